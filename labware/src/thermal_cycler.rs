@@ -1,0 +1,281 @@
+//! The thermal cycler (modelled on a Bio-Rad C1000's proportions): a static base, a lid on a hinge
+//! at its top, and on the lid's front edge a lock lever with a grip bar that snaps between two
+//! notches (raised, pressed). The latch locks the lid only when the lever is pressed *after* the
+//! lid is closed; pressing it while the lid is open jams it until it is raised again.
+//!
+//! Frame of the instrument: origin at the centre of the base's footprint, +y is the front (the side
+//! the lid opens from), +z up. Joint conventions follow the upstream task: lid 0 = open,
+//! -1.9 rad = closed; lever 0 = raised, -0.94 rad = pressed.
+
+use crate::frame::{Pose, Quat, Vec3};
+use serde::{Deserialize, Serialize};
+
+/// Every dimension of the instrument (metres, radians, kilograms, SI gains).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Params {
+    /// Half extents of the main body box.
+    pub base_half: Vec3,
+    /// Lid hinge point (the hinge axis is +x through it).
+    pub hinge: Vec3,
+    /// Lid extent from the hinge to its front edge, half width, half thickness.
+    pub lid_depth: f64,
+    pub lid_half_width: f64,
+    pub lid_half_thickness: f64,
+    pub lid_mass: f64,
+    pub lid_damping: f64,
+    pub lid_open: f64,
+    pub lid_closed: f64,
+    /// Lever: pivot on the lid's front edge; grip bar at `lever_arm` from the pivot.
+    pub lever_arm: f64,
+    pub grip_radius: f64,
+    pub grip_half_length: f64,
+    pub lever_mass: f64,
+    pub lever_raised: f64,
+    pub lever_pressed: f64,
+    /// Detent spring toward the nearest notch (N·m/rad) and its damping (N·m·s/rad).
+    pub detent_stiffness: f64,
+    pub detent_damping: f64,
+    /// Named tolerances of the success predicates (rad).
+    pub closed_tolerance: f64,
+    pub locked_tolerance: f64,
+    pub open_tolerance: f64,
+    pub unlocked_tolerance: f64,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Params {
+            base_half: [0.1655, 0.177, 0.0915],
+            hinge: [0.0, 0.01, 0.205],
+            lid_depth: 0.18,
+            lid_half_width: 0.10,
+            lid_half_thickness: 0.02,
+            lid_mass: 0.87,
+            lid_damping: 0.05,
+            lid_open: 0.0,
+            lid_closed: -1.9,
+            lever_arm: 0.06,
+            grip_radius: 0.009,
+            grip_half_length: 0.056,
+            lever_mass: 0.164,
+            lever_raised: 0.0,
+            lever_pressed: -0.94,
+            detent_stiffness: 0.3631,
+            detent_damping: 0.0363,
+            closed_tolerance: 0.01,
+            locked_tolerance: 0.01,
+            open_tolerance: 0.003,
+            unlocked_tolerance: 0.003,
+        }
+    }
+}
+
+/// MuJoCo names of one placed instrument, all prefixed by its protocol name.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Names {
+    pub base: String,
+    pub lid_body: String,
+    pub lever_body: String,
+    pub lid_joint: String,
+    pub lever_joint: String,
+    pub grip_site: String,
+    pub lock: String,
+}
+
+impl Names {
+    pub fn new(prefix: &str) -> Names {
+        Names {
+            base: format!("{prefix}/base"),
+            lid_body: format!("{prefix}/lid"),
+            lever_body: format!("{prefix}/lever"),
+            lid_joint: format!("{prefix}/lid_hinge"),
+            lever_joint: format!("{prefix}/lever_hinge"),
+            grip_site: format!("{prefix}/grip"),
+            lock: format!("{prefix}/lid_lock"),
+        }
+    }
+}
+
+/// MJCF fragments for one instrument, to be spliced into a scene.
+#[derive(Clone, Debug, Default)]
+pub struct Mjcf {
+    pub worldbody: String,
+    pub equality: String,
+    pub contact: String,
+}
+
+fn v3(v: Vec3) -> String {
+    format!("{} {} {}", v[0], v[1], v[2])
+}
+fn q4(q: Quat) -> String {
+    format!("{} {} {} {}", q.0[0], q.0[1], q.0[2], q.0[3])
+}
+
+impl Params {
+    /// Orientation of the lid body at joint angle 0: the closed geometry turned open about +x.
+    fn lid_rest(&self) -> Quat {
+        Quat::from_axis_angle([1.0, 0.0, 0.0], self.lid_open - self.lid_closed)
+    }
+
+    pub fn mjcf(&self, prefix: &str, placement: &Pose) -> Mjcf {
+        let n = Names::new(prefix);
+        let b = self.base_half;
+        let lid_rest = self.lid_rest();
+        let lid_rel_hinge = [0.0, self.lid_depth / 2.0, 0.0];
+        let lid_half = [self.lid_half_width, self.lid_depth / 2.0, self.lid_half_thickness];
+        let arm_half = [0.006, self.lever_arm / 2.0, 0.006];
+        let side = self.grip_half_length - 0.006;
+        let (lo, hi) = (self.lid_closed.min(self.lid_open), self.lid_closed.max(self.lid_open));
+        let (llo, lhi) = (self.lever_pressed.min(self.lever_raised), self.lever_pressed.max(self.lever_raised));
+        let worldbody = format!(
+            r#"<body name="{base}" pos="{pos}" quat="{quat}">
+  <geom name="{base}/body" type="box" size="{bh}" pos="0 0 {bz}" rgba="0.82 0.83 0.85 1"/>
+  <geom name="{base}/block" type="box" size="0.075 0.065 0.004" pos="0 {blocky} {blockz}" rgba="0.55 0.57 0.6 1" contype="0" conaffinity="0"/>
+  <geom name="{base}/panel" type="box" size="0.12 0.004 0.04" pos="0 {panely} 0.1" rgba="0.15 0.2 0.3 1" contype="0" conaffinity="0"/>
+  <body name="{lid}" pos="{hinge}" quat="{lidq}">
+    <joint name="{lidj}" type="hinge" axis="1 0 0" range="{lo} {hi}" damping="{lidd}" solreflimit="0.004 1" solimplimit="0.95 0.99 0.0005"/>
+    <inertial pos="{lidc}" mass="{lidm}" diaginertia="{lidi}"/>
+    <geom name="{lid}/shell" type="box" size="{lidh}" pos="{lidc}" rgba="0.86 0.87 0.9 1"/>
+    <geom name="{lid}/badge" type="box" size="0.05 0.03 0.001" pos="0 {badgey} {badgez}" rgba="0.2 0.35 0.6 1" contype="0" conaffinity="0"/>
+    <body name="{lever}" pos="0 {depth} 0">
+      <joint name="{leverj}" type="hinge" axis="1 0 0" range="{llo} {lhi}" armature="0.0005" damping="0.002" solreflimit="0.004 1"/>
+      <inertial pos="0 {armc} 0" mass="{leverm}" diaginertia="1.5e-4 6e-5 1.5e-4"/>
+      <geom name="{lever}/arm_l" type="box" size="{armh}" pos="{side} {armc} 0" rgba="0.25 0.25 0.27 1"/>
+      <geom name="{lever}/arm_r" type="box" size="{armh}" pos="-{side} {armc} 0" rgba="0.25 0.25 0.27 1"/>
+      <geom name="{lever}/grip" type="capsule" size="{gr} {gl}" pos="0 {arm} 0" quat="0.7071068 0 0.7071068 0" friction="1.5 0.01 0.001" rgba="0.2 0.2 0.22 1"/>
+      <site name="{grip}" pos="0 {arm} 0" size="0.005" rgba="1 0.2 0.2 0.5" group="4"/>
+    </body>
+  </body>
+</body>
+"#,
+            base = n.base,
+            pos = v3(placement.pos),
+            quat = q4(placement.quat),
+            bh = v3(b),
+            bz = b[2],
+            blocky = 0.02,
+            blockz = 2.0 * b[2] + 0.004,
+            panely = b[1] + 0.002,
+            lid = n.lid_body,
+            hinge = v3(self.hinge),
+            lidq = q4(lid_rest),
+            lidj = n.lid_joint,
+            lidd = self.lid_damping,
+            lidc = v3(lid_rel_hinge),
+            lidm = self.lid_mass,
+            lidi = v3(box_inertia(self.lid_mass, lid_half)),
+            lidh = v3(lid_half),
+            badgey = self.lid_depth * 0.6,
+            badgez = self.lid_half_thickness + 0.001,
+            lever = n.lever_body,
+            depth = self.lid_depth,
+            leverj = n.lever_joint,
+            leverm = self.lever_mass,
+            armc = self.lever_arm / 2.0,
+            armh = v3(arm_half),
+            side = side,
+            gr = self.grip_radius,
+            gl = self.grip_half_length,
+            arm = self.lever_arm,
+            grip = n.grip_site,
+        );
+        let equality = format!(
+            r#"<joint name="{lock}" joint1="{lidj}" polycoef="{closed} 0 0 0 0" active="false" solref="0.01 1"/>
+"#,
+            lock = n.lock,
+            lidj = n.lid_joint,
+            closed = self.lid_closed,
+        );
+        let contact = format!("<exclude body1=\"{}\" body2=\"{}\"/>\n", n.base, n.lever_body);
+        Mjcf { worldbody, equality, contact }
+    }
+
+    /// Pose of the grip bar's centre for given joint angles, in the frame `placement` is given in.
+    /// Axes: x along the bar, y pointing away from the lever pivot, z = x × y.
+    pub fn grip_pose(&self, placement: &Pose, lid: f64, lever: f64) -> Pose {
+        let x = [1.0, 0.0, 0.0];
+        let lid_frame = Pose::new(self.hinge, self.lid_rest().mul(Quat::from_axis_angle(x, lid)));
+        let lever_frame = Pose::new([0.0, self.lid_depth, 0.0], Quat::from_axis_angle(x, lever));
+        let grip = Pose::new([0.0, self.lever_arm, 0.0], Quat::IDENTITY);
+        placement.compose(&lid_frame).compose(&lever_frame).compose(&grip)
+    }
+
+    /// The notch nearest to a lever angle.
+    pub fn nearest_notch(&self, lever: f64) -> f64 {
+        if (lever - self.lever_pressed).abs() < (lever - self.lever_raised).abs() { self.lever_pressed } else { self.lever_raised }
+    }
+
+    /// Detent torque on the lever: a spring toward the nearest notch with damping.
+    pub fn detent_torque(&self, lever: f64, lever_vel: f64) -> f64 {
+        self.detent_stiffness * (self.nearest_notch(lever) - lever) - self.detent_damping * lever_vel
+    }
+
+    pub fn lid_is_closed(&self, lid: f64) -> bool {
+        (lid - self.lid_closed).abs() < self.closed_tolerance
+    }
+}
+
+fn box_inertia(m: f64, h: Vec3) -> Vec3 {
+    let (a, b, c) = (2.0 * h[0], 2.0 * h[1], 2.0 * h[2]);
+    [m * (b * b + c * c) / 12.0, m * (a * a + c * c) / 12.0, m * (a * a + b * b) / 12.0]
+}
+
+/// The lid latch's state machine, evaluated after every physics step.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Latch {
+    /// The lever was pressed while the lid was open; cleared when the lever is raised.
+    pub jammed: bool,
+    pub locked: bool,
+}
+
+impl Latch {
+    /// Updates from the current joint angles; returns whether the lock constraint is active.
+    pub fn update(&mut self, p: &Params, lid: f64, lever: f64) -> bool {
+        let pressed = p.nearest_notch(lever) == p.lever_pressed;
+        if !pressed {
+            self.jammed = false;
+            self.locked = false;
+        } else if !self.locked && !p.lid_is_closed(lid) {
+            self.jammed = true;
+        } else if !self.jammed {
+            self.locked = true;
+        }
+        self.locked
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn latch_locks_only_when_pressed_after_closing() {
+        let p = Params::default();
+        let mut l = Latch::default();
+        assert!(!l.update(&p, 0.0, p.lever_pressed), "pressed while open must not lock");
+        assert!(!l.update(&p, p.lid_closed, p.lever_pressed), "jammed until raised");
+        assert!(!l.update(&p, p.lid_closed, 0.0));
+        assert!(l.update(&p, p.lid_closed, p.lever_pressed));
+        assert!(!l.update(&p, p.lid_closed, -0.1), "raising unlocks");
+    }
+
+    #[test]
+    fn grip_moves_on_the_lid_arc() {
+        let p = Params::default();
+        let open = p.grip_pose(&Pose::IDENTITY, p.lid_open, 0.0);
+        let closed = p.grip_pose(&Pose::IDENTITY, p.lid_closed, 0.0);
+        // Closed: the bar lies in front of the hinge at hinge height; open: above and behind the front edge.
+        assert!((closed.pos[2] - p.hinge[2]).abs() < 1e-9);
+        assert!((closed.pos[1] - (p.hinge[1] + p.lid_depth + p.lever_arm)).abs() < 1e-9);
+        assert!(open.pos[2] > closed.pos[2] + 0.2);
+        let r = |q: &Pose| ((q.pos[1] - p.hinge[1]).powi(2) + (q.pos[2] - p.hinge[2]).powi(2)).sqrt();
+        assert!((r(&open) - r(&closed)).abs() < 1e-9);
+    }
+
+    #[test]
+    fn detent_pulls_to_the_nearest_notch() {
+        let p = Params::default();
+        assert!(p.detent_torque(-0.2, 0.0) > 0.0);
+        assert!(p.detent_torque(-0.6, 0.0) < 0.0);
+    }
+}

