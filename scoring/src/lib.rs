@@ -1,1 +1,17 @@
-//! scoring
+//! Scoring: policies (the scripted expert now; replays and websocket models later), the episode
+//! loop that couples a policy to the runtime, verdicts from success predicates, and evaluation runs
+//! that write versioned results.
+//!
+//! It does not simulate (the runtime does) and does not aggregate across submissions (the
+//! leaderboard does).
+
+pub mod episode;
+pub mod eval;
+pub mod expert;
+pub mod policy;
+pub mod verdict;
+
+pub use episode::{EpisodeOptions, EpisodeResult, run_episode};
+pub use eval::{EvalReport, EvalSummary, RESULTS_SCHEMA_VERSION, evaluate};
+pub use policy::{Observation, Policy, PolicyError, StageEvent};
+pub use verdict::{PredicateValue, Verdict, judge};

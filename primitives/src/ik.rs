@@ -1,0 +1,108 @@
+//! Inverse kinematics as a sequence of damped least-squares QPs with joint limits, solved by
+//! clarabel: min ||J dq - e||^2 + lambda ||dq||^2  s.t.  lo - q <= dq <= hi - q, |dq| <= step.
+
+use crate::Kinematics;
+use clarabel::algebra::CscMatrix;
+use clarabel::solver::{DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SupportedConeT};
+use labware::frame::{norm, sub};
+use labware::Pose;
+
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum IkError {
+    #[error("ik did not converge: position error {pos_err:.4} m, rotation error {rot_err:.4} rad")]
+    NoConvergence { pos_err: f64, rot_err: f64 },
+    #[error("the qp solver failed: {0}")]
+    Solver(String),
+}
+
+pub struct IkOptions {
+    pub damping: f64,
+    pub max_step: f64,
+    pub iterations: usize,
+    pub pos_tol: f64,
+    pub rot_tol: f64,
+}
+
+impl Default for IkOptions {
+    fn default() -> Self {
+        IkOptions { damping: 1e-4, max_step: 0.3, iterations: 80, pos_tol: 2e-4, rot_tol: 2e-3 }
+    }
+}
+
+/// Pose error as a 6-vector (position; rotation vector), world frame.
+pub fn pose_error(target: &Pose, current: &Pose) -> [f64; 6] {
+    let p = sub(target.pos, current.pos);
+    let r = target.quat.mul(current.quat.conj()).log();
+    [p[0], p[1], p[2], r[0], r[1], r[2]]
+}
+
+/// Solves for joint angles reaching `target`, starting from `seed`.
+pub fn solve_ik(kin: &mut dyn Kinematics, target: &Pose, seed: &[f64], opt: &IkOptions) -> Result<Vec<f64>, IkError> {
+    let n = kin.dof();
+    let limits = kin.limits();
+    let mut q = seed.to_vec();
+    let (mut pos_err, mut rot_err) = (f64::INFINITY, f64::INFINITY);
+    for _ in 0..opt.iterations {
+        let (pose, jac) = kin.jacobian(&q);
+        let e = pose_error(target, &pose);
+        pos_err = norm([e[0], e[1], e[2]]);
+        rot_err = norm([e[3], e[4], e[5]]);
+        if pos_err < opt.pos_tol && rot_err < opt.rot_tol {
+            return Ok(q);
+        }
+        // Rotation errors are weighted so that 1 rad counts like 0.3 m.
+        let w = [1.0, 1.0, 1.0, 0.3, 0.3, 0.3];
+        let mut jtj = vec![0.0; n * n];
+        let mut jte = vec![0.0; n];
+        for r in 0..6 {
+            for i in 0..n {
+                jte[i] += jac[i][r] * w[r] * w[r] * e[r];
+                for j in 0..n {
+                    jtj[i * n + j] += jac[i][r] * w[r] * w[r] * jac[j][r];
+                }
+            }
+        }
+        let mut rows = Vec::new();
+        let mut cols = Vec::new();
+        let mut vals = Vec::new();
+        for i in 0..n {
+            for j in i..n {
+                let v = 2.0 * (jtj[i * n + j] + if i == j { opt.damping } else { 0.0 });
+                rows.push(i);
+                cols.push(j);
+                vals.push(v);
+            }
+        }
+        let p = CscMatrix::new_from_triplets(n, n, rows, cols, vals);
+        let c: Vec<f64> = jte.iter().map(|v| -2.0 * v).collect();
+        let mut a_rows = Vec::new();
+        let mut a_cols = Vec::new();
+        let mut a_vals = Vec::new();
+        let mut b = Vec::new();
+        for i in 0..n {
+            a_rows.push(i);
+            a_cols.push(i);
+            a_vals.push(1.0);
+            b.push((limits[i].1 - q[i]).min(opt.max_step).max(0.0));
+        }
+        for i in 0..n {
+            a_rows.push(n + i);
+            a_cols.push(i);
+            a_vals.push(-1.0);
+            b.push((q[i] - limits[i].0).min(opt.max_step).max(0.0));
+        }
+        let a = CscMatrix::new_from_triplets(2 * n, n, a_rows, a_cols, a_vals);
+        let cones: [SupportedConeT<f64>; 1] = [NonnegativeConeT(2 * n)];
+        let settings = DefaultSettingsBuilder::default().verbose(false).build().map_err(|e| IkError::Solver(format!("{e:?}")))?;
+        let mut solver = DefaultSolver::new(&p, &c, &a, &b, &cones, settings).map_err(|e| IkError::Solver(format!("{e:?}")))?;
+        solver.solve();
+        let dq = &solver.solution.x;
+        if dq.iter().any(|v| !v.is_finite()) {
+            return Err(IkError::Solver("non-finite step".into()));
+        }
+        for i in 0..n {
+            q[i] = (q[i] + dq[i]).clamp(limits[i].0, limits[i].1);
+        }
+    }
+    Err(IkError::NoConvergence { pos_err, rot_err })
+}

@@ -1,0 +1,170 @@
+//! Episode recordings as MCAP (zstd chunks), readable by the `mcap` CLI and Foxglove.
+//!
+//! Channels (all JSON messages with a JSON schema; log time = simulation time in ns):
+//!
+//! | topic | schema | rate | content |
+//! |---|---|---|---|
+//! | `/task` | `autobio.Task` | once | compiled task, scene instance, seed |
+//! | `/robot/joint_state` | `autobio.JointState` | control (50 Hz) | `position` (6 arm joints + gripper driver, rad), `ctrl` |
+//! | `/robot/action` | `autobio.Action` | control | the action applied for the next period |
+//! | `/labware/state` | `autobio.LabwareState` | control | per labware: joint angles, `locked`, `jammed` |
+//! | `/camera/<name>` | `foxglove.RawImage` | `image_every` control steps (default 10 Hz) | 224x224 `rgb8`, base64 |
+//! | `/stage` | `autobio.StageEvent` | on event | expert motion / lab-step starts |
+//! | `/verdict` | `autobio.Verdict` | once, at the end | success and every predicate's value |
+
+use crate::LabwareState;
+use crate::render::Image;
+use base64::Engine;
+use serde::Serialize;
+use serde_json::json;
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::Path;
+
+pub const RECORDING_SCHEMA_VERSION: u32 = 1;
+
+#[derive(Debug, thiserror::Error)]
+pub enum RecordError {
+    #[error("cannot write the recording: {0}")]
+    Io(#[from] std::io::Error),
+    #[error("mcap: {0}")]
+    Mcap(#[from] mcap::McapError),
+    #[error("the recording has no `{0}` message")]
+    Missing(&'static str),
+    #[error("bad message on `{0}`: {1}")]
+    Bad(String, String),
+}
+
+const OBJECT: &str = r#"{"type":"object"}"#;
+const RAW_IMAGE_SCHEMA: &str = r#"{"title":"foxglove.RawImage","type":"object","properties":{"timestamp":{"type":"object","properties":{"sec":{"type":"integer"},"nsec":{"type":"integer"}}},"frame_id":{"type":"string"},"width":{"type":"integer"},"height":{"type":"integer"},"encoding":{"type":"string"},"step":{"type":"integer"},"data":{"type":"string","contentEncoding":"base64"}}}"#;
+
+pub struct Recorder {
+    w: mcap::Writer<BufWriter<File>>,
+    channels: BTreeMap<String, u16>,
+    schemas: BTreeMap<&'static str, u16>,
+    seq: u32,
+}
+
+fn ns(t: f64) -> u64 {
+    (t * 1e9).round().max(0.0) as u64
+}
+
+impl Recorder {
+    pub fn create(path: &Path) -> Result<Recorder, RecordError> {
+        let file = BufWriter::new(File::create(path)?);
+        let w = mcap::WriteOptions::new().compression(Some(mcap::Compression::Zstd)).profile("autobio").create(file)?;
+        Ok(Recorder { w, channels: BTreeMap::new(), schemas: BTreeMap::new(), seq: 0 })
+    }
+
+    fn channel(&mut self, topic: &str, schema: &'static str) -> Result<u16, RecordError> {
+        if let Some(&c) = self.channels.get(topic) {
+            return Ok(c);
+        }
+        let sid = match self.schemas.get(schema) {
+            Some(&s) => s,
+            None => {
+                let body = if schema == "foxglove.RawImage" { RAW_IMAGE_SCHEMA } else { OBJECT };
+                let s = self.w.add_schema(schema, "jsonschema", body.as_bytes())?;
+                self.schemas.insert(schema, s);
+                s
+            }
+        };
+        let c = self.w.add_channel(sid, topic, "json", &BTreeMap::new())?;
+        self.channels.insert(topic.to_string(), c);
+        Ok(c)
+    }
+
+    pub fn write<T: Serialize>(&mut self, topic: &str, schema: &'static str, t: f64, msg: &T) -> Result<(), RecordError> {
+        let c = self.channel(topic, schema)?;
+        let data = serde_json::to_vec(msg).map_err(|e| RecordError::Bad(topic.into(), e.to_string()))?;
+        self.seq += 1;
+        let header = mcap::records::MessageHeader { channel_id: c, sequence: self.seq, log_time: ns(t), publish_time: ns(t) };
+        self.w.write_to_known_channel(&header, &data)?;
+        Ok(())
+    }
+
+    pub fn task(&mut self, task_json: &serde_json::Value, instance: &serde_json::Value) -> Result<(), RecordError> {
+        let msg = json!({"schema_version": RECORDING_SCHEMA_VERSION, "task": task_json, "instance": instance});
+        self.write("/task", "autobio.Task", 0.0, &msg)
+    }
+
+    pub fn joint_state(&mut self, t: f64, position: &[f64], ctrl: &[f64]) -> Result<(), RecordError> {
+        self.write("/robot/joint_state", "autobio.JointState", t, &json!({"t": t, "position": position, "ctrl": ctrl}))
+    }
+
+    pub fn action(&mut self, t: f64, action: &[f64]) -> Result<(), RecordError> {
+        self.write("/robot/action", "autobio.Action", t, &json!({"t": t, "action": action}))
+    }
+
+    pub fn labware(&mut self, t: f64, states: &[LabwareState]) -> Result<(), RecordError> {
+        self.write("/labware/state", "autobio.LabwareState", t, &json!({"t": t, "labware": states}))
+    }
+
+    pub fn image(&mut self, t: f64, img: &Image) -> Result<(), RecordError> {
+        let ns = ns(t);
+        let msg = json!({
+            "timestamp": {"sec": ns / 1_000_000_000, "nsec": ns % 1_000_000_000},
+            "frame_id": img.camera, "width": img.width, "height": img.height, "encoding": "rgb8",
+            "step": img.width * 3, "data": base64::engine::general_purpose::STANDARD.encode(&img.rgb),
+        });
+        self.write(&format!("/camera/{}", img.camera), "foxglove.RawImage", t, &msg)
+    }
+
+    pub fn stage(&mut self, t: f64, label: &str) -> Result<(), RecordError> {
+        self.write("/stage", "autobio.StageEvent", t, &json!({"t": t, "label": label}))
+    }
+
+    pub fn finish(mut self) -> Result<(), RecordError> {
+        self.w.finish()?;
+        Ok(())
+    }
+}
+
+/// What offline re-scoring needs from a recording.
+pub struct RecordingSummary {
+    pub task: serde_json::Value,
+    pub instance: serde_json::Value,
+    pub final_labware: Vec<LabwareState>,
+    pub verdict: Option<serde_json::Value>,
+    pub messages: u64,
+    pub topics: BTreeMap<String, u64>,
+    pub duration_s: f64,
+}
+
+pub fn read_recording(path: &Path) -> Result<RecordingSummary, RecordError> {
+    let buf = std::fs::read(path)?;
+    let (mut task, mut instance, mut labware, mut verdict) = (None, None, None, None);
+    let mut topics = BTreeMap::new();
+    let mut messages = 0;
+    let mut last_t = 0u64;
+    for m in mcap::MessageStream::new(&buf)? {
+        let m = m?;
+        messages += 1;
+        last_t = last_t.max(m.log_time);
+        *topics.entry(m.channel.topic.clone()).or_insert(0) += 1;
+        let parse = |topic: &str| serde_json::from_slice::<serde_json::Value>(&m.data).map_err(|e| RecordError::Bad(topic.into(), e.to_string()));
+        match m.channel.topic.as_str() {
+            "/task" => {
+                let v = parse("/task")?;
+                task = Some(v["task"].clone());
+                instance = Some(v["instance"].clone());
+            }
+            "/labware/state" => labware = Some(m.data.clone()),
+            "/verdict" => verdict = Some(parse("/verdict")?),
+            _ => {}
+        }
+    }
+    let labware = labware.ok_or(RecordError::Missing("/labware/state"))?;
+    let v: serde_json::Value = serde_json::from_slice(&labware).map_err(|e| RecordError::Bad("/labware/state".into(), e.to_string()))?;
+    let final_labware = serde_json::from_value(v["labware"].clone()).map_err(|e| RecordError::Bad("/labware/state".into(), e.to_string()))?;
+    Ok(RecordingSummary {
+        task: task.ok_or(RecordError::Missing("/task"))?,
+        instance: instance.unwrap_or(serde_json::Value::Null),
+        final_labware,
+        verdict,
+        messages,
+        topics,
+        duration_s: last_t as f64 * 1e-9,
+    })
+}

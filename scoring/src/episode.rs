@@ -1,0 +1,137 @@
+//! The episode loop: reset, then observe -> act -> hold each action for one control period, until
+//! success (checked after every control period) or the time limit. A policy failure or an unstable
+//! simulation ends the episode as a failure with its reason; nothing already finished is lost.
+
+use crate::policy::{Observation, Policy, Privileged};
+use crate::verdict::{Verdict, judge};
+use compiler::{SceneInstance, Task};
+use runtime::Episode;
+use runtime::record::Recorder;
+use runtime::render::Cameras;
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Instant;
+
+#[derive(Clone, Debug, Default)]
+pub struct EpisodeOptions {
+    /// Write an MCAP recording here.
+    pub record: Option<PathBuf>,
+    /// Render and record camera images every this many control steps (0 = no images).
+    pub image_every: u32,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EpisodeResult {
+    pub seed: u64,
+    pub success: bool,
+    pub verdict: Verdict,
+    /// Why the episode ended early as a failure (policy error, unstable physics), if it did.
+    pub error: Option<String>,
+    pub sim_time_s: f64,
+    pub control_steps: u64,
+    pub wall_time_s: f64,
+    /// SHA-256 of every control step's qpos (little-endian f64): equal hashes, equal trajectories.
+    pub trajectory_hash: String,
+    pub recording: Option<String>,
+}
+
+/// Runs one episode of `task` with the scene instance for `seed`.
+pub fn run_episode(
+    task: &Task,
+    scene: &Arc<runtime::Scene>,
+    instance: &SceneInstance,
+    policy: &mut dyn Policy,
+    opts: &EpisodeOptions,
+) -> Result<EpisodeResult, String> {
+    let start = Instant::now();
+    let mut ep = Episode::new(scene.clone(), task, instance);
+    let mut rec = match &opts.record {
+        Some(p) => {
+            let mut r = Recorder::create(p).map_err(|e| format!("{}: {e}", p.display()))?;
+            let tj = serde_json::to_value(task).map_err(|e| e.to_string())?;
+            let ij = serde_json::to_value(instance).map_err(|e| e.to_string())?;
+            r.task(&tj, &ij).map_err(|e| e.to_string())?;
+            Some(r)
+        }
+        None => None,
+    };
+    let mut cameras = if rec.is_some() && opts.image_every > 0 { Some(Cameras::new(scene, 224, 224)?) } else { None };
+    let cam_names: Vec<String> = task.cameras.iter().map(|c| c.name.clone()).collect();
+    let mut hasher = Sha256::new();
+    let mut steps = 0u64;
+    let mut error = None;
+    let mut verdict = judge(task, &ep.labware_state());
+    'episode: while ep.time() < task.time_limit_s && !verdict.success {
+        let obs = Observation {
+            time: ep.time(),
+            state: ep.robot_state(0),
+            prompt: &task.instruction,
+            privileged: Privileged { arm_q: ep.arm_q(0), ctrl: ep.robot_ctrl(0), labware: ep.labware_state() },
+        };
+        let chunk = match policy.act(&obs) {
+            Ok(c) if !c.is_empty() => c,
+            Ok(_) => {
+                error = Some("policy returned an empty action chunk".into());
+                break;
+            }
+            Err(e) => {
+                error = Some(e.to_string());
+                break;
+            }
+        };
+        if let Some(r) = rec.as_mut() {
+            for ev in policy.drain_events() {
+                r.stage(ev.time, &ev.label).map_err(|e| e.to_string())?;
+            }
+        }
+        for action in chunk {
+            let t = ep.time();
+            if let Some(r) = rec.as_mut() {
+                r.joint_state(t, &ep.robot_state(0), &ep.robot_ctrl(0)).map_err(|e| e.to_string())?;
+                r.action(t, &action).map_err(|e| e.to_string())?;
+                r.labware(t, &ep.labware_state()).map_err(|e| e.to_string())?;
+                if let Some(c) = cameras.as_mut()
+                    && steps % opts.image_every as u64 == 0
+                {
+                    for img in c.render(&mut ep.data, &cam_names)? {
+                        r.image(t, &img).map_err(|e| e.to_string())?;
+                    }
+                }
+            }
+            if let Err(e) = ep.apply(0, &action).and_then(|_| ep.control_step()) {
+                error = Some(e.to_string());
+                break 'episode;
+            }
+            steps += 1;
+            for v in ep.data.qpos() {
+                hasher.update(v.to_le_bytes());
+            }
+            verdict = judge(task, &ep.labware_state());
+            if verdict.success || ep.time() >= task.time_limit_s {
+                break;
+            }
+        }
+    }
+    if error.is_some() {
+        verdict.success = false;
+    }
+    if let Some(mut r) = rec {
+        let t = ep.time();
+        r.labware(t, &ep.labware_state()).map_err(|e| e.to_string())?;
+        r.write("/verdict", "autobio.Verdict", t, &serde_json::json!({"verdict": verdict, "error": error})).map_err(|e| e.to_string())?;
+        r.finish().map_err(|e| e.to_string())?;
+    }
+    Ok(EpisodeResult {
+        seed: instance.seed,
+        success: verdict.success,
+        verdict,
+        error,
+        sim_time_s: ep.time(),
+        control_steps: steps,
+        wall_time_s: start.elapsed().as_secs_f64(),
+        trajectory_hash: hasher.finalize().iter().map(|b| format!("{b:02x}")).collect(),
+        recording: opts.record.as_ref().map(|p| p.display().to_string()),
+    })
+}

@@ -1,0 +1,109 @@
+//! Evaluation runs: N seeded episodes of one task with one policy. Each finished episode is
+//! appended to a JSONL journal immediately (so nothing finished is lost if the run dies), and the
+//! run ends with a versioned results JSON.
+
+use crate::episode::{EpisodeOptions, EpisodeResult, run_episode};
+use crate::expert::ExpertPolicy;
+use crate::policy::Policy;
+use compiler::Task;
+use serde::{Deserialize, Serialize};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+pub const RESULTS_SCHEMA_VERSION: u32 = 1;
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EvalSummary {
+    pub episodes: usize,
+    pub successes: usize,
+    pub success_rate: f64,
+    /// Standard error of the mean success rate.
+    pub sem: f64,
+    pub wall_time_s: f64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EvalReport {
+    pub schema_version: u32,
+    pub task_id: String,
+    pub protocol: String,
+    pub policy: String,
+    /// Episode i uses seed `seed + i`.
+    pub seed: u64,
+    pub summary: EvalSummary,
+    pub episodes: Vec<EpisodeResult>,
+}
+
+pub struct EvalOptions {
+    pub episodes: usize,
+    pub seed: u64,
+    /// Where to write recordings (`<task>_seed<seed>.mcap`), the journal and results.json.
+    pub out: Option<PathBuf>,
+    pub record: bool,
+    pub image_every: u32,
+}
+
+pub fn summarise(episodes: &[EpisodeResult], wall: f64) -> EvalSummary {
+    let n = episodes.len();
+    let k = episodes.iter().filter(|e| e.success).count();
+    let p = if n > 0 { k as f64 / n as f64 } else { 0.0 };
+    let sem = if n > 1 { (p * (1.0 - p) / (n as f64 - 1.0)).sqrt() } else { 0.0 };
+    EvalSummary { episodes: n, successes: k, success_rate: p, sem, wall_time_s: wall }
+}
+
+/// Runs the scripted expert on `task`. `progress` is called after each episode.
+pub fn evaluate(task: &Task, opts: &EvalOptions, mut progress: impl FnMut(&EpisodeResult)) -> Result<EvalReport, String> {
+    let start = Instant::now();
+    if let Some(dir) = &opts.out {
+        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    }
+    let journal_path = opts.out.as_ref().map(|d| d.join(format!("{}.journal.jsonl", task.id)));
+    let mut journal = match &journal_path {
+        Some(p) => Some(std::fs::OpenOptions::new().create(true).append(true).open(p).map_err(|e| format!("{}: {e}", p.display()))?),
+        None => None,
+    };
+    let mut scene: Option<Arc<runtime::Scene>> = None;
+    let mut results = Vec::new();
+    for i in 0..opts.episodes {
+        let seed = opts.seed.wrapping_add(i as u64);
+        let instance = task.sample(seed);
+        if scene.as_ref().is_none_or(|s| s.placements != instance.labware_placement) {
+            scene = Some(Arc::new(runtime::Scene::build(task, &instance).map_err(|e| e.to_string())?));
+        }
+        let sc = scene.as_ref().expect("built above");
+        let mut policy = ExpertPolicy::new(task, sc, &instance).map_err(|e| e.to_string())?;
+        let record = match (&opts.out, opts.record) {
+            (Some(d), true) => Some(recording_path(d, task, seed)),
+            _ => None,
+        };
+        let eo = EpisodeOptions { record, image_every: opts.image_every };
+        let r = run_episode(task, sc, &instance, &mut policy as &mut dyn Policy, &eo)?;
+        if let Some(j) = journal.as_mut() {
+            let line = serde_json::to_string(&r).map_err(|e| e.to_string())?;
+            writeln!(j, "{line}").and_then(|_| j.flush()).map_err(|e| format!("journal: {e}"))?;
+        }
+        progress(&r);
+        results.push(r);
+    }
+    let report = EvalReport {
+        schema_version: RESULTS_SCHEMA_VERSION,
+        task_id: task.id.clone(),
+        protocol: task.source.clone(),
+        policy: "expert".into(),
+        seed: opts.seed,
+        summary: summarise(&results, start.elapsed().as_secs_f64()),
+        episodes: results,
+    };
+    if let Some(dir) = &opts.out {
+        let p = dir.join(format!("{}.results.json", task.id));
+        let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
+        std::fs::write(&p, text).map_err(|e| format!("{}: {e}", p.display()))?;
+    }
+    Ok(report)
+}
+
+pub fn recording_path(dir: &Path, task: &Task, seed: u64) -> PathBuf {
+    dir.join(format!("{}_seed{seed}.mcap", task.id))
+}
