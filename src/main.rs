@@ -1,1 +1,187 @@
-fn main() {}
+//! `autobio`: the command-line front end. Thin by design: `main` parses arguments, `run` calls one
+//! library function per subcommand and renders its result; no logic lives here beyond formatting.
+
+mod bench;
+mod diagnostics;
+
+use anyhow::{Context, Result, bail};
+use clap::{Parser, Subcommand};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(name = "autobio", version, about = "Lab protocols as robot tasks: compile, demonstrate, evaluate, replay")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Check protocol files and report every problem with file:line:col (exit 1 on errors)
+    Check { files: Vec<PathBuf> },
+    /// Print the documentation of a diagnostic code (e.g. E0010)
+    Explain { code: String },
+    /// Compile a protocol and print the task as JSON
+    Compile { file: PathBuf },
+    /// Record scripted-expert demonstrations (MCAP with camera images) into a folder
+    Demo {
+        #[arg(long)]
+        protocol: PathBuf,
+        #[arg(long, default_value_t = 1)]
+        episodes: usize,
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        #[arg(long, default_value = "out/demo")]
+        out: PathBuf,
+    },
+    /// Evaluate a policy on protocols: seeded episodes, a results table and results JSON
+    Eval {
+        #[arg(long, required = true)]
+        protocol: Vec<PathBuf>,
+        #[arg(long, default_value = "expert")]
+        policy: String,
+        #[arg(long, default_value_t = 20)]
+        episodes: usize,
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Folder for results JSON, the episode journal and (with --record) recordings
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Write one MCAP recording per episode (with camera images)
+        #[arg(long)]
+        record: bool,
+    },
+    /// Re-score a recording offline from its recorded state (no simulation)
+    Replay { recording: PathBuf },
+    /// Measure throughput: physics steps/s (harness vs bare mj_step), rendered frames/s, expert episodes/min
+    Bench {
+        #[arg(long, default_value = "protocols/thermal_cycler/close_lid.toml")]
+        protocol: PathBuf,
+    },
+}
+
+fn main() -> ExitCode {
+    match run(Cli::parse()) {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn load(path: &Path) -> Result<compiler::Task> {
+    let source = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let name = path.display().to_string();
+    let (task, diags) = compiler::compile_source(&source, &name);
+    match task {
+        Some(t) => Ok(t),
+        None => {
+            eprint!("{}", diagnostics::render_all(&name, &source, &diags));
+            bail!("{} has errors; run `autobio check {}`", name, name)
+        }
+    }
+}
+
+fn run(cli: Cli) -> Result<ExitCode> {
+    match cli.command {
+        Command::Check { files } => {
+            let mut failed = false;
+            for f in &files {
+                let source = std::fs::read_to_string(f).with_context(|| format!("cannot read {}", f.display()))?;
+                let name = f.display().to_string();
+                let (_, diags) = compiler::compile_source(&source, &name);
+                if diags.is_empty() {
+                    println!("ok: {name}");
+                } else {
+                    eprint!("{}", diagnostics::render_all(&name, &source, &diags));
+                    failed |= diags.iter().any(|d| d.is_error());
+                }
+            }
+            Ok(if failed { ExitCode::FAILURE } else { ExitCode::SUCCESS })
+        }
+        Command::Explain { code } => match dsl::Code::from_name(&code) {
+            Some(c) => {
+                println!("{c}\n\n{}", c.explanation());
+                Ok(ExitCode::SUCCESS)
+            }
+            None => bail!("no diagnostic code `{code}` (codes look like E0010)"),
+        },
+        Command::Compile { file } => {
+            let task = load(&file)?;
+            println!("{}", serde_json::to_string_pretty(&task)?);
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Demo { protocol, episodes, seed, out } => {
+            let task = load(&protocol)?;
+            let opts = scoring::eval::EvalOptions { episodes, seed, out: Some(out.clone()), record: true, image_every: 5 };
+            let report = scoring::evaluate(&task, &opts, |e| {
+                println!("seed {:>4}  {}  {:.1} s  {}", e.seed, if e.success { "success" } else { "FAIL   " }, e.sim_time_s, e.recording.as_deref().unwrap_or(""));
+            })
+            .map_err(anyhow::Error::msg)?;
+            println!("{} demonstrations of {} in {} ({} successful)", report.summary.episodes, task.id, out.display(), report.summary.successes);
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Eval { protocol, policy, episodes, seed, out, record } => {
+            if policy != "expert" {
+                bail!("unknown policy `{policy}`: this build evaluates `expert` (model servers over websocket come with `--model`)");
+            }
+            let mut rows = Vec::new();
+            for p in &protocol {
+                let task = load(p)?;
+                let opts = scoring::eval::EvalOptions { episodes, seed, out: out.clone(), record, image_every: if record { 5 } else { 0 } };
+                eprintln!("evaluating {} ({} episodes from seed {seed})", task.id, episodes);
+                let report = scoring::evaluate(&task, &opts, |e| {
+                    if let Some(err) = &e.error {
+                        eprintln!("  seed {}: failed: {err}", e.seed);
+                    }
+                })
+                .map_err(anyhow::Error::msg)?;
+                rows.push(report);
+            }
+            println!("{:<28} {:>9} {:>16} {:>9} {:>10}", "task", "policy", "success (±SEM)", "episodes", "wall time");
+            for r in &rows {
+                let s = &r.summary;
+                println!(
+                    "{:<28} {:>9} {:>8.1}% ± {:>4.1} {:>9} {:>9.1}s",
+                    r.task_id,
+                    r.policy,
+                    100.0 * s.success_rate,
+                    100.0 * s.sem,
+                    s.episodes,
+                    s.wall_time_s
+                );
+            }
+            if let Some(o) = &out {
+                println!("results: {}/<task>.results.json", o.display());
+            }
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Replay { recording } => {
+            let rec = runtime::record::read_recording(&recording).with_context(|| format!("cannot read {}", recording.display()))?;
+            let task: compiler::Task = serde_json::from_value(rec.task.clone()).context("the recording's task does not match this autobio's task schema")?;
+            let verdict = scoring::judge(&task, &rec.final_labware);
+            println!("{}: {} messages over {:.2} s", recording.display(), rec.messages, rec.duration_s);
+            for (topic, n) in &rec.topics {
+                println!("  {topic:<28} {n}");
+            }
+            println!("re-scored: {}", if verdict.success { "success" } else { "failure" });
+            for p in &verdict.predicates {
+                println!("  [{}] {:<28} value {:+.4} target {:+.4} tol {}", if p.holds { "x" } else { " " }, p.text, p.value, p.target, p.tolerance);
+            }
+            if let Some(v) = &rec.verdict {
+                let recorded = v["verdict"]["success"].as_bool();
+                if recorded != Some(verdict.success) {
+                    println!("note: the recorded verdict was {recorded:?}");
+                }
+            }
+            Ok(if verdict.success { ExitCode::SUCCESS } else { ExitCode::FAILURE })
+        }
+        Command::Bench { protocol } => {
+            let task = load(&protocol)?;
+            bench::run(&task)?;
+            Ok(ExitCode::SUCCESS)
+        }
+    }
+}

@@ -201,7 +201,7 @@ impl Cx {
             if !prim.requires.contains(&state.as_str()) {
                 self.err(
                     Code::E0031,
-                    step.span,
+                    prim_name.span,
                     format!("`{}` needs `{}.{}` to be {}, but here it is `{}`", prim.name, on.value, prim.part, prim.requires.join(" or "), state),
                     Some(format!("remove this step or add one before it that leaves the {} {}", prim.part, prim.requires[0])),
                 );

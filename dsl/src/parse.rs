@@ -15,7 +15,11 @@ pub fn parse(source: &str) -> (Protocol, Vec<Diagnostic>) {
     let (doc, errors) = DeTable::parse_recoverable(source);
     if !errors.is_empty() {
         for e in errors {
-            let span = e.span().map(Span::from).unwrap_or(Span::new(0, 0));
+            let mut span = e.span().map(Span::from).unwrap_or(Span::new(0, 0));
+            // An error reported at the start of a line belongs to the end of the line before.
+            if span.start == span.end && span.start > 0 && source.as_bytes().get(span.start - 1) == Some(&b'\n') {
+                span = Span::new(span.start - 1, span.start - 1);
+            }
             let msg = e.message().trim().trim_end_matches('.').to_string();
             let msg = lowercase_first(&msg);
             p.diags.push(

@@ -13,5 +13,5 @@ pub mod verdict;
 
 pub use episode::{EpisodeOptions, EpisodeResult, run_episode};
 pub use eval::{EvalReport, EvalSummary, RESULTS_SCHEMA_VERSION, evaluate};
-pub use policy::{Observation, Policy, PolicyError, StageEvent};
+pub use policy::{HoldPolicy, Observation, Policy, PolicyError, StageEvent};
 pub use verdict::{PredicateValue, Verdict, judge};

@@ -41,3 +41,16 @@ pub trait Policy {
         Vec::new()
     }
 }
+
+/// The do-nothing baseline: holds the robot where it is (the lower bound on any leaderboard).
+pub struct HoldPolicy;
+
+impl Policy for HoldPolicy {
+    fn name(&self) -> String {
+        "hold".into()
+    }
+
+    fn act(&mut self, obs: &Observation) -> Result<Vec<Vec<f64>>, PolicyError> {
+        Ok(vec![obs.privileged.ctrl.clone()])
+    }
+}

@@ -1,0 +1,86 @@
+//! Malformed protocol files: each gives its diagnostic code with a span on the right text, and
+//! nothing panics. Also checks `autobio check` end to end as a process.
+
+use std::path::Path;
+use std::process::Command;
+
+fn diagnose(file: &str) -> (String, Vec<dsl::Diagnostic>) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/bad").join(file);
+    let source = std::fs::read_to_string(&path).unwrap();
+    let (task, diags) = compiler::compile_source(&source, file);
+    assert!(task.is_none(), "{file} must not compile");
+    (source, diags)
+}
+
+/// (file, code, text the span must cover, line)
+const CASES: &[(&str, &str, &str, usize)] = &[
+    ("bad_toml.toml", "E0001", "", 10),
+    ("unknown_kind.toml", "E0010", "\"thermal_cycle\"", 17),
+    ("unknown_primitive.toml", "E0012", "\"shut_lid\"", 25),
+    ("unit_unknown.toml", "E0020", "\"31.5 kg\"", 10),
+    ("unit_dimension.toml", "E0020", "\"31.5 deg\"", 10),
+    ("unit_missing.toml", "E0020", "31.5", 10),
+    ("unknown_reference.toml", "E0013", "\"cyclr\"", 26),
+    ("precondition.toml", "E0031", "\"close_lid\"", 25),
+    ("bad_predicate.toml", "E0030", "\"cycler.lid is ajar\"", 30),
+    ("unknown_key.toml", "E0003", "levle", 8),
+    ("unknown_robot.toml", "E0011", "\"ur10\"", 13),
+];
+
+#[test]
+fn each_malformed_file_gets_its_code_and_span() {
+    for &(file, code, text, line) in CASES {
+        let (source, diags) = diagnose(file);
+        let d = diags.iter().find(|d| d.code.as_str() == code).unwrap_or_else(|| panic!("{file}: no {code} in {diags:#?}"));
+        let (l, _) = dsl::render::line_col(&source, d.span.start);
+        assert_eq!(l, line, "{file}: {code} on line {l}, expected {line}: {d:?}");
+        if !text.is_empty() {
+            assert_eq!(&source[d.span.start..d.span.end], text, "{file}: span of {code}");
+        }
+        assert!(d.message.chars().next().is_some_and(|c| !c.is_uppercase()), "{file}: message must be lowercase: {}", d.message);
+    }
+}
+
+#[test]
+fn hints_suggest_the_closest_name() {
+    let (_, diags) = diagnose("unknown_kind.toml");
+    assert_eq!(diags[0].hint.as_deref(), Some("did you mean `thermal_cycler`?"));
+    let (_, diags) = diagnose("unknown_primitive.toml");
+    assert!(diags[0].hint.as_deref().unwrap().contains("close_lid"), "{:?}", diags[0].hint);
+}
+
+#[test]
+fn truncated_and_mangled_files_never_panic() {
+    let good = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("protocols/thermal_cycler/close_lid.toml")).unwrap();
+    // Every prefix, and every single-byte corruption on char boundaries, parses and checks.
+    for end in (0..good.len()).filter(|&i| good.is_char_boundary(i)) {
+        let _ = compiler::compile_source(&good[..end], "prefix.toml");
+    }
+    for i in (0..good.len()).step_by(3).filter(|&i| good.is_char_boundary(i) && good.is_char_boundary(i + 1)) {
+        for c in ["\"", "[", "=", "\n", "x", "0", "]"] {
+            let mangled = format!("{}{}{}", &good[..i], c, &good[i + 1..]);
+            let _ = compiler::compile_source(&mangled, "mangled.toml");
+        }
+    }
+}
+
+#[test]
+fn check_command_reports_file_line_col_and_fails() {
+    let bad = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/bad/unknown_kind.toml");
+    let out = Command::new(env!("CARGO_BIN_EXE_autobio")).arg("check").arg(&bad).output().unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("error[E0010]: unknown labware kind `thermal_cycle`"), "{err}");
+    assert!(err.contains("unknown_kind.toml:17:8"), "{err}");
+    assert!(err.contains("hint: did you mean `thermal_cycler`?"), "{err}");
+    let good = Path::new(env!("CARGO_MANIFEST_DIR")).join("protocols/thermal_cycler/open_lid.toml");
+    let out = Command::new(env!("CARGO_BIN_EXE_autobio")).arg("check").arg(&good).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+}
+
+#[test]
+fn explain_documents_every_code() {
+    let out = Command::new(env!("CARGO_BIN_EXE_autobio")).args(["explain", "E0031"]).output().unwrap();
+    assert!(out.status.success());
+    assert!(String::from_utf8_lossy(&out.stdout).contains("precondition"));
+}
