@@ -24,7 +24,11 @@ pub fn render_all(file: &str, source: &str, diags: &[Diagnostic]) -> String {
     }
     let errors = diags.iter().filter(|d| d.is_error()).count();
     if errors > 0 {
-        let _ = writeln!(out, "{file}: {errors} error{}", if errors == 1 { "" } else { "s" });
+        let _ = writeln!(
+            out,
+            "{file}: {errors} error{}",
+            if errors == 1 { "" } else { "s" }
+        );
     }
     out
 }

@@ -10,7 +10,11 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(name = "autobio", version, about = "Lab protocols as robot tasks: compile, demonstrate, evaluate, replay")]
+#[command(
+    name = "autobio",
+    version,
+    about = "Lab protocols as robot tasks: compile, demonstrate, evaluate, replay"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -72,7 +76,8 @@ fn main() -> ExitCode {
 }
 
 fn load(path: &Path) -> Result<compiler::Task> {
-    let source = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let source =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
     let name = path.display().to_string();
     let (task, diags) = compiler::compile_source(&source, &name);
     match task {
@@ -89,7 +94,8 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Check { files } => {
             let mut failed = false;
             for f in &files {
-                let source = std::fs::read_to_string(f).with_context(|| format!("cannot read {}", f.display()))?;
+                let source = std::fs::read_to_string(f)
+                    .with_context(|| format!("cannot read {}", f.display()))?;
                 let name = f.display().to_string();
                 let (_, diags) = compiler::compile_source(&source, &name);
                 if diags.is_empty() {
@@ -99,7 +105,11 @@ fn run(cli: Cli) -> Result<ExitCode> {
                     failed |= diags.iter().any(|d| d.is_error());
                 }
             }
-            Ok(if failed { ExitCode::FAILURE } else { ExitCode::SUCCESS })
+            Ok(if failed {
+                ExitCode::FAILURE
+            } else {
+                ExitCode::SUCCESS
+            })
         }
         Command::Explain { code } => match dsl::Code::from_name(&code) {
             Some(c) => {
@@ -113,25 +123,66 @@ fn run(cli: Cli) -> Result<ExitCode> {
             println!("{}", serde_json::to_string_pretty(&task)?);
             Ok(ExitCode::SUCCESS)
         }
-        Command::Demo { protocol, episodes, seed, out } => {
+        Command::Demo {
+            protocol,
+            episodes,
+            seed,
+            out,
+        } => {
             let task = load(&protocol)?;
-            let opts = scoring::eval::EvalOptions { episodes, seed, out: Some(out.clone()), record: true, image_every: 5 };
+            let opts = scoring::eval::EvalOptions {
+                episodes,
+                seed,
+                out: Some(out.clone()),
+                record: true,
+                image_every: 5,
+            };
             let report = scoring::evaluate(&task, &opts, |e| {
-                println!("seed {:>4}  {}  {:.1} s  {}", e.seed, if e.success { "success" } else { "FAIL   " }, e.sim_time_s, e.recording.as_deref().unwrap_or(""));
+                println!(
+                    "seed {:>4}  {}  {:.1} s  {}",
+                    e.seed,
+                    if e.success { "success" } else { "FAIL   " },
+                    e.sim_time_s,
+                    e.recording.as_deref().unwrap_or("")
+                );
             })
             .map_err(anyhow::Error::msg)?;
-            println!("{} demonstrations of {} in {} ({} successful)", report.summary.episodes, task.id, out.display(), report.summary.successes);
+            println!(
+                "{} demonstrations of {} in {} ({} successful)",
+                report.summary.episodes,
+                task.id,
+                out.display(),
+                report.summary.successes
+            );
             Ok(ExitCode::SUCCESS)
         }
-        Command::Eval { protocol, policy, episodes, seed, out, record } => {
+        Command::Eval {
+            protocol,
+            policy,
+            episodes,
+            seed,
+            out,
+            record,
+        } => {
             if policy != "expert" {
-                bail!("unknown policy `{policy}`: this build evaluates `expert` (model servers over websocket come with `--model`)");
+                bail!(
+                    "unknown policy `{policy}`: this build evaluates `expert` (model servers over websocket come with `--model`)"
+                );
             }
             let mut rows = Vec::new();
             for p in &protocol {
                 let task = load(p)?;
-                let opts = scoring::eval::EvalOptions { episodes, seed, out: out.clone(), record, image_every: if record { 5 } else { 0 } };
-                eprintln!("evaluating {} ({} episodes from seed {seed})", task.id, episodes);
+                let opts = scoring::eval::EvalOptions {
+                    episodes,
+                    seed,
+                    out: out.clone(),
+                    record,
+                    image_every: if record { 5 } else { 0 },
+                };
+                eprintln!(
+                    "evaluating {} ({} episodes from seed {seed})",
+                    task.id, episodes
+                );
                 let report = scoring::evaluate(&task, &opts, |e| {
                     if let Some(err) = &e.error {
                         eprintln!("  seed {}: failed: {err}", e.seed);
@@ -140,7 +191,10 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 .map_err(anyhow::Error::msg)?;
                 rows.push(report);
             }
-            println!("{:<28} {:>9} {:>16} {:>9} {:>10}", "task", "policy", "success (±SEM)", "episodes", "wall time");
+            println!(
+                "{:<28} {:>9} {:>16} {:>9} {:>10}",
+                "task", "policy", "success (±SEM)", "episodes", "wall time"
+            );
             for r in &rows {
                 let s = &r.summary;
                 println!(
@@ -159,16 +213,37 @@ fn run(cli: Cli) -> Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
         Command::Replay { recording } => {
-            let rec = runtime::record::read_recording(&recording).with_context(|| format!("cannot read {}", recording.display()))?;
-            let task: compiler::Task = serde_json::from_value(rec.task.clone()).context("the recording's task does not match this autobio's task schema")?;
+            let rec = runtime::record::read_recording(&recording)
+                .with_context(|| format!("cannot read {}", recording.display()))?;
+            let task: compiler::Task = serde_json::from_value(rec.task.clone())
+                .context("the recording's task does not match this autobio's task schema")?;
             let verdict = scoring::judge(&task, &rec.final_labware);
-            println!("{}: {} messages over {:.2} s", recording.display(), rec.messages, rec.duration_s);
+            println!(
+                "{}: {} messages over {:.2} s",
+                recording.display(),
+                rec.messages,
+                rec.duration_s
+            );
             for (topic, n) in &rec.topics {
                 println!("  {topic:<28} {n}");
             }
-            println!("re-scored: {}", if verdict.success { "success" } else { "failure" });
+            println!(
+                "re-scored: {}",
+                if verdict.success {
+                    "success"
+                } else {
+                    "failure"
+                }
+            );
             for p in &verdict.predicates {
-                println!("  [{}] {:<28} value {:+.4} target {:+.4} tol {}", if p.holds { "x" } else { " " }, p.text, p.value, p.target, p.tolerance);
+                println!(
+                    "  [{}] {:<28} value {:+.4} target {:+.4} tol {}",
+                    if p.holds { "x" } else { " " },
+                    p.text,
+                    p.value,
+                    p.target,
+                    p.tolerance
+                );
             }
             if let Some(v) = &rec.verdict {
                 let recorded = v["verdict"]["success"].as_bool();
@@ -176,7 +251,11 @@ fn run(cli: Cli) -> Result<ExitCode> {
                     println!("note: the recorded verdict was {recorded:?}");
                 }
             }
-            Ok(if verdict.success { ExitCode::SUCCESS } else { ExitCode::FAILURE })
+            Ok(if verdict.success {
+                ExitCode::SUCCESS
+            } else {
+                ExitCode::FAILURE
+            })
         }
         Command::Bench { protocol } => {
             let task = load(&protocol)?;

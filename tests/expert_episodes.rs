@@ -9,13 +9,19 @@ use std::path::Path;
 use std::sync::Arc;
 
 fn task(name: &str) -> compiler::Task {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("protocols/thermal_cycler").join(name);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("protocols/thermal_cycler")
+        .join(name);
     let source = std::fs::read_to_string(&path).unwrap();
     let (task, diags) = compiler::compile_source(&source, name);
     task.unwrap_or_else(|| panic!("{name}: {diags:?}"))
 }
 
-fn expert_episode(task: &compiler::Task, seed: u64, opts: &EpisodeOptions) -> scoring::EpisodeResult {
+fn expert_episode(
+    task: &compiler::Task,
+    seed: u64,
+    opts: &EpisodeOptions,
+) -> scoring::EpisodeResult {
     let instance = task.sample(seed);
     let scene = Arc::new(runtime::Scene::build(task, &instance).unwrap());
     let mut expert = ExpertPolicy::new(task, &scene, &instance).unwrap();
@@ -24,12 +30,25 @@ fn expert_episode(task: &compiler::Task, seed: u64, opts: &EpisodeOptions) -> sc
 
 #[test]
 fn expert_succeeds_on_three_seeded_episodes() {
-    for (name, seed) in [("close_lid.toml", 11), ("open_lid.toml", 12), ("close_lid.toml", 13)] {
+    for (name, seed) in [
+        ("close_lid.toml", 11),
+        ("open_lid.toml", 12),
+        ("close_lid.toml", 13),
+    ] {
         let t = task(name);
         let r = expert_episode(&t, seed, &EpisodeOptions::default());
-        assert!(r.success, "{name} seed {seed}: {:?} {:?}", r.error, r.verdict);
+        assert!(
+            r.success,
+            "{name} seed {seed}: {:?} {:?}",
+            r.error, r.verdict
+        );
         assert!(r.sim_time_s < t.time_limit_s);
-        assert!(r.verdict.predicates.iter().all(|p| p.holds && (p.value - p.target).abs() < p.tolerance));
+        assert!(
+            r.verdict
+                .predicates
+                .iter()
+                .all(|p| p.holds && (p.value - p.target).abs() < p.tolerance)
+        );
     }
 }
 
@@ -41,7 +60,10 @@ fn same_seed_same_trajectory() {
     assert_eq!(a.trajectory_hash, b.trajectory_hash);
     assert_eq!(a.control_steps, b.control_steps);
     let c = expert_episode(&t, 6, &EpisodeOptions::default());
-    assert_ne!(a.trajectory_hash, c.trajectory_hash, "different seeds start the arm elsewhere");
+    assert_ne!(
+        a.trajectory_hash, c.trajectory_hash,
+        "different seeds start the arm elsewhere"
+    );
 }
 
 #[test]
@@ -50,11 +72,21 @@ fn an_episode_that_leaves_the_lid_open_fails() {
     t.time_limit_s = 2.0;
     let instance = t.sample(1);
     let scene = Arc::new(runtime::Scene::build(&t, &instance).unwrap());
-    let r = run_episode(&t, &scene, &instance, &mut HoldPolicy, &EpisodeOptions::default()).unwrap();
+    let r = run_episode(
+        &t,
+        &scene,
+        &instance,
+        &mut HoldPolicy,
+        &EpisodeOptions::default(),
+    )
+    .unwrap();
     assert!(!r.success);
     assert!(r.error.is_none(), "{:?}", r.error);
     let closed = &r.verdict.predicates[0];
-    assert!(!closed.holds && closed.value.abs() < 0.05, "the lid stays open: {closed:?}");
+    assert!(
+        !closed.holds && closed.value.abs() < 0.05,
+        "the lid stays open: {closed:?}"
+    );
     assert!((r.sim_time_s - 2.0).abs() < 0.05);
 }
 
@@ -64,7 +96,14 @@ fn recording_rescores_offline_to_the_same_verdict() {
     let dir = std::env::temp_dir().join(format!("autobio-test-rec-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("ep.mcap");
-    let r = expert_episode(&t, 3, &EpisodeOptions { record: Some(path.clone()), image_every: 25 });
+    let r = expert_episode(
+        &t,
+        3,
+        &EpisodeOptions {
+            record: Some(path.clone()),
+            image_every: 25,
+        },
+    );
     assert!(r.success);
     let rec = runtime::record::read_recording(&path).unwrap();
     assert_eq!(rec.topics["/task"], 1);
@@ -75,8 +114,16 @@ fn recording_rescores_offline_to_the_same_verdict() {
     assert_eq!(replayed, t);
     assert_eq!(judge(&replayed, &rec.final_labware), r.verdict);
     // The CLI agrees, without simulating.
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_autobio")).arg("replay").arg(&path).output().unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_autobio"))
+        .arg("replay")
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert!(String::from_utf8_lossy(&out.stdout).contains("re-scored: success"));
     std::fs::remove_dir_all(&dir).unwrap();
 }

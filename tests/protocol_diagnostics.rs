@@ -5,7 +5,9 @@ use std::path::Path;
 use std::process::Command;
 
 fn diagnose(file: &str) -> (String, Vec<dsl::Diagnostic>) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/bad").join(file);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/bad")
+        .join(file);
     let source = std::fs::read_to_string(&path).unwrap();
     let (task, diags) = compiler::compile_source(&source, file);
     assert!(task.is_none(), "{file} must not compile");
@@ -31,32 +33,59 @@ const CASES: &[(&str, &str, &str, usize)] = &[
 fn each_malformed_file_gets_its_code_and_span() {
     for &(file, code, text, line) in CASES {
         let (source, diags) = diagnose(file);
-        let d = diags.iter().find(|d| d.code.as_str() == code).unwrap_or_else(|| panic!("{file}: no {code} in {diags:#?}"));
+        let d = diags
+            .iter()
+            .find(|d| d.code.as_str() == code)
+            .unwrap_or_else(|| panic!("{file}: no {code} in {diags:#?}"));
         let (l, _) = dsl::render::line_col(&source, d.span.start);
-        assert_eq!(l, line, "{file}: {code} on line {l}, expected {line}: {d:?}");
+        assert_eq!(
+            l, line,
+            "{file}: {code} on line {l}, expected {line}: {d:?}"
+        );
         if !text.is_empty() {
-            assert_eq!(&source[d.span.start..d.span.end], text, "{file}: span of {code}");
+            assert_eq!(
+                &source[d.span.start..d.span.end],
+                text,
+                "{file}: span of {code}"
+            );
         }
-        assert!(d.message.chars().next().is_some_and(|c| !c.is_uppercase()), "{file}: message must be lowercase: {}", d.message);
+        assert!(
+            d.message.chars().next().is_some_and(|c| !c.is_uppercase()),
+            "{file}: message must be lowercase: {}",
+            d.message
+        );
     }
 }
 
 #[test]
 fn hints_suggest_the_closest_name() {
     let (_, diags) = diagnose("unknown_kind.toml");
-    assert_eq!(diags[0].hint.as_deref(), Some("did you mean `thermal_cycler`?"));
+    assert_eq!(
+        diags[0].hint.as_deref(),
+        Some("did you mean `thermal_cycler`?")
+    );
     let (_, diags) = diagnose("unknown_primitive.toml");
-    assert!(diags[0].hint.as_deref().unwrap().contains("close_lid"), "{:?}", diags[0].hint);
+    assert!(
+        diags[0].hint.as_deref().unwrap().contains("close_lid"),
+        "{:?}",
+        diags[0].hint
+    );
 }
 
 #[test]
 fn truncated_and_mangled_files_never_panic() {
-    let good = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("protocols/thermal_cycler/close_lid.toml")).unwrap();
+    let good = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("protocols/thermal_cycler/close_lid.toml"),
+    )
+    .unwrap();
     // Every prefix, and every single-byte corruption on char boundaries, parses and checks.
     for end in (0..good.len()).filter(|&i| good.is_char_boundary(i)) {
         let _ = compiler::compile_source(&good[..end], "prefix.toml");
     }
-    for i in (0..good.len()).step_by(3).filter(|&i| good.is_char_boundary(i) && good.is_char_boundary(i + 1)) {
+    for i in (0..good.len())
+        .step_by(3)
+        .filter(|&i| good.is_char_boundary(i) && good.is_char_boundary(i + 1))
+    {
         for c in ["\"", "[", "=", "\n", "x", "0", "]"] {
             let mangled = format!("{}{}{}", &good[..i], c, &good[i + 1..]);
             let _ = compiler::compile_source(&mangled, "mangled.toml");
@@ -67,20 +96,41 @@ fn truncated_and_mangled_files_never_panic() {
 #[test]
 fn check_command_reports_file_line_col_and_fails() {
     let bad = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/bad/unknown_kind.toml");
-    let out = Command::new(env!("CARGO_BIN_EXE_autobio")).arg("check").arg(&bad).output().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_autobio"))
+        .arg("check")
+        .arg(&bad)
+        .output()
+        .unwrap();
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("error[E0010]: unknown labware kind `thermal_cycle`"), "{err}");
+    assert!(
+        err.contains("error[E0010]: unknown labware kind `thermal_cycle`"),
+        "{err}"
+    );
     assert!(err.contains("unknown_kind.toml:17:8"), "{err}");
-    assert!(err.contains("hint: did you mean `thermal_cycler`?"), "{err}");
+    assert!(
+        err.contains("hint: did you mean `thermal_cycler`?"),
+        "{err}"
+    );
     let good = Path::new(env!("CARGO_MANIFEST_DIR")).join("protocols/thermal_cycler/open_lid.toml");
-    let out = Command::new(env!("CARGO_BIN_EXE_autobio")).arg("check").arg(&good).output().unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = Command::new(env!("CARGO_BIN_EXE_autobio"))
+        .arg("check")
+        .arg(&good)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 }
 
 #[test]
 fn explain_documents_every_code() {
-    let out = Command::new(env!("CARGO_BIN_EXE_autobio")).args(["explain", "E0031"]).output().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_autobio"))
+        .args(["explain", "E0031"])
+        .output()
+        .unwrap();
     assert!(out.status.success());
     assert!(String::from_utf8_lossy(&out.stdout).contains("precondition"));
 }

@@ -23,5 +23,9 @@ pub fn compile_source(source: &str, file: &str) -> (Option<Task>, Vec<dsl::Diagn
     }
     let (task, more) = compile(&ast, file);
     diags.extend(more);
-    if diags.iter().any(|d| d.is_error()) { (None, diags) } else { (task, diags) }
+    if diags.iter().any(|d| d.is_error()) {
+        (None, diags)
+    } else {
+        (task, diags)
+    }
 }

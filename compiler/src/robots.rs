@@ -12,7 +12,14 @@ pub struct RobotModel {
 pub const MODELS: &[RobotModel] = &[RobotModel {
     name: "ur5e_2f85",
     description: "Universal Robots UR5e with a Robotiq 2F-85 gripper (MuJoCo Menagerie models)",
-    home: &[0.0, -std::f64::consts::FRAC_PI_2, std::f64::consts::FRAC_PI_2, -std::f64::consts::FRAC_PI_2, -std::f64::consts::FRAC_PI_2, -std::f64::consts::FRAC_PI_2],
+    home: &[
+        0.0,
+        -std::f64::consts::FRAC_PI_2,
+        std::f64::consts::FRAC_PI_2,
+        -std::f64::consts::FRAC_PI_2,
+        -std::f64::consts::FRAC_PI_2,
+        -std::f64::consts::FRAC_PI_2,
+    ],
     dof: 6,
 }];
 

@@ -84,7 +84,11 @@ pub struct CameraSpec {
 #[serde(rename_all = "snake_case")]
 pub enum CameraMount {
     /// Fixed in the world: position and the camera's x/y axes (MuJoCo `xyaxes`), vertical fov (deg).
-    Fixed { pos: [f64; 3], xyaxes: [f64; 6], fovy_deg: f64 },
+    Fixed {
+        pos: [f64; 3],
+        xyaxes: [f64; 6],
+        fovy_deg: f64,
+    },
     /// On a robot's wrist.
     Wrist { robot: String },
 }
@@ -154,10 +158,19 @@ impl Task {
                 let dy = uniform(&mut rng, -l.xy_jitter_m, l.xy_jitter_m);
                 let dyaw = uniform(&mut rng, -l.yaw_jitter_rad, l.yaw_jitter_rad);
                 let p = l.placement.pos;
-                Pose::new([p[0] + dx, p[1] + dy, p[2]], l.placement.quat.mul(labware::Quat::from_axis_angle([0.0, 0.0, 1.0], dyaw)))
+                Pose::new(
+                    [p[0] + dx, p[1] + dy, p[2]],
+                    l.placement
+                        .quat
+                        .times(labware::Quat::from_axis_angle([0.0, 0.0, 1.0], dyaw)),
+                )
             })
             .collect();
-        SceneInstance { seed, robot_q, labware_placement }
+        SceneInstance {
+            seed,
+            robot_q,
+            labware_placement,
+        }
     }
 
     pub fn labware_index(&self, name: &str) -> Option<usize> {

@@ -73,7 +73,11 @@ pub struct Randomisation {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub enum RandomItem {
     /// Per-joint uniform offsets (radians) added to the robot's home pose.
-    Joints { low: Spanned<Vec<f64>>, high: Spanned<Vec<f64>>, span: Span },
+    Joints {
+        low: Spanned<Vec<f64>>,
+        high: Spanned<Vec<f64>>,
+        span: Span,
+    },
     /// Uniform planar offset of a labware position: ± metres in x and y.
     Xy(Spanned<f64>),
     /// Uniform yaw offset: ± radians.

@@ -100,26 +100,52 @@ impl Code {
     ];
 
     pub fn from_name(name: &str) -> Option<Code> {
-        Code::ALL.into_iter().find(|c| c.as_str().eq_ignore_ascii_case(name))
+        Code::ALL
+            .into_iter()
+            .find(|c| c.as_str().eq_ignore_ascii_case(name))
     }
 
     /// Long-form documentation, printed by `autobio explain CODE`.
     pub fn explanation(self) -> &'static str {
         match self {
-            Code::E0001 => "The protocol file is not valid TOML (an unclosed string or table header, a duplicate key...).\nFix the syntax at the marked place; nothing else in the file is checked until it parses.",
-            Code::E0002 => "A table or key that every protocol needs is missing, e.g. `[protocol]`, `protocol.id`,\n`protocol.instruction`, `protocol.time_limit`, or at least one `[[steps]]` entry.",
-            Code::E0003 => "The key is not part of the protocol language (format 1). Usually a typo: the hint names the\nclosest known key. See docs/protocol-language.md for every table and key.",
-            Code::E0004 => "The value has the wrong TOML type, e.g. a number where a string is expected.",
-            Code::E0005 => "The file declares a `format` this autobio does not read. Format 1 is the current one.",
+            Code::E0001 => {
+                "The protocol file is not valid TOML (an unclosed string or table header, a duplicate key...).\nFix the syntax at the marked place; nothing else in the file is checked until it parses."
+            }
+            Code::E0002 => {
+                "A table or key that every protocol needs is missing, e.g. `[protocol]`, `protocol.id`,\n`protocol.instruction`, `protocol.time_limit`, or at least one `[[steps]]` entry."
+            }
+            Code::E0003 => {
+                "The key is not part of the protocol language (format 1). Usually a typo: the hint names the\nclosest known key. See docs/protocol-language.md for every table and key."
+            }
+            Code::E0004 => {
+                "The value has the wrong TOML type, e.g. a number where a string is expected."
+            }
+            Code::E0005 => {
+                "The file declares a `format` this autobio does not read. Format 1 is the current one."
+            }
             Code::E0010 => "`kind` names no labware in the catalogue. Known kinds: thermal_cycler.",
             Code::E0011 => "`model` names no robot in the catalogue. Known models: ur5e_2f85.",
-            Code::E0012 => "`do` names no lab primitive in the catalogue. Known primitives: open_lid, close_lid.",
-            Code::E0013 => "A step, randomisation or predicate refers to a name that is not declared under\n`[labware]` or `[robots]`.",
-            Code::E0014 => "The primitive exists but this labware kind has no affordance for it (e.g. `open_lid` on\nsomething without a lid).",
-            Code::E0020 => "A physical quantity has no unit, an unknown unit, or a unit of the wrong dimension.\nWrite quantities as strings with units (\"30 s\", \"5 deg\", \"10 mm\") or use a unit-suffixed key\n(`pos_m`, `yaw_deg`, `xy_mm`).",
-            Code::E0021 => "The value is outside the range the language allows (e.g. a negative time limit, a\nrandomisation range whose low end exceeds its high end).",
-            Code::E0030 => "A success predicate must read `<labware>.<part> is <state>`, e.g. \"cycler.lid is closed\";\nthe part and state must exist for that labware kind.",
-            Code::E0031 => "Each primitive declares the labware state it needs; tracing the steps from the declared\ninitial state, this step would start where its precondition does not hold (closing a lid\nthat is already closed).",
+            Code::E0012 => {
+                "`do` names no lab primitive in the catalogue. Known primitives: open_lid, close_lid."
+            }
+            Code::E0013 => {
+                "A step, randomisation or predicate refers to a name that is not declared under\n`[labware]` or `[robots]`."
+            }
+            Code::E0014 => {
+                "The primitive exists but this labware kind has no affordance for it (e.g. `open_lid` on\nsomething without a lid)."
+            }
+            Code::E0020 => {
+                "A physical quantity has no unit, an unknown unit, or a unit of the wrong dimension.\nWrite quantities as strings with units (\"30 s\", \"5 deg\", \"10 mm\") or use a unit-suffixed key\n(`pos_m`, `yaw_deg`, `xy_mm`)."
+            }
+            Code::E0021 => {
+                "The value is outside the range the language allows (e.g. a negative time limit, a\nrandomisation range whose low end exceeds its high end)."
+            }
+            Code::E0030 => {
+                "A success predicate must read `<labware>.<part> is <state>`, e.g. \"cycler.lid is closed\";\nthe part and state must exist for that labware kind."
+            }
+            Code::E0031 => {
+                "Each primitive declares the labware state it needs; tracing the steps from the declared\ninitial state, this step would start where its precondition does not hold (closing a lid\nthat is already closed)."
+            }
         }
     }
 }
@@ -143,7 +169,13 @@ pub struct Diagnostic {
 
 impl Diagnostic {
     pub fn error(code: Code, span: Span, message: impl Into<String>) -> Self {
-        Diagnostic { code, severity: Severity::Error, span, message: message.into(), hint: None }
+        Diagnostic {
+            code,
+            severity: Severity::Error,
+            span,
+            message: message.into(),
+            hint: None,
+        }
     }
 
     pub fn with_hint(mut self, hint: impl Into<String>) -> Self {
@@ -157,7 +189,10 @@ impl Diagnostic {
 }
 
 /// The closest candidate by edit distance, if it is close enough to be a plausible typo.
-pub fn did_you_mean<'a>(input: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+pub fn did_you_mean<'a>(
+    input: &str,
+    candidates: impl IntoIterator<Item = &'a str>,
+) -> Option<&'a str> {
     candidates
         .into_iter()
         .map(|c| (levenshtein(input, c), c))
@@ -186,8 +221,14 @@ mod tests {
 
     #[test]
     fn suggests_close_names_only() {
-        assert_eq!(did_you_mean("thermal_cycle", ["thermal_cycler", "centrifuge"]), Some("thermal_cycler"));
-        assert_eq!(did_you_mean("close_lidd", ["open_lid", "close_lid"]), Some("close_lid"));
+        assert_eq!(
+            did_you_mean("thermal_cycle", ["thermal_cycler", "centrifuge"]),
+            Some("thermal_cycler")
+        );
+        assert_eq!(
+            did_you_mean("close_lidd", ["open_lid", "close_lid"]),
+            Some("close_lid")
+        );
         assert_eq!(did_you_mean("zzz", ["thermal_cycler"]), None);
     }
 

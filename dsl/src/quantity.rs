@@ -50,7 +50,10 @@ const UNITS: &[(&str, Dimension, f64)] = &[
 
 /// Looks up a unit symbol (also used for unit-suffixed keys such as `yaw_deg`).
 pub fn unit(symbol: &str) -> Option<(Dimension, f64)> {
-    UNITS.iter().find(|(s, _, _)| *s == symbol).map(|(_, d, f)| (*d, *f))
+    UNITS
+        .iter()
+        .find(|(s, _, _)| *s == symbol)
+        .map(|(_, d, f)| (*d, *f))
 }
 
 /// Parses "<number> <unit>" (the space is optional). Errors are lowercase messages.
@@ -65,15 +68,21 @@ pub fn parse_quantity(text: &str) -> Result<Quantity, String> {
     let (num, sym) = t.split_at(split);
     let num = num.trim().replace('_', "");
     let sym = sym.trim();
-    let value: f64 = num.parse().map_err(|_| format!("`{text}` does not start with a number"))?;
+    let value: f64 = num
+        .parse()
+        .map_err(|_| format!("`{text}` does not start with a number"))?;
     if !value.is_finite() {
         return Err(format!("`{text}` is not a finite number"));
     }
     if sym.is_empty() {
         return Err(format!("`{text}` has no unit"));
     }
-    let (dimension, factor) = unit(sym).ok_or_else(|| format!("unknown unit `{sym}` in `{text}`"))?;
-    Ok(Quantity { si: value * factor, dimension })
+    let (dimension, factor) =
+        unit(sym).ok_or_else(|| format!("unknown unit `{sym}` in `{text}`"))?;
+    Ok(Quantity {
+        si: value * factor,
+        dimension,
+    })
 }
 
 #[cfg(test)]
@@ -85,13 +94,24 @@ mod tests {
         assert_eq!(parse_quantity("30 s").unwrap().si, 30.0);
         assert!((parse_quantity("90deg").unwrap().si - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
         assert_eq!(parse_quantity("-10 mm").unwrap().si, -0.01);
-        assert_eq!(parse_quantity("1.5 min").unwrap().dimension, Dimension::Time);
+        assert_eq!(
+            parse_quantity("1.5 min").unwrap().dimension,
+            Dimension::Time
+        );
     }
 
     #[test]
     fn rejects_bad_quantities() {
         assert!(parse_quantity("30").unwrap_err().contains("no unit"));
-        assert!(parse_quantity("30 kg").unwrap_err().contains("unknown unit `kg`"));
-        assert!(parse_quantity("fast").unwrap_err().contains("does not start with a number"));
+        assert!(
+            parse_quantity("30 kg")
+                .unwrap_err()
+                .contains("unknown unit `kg`")
+        );
+        assert!(
+            parse_quantity("fast")
+                .unwrap_err()
+                .contains("does not start with a number")
+        );
     }
 }

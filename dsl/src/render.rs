@@ -6,7 +6,10 @@ use crate::Span;
 /// 1-based (line, column) of a byte offset; columns count characters, not bytes.
 pub fn line_col(source: &str, offset: usize) -> (usize, usize) {
     let offset = offset.min(source.len());
-    let offset = (0..=offset).rev().find(|&o| source.is_char_boundary(o)).unwrap_or(0);
+    let offset = (0..=offset)
+        .rev()
+        .find(|&o| source.is_char_boundary(o))
+        .unwrap_or(0);
     let before = &source[..offset];
     let line = before.matches('\n').count() + 1;
     let line_start = before.rfind('\n').map(|i| i + 1).unwrap_or(0);
@@ -18,13 +21,22 @@ pub fn line_col(source: &str, offset: usize) -> (usize, usize) {
 /// (clipped to that line).
 pub fn line_of(source: &str, span: Span) -> (&str, usize, usize) {
     let start = span.start.min(source.len());
-    let start = (0..=start).rev().find(|&o| source.is_char_boundary(o)).unwrap_or(0);
+    let start = (0..=start)
+        .rev()
+        .find(|&o| source.is_char_boundary(o))
+        .unwrap_or(0);
     let line_start = source[..start].rfind('\n').map(|i| i + 1).unwrap_or(0);
-    let line_end = source[start..].find('\n').map(|i| start + i).unwrap_or(source.len());
+    let line_end = source[start..]
+        .find('\n')
+        .map(|i| start + i)
+        .unwrap_or(source.len());
     let line = &source[line_start..line_end];
     let from = source[line_start..start].chars().count();
     let end = span.end.clamp(start, line_end);
-    let end = (start..=end).rev().find(|&o| source.is_char_boundary(o)).unwrap_or(start);
+    let end = (start..=end)
+        .rev()
+        .find(|&o| source.is_char_boundary(o))
+        .unwrap_or(start);
     let width = source[start..end].chars().count().max(1);
     (line, from, width)
 }

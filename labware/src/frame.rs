@@ -19,7 +19,11 @@ pub fn dot(a: Vec3, b: Vec3) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 pub fn cross(a: Vec3, b: Vec3) -> Vec3 {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
 }
 pub fn norm(a: Vec3) -> f64 {
     dot(a, a).sqrt()
@@ -37,7 +41,7 @@ impl Quat {
         Quat([c, axis[0] / n * s, axis[1] / n * s, axis[2] / n * s])
     }
 
-    pub fn mul(self, o: Quat) -> Quat {
+    pub fn times(self, o: Quat) -> Quat {
         let [a1, b1, c1, d1] = self.0;
         let [a2, b2, c2, d2] = o.0;
         Quat([
@@ -60,7 +64,7 @@ impl Quat {
 
     pub fn rotate(self, v: Vec3) -> Vec3 {
         let p = Quat([0.0, v[0], v[1], v[2]]);
-        let r = self.mul(p).mul(self.conj());
+        let r = self.times(p).times(self.conj());
         [r.0[1], r.0[2], r.0[3]]
     }
 
@@ -84,23 +88,47 @@ impl Quat {
         let tr = m[0] + m[4] + m[8];
         let q = if tr > 0.0 {
             let s = (tr + 1.0).sqrt() * 2.0;
-            [0.25 * s, (m[7] - m[5]) / s, (m[2] - m[6]) / s, (m[3] - m[1]) / s]
+            [
+                0.25 * s,
+                (m[7] - m[5]) / s,
+                (m[2] - m[6]) / s,
+                (m[3] - m[1]) / s,
+            ]
         } else if m[0] > m[4] && m[0] > m[8] {
             let s = (1.0 + m[0] - m[4] - m[8]).sqrt() * 2.0;
-            [(m[7] - m[5]) / s, 0.25 * s, (m[1] + m[3]) / s, (m[2] + m[6]) / s]
+            [
+                (m[7] - m[5]) / s,
+                0.25 * s,
+                (m[1] + m[3]) / s,
+                (m[2] + m[6]) / s,
+            ]
         } else if m[4] > m[8] {
             let s = (1.0 + m[4] - m[0] - m[8]).sqrt() * 2.0;
-            [(m[2] - m[6]) / s, (m[1] + m[3]) / s, 0.25 * s, (m[5] + m[7]) / s]
+            [
+                (m[2] - m[6]) / s,
+                (m[1] + m[3]) / s,
+                0.25 * s,
+                (m[5] + m[7]) / s,
+            ]
         } else {
             let s = (1.0 + m[8] - m[0] - m[4]).sqrt() * 2.0;
-            [(m[3] - m[1]) / s, (m[2] + m[6]) / s, (m[5] + m[7]) / s, 0.25 * s]
+            [
+                (m[3] - m[1]) / s,
+                (m[2] + m[6]) / s,
+                (m[5] + m[7]) / s,
+                0.25 * s,
+            ]
         };
         Quat(q).normalized()
     }
 
     /// Rotation vector (axis * angle) of this rotation, angle in [0, pi].
     pub fn log(self) -> Vec3 {
-        let q = if self.0[0] < 0.0 { Quat(self.0.map(|v| -v)) } else { self };
+        let q = if self.0[0] < 0.0 {
+            Quat(self.0.map(|v| -v))
+        } else {
+            self
+        };
         let v = [q.0[1], q.0[2], q.0[3]];
         let s = norm(v);
         if s < 1e-12 {
@@ -112,13 +140,13 @@ impl Quat {
 
     /// Spherical interpolation from self (t=0) to o (t=1).
     pub fn slerp(self, o: Quat, t: f64) -> Quat {
-        let rel = self.conj().mul(o);
+        let rel = self.conj().times(o);
         let w = rel.log();
         let angle = norm(w);
         if angle < 1e-12 {
             return self;
         }
-        self.mul(Quat::from_axis_angle(w, angle * t)).normalized()
+        self.times(Quat::from_axis_angle(w, angle * t)).normalized()
     }
 }
 
@@ -130,7 +158,10 @@ pub struct Pose {
 }
 
 impl Pose {
-    pub const IDENTITY: Pose = Pose { pos: [0.0; 3], quat: Quat::IDENTITY };
+    pub const IDENTITY: Pose = Pose {
+        pos: [0.0; 3],
+        quat: Quat::IDENTITY,
+    };
 
     pub fn new(pos: Vec3, quat: Quat) -> Pose {
         Pose { pos, quat }
@@ -138,15 +169,24 @@ impl Pose {
 
     /// self * o: `o` expressed in self's frame, mapped to self's parent frame.
     pub fn compose(&self, o: &Pose) -> Pose {
-        Pose { pos: add(self.pos, self.quat.rotate(o.pos)), quat: self.quat.mul(o.quat).normalized() }
+        Pose {
+            pos: add(self.pos, self.quat.rotate(o.pos)),
+            quat: self.quat.times(o.quat).normalized(),
+        }
     }
 
     pub fn translated_local(&self, offset: Vec3) -> Pose {
-        Pose { pos: add(self.pos, self.quat.rotate(offset)), quat: self.quat }
+        Pose {
+            pos: add(self.pos, self.quat.rotate(offset)),
+            quat: self.quat,
+        }
     }
 
     pub fn yaw(pos: Vec3, yaw: f64) -> Pose {
-        Pose { pos, quat: Quat::from_axis_angle([0.0, 0.0, 1.0], yaw) }
+        Pose {
+            pos,
+            quat: Quat::from_axis_angle([0.0, 0.0, 1.0], yaw),
+        }
     }
 }
 
@@ -159,7 +199,8 @@ mod tests {
         let q = Quat::from_axis_angle([1.0, 2.0, 3.0], 0.7);
         let back = Quat::from_mat(&q.to_mat());
         assert!(q.0.iter().zip(back.0).all(|(a, b)| (a - b).abs() < 1e-12));
-        let r = Quat::from_axis_angle([0.0, 0.0, 1.0], std::f64::consts::FRAC_PI_2).rotate([1.0, 0.0, 0.0]);
+        let r = Quat::from_axis_angle([0.0, 0.0, 1.0], std::f64::consts::FRAC_PI_2)
+            .rotate([1.0, 0.0, 0.0]);
         assert!((r[1] - 1.0).abs() < 1e-12 && r[0].abs() < 1e-12);
         assert!((norm(q.log()) - 0.7).abs() < 1e-12);
         let half = Quat::IDENTITY.slerp(q, 0.5);

@@ -122,11 +122,21 @@ impl Params {
         let b = self.base_half;
         let lid_rest = self.lid_rest();
         let lid_rel_hinge = [0.0, self.lid_depth / 2.0, 0.0];
-        let lid_half = [self.lid_half_width, self.lid_depth / 2.0, self.lid_half_thickness];
+        let lid_half = [
+            self.lid_half_width,
+            self.lid_depth / 2.0,
+            self.lid_half_thickness,
+        ];
         let arm_half = [0.006, self.lever_arm / 2.0, 0.006];
         let side = self.grip_half_length - 0.006;
-        let (lo, hi) = (self.lid_closed.min(self.lid_open), self.lid_closed.max(self.lid_open));
-        let (llo, lhi) = (self.lever_pressed.min(self.lever_raised), self.lever_pressed.max(self.lever_raised));
+        let (lo, hi) = (
+            self.lid_closed.min(self.lid_open),
+            self.lid_closed.max(self.lid_open),
+        );
+        let (llo, lhi) = (
+            self.lever_pressed.min(self.lever_raised),
+            self.lever_pressed.max(self.lever_raised),
+        );
         let worldbody = format!(
             r#"<body name="{base}" pos="{pos}" quat="{quat}">
   <geom name="{base}/body" type="box" size="{bh}" pos="0 0 {bz}" rgba="0.82 0.83 0.85 1"/>
@@ -186,28 +196,46 @@ impl Params {
             lidj = n.lid_joint,
             closed = self.lid_closed,
         );
-        let contact = format!("<exclude body1=\"{}\" body2=\"{}\"/>\n", n.base, n.lever_body);
-        Mjcf { worldbody, equality, contact }
+        let contact = format!(
+            "<exclude body1=\"{}\" body2=\"{}\"/>\n",
+            n.base, n.lever_body
+        );
+        Mjcf {
+            worldbody,
+            equality,
+            contact,
+        }
     }
 
     /// Pose of the grip bar's centre for given joint angles, in the frame `placement` is given in.
     /// Axes: x along the bar, y pointing away from the lever pivot, z = x × y.
     pub fn grip_pose(&self, placement: &Pose, lid: f64, lever: f64) -> Pose {
         let x = [1.0, 0.0, 0.0];
-        let lid_frame = Pose::new(self.hinge, self.lid_rest().mul(Quat::from_axis_angle(x, lid)));
+        let lid_frame = Pose::new(
+            self.hinge,
+            self.lid_rest().times(Quat::from_axis_angle(x, lid)),
+        );
         let lever_frame = Pose::new([0.0, self.lid_depth, 0.0], Quat::from_axis_angle(x, lever));
         let grip = Pose::new([0.0, self.lever_arm, 0.0], Quat::IDENTITY);
-        placement.compose(&lid_frame).compose(&lever_frame).compose(&grip)
+        placement
+            .compose(&lid_frame)
+            .compose(&lever_frame)
+            .compose(&grip)
     }
 
     /// The notch nearest to a lever angle.
     pub fn nearest_notch(&self, lever: f64) -> f64 {
-        if (lever - self.lever_pressed).abs() < (lever - self.lever_raised).abs() { self.lever_pressed } else { self.lever_raised }
+        if (lever - self.lever_pressed).abs() < (lever - self.lever_raised).abs() {
+            self.lever_pressed
+        } else {
+            self.lever_raised
+        }
     }
 
     /// Detent torque on the lever: a spring toward the nearest notch with damping.
     pub fn detent_torque(&self, lever: f64, lever_vel: f64) -> f64 {
-        self.detent_stiffness * (self.nearest_notch(lever) - lever) - self.detent_damping * lever_vel
+        self.detent_stiffness * (self.nearest_notch(lever) - lever)
+            - self.detent_damping * lever_vel
     }
 
     pub fn lid_is_closed(&self, lid: f64) -> bool {
@@ -217,7 +245,11 @@ impl Params {
 
 fn box_inertia(m: f64, h: Vec3) -> Vec3 {
     let (a, b, c) = (2.0 * h[0], 2.0 * h[1], 2.0 * h[2]);
-    [m * (b * b + c * c) / 12.0, m * (a * a + c * c) / 12.0, m * (a * a + b * b) / 12.0]
+    [
+        m * (b * b + c * c) / 12.0,
+        m * (a * a + c * c) / 12.0,
+        m * (a * a + b * b) / 12.0,
+    ]
 }
 
 /// The lid latch's state machine, evaluated after every physics step.
@@ -252,8 +284,14 @@ mod tests {
     fn latch_locks_only_when_pressed_after_closing() {
         let p = Params::default();
         let mut l = Latch::default();
-        assert!(!l.update(&p, 0.0, p.lever_pressed), "pressed while open must not lock");
-        assert!(!l.update(&p, p.lid_closed, p.lever_pressed), "jammed until raised");
+        assert!(
+            !l.update(&p, 0.0, p.lever_pressed),
+            "pressed while open must not lock"
+        );
+        assert!(
+            !l.update(&p, p.lid_closed, p.lever_pressed),
+            "jammed until raised"
+        );
         assert!(!l.update(&p, p.lid_closed, 0.0));
         assert!(l.update(&p, p.lid_closed, p.lever_pressed));
         assert!(!l.update(&p, p.lid_closed, -0.1), "raising unlocks");
@@ -268,7 +306,8 @@ mod tests {
         assert!((closed.pos[2] - p.hinge[2]).abs() < 1e-9);
         assert!((closed.pos[1] - (p.hinge[1] + p.lid_depth + p.lever_arm)).abs() < 1e-9);
         assert!(open.pos[2] > closed.pos[2] + 0.2);
-        let r = |q: &Pose| ((q.pos[1] - p.hinge[1]).powi(2) + (q.pos[2] - p.hinge[2]).powi(2)).sqrt();
+        let r =
+            |q: &Pose| ((q.pos[1] - p.hinge[1]).powi(2) + (q.pos[2] - p.hinge[2]).powi(2)).sqrt();
         assert!((r(&open) - r(&closed)).abs() < 1e-9);
     }
 

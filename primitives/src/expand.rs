@@ -14,7 +14,11 @@ pub enum Motion {
     /// Straight in from the standoff to the grip.
     Insert { lid: f64, lever: f64 },
     /// Follow the grip while the lid and lever move from their live angles to these.
-    FollowGrip { lid: f64, lever: f64, samples: usize },
+    FollowGrip {
+        lid: f64,
+        lever: f64,
+        samples: usize,
+    },
     /// Command the gripper (0 open .. 255 closed) and hold still.
     Gripper { ctrl: f64, duration_s: f64 },
     /// Back off along the approach axis.
@@ -42,24 +46,60 @@ const STANDOFF_M: f64 = 0.07;
 /// Expands a lab primitive on a thermal cycler into the expert's motions.
 pub fn expand(primitive: &str, p: &Params) -> Option<Vec<Motion>> {
     let press = p.lever_pressed * 0.9 + p.lever_raised * 0.1;
-    let grasp = Motion::Gripper { ctrl: GRIP_CLOSED, duration_s: GRIPPER_WAIT_S };
-    let release = Motion::Gripper { ctrl: GRIP_OPEN, duration_s: GRIPPER_WAIT_S };
+    let grasp = Motion::Gripper {
+        ctrl: GRIP_CLOSED,
+        duration_s: GRIPPER_WAIT_S,
+    };
+    let release = Motion::Gripper {
+        ctrl: GRIP_OPEN,
+        duration_s: GRIPPER_WAIT_S,
+    };
     Some(match primitive {
         "close_lid" => vec![
-            Motion::Approach { lid: p.lid_open, lever: p.lever_raised, standoff: STANDOFF_M },
-            Motion::Insert { lid: p.lid_open, lever: p.lever_raised },
+            Motion::Approach {
+                lid: p.lid_open,
+                lever: p.lever_raised,
+                standoff: STANDOFF_M,
+            },
+            Motion::Insert {
+                lid: p.lid_open,
+                lever: p.lever_raised,
+            },
             grasp,
-            Motion::FollowGrip { lid: p.lid_closed, lever: p.lever_raised, samples: 30 },
-            Motion::FollowGrip { lid: p.lid_closed, lever: press, samples: 10 },
+            Motion::FollowGrip {
+                lid: p.lid_closed,
+                lever: p.lever_raised,
+                samples: 30,
+            },
+            Motion::FollowGrip {
+                lid: p.lid_closed,
+                lever: press,
+                samples: 10,
+            },
             release,
             Motion::Retreat { distance: 0.1 },
         ],
         "open_lid" => vec![
-            Motion::Approach { lid: p.lid_closed, lever: p.lever_pressed, standoff: STANDOFF_M },
-            Motion::Insert { lid: p.lid_closed, lever: p.lever_pressed },
+            Motion::Approach {
+                lid: p.lid_closed,
+                lever: p.lever_pressed,
+                standoff: STANDOFF_M,
+            },
+            Motion::Insert {
+                lid: p.lid_closed,
+                lever: p.lever_pressed,
+            },
             grasp,
-            Motion::FollowGrip { lid: p.lid_closed, lever: p.lever_raised, samples: 10 },
-            Motion::FollowGrip { lid: p.lid_open, lever: p.lever_raised, samples: 30 },
+            Motion::FollowGrip {
+                lid: p.lid_closed,
+                lever: p.lever_raised,
+                samples: 10,
+            },
+            Motion::FollowGrip {
+                lid: p.lid_open,
+                lever: p.lever_raised,
+                samples: 30,
+            },
             release,
             Motion::Retreat { distance: 0.1 },
         ],
@@ -78,11 +118,31 @@ pub struct GripContext {
 
 impl GripContext {
     /// Picks the grasp closer in orientation to the current TCP.
-    pub fn new(params: Params, placement: Pose, lid: f64, lever: f64, tcp_now: &Pose) -> GripContext {
-        let mut cx = GripContext { params, placement, flip: false };
-        let a = cx.tool_pose(lid, lever).quat.conj().mul(tcp_now.quat).log();
+    pub fn new(
+        params: Params,
+        placement: Pose,
+        lid: f64,
+        lever: f64,
+        tcp_now: &Pose,
+    ) -> GripContext {
+        let mut cx = GripContext {
+            params,
+            placement,
+            flip: false,
+        };
+        let a = cx
+            .tool_pose(lid, lever)
+            .quat
+            .conj()
+            .times(tcp_now.quat)
+            .log();
         cx.flip = true;
-        let b = cx.tool_pose(lid, lever).quat.conj().mul(tcp_now.quat).log();
+        let b = cx
+            .tool_pose(lid, lever)
+            .quat
+            .conj()
+            .times(tcp_now.quat)
+            .log();
         cx.flip = norm(b) < norm(a);
         cx
     }
@@ -92,9 +152,15 @@ impl GripContext {
     /// round, so it turns inside the closed fingers while the lever moves: the tool follows the
     /// lid's rotation but not the lever's, and never has to come at the pressed lever from below.
     pub fn tool_pose(&self, lid: f64, lever: f64) -> Pose {
-        let mut grip = self.params.grip_pose(&self.placement, lid, self.params.lever_raised);
+        let mut grip = self
+            .params
+            .grip_pose(&self.placement, lid, self.params.lever_raised);
         grip.pos = self.params.grip_pose(&self.placement, lid, lever).pos;
-        let m = if self.flip { [0.0, 1.0, 0.0, 0.0, 0.0, -1.0, -1.0, 0.0, 0.0] } else { [0.0, -1.0, 0.0, 0.0, 0.0, -1.0, 1.0, 0.0, 0.0] };
+        let m = if self.flip {
+            [0.0, 1.0, 0.0, 0.0, 0.0, -1.0, -1.0, 0.0, 0.0]
+        } else {
+            [0.0, -1.0, 0.0, 0.0, 0.0, -1.0, 1.0, 0.0, 0.0]
+        };
         grip.compose(&Pose::new([0.0; 3], Quat::from_mat(&m)))
     }
 
@@ -102,20 +168,34 @@ impl GripContext {
     /// Gripper motions have no path (empty).
     pub fn poses(&self, motion: &Motion, tcp_now: &Pose, live: (f64, f64)) -> Vec<Pose> {
         match *motion {
-            Motion::Approach { lid, lever, standoff } => {
-                let target = self.tool_pose(lid, lever).translated_local([0.0, 0.0, -standoff]);
+            Motion::Approach {
+                lid,
+                lever,
+                standoff,
+            } => {
+                let target = self
+                    .tool_pose(lid, lever)
+                    .translated_local([0.0, 0.0, -standoff]);
                 arc(tcp_now, &target, 16)
             }
             Motion::Insert { lid, lever } => line(tcp_now, &self.tool_pose(lid, lever), 6),
-            Motion::FollowGrip { lid, lever, samples } => {
+            Motion::FollowGrip {
+                lid,
+                lever,
+                samples,
+            } => {
                 let mut out = vec![*tcp_now];
                 for i in 1..=samples {
                     let t = i as f64 / samples as f64;
-                    out.push(self.tool_pose(live.0 + (lid - live.0) * t, live.1 + (lever - live.1) * t));
+                    out.push(
+                        self.tool_pose(live.0 + (lid - live.0) * t, live.1 + (lever - live.1) * t),
+                    );
                 }
                 out
             }
-            Motion::Retreat { distance } => line(tcp_now, &tcp_now.translated_local([0.0, 0.0, -distance]), 6),
+            Motion::Retreat { distance } => {
+                line(tcp_now, &tcp_now.translated_local([0.0, 0.0, -distance]), 6)
+            }
             Motion::Gripper { .. } => Vec::new(),
         }
     }
@@ -125,7 +205,10 @@ fn line(a: &Pose, b: &Pose, n: usize) -> Vec<Pose> {
     (0..=n)
         .map(|i| {
             let t = i as f64 / n as f64;
-            Pose::new(add(a.pos, scale(sub(b.pos, a.pos), t)), a.quat.slerp(b.quat, t))
+            Pose::new(
+                add(a.pos, scale(sub(b.pos, a.pos), t)),
+                a.quat.slerp(b.quat, t),
+            )
         })
         .collect()
 }
@@ -158,7 +241,11 @@ mod tests {
     #[test]
     fn grasp_approaches_against_the_lever() {
         let p = Params::default();
-        let cx = GripContext { params: p.clone(), placement: Pose::IDENTITY, flip: false };
+        let cx = GripContext {
+            params: p.clone(),
+            placement: Pose::IDENTITY,
+            flip: false,
+        };
         let closed = cx.tool_pose(p.lid_closed, 0.0);
         // Lid closed, lever raised: the grip's outward axis is +y, so the tool approaches along -y.
         let z = closed.quat.rotate([0.0, 0.0, 1.0]);

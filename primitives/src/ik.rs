@@ -3,9 +3,11 @@
 
 use crate::Kinematics;
 use clarabel::algebra::CscMatrix;
-use clarabel::solver::{DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SupportedConeT};
-use labware::frame::{norm, sub};
+use clarabel::solver::{
+    DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SupportedConeT,
+};
 use labware::Pose;
+use labware::frame::{norm, sub};
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum IkError {
@@ -25,19 +27,30 @@ pub struct IkOptions {
 
 impl Default for IkOptions {
     fn default() -> Self {
-        IkOptions { damping: 1e-4, max_step: 0.3, iterations: 80, pos_tol: 2e-4, rot_tol: 2e-3 }
+        IkOptions {
+            damping: 1e-4,
+            max_step: 0.3,
+            iterations: 80,
+            pos_tol: 2e-4,
+            rot_tol: 2e-3,
+        }
     }
 }
 
 /// Pose error as a 6-vector (position; rotation vector), world frame.
 pub fn pose_error(target: &Pose, current: &Pose) -> [f64; 6] {
     let p = sub(target.pos, current.pos);
-    let r = target.quat.mul(current.quat.conj()).log();
+    let r = target.quat.times(current.quat.conj()).log();
     [p[0], p[1], p[2], r[0], r[1], r[2]]
 }
 
 /// Solves for joint angles reaching `target`, starting from `seed`.
-pub fn solve_ik(kin: &mut dyn Kinematics, target: &Pose, seed: &[f64], opt: &IkOptions) -> Result<Vec<f64>, IkError> {
+pub fn solve_ik(
+    kin: &mut dyn Kinematics,
+    target: &Pose,
+    seed: &[f64],
+    opt: &IkOptions,
+) -> Result<Vec<f64>, IkError> {
     let n = kin.dof();
     let limits = kin.limits();
     let mut q = seed.to_vec();
@@ -93,8 +106,12 @@ pub fn solve_ik(kin: &mut dyn Kinematics, target: &Pose, seed: &[f64], opt: &IkO
         }
         let a = CscMatrix::new_from_triplets(2 * n, n, a_rows, a_cols, a_vals);
         let cones: [SupportedConeT<f64>; 1] = [NonnegativeConeT(2 * n)];
-        let settings = DefaultSettingsBuilder::default().verbose(false).build().map_err(|e| IkError::Solver(format!("{e:?}")))?;
-        let mut solver = DefaultSolver::new(&p, &c, &a, &b, &cones, settings).map_err(|e| IkError::Solver(format!("{e:?}")))?;
+        let settings = DefaultSettingsBuilder::default()
+            .verbose(false)
+            .build()
+            .map_err(|e| IkError::Solver(format!("{e:?}")))?;
+        let mut solver = DefaultSolver::new(&p, &c, &a, &b, &cones, settings)
+            .map_err(|e| IkError::Solver(format!("{e:?}")))?;
         solver.solve();
         let dq = &solver.solution.x;
         if dq.iter().any(|v| !v.is_finite()) {

@@ -21,7 +21,11 @@ impl JointSpline {
                 // Tridiagonal system for interior second derivatives (natural ends).
                 let size = k - 2;
                 let mut diag = vec![4.0; size];
-                let mut rhs: Vec<f64> = (1..k - 1).map(|i| 6.0 * (points[i + 1][j] - 2.0 * points[i][j] + points[i - 1][j]) / (h * h)).collect();
+                let mut rhs: Vec<f64> = (1..k - 1)
+                    .map(|i| {
+                        6.0 * (points[i + 1][j] - 2.0 * points[i][j] + points[i - 1][j]) / (h * h)
+                    })
+                    .collect();
                 for i in 1..size {
                     let f = 1.0 / diag[i - 1];
                     diag[i] -= f;
@@ -57,8 +61,12 @@ impl JointSpline {
             let (y0, y1) = (self.points[i][j], self.points[i + 1][j]);
             let (m0, m1) = (self.m[i][j], self.m[i + 1][j]);
             let a = h - t;
-            q[j] = m0 * a.powi(3) / (6.0 * h) + m1 * t.powi(3) / (6.0 * h) + (y0 / h - m0 * h / 6.0) * a + (y1 / h - m1 * h / 6.0) * t;
-            dq[j] = -m0 * a * a / (2.0 * h) + m1 * t * t / (2.0 * h) - (y0 / h - m0 * h / 6.0) + (y1 / h - m1 * h / 6.0);
+            q[j] = m0 * a.powi(3) / (6.0 * h)
+                + m1 * t.powi(3) / (6.0 * h)
+                + (y0 / h - m0 * h / 6.0) * a
+                + (y1 / h - m1 * h / 6.0) * t;
+            dq[j] = -m0 * a * a / (2.0 * h) + m1 * t * t / (2.0 * h) - (y0 / h - m0 * h / 6.0)
+                + (y1 / h - m1 * h / 6.0);
             ddq[j] = m0 * a / h + m1 * t / h;
         }
         (q, dq, ddq)

@@ -53,18 +53,33 @@ fn speed_cap(dq: &[f64], ddq: &[f64], lim: &Limits) -> f64 {
 
 /// Fits a spline through `waypoints` (at uniform s) and times it. `grid` intervals in s.
 pub fn plan_trajectory(waypoints: Vec<Vec<f64>>, lim: &Limits, grid: usize) -> Trajectory {
-    let waypoints = if waypoints.len() == 1 { vec![waypoints[0].clone(), waypoints[0].clone()] } else { waypoints };
+    let waypoints = if waypoints.len() == 1 {
+        vec![waypoints[0].clone(), waypoints[0].clone()]
+    } else {
+        waypoints
+    };
     let spline = JointSpline::new(waypoints);
     let n = grid.max(2);
     let ds = 1.0 / n as f64;
     let s: Vec<f64> = (0..=n).map(|i| i as f64 * ds).collect();
-    let derivs: Vec<(Vec<f64>, Vec<f64>)> = s.iter().map(|&si| {
-        let (_, d, dd) = spline.eval(si);
-        (d, dd)
-    }).collect();
-    let length: f64 = derivs.iter().map(|(d, _)| d.iter().map(|v| v.abs()).fold(0.0, f64::max)).fold(0.0, f64::max);
+    let derivs: Vec<(Vec<f64>, Vec<f64>)> = s
+        .iter()
+        .map(|&si| {
+            let (_, d, dd) = spline.eval(si);
+            (d, dd)
+        })
+        .collect();
+    let length: f64 = derivs
+        .iter()
+        .map(|(d, _)| d.iter().map(|v| v.abs()).fold(0.0, f64::max))
+        .fold(0.0, f64::max);
     if length < 1e-9 {
-        return Trajectory { spline, s: vec![0.0, 1.0], x: vec![0.0, 0.0], t: vec![0.0, 0.0] };
+        return Trajectory {
+            spline,
+            s: vec![0.0, 1.0],
+            x: vec![0.0, 0.0],
+            t: vec![0.0, 0.0],
+        };
     }
     // Backward pass: largest x_i from which the rest can be followed and the end reached at rest.
     let mut xmax = vec![0.0; n + 1];
@@ -98,7 +113,11 @@ pub fn plan_trajectory(waypoints: Vec<Vec<f64>>, lim: &Limits, grid: usize) -> T
     let mut t = vec![0.0; n + 1];
     for i in 0..n {
         let denom = x[i].sqrt() + x[i + 1].sqrt();
-        let dt = if denom > 1e-12 { 2.0 * ds / denom } else { (2.0 * ds / lim.amax.max(1e-6)).sqrt() };
+        let dt = if denom > 1e-12 {
+            2.0 * ds / denom
+        } else {
+            (2.0 * ds / lim.amax.max(1e-6)).sqrt()
+        };
         t[i + 1] = t[i] + dt;
     }
     Trajectory { spline, s, x, t }
@@ -120,7 +139,11 @@ impl Trajectory {
         if t >= self.duration() {
             return 1.0;
         }
-        let i = self.t.partition_point(|&ti| ti <= t).saturating_sub(1).min(self.t.len() - 2);
+        let i = self
+            .t
+            .partition_point(|&ti| ti <= t)
+            .saturating_sub(1)
+            .min(self.t.len() - 2);
         let ds = self.s[i + 1] - self.s[i];
         let u = (self.x[i + 1] - self.x[i]) / (2.0 * ds);
         let tau = t - self.t[i];
@@ -147,8 +170,15 @@ mod tests {
 
     #[test]
     fn respects_limits_and_ends_at_rest() {
-        let lim = Limits { vmax: 1.0, amax: 2.0 };
-        let traj = plan_trajectory(vec![vec![0.0, 0.0], vec![0.5, -0.2], vec![2.0, 0.3]], &lim, 400);
+        let lim = Limits {
+            vmax: 1.0,
+            amax: 2.0,
+        };
+        let traj = plan_trajectory(
+            vec![vec![0.0, 0.0], vec![0.5, -0.2], vec![2.0, 0.3]],
+            &lim,
+            400,
+        );
         let d = traj.duration();
         // A 2 rad move at 1 rad/s and 2 rad/s^2 needs at least 2.5 s.
         assert!(d >= 2.5 - 1e-6, "{d}");
@@ -159,7 +189,10 @@ mod tests {
         while t <= d {
             let q = traj.sample(t);
             for j in 0..2 {
-                assert!(((q[j] - prev[j]) / dt).abs() <= lim.vmax * 1.05, "velocity at {t}");
+                assert!(
+                    ((q[j] - prev[j]) / dt).abs() <= lim.vmax * 1.05,
+                    "velocity at {t}"
+                );
             }
             prev = q;
             t += dt;
@@ -170,7 +203,14 @@ mod tests {
 
     #[test]
     fn zero_length_path_takes_no_time() {
-        let traj = plan_trajectory(vec![vec![1.0], vec![1.0]], &Limits { vmax: 1.0, amax: 1.0 }, 50);
+        let traj = plan_trajectory(
+            vec![vec![1.0], vec![1.0]],
+            &Limits {
+                vmax: 1.0,
+                amax: 1.0,
+            },
+            50,
+        );
         assert_eq!(traj.duration(), 0.0);
         assert_eq!(traj.sample(3.0), vec![1.0]);
     }

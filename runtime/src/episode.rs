@@ -36,12 +36,23 @@ pub struct Episode {
 }
 
 /// MuJoCo's warning counters that make a step invalid (mjtWarning: BADQPOS..BADCTRL).
-const FATAL_WARNINGS: [(usize, &str); 4] = [(3, "bad qpos"), (4, "bad qvel"), (5, "bad qacc"), (6, "bad ctrl")];
+const FATAL_WARNINGS: [(usize, &str); 4] = [
+    (3, "bad qpos"),
+    (4, "bad qvel"),
+    (5, "bad qacc"),
+    (6, "bad ctrl"),
+];
 
 impl Episode {
     pub fn new(scene: Arc<Scene>, task: &Task, instance: &SceneInstance) -> Episode {
         let data = MjData::new(scene.model.clone());
-        let mut ep = Episode { latches: vec![Latch::default(); task.labware.len()], scene, task: task.clone(), data, physics_steps: 0 };
+        let mut ep = Episode {
+            latches: vec![Latch::default(); task.labware.len()],
+            scene,
+            task: task.clone(),
+            data,
+            physics_steps: 0,
+        };
         ep.reset(instance);
         ep
     }
@@ -61,7 +72,11 @@ impl Episode {
         }
         for (i, (spec, ids)) in self.task.labware.iter().zip(&scene.labware).enumerate() {
             let LabwareParams::ThermalCycler(p) = &spec.params;
-            let state = spec.initial.get("lid").map(String::as_str).unwrap_or("open");
+            let state = spec
+                .initial
+                .get("lid")
+                .map(String::as_str)
+                .unwrap_or("open");
             let (lid, lever) = match state {
                 "open" => (p.lid_open, p.lever_raised),
                 "closed" => (p.lid_closed, p.lever_raised),
@@ -84,10 +99,16 @@ impl Episode {
     pub fn apply(&mut self, robot: usize, action: &[f64]) -> Result<(), StepError> {
         let ids = &self.scene.robots[robot];
         if action.len() != ids.actuators.len() + 1 {
-            return Err(StepError::BadAction { got: action.len(), want: ids.actuators.len() + 1 });
+            return Err(StepError::BadAction {
+                got: action.len(),
+                want: ids.actuators.len() + 1,
+            });
         }
         if let Some(bad) = action.iter().position(|v| !v.is_finite()) {
-            return Err(StepError::Unstable { time: self.time(), what: format!("action element {bad} is not finite") });
+            return Err(StepError::Unstable {
+                time: self.time(),
+                what: format!("action element {bad} is not finite"),
+            });
         }
         let acts = ids.actuators.clone();
         let grip = ids.gripper_actuator;
@@ -103,25 +124,37 @@ impl Episode {
         let scene = self.scene.clone();
         for (spec, ids) in self.task.labware.iter().zip(&scene.labware) {
             let LabwareParams::ThermalCycler(p) = &spec.params;
-            let (q, v) = (self.data.qpos()[ids.lever_qpos], self.data.qvel()[ids.lever_dof]);
+            let (q, v) = (
+                self.data.qpos()[ids.lever_qpos],
+                self.data.qvel()[ids.lever_dof],
+            );
             self.data.qfrc_applied_mut()[ids.lever_dof] = p.detent_torque(q, v);
         }
         self.data.step();
         self.physics_steps += 1;
         for (i, (spec, ids)) in self.task.labware.iter().zip(&scene.labware).enumerate() {
             let LabwareParams::ThermalCycler(p) = &spec.params;
-            let (lid, lever) = (self.data.qpos()[ids.lid_qpos], self.data.qpos()[ids.lever_qpos]);
+            let (lid, lever) = (
+                self.data.qpos()[ids.lid_qpos],
+                self.data.qpos()[ids.lever_qpos],
+            );
             let locked = self.latches[i].update(p, lid, lever);
             self.data.eq_active_mut()[ids.lock_eq] = locked;
         }
         let warnings = &self.data.ffi().warning;
         for (idx, what) in FATAL_WARNINGS {
             if warnings[idx].number > 0 {
-                return Err(StepError::Unstable { time: self.time(), what: what.into() });
+                return Err(StepError::Unstable {
+                    time: self.time(),
+                    what: what.into(),
+                });
             }
         }
         if self.data.qpos().iter().any(|v| !v.is_finite()) {
-            return Err(StepError::Unstable { time: self.time(), what: "non-finite qpos".into() });
+            return Err(StepError::Unstable {
+                time: self.time(),
+                what: "non-finite qpos".into(),
+            });
         }
         Ok(())
     }
@@ -136,7 +169,11 @@ impl Episode {
 
     /// Arm joint angles of a robot.
     pub fn arm_q(&self, robot: usize) -> Vec<f64> {
-        self.scene.robots[robot].qpos.iter().map(|&a| self.data.qpos()[a]).collect()
+        self.scene.robots[robot]
+            .qpos
+            .iter()
+            .map(|&a| self.data.qpos()[a])
+            .collect()
     }
 
     /// Observation state of a robot: arm joints (rad) then the gripper driver angle (rad, 0..0.8).
@@ -162,7 +199,10 @@ impl Episode {
             .zip(&self.latches)
             .map(|((spec, ids), latch)| LabwareState {
                 name: spec.name.clone(),
-                joints: BTreeMap::from([("lid".to_string(), self.data.qpos()[ids.lid_qpos]), ("lever".to_string(), self.data.qpos()[ids.lever_qpos])]),
+                joints: BTreeMap::from([
+                    ("lid".to_string(), self.data.qpos()[ids.lid_qpos]),
+                    ("lever".to_string(), self.data.qpos()[ids.lever_qpos]),
+                ]),
                 locked: latch.locked,
                 jammed: latch.jammed,
             })

@@ -20,12 +20,18 @@ impl ArmKinematics {
             .qpos
             .iter()
             .map(|&adr| {
-                let j = (0..m.ffi().njnt as usize).find(|&j| m.jnt_qposadr()[j] as usize == adr).expect("arm joint exists");
+                let j = (0..m.ffi().njnt as usize)
+                    .find(|&j| m.jnt_qposadr()[j] as usize == adr)
+                    .expect("arm joint exists");
                 let r = m.jnt_range()[j];
                 (r[0], r[1])
             })
             .collect();
-        ArmKinematics { data: MjData::new(scene.model.clone()), ids, limits }
+        ArmKinematics {
+            data: MjData::new(scene.model.clone()),
+            ids,
+            limits,
+        }
     }
 
     fn set(&mut self, q: &[f64]) {
@@ -37,7 +43,10 @@ impl ArmKinematics {
 
     fn site_pose(&self) -> Pose {
         let s = self.ids.tcp_site;
-        Pose::new(self.data.site_xpos()[s], Quat::from_mat(&self.data.site_xmat()[s]))
+        Pose::new(
+            self.data.site_xpos()[s],
+            Quat::from_mat(&self.data.site_xmat()[s]),
+        )
     }
 }
 
@@ -64,7 +73,16 @@ impl primitives::Kinematics for ArmKinematics {
             .ids
             .dof
             .iter()
-            .map(|&d| [jp[d], jp[nv + d], jp[2 * nv + d], jr[d], jr[nv + d], jr[2 * nv + d]])
+            .map(|&d| {
+                [
+                    jp[d],
+                    jp[nv + d],
+                    jp[2 * nv + d],
+                    jr[d],
+                    jr[nv + d],
+                    jr[2 * nv + d],
+                ]
+            })
             .collect();
         (self.site_pose(), cols)
     }

@@ -53,8 +53,16 @@ fn ns(t: f64) -> u64 {
 impl Recorder {
     pub fn create(path: &Path) -> Result<Recorder, RecordError> {
         let file = BufWriter::new(File::create(path)?);
-        let w = mcap::WriteOptions::new().compression(Some(mcap::Compression::Zstd)).profile("autobio").create(file)?;
-        Ok(Recorder { w, channels: BTreeMap::new(), schemas: BTreeMap::new(), seq: 0 })
+        let w = mcap::WriteOptions::new()
+            .compression(Some(mcap::Compression::Zstd))
+            .profile("autobio")
+            .create(file)?;
+        Ok(Recorder {
+            w,
+            channels: BTreeMap::new(),
+            schemas: BTreeMap::new(),
+            seq: 0,
+        })
     }
 
     fn channel(&mut self, topic: &str, schema: &'static str) -> Result<u16, RecordError> {
@@ -64,7 +72,11 @@ impl Recorder {
         let sid = match self.schemas.get(schema) {
             Some(&s) => s,
             None => {
-                let body = if schema == "foxglove.RawImage" { RAW_IMAGE_SCHEMA } else { OBJECT };
+                let body = if schema == "foxglove.RawImage" {
+                    RAW_IMAGE_SCHEMA
+                } else {
+                    OBJECT
+                };
                 let s = self.w.add_schema(schema, "jsonschema", body.as_bytes())?;
                 self.schemas.insert(schema, s);
                 s
@@ -75,30 +87,66 @@ impl Recorder {
         Ok(c)
     }
 
-    pub fn write<T: Serialize>(&mut self, topic: &str, schema: &'static str, t: f64, msg: &T) -> Result<(), RecordError> {
+    pub fn write<T: Serialize>(
+        &mut self,
+        topic: &str,
+        schema: &'static str,
+        t: f64,
+        msg: &T,
+    ) -> Result<(), RecordError> {
         let c = self.channel(topic, schema)?;
-        let data = serde_json::to_vec(msg).map_err(|e| RecordError::Bad(topic.into(), e.to_string()))?;
+        let data =
+            serde_json::to_vec(msg).map_err(|e| RecordError::Bad(topic.into(), e.to_string()))?;
         self.seq += 1;
-        let header = mcap::records::MessageHeader { channel_id: c, sequence: self.seq, log_time: ns(t), publish_time: ns(t) };
+        let header = mcap::records::MessageHeader {
+            channel_id: c,
+            sequence: self.seq,
+            log_time: ns(t),
+            publish_time: ns(t),
+        };
         self.w.write_to_known_channel(&header, &data)?;
         Ok(())
     }
 
-    pub fn task(&mut self, task_json: &serde_json::Value, instance: &serde_json::Value) -> Result<(), RecordError> {
+    pub fn task(
+        &mut self,
+        task_json: &serde_json::Value,
+        instance: &serde_json::Value,
+    ) -> Result<(), RecordError> {
         let msg = json!({"schema_version": RECORDING_SCHEMA_VERSION, "task": task_json, "instance": instance});
         self.write("/task", "autobio.Task", 0.0, &msg)
     }
 
-    pub fn joint_state(&mut self, t: f64, position: &[f64], ctrl: &[f64]) -> Result<(), RecordError> {
-        self.write("/robot/joint_state", "autobio.JointState", t, &json!({"t": t, "position": position, "ctrl": ctrl}))
+    pub fn joint_state(
+        &mut self,
+        t: f64,
+        position: &[f64],
+        ctrl: &[f64],
+    ) -> Result<(), RecordError> {
+        self.write(
+            "/robot/joint_state",
+            "autobio.JointState",
+            t,
+            &json!({"t": t, "position": position, "ctrl": ctrl}),
+        )
     }
 
     pub fn action(&mut self, t: f64, action: &[f64]) -> Result<(), RecordError> {
-        self.write("/robot/action", "autobio.Action", t, &json!({"t": t, "action": action}))
+        self.write(
+            "/robot/action",
+            "autobio.Action",
+            t,
+            &json!({"t": t, "action": action}),
+        )
     }
 
     pub fn labware(&mut self, t: f64, states: &[LabwareState]) -> Result<(), RecordError> {
-        self.write("/labware/state", "autobio.LabwareState", t, &json!({"t": t, "labware": states}))
+        self.write(
+            "/labware/state",
+            "autobio.LabwareState",
+            t,
+            &json!({"t": t, "labware": states}),
+        )
     }
 
     pub fn image(&mut self, t: f64, img: &Image) -> Result<(), RecordError> {
@@ -108,11 +156,21 @@ impl Recorder {
             "frame_id": img.camera, "width": img.width, "height": img.height, "encoding": "rgb8",
             "step": img.width * 3, "data": base64::engine::general_purpose::STANDARD.encode(&img.rgb),
         });
-        self.write(&format!("/camera/{}", img.camera), "foxglove.RawImage", t, &msg)
+        self.write(
+            &format!("/camera/{}", img.camera),
+            "foxglove.RawImage",
+            t,
+            &msg,
+        )
     }
 
     pub fn stage(&mut self, t: f64, label: &str) -> Result<(), RecordError> {
-        self.write("/stage", "autobio.StageEvent", t, &json!({"t": t, "label": label}))
+        self.write(
+            "/stage",
+            "autobio.StageEvent",
+            t,
+            &json!({"t": t, "label": label}),
+        )
     }
 
     pub fn finish(mut self) -> Result<(), RecordError> {
@@ -143,7 +201,10 @@ pub fn read_recording(path: &Path) -> Result<RecordingSummary, RecordError> {
         messages += 1;
         last_t = last_t.max(m.log_time);
         *topics.entry(m.channel.topic.clone()).or_insert(0) += 1;
-        let parse = |topic: &str| serde_json::from_slice::<serde_json::Value>(&m.data).map_err(|e| RecordError::Bad(topic.into(), e.to_string()));
+        let parse = |topic: &str| {
+            serde_json::from_slice::<serde_json::Value>(&m.data)
+                .map_err(|e| RecordError::Bad(topic.into(), e.to_string()))
+        };
         match m.channel.topic.as_str() {
             "/task" => {
                 let v = parse("/task")?;
@@ -156,8 +217,10 @@ pub fn read_recording(path: &Path) -> Result<RecordingSummary, RecordError> {
         }
     }
     let labware = labware.ok_or(RecordError::Missing("/labware/state"))?;
-    let v: serde_json::Value = serde_json::from_slice(&labware).map_err(|e| RecordError::Bad("/labware/state".into(), e.to_string()))?;
-    let final_labware = serde_json::from_value(v["labware"].clone()).map_err(|e| RecordError::Bad("/labware/state".into(), e.to_string()))?;
+    let v: serde_json::Value = serde_json::from_slice(&labware)
+        .map_err(|e| RecordError::Bad("/labware/state".into(), e.to_string()))?;
+    let final_labware = serde_json::from_value(v["labware"].clone())
+        .map_err(|e| RecordError::Bad("/labware/state".into(), e.to_string()))?;
     Ok(RecordingSummary {
         task: task.ok_or(RecordError::Missing("/task"))?,
         instance: instance.unwrap_or(serde_json::Value::Null),

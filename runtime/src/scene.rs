@@ -60,8 +60,22 @@ pub struct Scene {
     pub placements: Vec<Pose>,
 }
 
-pub const ARM_JOINTS: [&str; 6] = ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint", "wrist_3_joint"];
-pub const ARM_ACTUATORS: [&str; 6] = ["shoulder_pan", "shoulder_lift", "elbow", "wrist_1", "wrist_2", "wrist_3"];
+pub const ARM_JOINTS: [&str; 6] = [
+    "shoulder_pan_joint",
+    "shoulder_lift_joint",
+    "elbow_joint",
+    "wrist_1_joint",
+    "wrist_2_joint",
+    "wrist_3_joint",
+];
+pub const ARM_ACTUATORS: [&str; 6] = [
+    "shoulder_pan",
+    "shoulder_lift",
+    "elbow",
+    "wrist_1",
+    "wrist_2",
+    "wrist_3",
+];
 /// Gripper actuator range: 0 open, 255 closed.
 pub const GRIPPER_CLOSED: f64 = 255.0;
 /// Distance from the flange to the 2F-85's pinch point along the tool axis (m).
@@ -86,13 +100,22 @@ pub fn prepare_ur5e_2f85() -> Result<PathBuf, SceneError> {
     let gravcomp = |s: &str| s.replace("<body ", "<body gravcomp=\"1\" ");
     let mut gripper = std::fs::read_to_string(&gr_file)?;
     gripper = strip_element(&gripper, "<option", "/>");
-    gripper = gravcomp(&gripper).replace("meshdir=\"assets\"", &format!("meshdir=\"{}\"", abs(&gr_dir.join("assets"))?));
+    gripper = gravcomp(&gripper).replace(
+        "meshdir=\"assets\"",
+        &format!("meshdir=\"{}\"", abs(&gr_dir.join("assets"))?),
+    );
     let mut arm = std::fs::read_to_string(&ur_file)?;
-    arm = gravcomp(&arm).replace("meshdir=\"assets\"", &format!("meshdir=\"{}\"", abs(&ur_dir.join("assets"))?));
+    arm = gravcomp(&arm).replace(
+        "meshdir=\"assets\"",
+        &format!("meshdir=\"{}\"", abs(&ur_dir.join("assets"))?),
+    );
     arm = strip_element(&arm, "<keyframe>", "</keyframe>");
     arm = strip_element(&arm, "<light name=\"spotlight\"", "/>");
     arm = strip_element(&arm, "<option", "/>");
-    let dir = std::env::temp_dir().join(format!("autobio-robot-{}", short_hash(&(arm.clone() + &gripper))));
+    let dir = std::env::temp_dir().join(format!(
+        "autobio-robot-{}",
+        short_hash(&(arm.clone() + &gripper))
+    ));
     std::fs::create_dir_all(&dir)?;
     let gripper_path = dir.join("2f85.xml");
     // The tool frame: z along the approach, fingers closing along x. The camera sits on the -y side
@@ -105,8 +128,17 @@ pub fn prepare_ur5e_2f85() -> Result<PathBuf, SceneError> {
                     <camera name="wrist_cam" pos="0 -0.08 0.02" xyaxes="1 0 0 0 -0.868 0.496" fovy="58"/>
                   </body>"#
     );
-    arm = arm.replace(r#"<site name="attachment_site" pos="0 0.1 0" quat="-1 1 0 0"/>"#, &tool);
-    arm = arm.replace("<asset>", &format!("<asset>\n    <model name=\"gripper\" file=\"{}\"/>", gripper_path.display()));
+    arm = arm.replace(
+        r#"<site name="attachment_site" pos="0 0.1 0" quat="-1 1 0 0"/>"#,
+        &tool,
+    );
+    arm = arm.replace(
+        "<asset>",
+        &format!(
+            "<asset>\n    <model name=\"gripper\" file=\"{}\"/>",
+            gripper_path.display()
+        ),
+    );
     let arm_path = dir.join("ur5e_2f85.xml");
     write_if_changed(&gripper_path, &gripper)?;
     write_if_changed(&arm_path, &arm)?;
@@ -144,7 +176,12 @@ pub fn scene_xml(task: &Task, placements: &[Pose]) -> Result<String, SceneError>
     let mut equality = String::new();
     let mut contact = String::new();
     for cam in &task.cameras {
-        if let CameraMount::Fixed { pos, xyaxes, fovy_deg } = &cam.mount {
+        if let CameraMount::Fixed {
+            pos,
+            xyaxes,
+            fovy_deg,
+        } = &cam.mount
+        {
             let a = xyaxes;
             world += &format!(
                 "<camera name=\"{}\" pos=\"{}\" xyaxes=\"{} {} {} {} {} {}\" fovy=\"{fovy_deg}\"/>\n",
@@ -165,7 +202,7 @@ pub fn scene_xml(task: &Task, placements: &[Pose]) -> Result<String, SceneError>
         world += &format!(
             "<body name=\"{n}/mount\" pos=\"{}\" quat=\"{}\">\n  <attach model=\"{}\" body=\"base\" prefix=\"{n}/\"/>\n</body>\n",
             v3(r.base.pos),
-            q4(r.base.quat.mul(facing)),
+            q4(r.base.quat.times(facing)),
             r.model,
             n = r.name
         );
@@ -210,8 +247,15 @@ pub fn scene_xml(task: &Task, placements: &[Pose]) -> Result<String, SceneError>
     ))
 }
 
-fn id_of(model: &MjModel, ty: MjtObjBase, what: &'static str, name: &str) -> Result<usize, SceneError> {
-    model.name_to_id(ty, name).ok_or_else(|| SceneError::MissingName(what, name.to_string()))
+fn id_of(
+    model: &MjModel,
+    ty: MjtObjBase,
+    what: &'static str,
+    name: &str,
+) -> Result<usize, SceneError> {
+    model
+        .name_to_id(ty, name)
+        .ok_or_else(|| SceneError::MissingName(what, name.to_string()))
 }
 
 impl Scene {
@@ -219,7 +263,8 @@ impl Scene {
     pub fn build(task: &Task, instance: &SceneInstance) -> Result<Scene, SceneError> {
         let placements = instance.labware_placement.clone();
         let xml = scene_xml(task, &placements)?;
-        let model = MjModel::from_xml_string(&xml).map_err(|e| SceneError::Compile(e.to_string()))?;
+        let model =
+            MjModel::from_xml_string(&xml).map_err(|e| SceneError::Compile(e.to_string()))?;
         let m = &model;
         let mut robots = Vec::new();
         for r in &task.robots {
@@ -227,20 +272,50 @@ impl Scene {
             let mut dof = Vec::new();
             let mut actuators = Vec::new();
             for (j, a) in ARM_JOINTS.iter().zip(ARM_ACTUATORS) {
-                let jid = id_of(m, MjtObjBase::mjOBJ_JOINT, "joint", &format!("{}/{j}", r.name))?;
+                let jid = id_of(
+                    m,
+                    MjtObjBase::mjOBJ_JOINT,
+                    "joint",
+                    &format!("{}/{j}", r.name),
+                )?;
                 qpos.push(joint_qposadr(m, jid));
                 dof.push(joint_dofadr(m, jid));
-                actuators.push(id_of(m, MjtObjBase::mjOBJ_ACTUATOR, "actuator", &format!("{}/{a}", r.name))?);
+                actuators.push(id_of(
+                    m,
+                    MjtObjBase::mjOBJ_ACTUATOR,
+                    "actuator",
+                    &format!("{}/{a}", r.name),
+                )?);
             }
-            let driver = id_of(m, MjtObjBase::mjOBJ_JOINT, "joint", &format!("{}/gripper/right_driver_joint", r.name))?;
+            let driver = id_of(
+                m,
+                MjtObjBase::mjOBJ_JOINT,
+                "joint",
+                &format!("{}/gripper/right_driver_joint", r.name),
+            )?;
             robots.push(RobotIds {
                 qpos,
                 dof,
                 actuators,
-                gripper_actuator: id_of(m, MjtObjBase::mjOBJ_ACTUATOR, "actuator", &format!("{}/gripper/fingers_actuator", r.name))?,
+                gripper_actuator: id_of(
+                    m,
+                    MjtObjBase::mjOBJ_ACTUATOR,
+                    "actuator",
+                    &format!("{}/gripper/fingers_actuator", r.name),
+                )?,
                 gripper_qpos: joint_qposadr(m, driver),
-                tcp_site: id_of(m, MjtObjBase::mjOBJ_SITE, "site", &format!("{}/tcp", r.name))?,
-                body_root: id_of(m, MjtObjBase::mjOBJ_BODY, "body", &format!("{}/mount", r.name))?,
+                tcp_site: id_of(
+                    m,
+                    MjtObjBase::mjOBJ_SITE,
+                    "site",
+                    &format!("{}/tcp", r.name),
+                )?,
+                body_root: id_of(
+                    m,
+                    MjtObjBase::mjOBJ_BODY,
+                    "body",
+                    &format!("{}/mount", r.name),
+                )?,
             });
         }
         let mut labware = Vec::new();
@@ -265,7 +340,14 @@ impl Scene {
             };
             cameras.push(id_of(m, MjtObjBase::mjOBJ_CAMERA, "camera", &name)?);
         }
-        Ok(Scene { model: Arc::new(model), robots, labware, cameras, xml, placements })
+        Ok(Scene {
+            model: Arc::new(model),
+            robots,
+            labware,
+            cameras,
+            xml,
+            placements,
+        })
     }
 }
 

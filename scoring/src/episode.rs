@@ -57,7 +57,11 @@ pub fn run_episode(
         }
         None => None,
     };
-    let mut cameras = if rec.is_some() && opts.image_every > 0 { Some(Cameras::new(scene, 224, 224)?) } else { None };
+    let mut cameras = if rec.is_some() && opts.image_every > 0 {
+        Some(Cameras::new(scene, 224, 224)?)
+    } else {
+        None
+    };
     let cam_names: Vec<String> = task.cameras.iter().map(|c| c.name.clone()).collect();
     let mut hasher = Sha256::new();
     let mut steps = 0u64;
@@ -68,7 +72,11 @@ pub fn run_episode(
             time: ep.time(),
             state: ep.robot_state(0),
             prompt: &task.instruction,
-            privileged: Privileged { arm_q: ep.arm_q(0), ctrl: ep.robot_ctrl(0), labware: ep.labware_state() },
+            privileged: Privileged {
+                arm_q: ep.arm_q(0),
+                ctrl: ep.robot_ctrl(0),
+                labware: ep.labware_state(),
+            },
         };
         let chunk = match policy.act(&obs) {
             Ok(c) if !c.is_empty() => c,
@@ -89,11 +97,13 @@ pub fn run_episode(
         for action in chunk {
             let t = ep.time();
             if let Some(r) = rec.as_mut() {
-                r.joint_state(t, &ep.robot_state(0), &ep.robot_ctrl(0)).map_err(|e| e.to_string())?;
+                r.joint_state(t, &ep.robot_state(0), &ep.robot_ctrl(0))
+                    .map_err(|e| e.to_string())?;
                 r.action(t, &action).map_err(|e| e.to_string())?;
-                r.labware(t, &ep.labware_state()).map_err(|e| e.to_string())?;
+                r.labware(t, &ep.labware_state())
+                    .map_err(|e| e.to_string())?;
                 if let Some(c) = cameras.as_mut()
-                    && steps % opts.image_every as u64 == 0
+                    && steps.is_multiple_of(opts.image_every as u64)
                 {
                     for img in c.render(&mut ep.data, &cam_names)? {
                         r.image(t, &img).map_err(|e| e.to_string())?;
@@ -119,8 +129,15 @@ pub fn run_episode(
     }
     if let Some(mut r) = rec {
         let t = ep.time();
-        r.labware(t, &ep.labware_state()).map_err(|e| e.to_string())?;
-        r.write("/verdict", "autobio.Verdict", t, &serde_json::json!({"verdict": verdict, "error": error})).map_err(|e| e.to_string())?;
+        r.labware(t, &ep.labware_state())
+            .map_err(|e| e.to_string())?;
+        r.write(
+            "/verdict",
+            "autobio.Verdict",
+            t,
+            &serde_json::json!({"verdict": verdict, "error": error}),
+        )
+        .map_err(|e| e.to_string())?;
         r.finish().map_err(|e| e.to_string())?;
     }
     Ok(EpisodeResult {
@@ -131,7 +148,11 @@ pub fn run_episode(
         sim_time_s: ep.time(),
         control_steps: steps,
         wall_time_s: start.elapsed().as_secs_f64(),
-        trajectory_hash: hasher.finalize().iter().map(|b| format!("{b:02x}")).collect(),
+        trajectory_hash: hasher
+            .finalize()
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect(),
         recording: opts.record.as_ref().map(|p| p.display().to_string()),
     })
 }

@@ -49,19 +49,42 @@ pub fn summarise(episodes: &[EpisodeResult], wall: f64) -> EvalSummary {
     let n = episodes.len();
     let k = episodes.iter().filter(|e| e.success).count();
     let p = if n > 0 { k as f64 / n as f64 } else { 0.0 };
-    let sem = if n > 1 { (p * (1.0 - p) / (n as f64 - 1.0)).sqrt() } else { 0.0 };
-    EvalSummary { episodes: n, successes: k, success_rate: p, sem, wall_time_s: wall }
+    let sem = if n > 1 {
+        (p * (1.0 - p) / (n as f64 - 1.0)).sqrt()
+    } else {
+        0.0
+    };
+    EvalSummary {
+        episodes: n,
+        successes: k,
+        success_rate: p,
+        sem,
+        wall_time_s: wall,
+    }
 }
 
 /// Runs the scripted expert on `task`. `progress` is called after each episode.
-pub fn evaluate(task: &Task, opts: &EvalOptions, mut progress: impl FnMut(&EpisodeResult)) -> Result<EvalReport, String> {
+pub fn evaluate(
+    task: &Task,
+    opts: &EvalOptions,
+    mut progress: impl FnMut(&EpisodeResult),
+) -> Result<EvalReport, String> {
     let start = Instant::now();
     if let Some(dir) = &opts.out {
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     }
-    let journal_path = opts.out.as_ref().map(|d| d.join(format!("{}.journal.jsonl", task.id)));
+    let journal_path = opts
+        .out
+        .as_ref()
+        .map(|d| d.join(format!("{}.journal.jsonl", task.id)));
     let mut journal = match &journal_path {
-        Some(p) => Some(std::fs::OpenOptions::new().create(true).append(true).open(p).map_err(|e| format!("{}: {e}", p.display()))?),
+        Some(p) => Some(
+            std::fs::OpenOptions::new()
+                .create(true)
+                .append(true)
+                .open(p)
+                .map_err(|e| format!("{}: {e}", p.display()))?,
+        ),
         None => None,
     };
     let mut scene: Option<Arc<runtime::Scene>> = None;
@@ -69,8 +92,13 @@ pub fn evaluate(task: &Task, opts: &EvalOptions, mut progress: impl FnMut(&Episo
     for i in 0..opts.episodes {
         let seed = opts.seed.wrapping_add(i as u64);
         let instance = task.sample(seed);
-        if scene.as_ref().is_none_or(|s| s.placements != instance.labware_placement) {
-            scene = Some(Arc::new(runtime::Scene::build(task, &instance).map_err(|e| e.to_string())?));
+        if scene
+            .as_ref()
+            .is_none_or(|s| s.placements != instance.labware_placement)
+        {
+            scene = Some(Arc::new(
+                runtime::Scene::build(task, &instance).map_err(|e| e.to_string())?,
+            ));
         }
         let sc = scene.as_ref().expect("built above");
         let mut policy = ExpertPolicy::new(task, sc, &instance).map_err(|e| e.to_string())?;
@@ -78,11 +106,16 @@ pub fn evaluate(task: &Task, opts: &EvalOptions, mut progress: impl FnMut(&Episo
             (Some(d), true) => Some(recording_path(d, task, seed)),
             _ => None,
         };
-        let eo = EpisodeOptions { record, image_every: opts.image_every };
+        let eo = EpisodeOptions {
+            record,
+            image_every: opts.image_every,
+        };
         let r = run_episode(task, sc, &instance, &mut policy as &mut dyn Policy, &eo)?;
         if let Some(j) = journal.as_mut() {
             let line = serde_json::to_string(&r).map_err(|e| e.to_string())?;
-            writeln!(j, "{line}").and_then(|_| j.flush()).map_err(|e| format!("journal: {e}"))?;
+            writeln!(j, "{line}")
+                .and_then(|_| j.flush())
+                .map_err(|e| format!("journal: {e}"))?;
         }
         progress(&r);
         results.push(r);

@@ -11,7 +11,10 @@ use runtime::kinematics::ArmKinematics;
 use std::collections::VecDeque;
 
 /// Joint velocity and acceleration limits of the expert (as the upstream thermal-cycler expert).
-pub const EXPERT_LIMITS: Limits = Limits { vmax: 1.5, amax: 1.0 };
+pub const EXPERT_LIMITS: Limits = Limits {
+    vmax: 1.5,
+    amax: 1.0,
+};
 const SETTLE_S: f64 = 0.2;
 
 struct Queued {
@@ -38,12 +41,20 @@ pub struct ExpertPolicy {
 }
 
 impl ExpertPolicy {
-    pub fn new(task: &Task, scene: &Scene, instance: &SceneInstance) -> Result<ExpertPolicy, PolicyError> {
+    pub fn new(
+        task: &Task,
+        scene: &Scene,
+        instance: &SceneInstance,
+    ) -> Result<ExpertPolicy, PolicyError> {
         let mut queue = VecDeque::new();
         for (i, step) in task.plan.iter().enumerate() {
-            let spec = &task.labware[task.labware_index(&step.labware).ok_or_else(|| PolicyError::Planning(format!("no labware `{}`", step.labware)))?];
+            let spec = &task.labware[task
+                .labware_index(&step.labware)
+                .ok_or_else(|| PolicyError::Planning(format!("no labware `{}`", step.labware)))?];
             let LabwareParams::ThermalCycler(p) = &spec.params;
-            let motions = expand(&step.primitive, p).ok_or_else(|| PolicyError::Planning(format!("no expansion for `{}`", step.primitive)))?;
+            let motions = expand(&step.primitive, p).ok_or_else(|| {
+                PolicyError::Planning(format!("no expansion for `{}`", step.primitive))
+            })?;
             queue.extend(motions.into_iter().map(|motion| Queued { step: i, motion }));
         }
         Ok(ExpertPolicy {
@@ -62,7 +73,10 @@ impl ExpertPolicy {
 
     fn start(&mut self, q: Queued, obs: &Observation) -> Result<Active, PolicyError> {
         let step = &self.task.plan[q.step];
-        let li = self.task.labware_index(&step.labware).expect("checked in new");
+        let li = self
+            .task
+            .labware_index(&step.labware)
+            .expect("checked in new");
         let live = &obs.privileged.labware[li];
         let live = (live.joints["lid"], live.joints["lever"]);
         let target = self.target.clone().expect("set before start");
@@ -73,20 +87,32 @@ impl ExpertPolicy {
                 Motion::Approach { lid, lever, .. } => (lid, lever),
                 _ => live,
             };
-            self.context = Some((q.step, GripContext::new(p.clone(), self.placements[li], lid, lever, &tcp_now)));
-            self.events.push(StageEvent { time: obs.time, label: format!("step {}: {} {}", q.step, step.primitive, step.labware) });
+            self.context = Some((
+                q.step,
+                GripContext::new(p.clone(), self.placements[li], lid, lever, &tcp_now),
+            ));
+            self.events.push(StageEvent {
+                time: obs.time,
+                label: format!("step {}: {} {}", q.step, step.primitive, step.labware),
+            });
         }
-        self.events.push(StageEvent { time: obs.time, label: q.motion.label().to_string() });
+        self.events.push(StageEvent {
+            time: obs.time,
+            label: q.motion.label().to_string(),
+        });
         let cx = &self.context.as_ref().expect("set above").1;
         if let Motion::Gripper { ctrl, duration_s } = q.motion {
             self.gripper = ctrl;
-            return Ok(Active::Hold { until: obs.time + duration_s });
+            return Ok(Active::Hold {
+                until: obs.time + duration_s,
+            });
         }
         let poses = cx.poses(&q.motion, &tcp_now, live);
         let mut waypoints = vec![target.clone()];
         let mut seed = target;
         for pose in poses.iter().skip(1) {
-            let qn = solve_ik(&mut self.kin, pose, &seed, &Default::default()).map_err(|e| PolicyError::Planning(format!("{}: {e}", q.motion.label())))?;
+            let qn = solve_ik(&mut self.kin, pose, &seed, &Default::default())
+                .map_err(|e| PolicyError::Planning(format!("{}: {e}", q.motion.label())))?;
             waypoints.push(qn.clone());
             seed = qn;
         }

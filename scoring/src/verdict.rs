@@ -25,7 +25,13 @@ fn evaluate(task: &Task, pred: &Predicate, states: &[LabwareState]) -> Predicate
     let spec = task.labware.iter().find(|l| l.name == pred.labware);
     let state = states.iter().find(|s| s.name == pred.labware);
     let (Some(spec), Some(state)) = (spec, state) else {
-        return PredicateValue { text: pred.text.clone(), holds: false, value: f64::NAN, target: f64::NAN, tolerance: pred.tolerance };
+        return PredicateValue {
+            text: pred.text.clone(),
+            holds: false,
+            value: f64::NAN,
+            target: f64::NAN,
+            tolerance: pred.tolerance,
+        };
     };
     let LabwareParams::ThermalCycler(p) = &spec.params;
     let lid = state.joints.get("lid").copied().unwrap_or(f64::NAN);
@@ -37,11 +43,24 @@ fn evaluate(task: &Task, pred: &Predicate, states: &[LabwareState]) -> Predicate
         _ => (lever, p.lever_raised, !state.locked),
     };
     let holds = (value - target).abs() < pred.tolerance && extra;
-    PredicateValue { text: pred.text.clone(), holds, value, target, tolerance: pred.tolerance }
+    PredicateValue {
+        text: pred.text.clone(),
+        holds,
+        value,
+        target,
+        tolerance: pred.tolerance,
+    }
 }
 
 /// Evaluates every success predicate of the task.
 pub fn judge(task: &Task, states: &[LabwareState]) -> Verdict {
-    let predicates: Vec<PredicateValue> = task.success.iter().map(|p| evaluate(task, p, states)).collect();
-    Verdict { success: !predicates.is_empty() && predicates.iter().all(|p| p.holds), predicates }
+    let predicates: Vec<PredicateValue> = task
+        .success
+        .iter()
+        .map(|p| evaluate(task, p, states))
+        .collect();
+    Verdict {
+        success: !predicates.is_empty() && predicates.iter().all(|p| p.holds),
+        predicates,
+    }
 }

@@ -1,0 +1,29 @@
+# Two commands on a fresh machine: `make demo` and `make test`. Both run `make setup` first.
+CARGO ?= cargo
+
+.PHONY: setup build demo test bench clean
+
+setup:
+	./scripts/setup.sh
+
+build: setup
+	$(CARGO) build --release
+
+# The main job: the scripted expert on both thermal-cycler protocols, 20 seeded episodes each,
+# a results table, results JSON and one MCAP recording per episode under out/demo/.
+demo: build
+	$(CARGO) run --release --quiet -- eval \
+	  --protocol protocols/thermal_cycler/close_lid.toml \
+	  --protocol protocols/thermal_cycler/open_lid.toml \
+	  --episodes 20 --seed 0 --out out/demo --record
+
+test: setup
+	$(CARGO) test --release --workspace
+	$(CARGO) clippy --release --workspace --all-targets -- -D warnings
+	$(CARGO) fmt --all -- --check
+
+bench: build
+	$(CARGO) run --release --quiet -- bench
+
+clean:
+	rm -rf out
