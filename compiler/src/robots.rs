@@ -5,7 +5,7 @@ pub struct RobotModel {
     pub description: &'static str,
     /// Home joint angles of the arm (rad).
     pub home: &'static [f64],
-    /// Default mount yaw (rad) added to the protocol's.
+    /// Number of arm joints (the gripper is one more action element).
     pub dof: usize,
 }
 
