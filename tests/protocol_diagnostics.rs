@@ -93,14 +93,17 @@ fn truncated_and_mangled_files_never_panic() {
     }
 }
 
+fn autobio(args: &[&std::ffi::OsStr]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_autobio"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
 #[test]
 fn check_command_reports_file_line_col_and_fails() {
     let bad = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/bad/unknown_kind.toml");
-    let out = Command::new(env!("CARGO_BIN_EXE_autobio"))
-        .arg("check")
-        .arg(&bad)
-        .output()
-        .unwrap();
+    let out = autobio(&["check".as_ref(), bad.as_os_str()]);
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
@@ -113,11 +116,7 @@ fn check_command_reports_file_line_col_and_fails() {
         "{err}"
     );
     let good = Path::new(env!("CARGO_MANIFEST_DIR")).join("protocols/thermal_cycler/open_lid.toml");
-    let out = Command::new(env!("CARGO_BIN_EXE_autobio"))
-        .arg("check")
-        .arg(&good)
-        .output()
-        .unwrap();
+    let out = autobio(&["check".as_ref(), good.as_os_str()]);
     assert!(
         out.status.success(),
         "{}",

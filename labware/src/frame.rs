@@ -18,13 +18,6 @@ pub fn scale(a: Vec3, s: f64) -> Vec3 {
 pub fn dot(a: Vec3, b: Vec3) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
-pub fn cross(a: Vec3, b: Vec3) -> Vec3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
 pub fn norm(a: Vec3) -> f64 {
     dot(a, a).sqrt()
 }

@@ -1,6 +1,6 @@
 //! Lab primitive -> motions, and motions -> TCP poses against live labware state.
 
-use labware::frame::{add, dot, norm, scale, sub};
+use labware::frame::{add, norm, scale, sub};
 use labware::thermal_cycler::Params;
 use labware::{Pose, Quat};
 use serde::Serialize;
@@ -228,15 +228,10 @@ fn arc(a: &Pose, b: &Pose, n: usize) -> Vec<Pose> {
         .collect()
 }
 
-/// Distance between two poses' positions (m), for tests and diagnostics.
-pub fn position_gap(a: &Pose, b: &Pose) -> f64 {
-    let d = sub(a.pos, b.pos);
-    dot(d, d).sqrt()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use labware::frame::dot;
 
     #[test]
     fn grasp_approaches_against_the_lever() {
@@ -250,8 +245,25 @@ mod tests {
         // Lid closed, lever raised: the grip's outward axis is +y, so the tool approaches along -y.
         let z = closed.quat.rotate([0.0, 0.0, 1.0]);
         assert!((z[1] + 1.0).abs() < 1e-9, "{z:?}");
-        let flipped = GripContext { flip: true, ..cx };
-        assert!(position_gap(&flipped.tool_pose(-1.0, 0.0), &flipped.tool_pose(-1.0, 0.0)) < 1e-12);
+        let flipped = GripContext {
+            flip: true,
+            ..cx.clone()
+        };
+        // The flipped grasp holds the bar at the same point from the same side, fingers turned over.
+        let (a, b) = (cx.tool_pose(-1.0, 0.0), flipped.tool_pose(-1.0, 0.0));
+        assert!(norm(sub(a.pos, b.pos)) < 1e-12);
+        assert!(
+            dot(
+                a.quat.rotate([0.0, 0.0, 1.0]),
+                b.quat.rotate([0.0, 0.0, 1.0])
+            ) > 1.0 - 1e-9
+        );
+        assert!(
+            dot(
+                a.quat.rotate([1.0, 0.0, 0.0]),
+                b.quat.rotate([1.0, 0.0, 0.0])
+            ) < -1.0 + 1e-9
+        );
         assert_eq!(expand("close_lid", &p).unwrap().len(), 7);
         assert!(expand("dance", &p).is_none());
     }

@@ -154,14 +154,6 @@ impl Trajectory {
     pub fn sample(&self, t: f64) -> Vec<f64> {
         self.spline.eval(self.s_at(t)).0
     }
-
-    /// Joint velocities at time t.
-    pub fn velocity(&self, t: f64) -> Vec<f64> {
-        let s = self.s_at(t);
-        let i = ((s * (self.s.len() - 1) as f64).floor() as usize).min(self.s.len() - 2);
-        let sd = self.x[i].max(self.x[i + 1]).sqrt();
-        self.spline.eval(s).1.iter().map(|d| d * sd).collect()
-    }
 }
 
 #[cfg(test)]

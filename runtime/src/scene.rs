@@ -35,7 +35,6 @@ pub struct RobotIds {
     pub gripper_actuator: usize,
     pub gripper_qpos: usize,
     pub tcp_site: usize,
-    pub body_root: usize,
 }
 
 /// Per-labware indices (thermal cycler).
@@ -309,12 +308,6 @@ impl Scene {
                     MjtObjBase::mjOBJ_SITE,
                     "site",
                     &format!("{}/tcp", r.name),
-                )?,
-                body_root: id_of(
-                    m,
-                    MjtObjBase::mjOBJ_BODY,
-                    "body",
-                    &format!("{}/mount", r.name),
                 )?,
             });
         }
