@@ -22,10 +22,28 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Check protocol files and report every problem with file:line:col (exit 1 on errors)
-    Check { files: Vec<PathBuf> },
-    /// Print the documentation of a diagnostic code (e.g. E0010)
-    Explain { code: String },
+    /// Check protocol or chain files and report every problem with file:line:col (exit 1 on errors)
+    Check {
+        files: Vec<PathBuf>,
+        /// Print the diagnostics as JSON lines (one object per diagnostic) instead of text
+        #[arg(long)]
+        json: bool,
+    },
+    /// Print the documentation of a diagnostic code (e.g. E0010); `autobio explain --all` lists them
+    Explain {
+        #[arg(required_unless_present = "all")]
+        code: Option<String>,
+        #[arg(long)]
+        all: bool,
+    },
+    /// Print a task sheet: instruction, parameters, randomisation, plan, checks, time limits
+    Describe {
+        #[arg(required_unless_present = "catalogue")]
+        file: Option<PathBuf>,
+        /// Print the catalogue of labware kinds and lab primitives instead
+        #[arg(long)]
+        catalogue: bool,
+    },
     /// Compile a protocol and print the task as JSON
     Compile { file: PathBuf },
     /// Record scripted-expert demonstrations (MCAP with camera images) into a folder
@@ -84,25 +102,29 @@ fn load(path: &Path) -> Result<compiler::Task> {
         Some(t) => Ok(t),
         None => {
             eprint!("{}", diagnostics::render_all(&name, &source, &diags));
-            bail!("{} has errors; run `autobio check {}`", name, name)
+            bail!("{name} has errors; run `autobio check {name}`")
         }
     }
 }
 
 fn run(cli: Cli) -> Result<ExitCode> {
     match cli.command {
-        Command::Check { files } => {
+        Command::Check { files, json } => {
             let mut failed = false;
             for f in &files {
                 let source = std::fs::read_to_string(f)
                     .with_context(|| format!("cannot read {}", f.display()))?;
                 let name = f.display().to_string();
                 let (_, diags) = compiler::compile_source(&source, &name);
-                if diags.is_empty() {
+                failed |= diags.iter().any(|d| d.is_error());
+                if json {
+                    for d in &diags {
+                        println!("{}", diagnostics::to_json(&name, &source, d));
+                    }
+                } else if diags.is_empty() {
                     println!("ok: {name}");
                 } else {
                     eprint!("{}", diagnostics::render_all(&name, &source, &diags));
-                    failed |= diags.iter().any(|d| d.is_error());
                 }
             }
             Ok(if failed {
@@ -111,13 +133,34 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 ExitCode::SUCCESS
             })
         }
-        Command::Explain { code } => match dsl::Code::from_name(&code) {
-            Some(c) => {
-                println!("{c}\n\n{}", c.explanation());
-                Ok(ExitCode::SUCCESS)
+        Command::Explain { code, all } => {
+            if all {
+                for c in dsl::Code::ALL {
+                    println!("{c}  {}", c.summary());
+                }
+                return Ok(ExitCode::SUCCESS);
             }
-            None => bail!("no diagnostic code `{code}` (codes look like E0010)"),
-        },
+            let code = code.unwrap_or_default();
+            match dsl::Code::from_name(&code) {
+                Some(c) => {
+                    println!("{c}: {}\n\n{}", c.summary(), c.explanation());
+                    Ok(ExitCode::SUCCESS)
+                }
+                None => bail!(
+                    "no diagnostic code `{code}` (codes look like E0010; `autobio explain --all` lists them)"
+                ),
+            }
+        }
+        Command::Describe { file, catalogue } => {
+            if catalogue {
+                print!("{}", compiler::describe::catalogue());
+                return Ok(ExitCode::SUCCESS);
+            }
+            let file = file.context("a protocol or chain file is needed")?;
+            let task = load(&file)?;
+            print!("{}", compiler::describe(&task));
+            Ok(ExitCode::SUCCESS)
+        }
         Command::Compile { file } => {
             let task = load(&file)?;
             println!("{}", serde_json::to_string_pretty(&task)?);
@@ -217,7 +260,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 .with_context(|| format!("cannot read {}", recording.display()))?;
             let task: compiler::Task = serde_json::from_value(rec.task.clone())
                 .context("the recording's task does not match this autobio's task schema")?;
-            let verdict = scoring::judge(&task, &rec.final_labware);
+            let verdict = scoring::Judge::replay(&task, &rec.labware_series);
             println!(
                 "{}: {} messages over {:.2} s",
                 recording.display(),
@@ -228,22 +271,30 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 println!("  {topic:<28} {n}");
             }
             println!(
-                "re-scored: {}",
+                "re-scored: {} (score {:.3})",
                 if verdict.success {
                     "success"
                 } else {
                     "failure"
-                }
+                },
+                verdict.score
             );
-            for p in &verdict.predicates {
-                println!(
-                    "  [{}] {:<28} value {:+.4} target {:+.4} tol {}",
-                    if p.holds { "x" } else { " " },
-                    p.text,
-                    p.value,
-                    p.target,
-                    p.tolerance
-                );
+            for (i, st) in verdict.stages.iter().enumerate() {
+                let done = st
+                    .completed_at_s
+                    .map(|t| format!("done at {t:.2} s"))
+                    .unwrap_or_else(|| "not done".into());
+                println!("  stage {} `{}`: {done}", i + 1, st.id);
+                for p in &st.predicates {
+                    println!(
+                        "    [{}] {:<28} value {:+.4} target {:+.4} tol {}",
+                        if p.holds { "x" } else { " " },
+                        p.text,
+                        p.value,
+                        p.target,
+                        p.tolerance
+                    );
+                }
             }
             if let Some(v) = &rec.verdict {
                 let recorded = v["verdict"]["success"].as_bool();

@@ -4,7 +4,7 @@
 
 use scoring::episode::{EpisodeOptions, run_episode};
 use scoring::expert::ExpertPolicy;
-use scoring::{HoldPolicy, judge};
+use scoring::{HoldPolicy, Judge};
 use std::path::Path;
 use std::sync::Arc;
 
@@ -45,7 +45,7 @@ fn expert_succeeds_on_three_seeded_episodes() {
         assert!(r.sim_time_s < t.time_limit_s);
         assert!(
             r.verdict
-                .predicates
+                .predicates()
                 .iter()
                 .all(|p| p.holds && (p.value - p.target).abs() < p.tolerance)
         );
@@ -82,7 +82,7 @@ fn an_episode_that_leaves_the_lid_open_fails() {
     .unwrap();
     assert!(!r.success);
     assert!(r.error.is_none(), "{:?}", r.error);
-    let closed = &r.verdict.predicates[0];
+    let closed = &r.verdict.predicates()[0];
     assert!(
         !closed.holds && closed.value.abs() < 0.05,
         "the lid stays open: {closed:?}"
@@ -112,7 +112,7 @@ fn recording_rescores_offline_to_the_same_verdict() {
     assert!(rec.topics["/camera/arm/wrist"] >= 1);
     let replayed: compiler::Task = serde_json::from_value(rec.task).unwrap();
     assert_eq!(replayed, t);
-    assert_eq!(judge(&replayed, &rec.final_labware), r.verdict);
+    assert_eq!(Judge::replay(&replayed, &rec.labware_series), r.verdict);
     // The CLI agrees, without simulating.
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_autobio"))
         .arg("replay")

@@ -1,450 +1,1200 @@
-//! Name resolution, state tracing and lowering from the AST to a [`Task`].
+//! Name resolution and lowering of one protocol to a scene plus a [`Stage`], collecting every
+//! diagnostic. The state proof over the stages lives in [`crate::proof`]; chains in
+//! [`crate::chain`].
 
-use crate::primitives;
+use crate::params::{Domain, ParamSpec, placeholders};
+use crate::predicates::{self, Check, Cmp, Form, Tolerance};
+use crate::primitives::{self, LabPrimitive, resolve_location};
 use crate::robots;
 use crate::task::*;
-use dsl::ast::{Protocol, RandomItem, Spanned};
-use dsl::{Code, Diagnostic, Span, did_you_mean};
-use labware::{Pose, thermal_cycler};
-use std::collections::BTreeMap;
+use dsl::ast::{ParamDomain, Protocol, RandomItem, Scalar, Spanned, Step};
+use dsl::{Code, Diagnostic, Dimension, Span, did_you_mean, parse_quantity};
+use labware::{LabwareKind, Pose, thermal_cycler};
+use std::collections::{BTreeMap, BTreeSet};
 
-/// Checks a parsed protocol and lowers it. Returns a task only when no error was found; the
-/// diagnostics are complete either way.
-pub fn compile(p: &Protocol, file: &str) -> (Option<Task>, Vec<Diagnostic>) {
-    let mut cx = Cx { diags: Vec::new() };
-    let task = cx.lower(p, file);
-    let ok = !cx.diags.iter().any(|d| d.is_error());
-    (task.filter(|_| ok), cx.diags)
-}
-
-struct Cx {
-    diags: Vec<Diagnostic>,
-}
-
-fn hint_for(input: &str, candidates: &[&str], what: &str) -> String {
+pub(crate) fn hint_for(input: &str, candidates: &[&str], what: &str) -> String {
     match did_you_mean(input, candidates.iter().copied()) {
         Some(s) => format!("did you mean `{s}`?"),
+        None if candidates.is_empty() => format!("there are no {what}"),
         None => format!("known {what}: {}", candidates.join(", ")),
     }
 }
 
+/// Diagnostics sink that tags each diagnostic with the file it points into (for chain stages).
+pub(crate) struct Cx {
+    pub diags: Vec<Diagnostic>,
+    pub file: Option<String>,
+}
+
 impl Cx {
-    fn err(&mut self, code: Code, span: Span, msg: String, hint: Option<String>) {
-        let mut d = Diagnostic::error(code, span, msg);
+    pub fn new(file: Option<String>) -> Self {
+        Cx {
+            diags: Vec::new(),
+            file,
+        }
+    }
+
+    pub fn push(&mut self, mut d: Diagnostic) {
+        d.file = self.file.clone();
+        // One report per place: the proof may hit the same failure under many parameter values.
+        let dup = self
+            .diags
+            .iter()
+            .any(|x| x.code == d.code && x.span == d.span && x.file == d.file);
+        if !dup {
+            self.diags.push(d);
+        }
+    }
+
+    pub fn err(&mut self, code: Code, span: Span, msg: String, hint: Option<String>) {
+        let mut d = Diagnostic::new(code, span, msg);
         d.hint = hint;
-        self.diags.push(d);
+        self.push(d);
     }
 
-    fn lower(&mut self, p: &Protocol, file: &str) -> Option<Task> {
-        let mut robots = self.robots(p);
-        let mut labware = self.labware(p);
-        self.randomise(p, &mut robots, &mut labware);
-        let plan = self.plan(p, &labware);
-        let success = self.success(p, &labware);
-        let m = &p.meta;
-        let robots: Vec<RobotSpec> = robots.into_iter().flatten().collect();
-        let labware: Vec<LabwareSpec> = labware.into_iter().flatten().collect();
-        let cameras = default_cameras(&robots);
-        Some(Task {
-            schema_version: TASK_SCHEMA_VERSION,
-            id: m.id.as_ref()?.value.clone(),
-            version: m.version.as_ref().map(|v| v.value).unwrap_or(1),
-            level: m
-                .level
-                .as_ref()
-                .map(|l| l.value.clone())
-                .unwrap_or_else(|| "easy".into()),
-            instruction: m.instruction.as_ref()?.value.clone(),
-            source: file.to_string(),
-            time_limit_s: m.time_limit.as_ref()?.value,
-            physics: Physics {
-                timestep_s: 0.002,
-                substeps: 10,
-            },
-            robots,
-            labware,
-            cameras,
-            plan: plan?,
-            success,
-        })
-    }
-
-    fn robots(&mut self, p: &Protocol) -> Vec<Option<RobotSpec>> {
-        let names: Vec<&str> = robots::MODELS.iter().map(|m| m.name).collect();
-        p.robots
-            .iter()
-            .map(|r| {
-                let model = r.model.as_ref()?;
-                let Some(m) = robots::model(&model.value) else {
-                    let hint = hint_for(&model.value, &names, "robot models");
-                    self.err(
-                        Code::E0011,
-                        model.span,
-                        format!("unknown robot model `{}`", model.value),
-                        Some(hint),
-                    );
-                    return None;
-                };
-                Some(RobotSpec {
-                    name: r.name.value.clone(),
-                    model: m.name.into(),
-                    base: pose(&r.base),
-                    home: m.home.to_vec(),
-                    joint_jitter: None,
-                })
-            })
-            .collect()
-    }
-
-    fn labware(&mut self, p: &Protocol) -> Vec<Option<LabwareSpec>> {
-        let kinds: Vec<&str> = labware::KINDS.iter().map(|k| k.name).collect();
-        p.labware
-            .iter()
-            .map(|l| {
-                let kind = l.kind.as_ref()?;
-                let Some(k) = labware::kind(&kind.value) else {
-                    let hint = hint_for(&kind.value, &kinds, "labware kinds");
-                    self.err(
-                        Code::E0010,
-                        kind.span,
-                        format!("unknown labware kind `{}`", kind.value),
-                        Some(hint),
-                    );
-                    return None;
-                };
-                let mut initial = BTreeMap::new();
-                for part in k.parts {
-                    initial.insert(part.part.to_string(), part.initial[0].to_string());
-                }
-                for (part, state) in &l.state {
-                    let Some(ps) = k.parts.iter().find(|ps| ps.part == part.value) else {
-                        let parts: Vec<&str> = k.parts.iter().map(|ps| ps.part).collect();
-                        self.err(
-                            Code::E0003,
-                            part.span,
-                            format!("`{}` has no part `{}`", k.name, part.value),
-                            Some(hint_for(&part.value, &parts, "parts")),
-                        );
-                        continue;
-                    };
-                    if !ps.initial.contains(&state.value.as_str()) {
-                        self.err(
-                            Code::E0021,
-                            state.span,
-                            format!("`{}` cannot start `{}`", part.value, state.value),
-                            Some(hint_for(&state.value, ps.initial, "initial states")),
-                        );
-                        continue;
-                    }
-                    initial.insert(part.value.clone(), state.value.clone());
-                }
-                // The catalogue holds one kind so far; new kinds add their arm here.
-                let params = LabwareParams::ThermalCycler(thermal_cycler::Params::default());
-                Some(LabwareSpec {
-                    name: l.name.value.clone(),
-                    kind: k.name.into(),
-                    placement: pose(&l.pose),
-                    xy_jitter_m: 0.0,
-                    yaw_jitter_rad: 0.0,
-                    initial,
-                    params,
-                })
-            })
-            .collect()
-    }
-
-    fn randomise(
-        &mut self,
-        p: &Protocol,
-        robots: &mut [Option<RobotSpec>],
-        labware: &mut [Option<LabwareSpec>],
-    ) {
-        for r in &p.randomise {
-            let target = &r.target;
-            if let Some(i) = p.robots.iter().position(|x| x.name.value == target.value) {
-                let Some(robot) = robots[i].as_mut() else {
-                    continue;
-                };
-                for item in &r.items {
-                    match item {
-                        RandomItem::Joints { low, high, span } => {
-                            if low.value.len() > robot.home.len() {
-                                self.err(
-                                    Code::E0021,
-                                    *span,
-                                    format!(
-                                        "`{}` has {} joints, but {} ranges are given",
-                                        target.value,
-                                        robot.home.len(),
-                                        low.value.len()
-                                    ),
-                                    None,
-                                );
-                                continue;
-                            }
-                            robot.joint_jitter = Some(JointJitter {
-                                low: low.value.clone(),
-                                high: high.value.clone(),
-                            });
-                        }
-                        RandomItem::Xy(q) | RandomItem::Yaw(q) => {
-                            self.err(
-                                Code::E0003,
-                                q.span,
-                                format!(
-                                    "robot `{}` cannot be moved by randomisation",
-                                    target.value
-                                ),
-                                Some(
-                                    "randomise a robot's `joints`; `xy` and `yaw` apply to labware"
-                                        .into(),
-                                ),
-                            );
-                        }
-                    }
-                }
-            } else if let Some(i) = p.labware.iter().position(|x| x.name.value == target.value) {
-                let Some(lw) = labware[i].as_mut() else {
-                    continue;
-                };
-                for item in &r.items {
-                    match item {
-                        RandomItem::Xy(q) => lw.xy_jitter_m = q.value.abs(),
-                        RandomItem::Yaw(q) => lw.yaw_jitter_rad = q.value.abs(),
-                        RandomItem::Joints { span, .. } => {
-                            self.err(
-                                Code::E0003,
-                                *span,
-                                format!("labware `{}` has no joints to randomise", target.value),
-                                Some("use `xy` and `yaw` for labware".into()),
-                            );
-                        }
-                    }
-                }
-            } else {
-                let names: Vec<&str> = p
-                    .robots
-                    .iter()
-                    .map(|r| r.name.value.as_str())
-                    .chain(p.labware.iter().map(|l| l.name.value.as_str()))
-                    .collect();
-                self.err(
-                    Code::E0013,
-                    target.span,
-                    format!("nothing named `{}` to randomise", target.value),
-                    Some(hint_for(&target.value, &names, "robots and labware")),
-                );
-            }
-        }
-    }
-
-    fn plan(&mut self, p: &Protocol, labware: &[Option<LabwareSpec>]) -> Option<Vec<PlannedStep>> {
-        let names: Vec<&str> = primitives::CATALOGUE.iter().map(|p| p.name).collect();
-        let labware_names: Vec<&str> = p.labware.iter().map(|l| l.name.value.as_str()).collect();
-        let robot_names: Vec<&str> = p.robots.iter().map(|r| r.name.value.as_str()).collect();
-        let mut states: BTreeMap<String, BTreeMap<String, String>> = labware
-            .iter()
-            .flatten()
-            .map(|l| (l.name.clone(), l.initial.clone()))
-            .collect();
-        let mut plan = Vec::new();
-        let mut ok = true;
-        for step in &p.steps {
-            let Some(prim_name) = &step.primitive else {
-                ok = false;
-                continue;
-            };
-            let Some(prim) = primitives::primitive(&prim_name.value) else {
-                self.err(
-                    Code::E0012,
-                    prim_name.span,
-                    format!("unknown lab primitive `{}`", prim_name.value),
-                    Some(hint_for(&prim_name.value, &names, "primitives")),
-                );
-                ok = false;
-                continue;
-            };
-            let on = self.reference(step.on.as_ref(), step.span, "on", &labware_names, "labware");
-            let with = self.reference(
-                step.with.as_ref(),
-                step.span,
-                "with",
-                &robot_names,
-                "robots",
-            );
-            let (Some(on), Some(with)) = (on, with) else {
-                ok = false;
-                continue;
-            };
-            let Some(spec) = labware.iter().flatten().find(|l| l.name == on.value) else {
-                ok = false;
-                continue;
-            };
-            let kind = labware::kind(&spec.kind).expect("kinds resolved above");
-            if !kind.primitives.contains(&prim.name) {
-                self.err(
-                    Code::E0014,
-                    prim_name.span,
-                    format!(
-                        "`{}` cannot be applied to `{}` (a {})",
-                        prim.name, on.value, kind.name
-                    ),
-                    Some(format!(
-                        "a {} supports: {}",
-                        kind.name,
-                        kind.primitives.join(", ")
-                    )),
-                );
-                ok = false;
-                continue;
-            }
-            let state = states
-                .get_mut(&on.value)
-                .and_then(|s| s.get_mut(prim.part))
-                .expect("every part has an initial state");
-            if !prim.requires.contains(&state.as_str()) {
-                self.err(
-                    Code::E0031,
-                    prim_name.span,
-                    format!(
-                        "`{}` needs `{}.{}` to be {}, but here it is `{}`",
-                        prim.name,
-                        on.value,
-                        prim.part,
-                        prim.requires.join(" or "),
-                        state
-                    ),
-                    Some(format!(
-                        "remove this step or add one before it that leaves the {} {}",
-                        prim.part, prim.requires[0]
-                    )),
-                );
-                ok = false;
-                continue;
-            }
-            plan.push(PlannedStep {
-                primitive: prim.name.into(),
-                labware: on.value.clone(),
-                robot: with.value.clone(),
-                from_state: state.clone(),
-                to_state: prim.leaves.into(),
-            });
-            *state = prim.leaves.to_string();
-        }
-        ok.then_some(plan)
-    }
-
-    fn reference<'a>(
-        &mut self,
-        r: Option<&'a Spanned<String>>,
-        step: Span,
-        key: &str,
-        names: &[&str],
-        what: &str,
-    ) -> Option<&'a Spanned<String>> {
-        let Some(r) = r else {
-            self.err(
-                Code::E0002,
-                step,
-                format!("step has no `{key}`"),
-                Some(format!(
-                    "name one of the declared {what}: {}",
-                    names.join(", ")
-                )),
-            );
-            return None;
-        };
-        if !names.contains(&r.value.as_str()) {
-            self.err(
-                Code::E0013,
-                r.span,
-                format!("no {what} named `{}`", r.value),
-                Some(hint_for(&r.value, names, what)),
-            );
-            return None;
-        }
-        Some(r)
-    }
-
-    fn success(&mut self, p: &Protocol, labware: &[Option<LabwareSpec>]) -> Vec<Predicate> {
-        let mut out = Vec::new();
-        for pred in &p.success {
-            let text = pred.value.trim();
-            let parsed = text.split_once(" is ").and_then(|(lhs, state)| {
-                lhs.trim()
-                    .split_once('.')
-                    .map(|(l, part)| (l.trim(), part.trim(), state.trim()))
-            });
-            let Some((name, part, state)) = parsed else {
-                self.err(
-                    Code::E0030,
-                    pred.span,
-                    format!("cannot read predicate `{text}`"),
-                    Some(
-                        "write `<labware>.<part> is <state>`, e.g. \"cycler.lid is closed\"".into(),
-                    ),
-                );
-                continue;
-            };
-            let Some(spec) = labware.iter().flatten().find(|l| l.name == name) else {
-                let names: Vec<&str> = p.labware.iter().map(|l| l.name.value.as_str()).collect();
-                if !names.contains(&name) {
-                    self.err(
-                        Code::E0013,
-                        pred.span,
-                        format!("no labware named `{name}`"),
-                        Some(hint_for(name, &names, "labware")),
-                    );
-                }
-                continue;
-            };
-            let kind = labware::kind(&spec.kind).expect("kinds resolved above");
-            let Some(ps) = kind.parts.iter().find(|ps| ps.part == part) else {
-                let parts: Vec<&str> = kind.parts.iter().map(|ps| ps.part).collect();
-                self.err(
-                    Code::E0030,
-                    pred.span,
-                    format!("a {} has no part `{part}`", kind.name),
-                    Some(hint_for(part, &parts, "parts")),
-                );
-                continue;
-            };
-            if !ps.states.contains(&state) {
-                self.err(
-                    Code::E0030,
-                    pred.span,
-                    format!("`{part}` has no state `{state}`"),
-                    Some(hint_for(state, ps.states, "states")),
-                );
-                continue;
-            }
-            let LabwareParams::ThermalCycler(params) = &spec.params;
-            let tolerance = match state {
-                "closed" => params.closed_tolerance,
-                "locked" => params.locked_tolerance,
-                "open" => params.open_tolerance,
-                _ => params.unlocked_tolerance,
-            };
-            out.push(Predicate {
-                text: text.into(),
-                labware: name.into(),
-                part: part.into(),
-                state: state.into(),
-                tolerance,
-            });
-        }
-        out
+    pub fn has_errors(&self) -> bool {
+        self.diags.iter().any(|d| d.is_error())
     }
 }
 
-fn pose(p: &dsl::ast::Pose) -> Pose {
+/// A step after static checks, kept with its AST for the proof's diagnostics.
+pub(crate) struct CheckedStep<'a> {
+    pub ast: &'a Step,
+    pub primitive: &'static LabPrimitive,
+    pub planned: PlannedStep,
+}
+
+/// A predicate after static checks, with its span.
+pub(crate) struct CheckedPredicate {
+    pub span: Span,
+    pub predicate: Predicate,
+}
+
+/// One protocol lowered: its scene, its stage, and what the proof needs.
+pub(crate) struct Lowered<'a> {
+    pub id: String,
+    pub version: i64,
+    pub level: String,
+    pub robots: Vec<RobotSpec>,
+    pub labware: Vec<LabwareSpec>,
+    pub kinds: BTreeMap<String, &'static LabwareKind>,
+    pub params: Vec<ParamSpec>,
+    pub stage: Stage,
+    pub steps: Vec<CheckedStep<'a>>,
+    pub predicates: Vec<CheckedPredicate>,
+    /// Spans to point at, by labware name (the `at` value or the name).
+    pub labware_spans: BTreeMap<String, Span>,
+}
+
+/// Checks one protocol's names, arguments, parameters and predicates and lowers it. Returns
+/// `None` when something needed for a task is missing; the diagnostics are complete either way.
+pub(crate) fn lower<'a>(cx: &mut Cx, p: &'a Protocol, file: &str) -> Option<Lowered<'a>> {
+    duplicates(cx, p);
+    let robots = lower_robots(cx, p);
+    let (labware, kinds) = lower_labware(cx, p);
+    let mut robots_ok: Vec<Option<RobotSpec>> = robots;
+    let mut labware_ok: Vec<Option<LabwareSpec>> = labware;
+    randomise(cx, p, &mut robots_ok, &mut labware_ok);
+    let params = lower_params(cx, p, &kinds, &labware_ok);
+    let param_names: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
+    if let Some(i) = &p.meta.instruction {
+        check_placeholders(cx, i, &param_names);
+    }
+    for l in &p.labware {
+        if let Some(at) = &l.at {
+            check_placeholders(cx, at, &param_names);
+        }
+        for (_, v) in &l.state {
+            if let Scalar::Str(s) = &v.value {
+                check_placeholders(cx, &Spanned::new(s.clone(), v.span), &param_names);
+            }
+        }
+    }
+    let robot_names: Vec<String> = p.robots.iter().map(|r| r.name.value.clone()).collect();
+    let steps = check_steps(cx, p, &robot_names, &param_names);
+    let predicates = lower_predicates(cx, p, &kinds, &robot_names, &param_names);
+    let m = &p.meta;
+    let labware_spans = p
+        .labware
+        .iter()
+        .map(|l| {
+            let span = l.at.as_ref().map(|a| a.span).unwrap_or(l.name.span);
+            (l.name.value.clone(), span)
+        })
+        .collect();
+    let scoring = match p.success.scoring.as_ref().map(|s| s.value.as_str()) {
+        Some("progress") => Scoring::Progress,
+        _ => Scoring::Binary,
+    };
+    let id = m.id.as_ref()?.value.clone();
+    let stage = Stage {
+        id: id.clone(),
+        source: file.to_string(),
+        instruction: m.instruction.as_ref()?.value.clone(),
+        time_limit_s: m.time_limit.as_ref()?.value,
+        plan: steps.iter().map(|s| s.planned.clone()).collect(),
+        success: predicates.iter().map(|p| p.predicate.clone()).collect(),
+        scoring,
+    };
+    Some(Lowered {
+        id,
+        version: m.version.as_ref().map(|v| v.value).unwrap_or(1),
+        level: m
+            .level
+            .as_ref()
+            .map(|l| l.value.clone())
+            .unwrap_or_else(|| "easy".into()),
+        robots: robots_ok.into_iter().collect::<Option<Vec<_>>>()?,
+        labware: labware_ok.into_iter().collect::<Option<Vec<_>>>()?,
+        kinds,
+        params,
+        stage,
+        steps,
+        predicates,
+        labware_spans,
+    })
+}
+
+fn duplicates(cx: &mut Cx, p: &Protocol) {
+    let mut seen: BTreeMap<&str, &str> = BTreeMap::new();
+    let names = p
+        .robots
+        .iter()
+        .map(|r| (&r.name, "robot"))
+        .chain(p.labware.iter().map(|l| (&l.name, "labware")))
+        .chain(p.params.iter().map(|x| (&x.name, "parameter")));
+    for (name, what) in names {
+        if let Some(first) = seen.insert(&name.value, what) {
+            cx.err(
+                Code::E0015,
+                name.span,
+                format!(
+                    "`{}` is declared twice (as a {first} and a {what})",
+                    name.value
+                ),
+                Some("robots, labware and parameters share one namespace; rename one".into()),
+            );
+        }
+    }
+}
+
+fn lower_robots(cx: &mut Cx, p: &Protocol) -> Vec<Option<RobotSpec>> {
+    let names: Vec<&str> = robots::MODELS.iter().map(|m| m.name).collect();
+    p.robots
+        .iter()
+        .map(|r| {
+            let model = r.model.as_ref()?;
+            let Some(m) = robots::model(&model.value) else {
+                let hint = hint_for(&model.value, &names, "robot models");
+                cx.err(
+                    Code::E0011,
+                    model.span,
+                    format!("unknown robot model `{}`", model.value),
+                    Some(hint),
+                );
+                return None;
+            };
+            Some(RobotSpec {
+                name: r.name.value.clone(),
+                model: m.name.into(),
+                base: pose(&r.base),
+                home: m.home.to_vec(),
+                joint_jitter: None,
+            })
+        })
+        .collect()
+}
+
+type KindMap = BTreeMap<String, &'static LabwareKind>;
+
+/// A predicate's tolerance before overrides: name, default value, and what it bounds.
+type NamedTolerance = (String, f64, Dimension);
+
+fn lower_labware(cx: &mut Cx, p: &Protocol) -> (Vec<Option<LabwareSpec>>, KindMap) {
+    let kinds: Vec<&str> = labware::KINDS.iter().map(|k| k.name).collect();
+    let mut map = KindMap::new();
+    let specs = p
+        .labware
+        .iter()
+        .map(|l| {
+            let kind = l.kind.as_ref()?;
+            let Some(k) = labware::kind(&kind.value) else {
+                let hint = hint_for(&kind.value, &kinds, "labware kinds");
+                cx.err(
+                    Code::E0010,
+                    kind.span,
+                    format!("unknown labware kind `{}`", kind.value),
+                    Some(hint),
+                );
+                return None;
+            };
+            map.insert(l.name.value.clone(), k);
+            let mut spec = LabwareSpec {
+                name: l.name.value.clone(),
+                kind: k.name.into(),
+                placement: pose(&l.pose),
+                xy_jitter_m: 0.0,
+                yaw_jitter_rad: 0.0,
+                initial: k
+                    .parts
+                    .iter()
+                    .map(|ps| (ps.part.to_string(), ps.initial[0].to_string()))
+                    .collect(),
+                at: l.at.as_ref().map(|a| a.value.clone()),
+                volume: None,
+                panel: BTreeMap::new(),
+                params: match k.name {
+                    "thermal_cycler" => {
+                        LabwareParams::ThermalCycler(thermal_cycler::Params::default())
+                    }
+                    _ => LabwareParams::Unmodelled,
+                },
+            };
+            if let Some(at) = &l.at
+                && !k.movable
+            {
+                cx.err(
+                    Code::E0016,
+                    at.span,
+                    format!("`{}` (a {}) cannot stand in a slot", l.name.value, k.name),
+                    Some("place it with `pose` instead".into()),
+                );
+            }
+            for (key, value) in &l.state {
+                initial_state(cx, k, &mut spec, key, value);
+            }
+            Some(spec)
+        })
+        .collect();
+    (specs, map)
+}
+
+/// One `state = { key = value }` entry: a part state, the volume, or a panel value.
+fn initial_state(
+    cx: &mut Cx,
+    k: &'static LabwareKind,
+    spec: &mut LabwareSpec,
+    key: &Spanned<String>,
+    value: &Spanned<Scalar>,
+) {
+    let text = value.value.text();
+    if let Some(ps) = k.part(&key.value) {
+        if !ps.initial.contains(&text.as_str()) {
+            cx.err(
+                Code::E0017,
+                value.span,
+                format!("`{}` cannot start `{text}`", key.value),
+                Some(hint_for(&text, ps.initial, "initial states")),
+            );
+        } else {
+            spec.initial.insert(key.value.clone(), text);
+        }
+        return;
+    }
+    let dim = if key.value == "volume" && k.capacity_ul.is_some() {
+        Some(Dimension::Volume)
+    } else {
+        k.panel_param(&key.value)
+            .map(|p| primitives::panel_dimension(p.unit))
+    };
+    let Some(dim) = dim else {
+        let mut keys: Vec<&str> = k.parts.iter().map(|p| p.part).collect();
+        if k.capacity_ul.is_some() {
+            keys.push("volume");
+        }
+        keys.extend(k.panel.iter().map(|p| p.name));
+        cx.err(
+            Code::E0017,
+            key.span,
+            format!("a {} has no state `{}`", k.name, key.value),
+            Some(hint_for(&key.value, &keys, "state keys")),
+        );
+        return;
+    };
+    let Scalar::Str(s) = &value.value else {
+        cx.err(
+            Code::E0020,
+            value.span,
+            format!("`{}` needs a unit", key.value),
+            Some(format!(
+                "write it as a string such as \"{text} {}\"",
+                dim.canonical_unit()
+            )),
+        );
+        return;
+    };
+    if placeholders(s).is_empty() {
+        match parse_quantity(s) {
+            Ok(q) if q.dimension != dim => {
+                cx.err(
+                    Code::E0020,
+                    value.span,
+                    format!(
+                        "`{s}` is a {}, but `{}` is a {}",
+                        q.dimension.name(),
+                        key.value,
+                        dim.name()
+                    ),
+                    Some(format!("use one of: {}", dim.example_units())),
+                );
+                return;
+            }
+            Err(e) => {
+                cx.err(Code::E0020, value.span, e, None);
+                return;
+            }
+            Ok(q) => {
+                let range = if key.value == "volume" {
+                    Some((0.0, k.capacity_ul.unwrap_or(0.0), "µL"))
+                } else {
+                    k.panel_param(&key.value).map(|p| (p.min, p.max, p.unit))
+                };
+                if let Some((lo, hi, unit)) = range
+                    && !(lo..=hi).contains(&q.si)
+                {
+                    cx.err(
+                        Code::E0021,
+                        value.span,
+                        format!(
+                            "`{}` of a {} ranges {lo}..{hi} {unit}, found `{s}`",
+                            key.value, k.name
+                        ),
+                        None,
+                    );
+                    return;
+                }
+            }
+        }
+    }
+    if key.value == "volume" {
+        spec.volume = Some(s.clone());
+    } else {
+        spec.panel.insert(key.value.clone(), s.clone());
+    }
+}
+
+fn randomise(
+    cx: &mut Cx,
+    p: &Protocol,
+    robots: &mut [Option<RobotSpec>],
+    labware: &mut [Option<LabwareSpec>],
+) {
+    for r in &p.randomise {
+        let target = &r.target;
+        if let Some(i) = p.robots.iter().position(|x| x.name.value == target.value) {
+            let Some(robot) = robots[i].as_mut() else {
+                continue;
+            };
+            for item in &r.items {
+                match item {
+                    RandomItem::Joints { low, high, span } => {
+                        if low.value.len() > robot.home.len() {
+                            cx.err(
+                                Code::E0021,
+                                *span,
+                                format!(
+                                    "`{}` has {} joints, but {} ranges are given",
+                                    target.value,
+                                    robot.home.len(),
+                                    low.value.len()
+                                ),
+                                None,
+                            );
+                            continue;
+                        }
+                        robot.joint_jitter = Some(JointJitter {
+                            low: low.value.clone(),
+                            high: high.value.clone(),
+                        });
+                    }
+                    RandomItem::Xy(q) | RandomItem::Yaw(q) => cx.err(
+                        Code::E0003,
+                        q.span,
+                        format!("robot `{}` cannot be moved by randomisation", target.value),
+                        Some(
+                            "randomise a robot's `joints`; `xy` and `yaw` apply to labware".into(),
+                        ),
+                    ),
+                }
+            }
+        } else if let Some(i) = p.labware.iter().position(|x| x.name.value == target.value) {
+            let Some(lw) = labware[i].as_mut() else {
+                continue;
+            };
+            for item in &r.items {
+                match item {
+                    RandomItem::Xy(q) => lw.xy_jitter_m = q.value.abs(),
+                    RandomItem::Yaw(q) => lw.yaw_jitter_rad = q.value.abs(),
+                    RandomItem::Joints { span, .. } => cx.err(
+                        Code::E0003,
+                        *span,
+                        format!("labware `{}` has no joints to randomise", target.value),
+                        Some("use `xy` and `yaw` for labware".into()),
+                    ),
+                }
+            }
+        } else {
+            let names: Vec<&str> = p
+                .robots
+                .iter()
+                .map(|r| r.name.value.as_str())
+                .chain(p.labware.iter().map(|l| l.name.value.as_str()))
+                .collect();
+            cx.err(
+                Code::E0013,
+                target.span,
+                format!("nothing named `{}` to randomise", target.value),
+                Some(hint_for(&target.value, &names, "robots and labware")),
+            );
+        }
+    }
+}
+
+fn lower_params(
+    cx: &mut Cx,
+    p: &Protocol,
+    kinds: &KindMap,
+    labware: &[Option<LabwareSpec>],
+) -> Vec<ParamSpec> {
+    let mut out: Vec<ParamSpec> = Vec::new();
+    for param in &p.params {
+        let earlier: Vec<&str> = out.iter().map(|p| p.name.as_str()).collect();
+        let Some(domain) = &param.domain else {
+            continue;
+        };
+        let domain = match domain {
+            ParamDomain::Choice(values) => {
+                let mut seen = BTreeSet::new();
+                for v in values {
+                    if !seen.insert(v.value.text()) {
+                        cx.err(
+                            Code::E0022,
+                            v.span,
+                            format!("`{}` is listed twice", v.value.text()),
+                            None,
+                        );
+                    }
+                }
+                Domain::Choice {
+                    values: values.iter().map(|v| v.value.text()).collect(),
+                }
+            }
+            ParamDomain::Int { low, high, step } => {
+                let step_v = step.as_ref().map(|s| s.value).unwrap_or(1);
+                if low.value > high.value {
+                    cx.err(
+                        Code::E0022,
+                        low.span,
+                        format!("`int` range [{}, {}] is empty", low.value, high.value),
+                        Some("write the low end first".into()),
+                    );
+                    continue;
+                }
+                if step_v <= 0 {
+                    let span = step.as_ref().map(|s| s.span).unwrap_or(param.span);
+                    cx.err(Code::E0022, span, "`step` must be positive".into(), None);
+                    continue;
+                }
+                Domain::Int {
+                    low: low.value,
+                    high: high.value,
+                    step: step_v,
+                }
+            }
+            ParamDomain::Real { low, high } => {
+                let (lo, hi) = match (parse_quantity(&low.value), parse_quantity(&high.value)) {
+                    (Ok(a), Ok(b)) if a.dimension == b.dimension => (a, b),
+                    (Ok(a), Ok(b)) => {
+                        cx.err(
+                            Code::E0020,
+                            high.span,
+                            format!(
+                                "`real` bounds differ in kind: a {} and a {}",
+                                a.dimension.name(),
+                                b.dimension.name()
+                            ),
+                            None,
+                        );
+                        continue;
+                    }
+                    (Err(e), _) => {
+                        cx.err(Code::E0020, low.span, e, None);
+                        continue;
+                    }
+                    (_, Err(e)) => {
+                        cx.err(Code::E0020, high.span, e, None);
+                        continue;
+                    }
+                };
+                if lo.si > hi.si {
+                    cx.err(
+                        Code::E0022,
+                        low.span,
+                        format!("`real` range [`{}`, `{}`] is empty", low.value, high.value),
+                        None,
+                    );
+                    continue;
+                }
+                if let Some(e) = param.exclude.first() {
+                    cx.err(
+                        Code::E0022,
+                        e.span,
+                        "a `real` parameter cannot exclude values".into(),
+                        Some("exclusions apply to `choice`, `int` and `slot` parameters".into()),
+                    );
+                }
+                Domain::Real {
+                    low: lo.si,
+                    high: hi.si,
+                    unit: lo.dimension.canonical_unit().into(),
+                }
+            }
+            ParamDomain::Slot { of, free, opposite } => {
+                let Some(kind) = kinds.get(&of.value) else {
+                    let names: Vec<&str> = kinds.keys().map(String::as_str).collect();
+                    cx.err(
+                        Code::E0013,
+                        of.span,
+                        format!("no labware named `{}`", of.value),
+                        Some(hint_for(&of.value, &names, "labware")),
+                    );
+                    continue;
+                };
+                let Some(slots) = kind.slots else {
+                    cx.err(
+                        Code::E0016,
+                        of.span,
+                        format!("`{}` (a {}) has no slots", of.value, kind.name),
+                        None,
+                    );
+                    continue;
+                };
+                if let Some(o) = opposite {
+                    let labware::SlotLayout::Ring { n } = slots.layout else {
+                        cx.err(
+                            Code::E0016,
+                            o.span,
+                            format!(
+                                "`{}` has no opposite slots: its slots form a {}",
+                                of.value,
+                                slots.layout.describe()
+                            ),
+                            None,
+                        );
+                        continue;
+                    };
+                    let same_holder = out.iter().any(|x| {
+                        x.name == o.value && matches!(&x.domain, Domain::Slot { holder, .. } if *holder == of.value)
+                    });
+                    if !same_holder {
+                        cx.err(
+                            Code::E0023,
+                            o.span,
+                            format!(
+                                "`opposite` needs an earlier slot parameter of `{}`, found `{}`",
+                                of.value, o.value
+                            ),
+                            Some(hint_for(&o.value, &earlier, "earlier parameters")),
+                        );
+                        continue;
+                    }
+                    Domain::Opposite {
+                        holder: of.value.clone(),
+                        of: o.value.clone(),
+                        ring: n,
+                    }
+                } else {
+                    let occupied: Vec<String> = labware
+                        .iter()
+                        .flatten()
+                        .filter_map(|l| l.at.as_deref())
+                        .filter(|a| placeholders(a).is_empty())
+                        .filter_map(|a| a.split_once('.'))
+                        .filter(|(h, _)| *h == of.value)
+                        .map(|(_, s)| s.to_string())
+                        .collect();
+                    Domain::Slot {
+                        holder: of.value.clone(),
+                        slots: slots
+                            .layout
+                            .names()
+                            .into_iter()
+                            .filter(|s| !(*free && occupied.contains(s)))
+                            .collect(),
+                    }
+                }
+            }
+        };
+        for e in &param.exclude {
+            if let Scalar::Str(s) = &e.value {
+                for (_, name) in placeholders(s) {
+                    if !earlier.contains(&name.as_str()) {
+                        cx.err(
+                            Code::E0023,
+                            e.span,
+                            format!(
+                                "`exclude` uses `{{{name}}}`, which is not an earlier parameter"
+                            ),
+                            Some(hint_for(&name, &earlier, "earlier parameters")),
+                        );
+                    }
+                }
+            }
+        }
+        let spec = ParamSpec {
+            name: param.name.value.clone(),
+            domain,
+            exclude: param.exclude.iter().map(|e| e.value.text()).collect(),
+        };
+        out.push(spec);
+        let (assignments, _) = crate::params::proof_assignments(&out);
+        if assignments.is_empty() {
+            out.pop();
+            cx.err(
+                Code::E0022,
+                param.name.span,
+                format!("parameter `{}` has no value left to draw", param.name.value),
+                Some("its exclusions (or `free = true`) remove every value".into()),
+            );
+        }
+    }
+    out
+}
+
+/// Reports `{name}` placeholders that name no parameter.
+fn check_placeholders(cx: &mut Cx, text: &Spanned<String>, params: &[&str]) {
+    for (offset, name) in placeholders(&text.value) {
+        if !params.contains(&name.as_str()) {
+            // +1 skips the opening quote of a basic string; exact for strings without escapes.
+            let start = text.span.start + 1 + offset;
+            let span = Span::new(start, (start + name.len() + 2).min(text.span.end));
+            cx.err(
+                Code::E0023,
+                span,
+                format!("unknown placeholder `{{{name}}}`"),
+                Some(hint_for(&name, params, "parameters")),
+            );
+        }
+    }
+}
+
+fn check_steps<'a>(
+    cx: &mut Cx,
+    p: &'a Protocol,
+    robots: &[String],
+    params: &[&str],
+) -> Vec<CheckedStep<'a>> {
+    let prim_names: Vec<&str> = primitives::CATALOGUE.iter().map(|p| p.name).collect();
+    let robot_names: Vec<&str> = robots.iter().map(String::as_str).collect();
+    let mut out = Vec::new();
+    for step in &p.steps {
+        let Some(prim_name) = &step.primitive else {
+            continue;
+        };
+        let Some(prim) = primitives::primitive(&prim_name.value) else {
+            cx.err(
+                Code::E0012,
+                prim_name.span,
+                format!("unknown lab primitive `{}`", prim_name.value),
+                Some(hint_for(&prim_name.value, &prim_names, "primitives")),
+            );
+            continue;
+        };
+        let mut ok = true;
+        match &step.with {
+            None => {
+                cx.err(
+                    Code::E0002,
+                    step.span,
+                    "step has no `with`".into(),
+                    Some(format!(
+                        "name the robot that does it: {}",
+                        robot_names.join(", ")
+                    )),
+                );
+                ok = false;
+            }
+            Some(w) if !robots.contains(&w.value) => {
+                cx.err(
+                    Code::E0013,
+                    w.span,
+                    format!("no robot named `{}`", w.value),
+                    Some(hint_for(&w.value, &robot_names, "robots")),
+                );
+                ok = false;
+            }
+            Some(_) => {}
+        }
+        let arg_names: Vec<&str> = prim.args.iter().map(|a| a.name).collect();
+        for (key, value) in &step.args {
+            if !arg_names.contains(&key.value.as_str()) {
+                let hint = match did_you_mean(&key.value, arg_names.iter().copied()) {
+                    Some(s) => format!("did you mean `{s}`? `{}`", prim.signature()),
+                    None => format!("`{}`", prim.signature()),
+                };
+                cx.err(
+                    Code::E0032,
+                    key.span,
+                    format!("`{}` takes no argument `{}`", prim.name, key.value),
+                    Some(hint),
+                );
+                ok = false;
+            }
+            if let Scalar::Str(s) = &value.value {
+                let before = cx.diags.len();
+                check_placeholders(cx, &Spanned::new(s.clone(), value.span), params);
+                ok &= cx.diags.len() == before;
+            }
+        }
+        for a in prim.args {
+            if step.arg(a.name).is_none() {
+                cx.err(
+                    Code::E0032,
+                    prim_name.span,
+                    format!("`{}` needs `{}` ({})", prim.name, a.name, a.doc),
+                    Some(format!("`{}`", prim.signature())),
+                );
+                ok = false;
+            }
+        }
+        if !ok {
+            continue;
+        }
+        let args: BTreeMap<String, String> = step
+            .args
+            .iter()
+            .map(|(k, v)| (k.value.clone(), v.value.text()))
+            .collect();
+        out.push(CheckedStep {
+            ast: step,
+            primitive: prim,
+            planned: PlannedStep {
+                primitive: prim.name.into(),
+                robot: step
+                    .with
+                    .as_ref()
+                    .map(|w| w.value.clone())
+                    .unwrap_or_default(),
+                labware: args.get("on").cloned(),
+                args,
+            },
+        });
+    }
+    out
+}
+
+fn lower_predicates(
+    cx: &mut Cx,
+    p: &Protocol,
+    kinds: &KindMap,
+    robots: &[String],
+    params: &[&str],
+) -> Vec<CheckedPredicate> {
+    let overrides: BTreeMap<&str, (&Spanned<String>, &Spanned<String>)> = p
+        .tolerances
+        .iter()
+        .map(|(n, v)| (n.value.as_str(), (n, v)))
+        .collect();
+    let weights = p.success.weights.as_ref();
+    if let Some(w) = weights
+        && w.value.len() != p.success.all.len()
+    {
+        cx.err(
+            Code::E0021,
+            w.span,
+            format!(
+                "{} weights for {} predicates",
+                w.value.len(),
+                p.success.all.len()
+            ),
+            Some("give one weight per predicate in `all`".into()),
+        );
+    }
+    if let Some(w) = weights
+        && w.value.iter().sum::<f64>() <= 0.0
+    {
+        cx.err(Code::E0021, w.span, "the weights sum to zero".into(), None);
+    }
+    let mut used_tolerances: BTreeMap<String, Dimension> = BTreeMap::new();
+    let mut out = Vec::new();
+    for (i, text) in p.success.all.iter().enumerate() {
+        check_placeholders(cx, text, params);
+        let parsed = match predicates::parse(&text.value) {
+            Ok(x) => x,
+            Err(e) => {
+                cx.err(
+                    Code::E0030,
+                    text.span,
+                    format!("cannot read predicate `{}`: {e}", text.value),
+                    Some("forms: `<lw>.<part> is <state>`, `<item> in <holder>.<slot>`, `<lw>.volume = <q>`, `<lw>.<value> = <q>`, `<robot> touches <item>`, `<lw>.<joint> in [lo, hi] <unit>`, `<item> near [x, y, z] m`".into()),
+                );
+                continue;
+            }
+        };
+        let Some((check, dim)) = resolve_check(cx, text, &parsed.form, kinds, robots) else {
+            continue;
+        };
+        let check = apply_tolerance(
+            cx,
+            text,
+            check,
+            dim,
+            parsed.within,
+            &overrides,
+            &mut used_tolerances,
+        );
+        let weight = weights.and_then(|w| w.value.get(i).copied()).unwrap_or(1.0);
+        out.push(CheckedPredicate {
+            span: text.span,
+            predicate: Predicate {
+                text: text.value.clone(),
+                check,
+                weight,
+            },
+        });
+    }
+    for (name, (n, v)) in &overrides {
+        let Some(dim) = used_tolerances.get(*name) else {
+            let used: Vec<&str> = used_tolerances.keys().map(String::as_str).collect();
+            cx.err(
+                Code::E0035,
+                n.span,
+                format!("no predicate uses a tolerance named `{name}`"),
+                Some(hint_for(name, &used, "tolerances in use")),
+            );
+            continue;
+        };
+        match parse_quantity(&v.value) {
+            Ok(q) if q.dimension == *dim => {}
+            Ok(q) => cx.err(
+                Code::E0035,
+                v.span,
+                format!(
+                    "tolerance `{name}` bounds a {}, but `{}` is a {}",
+                    dim.name(),
+                    v.value,
+                    q.dimension.name()
+                ),
+                Some(format!("use one of: {}", dim.example_units())),
+            ),
+            Err(e) => cx.err(Code::E0020, v.span, e, None),
+        }
+    }
+    out
+}
+
+/// Resolves a predicate's names. Returns the check (tolerance not yet applied) and the dimension
+/// its tolerance bounds.
+fn resolve_check(
+    cx: &mut Cx,
+    text: &Spanned<String>,
+    form: &Form,
+    kinds: &KindMap,
+    robots: &[String],
+) -> Option<(Check, Option<NamedTolerance>)> {
+    let labware_names: Vec<&str> = kinds.keys().map(String::as_str).collect();
+    let lookup = |cx: &mut Cx, name: &str| -> Option<&'static LabwareKind> {
+        if !placeholders(name).is_empty() {
+            cx.err(
+                Code::E0030,
+                text.span,
+                format!("`{name}`: labware names in predicates cannot be parameters"),
+                Some("parameters may stand for slots and values".into()),
+            );
+            return None;
+        }
+        let k = kinds.get(name).copied();
+        if k.is_none() {
+            cx.err(
+                Code::E0013,
+                text.span,
+                format!("no labware named `{name}`"),
+                Some(hint_for(name, &labware_names, "labware")),
+            );
+        }
+        k
+    };
+    match form {
+        Form::State {
+            labware: lw,
+            part,
+            state,
+        } => {
+            let kind = lookup(cx, lw)?;
+            let Some(ps) = kind.part(part) else {
+                let parts: Vec<&str> = kind.parts.iter().map(|p| p.part).collect();
+                cx.err(
+                    Code::E0030,
+                    text.span,
+                    format!("a {} has no part `{part}`", kind.name),
+                    Some(hint_for(part, &parts, "parts")),
+                );
+                return None;
+            };
+            if !ps.states.contains(&state.as_str()) {
+                cx.err(
+                    Code::E0030,
+                    text.span,
+                    format!("`{part}` has no state `{state}`"),
+                    Some(hint_for(state, ps.states, "states")),
+                );
+                return None;
+            }
+            let name = format!("{part}_{state}");
+            let tol = kind.tolerance(&name).map(|v| (name, v, Dimension::Angle));
+            Some((
+                Check::State {
+                    labware: lw.clone(),
+                    part: part.clone(),
+                    state: state.clone(),
+                    tolerance: None,
+                },
+                tol,
+            ))
+        }
+        Form::JointRange {
+            labware: lw,
+            joint,
+            low,
+            high,
+        } => {
+            let kind = lookup(cx, lw)?;
+            if !kind.joints.iter().any(|(j, _)| j == joint) {
+                let joints: Vec<&str> = kind.joints.iter().map(|(j, _)| *j).collect();
+                cx.err(
+                    Code::E0030,
+                    text.span,
+                    format!("a {} has no joint `{joint}`", kind.name),
+                    Some(hint_for(joint, &joints, "joints")),
+                );
+                return None;
+            }
+            Some((
+                Check::JointRange {
+                    labware: lw.clone(),
+                    joint: joint.clone(),
+                    low: *low,
+                    high: *high,
+                },
+                None,
+            ))
+        }
+        Form::InSlot { item, location } => {
+            let kind = lookup(cx, item)?;
+            if !kind.movable {
+                cx.err(
+                    Code::E0030,
+                    text.span,
+                    format!("`{item}` (a {}) never moves into a slot", kind.name),
+                    None,
+                );
+                return None;
+            }
+            let holder = location.split_once('.').map(|(h, _)| h).unwrap_or("");
+            let hkind = lookup(cx, holder)?;
+            if hkind.slots.is_none() {
+                cx.err(
+                    Code::E0016,
+                    text.span,
+                    format!("`{holder}` (a {}) has no slots", hkind.name),
+                    None,
+                );
+                return None;
+            }
+            if placeholders(location).is_empty() {
+                let env_kinds = kinds.clone();
+                let env = primitives::Env {
+                    kinds: &env_kinds,
+                    robots,
+                };
+                if let Err(m) = resolve_location(&env, location) {
+                    cx.err(Code::E0016, text.span, m, None);
+                    return None;
+                }
+            }
+            let v = kind.tolerance("slot_xy").unwrap_or(0.015);
+            Some((
+                Check::InSlot {
+                    item: item.clone(),
+                    location: location.clone(),
+                    tolerance: Tolerance {
+                        name: "slot_xy".into(),
+                        value: v,
+                    },
+                },
+                Some(("slot_xy".into(), v, Dimension::Length)),
+            ))
+        }
+        Form::Compare {
+            labware: lw,
+            field,
+            cmp,
+            value,
+        } => {
+            let kind = lookup(cx, lw)?;
+            if field == "volume" && kind.capacity_ul.is_some() {
+                let v = kind.tolerance("volume").unwrap_or(1.0);
+                return Some((
+                    Check::Volume {
+                        container: lw.clone(),
+                        cmp: *cmp,
+                        value: value.clone(),
+                        tolerance: Tolerance {
+                            name: "volume".into(),
+                            value: v,
+                        },
+                    },
+                    Some(("volume".into(), v, Dimension::Volume)),
+                ));
+            }
+            let Some(p) = kind.panel_param(field) else {
+                let mut fields: Vec<&str> = kind.panel.iter().map(|p| p.name).collect();
+                if kind.capacity_ul.is_some() {
+                    fields.push("volume");
+                }
+                cx.err(
+                    Code::E0030,
+                    text.span,
+                    format!("a {} has no value `{field}` to compare", kind.name),
+                    Some(hint_for(field, &fields, "values")),
+                );
+                return None;
+            };
+            if *cmp != Cmp::Eq {
+                cx.err(
+                    Code::E0030,
+                    text.span,
+                    "a panel value is compared with `=`".into(),
+                    None,
+                );
+                return None;
+            }
+            let dim = primitives::panel_dimension(p.unit);
+            if placeholders(value).is_empty()
+                && let Err(e) = predicates::quantity(value, &Default::default(), dim)
+            {
+                cx.err(Code::E0020, text.span, e, None);
+                return None;
+            }
+            let v = kind.tolerance("display").unwrap_or(1e-6);
+            Some((
+                Check::Panel {
+                    instrument: lw.clone(),
+                    param: field.clone(),
+                    unit: p.unit.into(),
+                    initial: p.initial,
+                    value: value.clone(),
+                    tolerance: Tolerance {
+                        name: "display".into(),
+                        value: v,
+                    },
+                },
+                Some(("display".into(), v, dim)),
+            ))
+        }
+        Form::Contact { robot, item } => {
+            if !robots.contains(robot) {
+                let names: Vec<&str> = robots.iter().map(String::as_str).collect();
+                cx.err(
+                    Code::E0013,
+                    text.span,
+                    format!("no robot named `{robot}`"),
+                    Some(hint_for(robot, &names, "robots")),
+                );
+                return None;
+            }
+            lookup(cx, item)?;
+            Some((
+                Check::Contact {
+                    robot: robot.clone(),
+                    item: item.clone(),
+                },
+                None,
+            ))
+        }
+        Form::Near { item, pos } => {
+            let kind = lookup(cx, item)?;
+            let v = kind.tolerance("position").unwrap_or(0.005);
+            Some((
+                Check::Position {
+                    item: item.clone(),
+                    pos: *pos,
+                    tolerance: Tolerance {
+                        name: "position".into(),
+                        value: v,
+                    },
+                },
+                Some(("position".into(), v, Dimension::Length)),
+            ))
+        }
+    }
+}
+
+/// Fills in the tolerance: inline `within`, else a `[tolerances]` override, else the kind's default.
+fn apply_tolerance(
+    cx: &mut Cx,
+    text: &Spanned<String>,
+    mut check: Check,
+    tol: Option<NamedTolerance>,
+    within: Option<(f64, Dimension)>,
+    overrides: &BTreeMap<&str, (&Spanned<String>, &Spanned<String>)>,
+    used: &mut BTreeMap<String, Dimension>,
+) -> Check {
+    let Some((name, default, dim)) = tol else {
+        if within.is_some() {
+            cx.err(
+                Code::E0035,
+                text.span,
+                "this predicate takes no tolerance".into(),
+                Some("remove `within ..`".into()),
+            );
+        }
+        return check;
+    };
+    used.insert(name.clone(), dim);
+    let mut value = default;
+    if let Some((_, v)) = overrides.get(name.as_str())
+        && let Ok(q) = parse_quantity(&v.value)
+        && q.dimension == dim
+    {
+        value = q.si;
+    }
+    if let Some((v, d)) = within {
+        if d == dim {
+            value = v;
+        } else {
+            cx.err(
+                Code::E0035,
+                text.span,
+                format!(
+                    "`within` gives a {}, but this predicate's tolerance is a {}",
+                    d.name(),
+                    dim.name()
+                ),
+                Some(format!("use one of: {}", dim.example_units())),
+            );
+        }
+    }
+    let t = Tolerance { name, value };
+    match &mut check {
+        Check::State { tolerance, .. } => *tolerance = Some(t),
+        Check::InSlot { tolerance, .. }
+        | Check::Volume { tolerance, .. }
+        | Check::Panel { tolerance, .. }
+        | Check::Position { tolerance, .. } => *tolerance = t,
+        Check::JointRange { .. } | Check::Contact { .. } => {}
+    }
+    check
+}
+
+pub(crate) fn pose(p: &dsl::ast::Pose) -> Pose {
     let pos = p.pos.as_ref().map(|s| s.value).unwrap_or([0.0; 3]);
     Pose::yaw(pos, p.yaw.as_ref().map(|y| y.value).unwrap_or(0.0))
 }
 
 /// The fixed bench camera (in front of the bench, looking across it and 20° down) and one wrist
 /// camera per robot, all 224x224.
-fn default_cameras(robots: &[RobotSpec]) -> Vec<CameraSpec> {
+pub(crate) fn default_cameras(robots: &[RobotSpec]) -> Vec<CameraSpec> {
     let (s, c) = 20f64.to_radians().sin_cos();
     let mut cams = vec![CameraSpec {
         name: "table_front".into(),

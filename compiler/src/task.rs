@@ -1,12 +1,15 @@
 //! The compiled task: the contract between the compiler and everything downstream. Serialised as
 //! JSON by `autobio compile`; `schema_version` changes whenever a field changes meaning.
 
+use crate::params::{Bindings, ParamSpec, draw_all, render, uniform};
+use crate::predicates::Check;
 use labware::{Pose, thermal_cycler};
-use rand_core::{RngCore, SeedableRng};
+use rand_core::SeedableRng;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
-pub const TASK_SCHEMA_VERSION: u32 = 1;
+/// 2: stages (chains), parameters, typed checks with named tolerances, progress scoring.
+pub const TASK_SCHEMA_VERSION: u32 = 2;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Task {
@@ -14,15 +17,41 @@ pub struct Task {
     pub id: String,
     pub version: i64,
     pub level: String,
+    /// The whole task's instruction (template over `params`).
     pub instruction: String,
     pub source: String,
+    /// The sum of the stages' limits.
     pub time_limit_s: f64,
     pub physics: Physics,
     pub robots: Vec<RobotSpec>,
     pub labware: Vec<LabwareSpec>,
     pub cameras: Vec<CameraSpec>,
+    /// Drawn per episode, in order, after the scene randomisation.
+    pub params: Vec<ParamSpec>,
+    /// One for a protocol; one per protocol of a chain, run in order on one scene.
+    pub stages: Vec<Stage>,
+}
+
+/// One stage: its own instruction, plan, checks and time limit.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Stage {
+    pub id: String,
+    pub source: String,
+    /// Template over the task's params.
+    pub instruction: String,
+    pub time_limit_s: f64,
     pub plan: Vec<PlannedStep>,
     pub success: Vec<Predicate>,
+    pub scoring: Scoring,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Scoring {
+    /// 1 when every predicate holds, else 0; the stage ends as soon as they all hold.
+    Binary,
+    /// The weighted mean of each predicate's progress toward its target.
+    Progress,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -62,7 +91,14 @@ pub struct LabwareSpec {
     /// ± metres of uniform planar jitter, ± radians of uniform yaw jitter.
     pub xy_jitter_m: f64,
     pub yaw_jitter_rad: f64,
+    /// Initial part states (every part of the kind).
     pub initial: BTreeMap<String, String>,
+    /// Where a movable item starts (template `holder.slot`); `None`: at `placement`.
+    pub at: Option<String>,
+    /// Initial liquid volume (template quantity), for containers.
+    pub volume: Option<String>,
+    /// Initial panel values (template quantities) that differ from the kind's defaults.
+    pub panel: BTreeMap<String, String>,
     pub params: LabwareParams,
 }
 
@@ -70,6 +106,9 @@ pub struct LabwareSpec {
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum LabwareParams {
     ThermalCycler(thermal_cycler::Params),
+    /// A catalogue kind without a simulation model yet: it compiles and is checked, and the
+    /// runtime refuses to build it.
+    Unmodelled,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -96,22 +135,20 @@ pub enum CameraMount {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PlannedStep {
     pub primitive: String,
-    pub labware: String,
     pub robot: String,
-    /// The part state before and after, as traced by the compiler.
-    pub from_state: String,
-    pub to_state: String,
+    /// The `on` argument, when the primitive takes one.
+    pub labware: Option<String>,
+    /// Every argument as written (templates over the task's params), `on` included.
+    pub args: BTreeMap<String, String>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Predicate {
     /// As written: "cycler.lid is closed".
     pub text: String,
-    pub labware: String,
-    pub part: String,
-    pub state: String,
-    /// The named tolerance this predicate uses (rad).
-    pub tolerance: f64,
+    pub check: Check,
+    /// Weight in progress scoring.
+    pub weight: f64,
 }
 
 /// One concrete episode's scene, drawn from a task and a seed.
@@ -122,17 +159,17 @@ pub struct SceneInstance {
     pub robot_q: Vec<Vec<f64>>,
     /// Placement per labware, in task order.
     pub labware_placement: Vec<Pose>,
-}
-
-/// Uniform draw in [lo, hi) from 53 random bits.
-fn uniform(rng: &mut rand_chacha::ChaCha8Rng, lo: f64, hi: f64) -> f64 {
-    let u = (rng.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
-    lo + (hi - lo) * u
+    /// The drawn parameter values.
+    pub params: Bindings,
+    /// The task's instruction, and each stage's, with the parameters filled in.
+    pub instruction: String,
+    pub stage_instructions: Vec<String>,
 }
 
 impl Task {
     /// Draws the scene for `seed`. Draw order: robots in order (one draw per joint), then labware in
-    /// order (x, y, yaw). The same task and seed always give the same instance.
+    /// order (x, y, yaw), then parameters in order. The same task and seed always give the same
+    /// instance.
     pub fn sample(&self, seed: u64) -> SceneInstance {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
         let robot_q = self
@@ -166,10 +203,17 @@ impl Task {
                 )
             })
             .collect();
+        // The compiler proved every combination it traced drawable; a sampled proof may miss one,
+        // in which case the episode gets no parameters and its templates stay as written.
+        let params = draw_all(&self.params, &mut rng).unwrap_or_default();
+        let fill = |t: &str| render(t, &params).unwrap_or_else(|_| t.to_string());
         SceneInstance {
             seed,
             robot_q,
             labware_placement,
+            instruction: fill(&self.instruction),
+            stage_instructions: self.stages.iter().map(|s| fill(&s.instruction)).collect(),
+            params,
         }
     }
 
@@ -179,5 +223,13 @@ impl Task {
 
     pub fn robot_index(&self, name: &str) -> Option<usize> {
         self.robots.iter().position(|r| r.name == name)
+    }
+
+    /// Every planned step of every stage, with its stage index.
+    pub fn steps(&self) -> impl Iterator<Item = (usize, &PlannedStep)> {
+        self.stages
+            .iter()
+            .enumerate()
+            .flat_map(|(i, s)| s.plan.iter().map(move |p| (i, p)))
     }
 }

@@ -1,5 +1,6 @@
 //! The protocol AST: what a file says, with a span on everything a diagnostic may point at.
-//! Names are not resolved here (see the compiler); quantities are already in SI units.
+//! Names are not resolved here (see the compiler); fixed quantities are already in canonical units,
+//! while values that may hold `{param}` placeholders stay as written ([`Scalar`]).
 
 use crate::Span;
 use serde::Serialize;
@@ -17,15 +18,49 @@ impl<T> Spanned<T> {
     }
 }
 
+/// A TOML scalar kept as written, for values the compiler interprets (step arguments, parameter
+/// choices, initial states).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum Scalar {
+    Str(String),
+    Int(i64),
+    Float(f64),
+    Bool(bool),
+}
+
+impl Scalar {
+    /// The value as text, as it is substituted into templates.
+    pub fn text(&self) -> String {
+        match self {
+            Scalar::Str(s) => s.clone(),
+            Scalar::Int(i) => i.to_string(),
+            Scalar::Float(f) => f.to_string(),
+            Scalar::Bool(b) => b.to_string(),
+        }
+    }
+}
+
+/// A file is either one protocol or a chain of protocols.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub enum Document {
+    Protocol(Box<Protocol>),
+    // Boxed too: both are large and a document is made once per file.
+    Chain(Box<Chain>),
+}
+
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct Protocol {
     pub format: Option<Spanned<i64>>,
     pub meta: Meta,
     pub robots: Vec<Robot>,
     pub labware: Vec<Labware>,
+    pub params: Vec<Param>,
     pub randomise: Vec<Randomisation>,
     pub steps: Vec<Step>,
-    pub success: Vec<Spanned<String>>,
+    pub success: Success,
+    /// `[tolerances]`: name -> quantity as written (the compiler checks its dimension).
+    pub tolerances: Vec<(Spanned<String>, Spanned<String>)>,
 }
 
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
@@ -36,7 +71,7 @@ pub struct Meta {
     pub instruction: Option<Spanned<String>>,
     /// Seconds.
     pub time_limit: Option<Spanned<f64>>,
-    /// Span of the `[protocol]` header (or of the whole file when it is missing).
+    /// Span of the `[protocol]` (or `[chain]`) header, or of the file's start when it is missing.
     pub span: Span,
 }
 
@@ -59,8 +94,44 @@ pub struct Labware {
     pub name: Spanned<String>,
     pub kind: Option<Spanned<String>>,
     pub pose: Pose,
-    /// Initial state, e.g. `lid = "open"`: (part, state).
-    pub state: Vec<(Spanned<String>, Spanned<String>)>,
+    /// Where a movable item starts: `"<holder>.<slot>"`, may use placeholders.
+    pub at: Option<Spanned<String>>,
+    /// Initial state, e.g. `lid = "open"`, `volume = "1 mL"`, `speed = "900 rpm"`: (key, value).
+    pub state: Vec<(Spanned<String>, Spanned<Scalar>)>,
+}
+
+/// One `[params.<name>]` table: a value drawn per episode.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Param {
+    pub name: Spanned<String>,
+    pub domain: Option<ParamDomain>,
+    /// Values never drawn; may be `{other}` placeholders naming earlier parameters.
+    pub exclude: Vec<Spanned<Scalar>>,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub enum ParamDomain {
+    /// One of the listed values, uniformly.
+    Choice(Vec<Spanned<Scalar>>),
+    /// An integer in `[low, high]` (inclusive) on a grid of `step`.
+    Int {
+        low: Spanned<i64>,
+        high: Spanned<i64>,
+        step: Option<Spanned<i64>>,
+    },
+    /// A real quantity, uniform in `[low, high]` (both as written, same dimension).
+    Real {
+        low: Spanned<String>,
+        high: Spanned<String>,
+    },
+    /// A slot of a holder; `free` excludes slots occupied at the start; `opposite` makes it the
+    /// slot across the rotor from another parameter's slot.
+    Slot {
+        of: Spanned<String>,
+        free: bool,
+        opposite: Option<Spanned<String>>,
+    },
 }
 
 /// One `[randomise.<name>]` table.
@@ -87,7 +158,47 @@ pub enum RandomItem {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Step {
     pub primitive: Option<Spanned<String>>,
-    pub on: Option<Spanned<String>>,
     pub with: Option<Spanned<String>>,
+    /// Every other key of the step (`on`, `to`, `volume`, ...), as written.
+    pub args: Vec<(Spanned<String>, Spanned<Scalar>)>,
+    pub span: Span,
+}
+
+impl Step {
+    pub fn arg(&self, name: &str) -> Option<&Spanned<Scalar>> {
+        self.args
+            .iter()
+            .find(|(k, _)| k.value == name)
+            .map(|(_, v)| v)
+    }
+}
+
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Success {
+    /// Predicates that must all hold.
+    pub all: Vec<Spanned<String>>,
+    /// `binary` (default) or `progress`.
+    pub scoring: Option<Spanned<String>>,
+    /// One weight per predicate, for progress scoring.
+    pub weights: Option<Spanned<Vec<f64>>>,
+    pub span: Span,
+}
+
+/// A chain file: protocols run one after another on the first one's scene.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Chain {
+    pub format: Option<Spanned<i64>>,
+    pub meta: Meta,
+    pub stages: Vec<StageRef>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StageRef {
+    /// Path of the protocol file, relative to the chain file.
+    pub protocol: Option<Spanned<String>>,
+    /// Overrides the protocol's instruction for this stage.
+    pub instruction: Option<Spanned<String>>,
+    /// Overrides the protocol's time limit (seconds).
+    pub time_limit: Option<Spanned<f64>>,
     pub span: Span,
 }

@@ -29,37 +29,61 @@ pub enum Severity {
 }
 
 /// Stable diagnostic codes. The number never changes meaning once released; `autobio explain`
-/// prints [`Code::explanation`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+/// prints [`Code::explanation`]. `E` codes are errors, `W` codes warnings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize)]
 pub enum Code {
     /// The file is not valid TOML.
     E0001,
     /// A required table or key is missing.
     E0002,
-    /// A key that the language does not define.
+    /// A key the language does not define.
     E0003,
     /// A value of the wrong type.
     E0004,
-    /// Unsupported `format` version.
+    /// Unsupported format version.
     E0005,
+    /// A chain stage cannot be loaded.
+    E0006,
     /// Unknown labware kind.
     E0010,
     /// Unknown robot model.
     E0011,
     /// Unknown lab primitive.
     E0012,
-    /// A name that refers to no declared labware or robot.
+    /// A name that refers to nothing declared.
     E0013,
     /// A primitive applied to labware that does not support it.
     E0014,
-    /// A quantity with a missing, unknown or wrong-dimension unit.
+    /// A name declared twice.
+    E0015,
+    /// An unknown or unusable slot.
+    E0016,
+    /// An initial state the labware kind does not have.
+    E0017,
+    /// A quantity with a missing, unknown or wrong unit.
     E0020,
     /// A value outside its allowed range.
     E0021,
+    /// A parameter with no usable domain.
+    E0022,
+    /// An unknown placeholder.
+    E0023,
     /// A success predicate that cannot be read.
     E0030,
-    /// A step whose labware state precondition does not hold where it runs.
+    /// A step whose precondition does not hold.
     E0031,
+    /// A missing or unknown primitive argument.
+    E0032,
+    /// The plan does not reach the success condition.
+    E0033,
+    /// A chain stage that does not fit the chain's scene.
+    E0034,
+    /// An unknown or ill-typed tolerance.
+    E0035,
+    /// The success condition already holds at the start.
+    W0001,
+    /// The state proof sampled parameter combinations.
+    W0002,
 }
 
 impl Code {
@@ -70,39 +94,95 @@ impl Code {
             Code::E0003 => "E0003",
             Code::E0004 => "E0004",
             Code::E0005 => "E0005",
+            Code::E0006 => "E0006",
             Code::E0010 => "E0010",
             Code::E0011 => "E0011",
             Code::E0012 => "E0012",
             Code::E0013 => "E0013",
             Code::E0014 => "E0014",
+            Code::E0015 => "E0015",
+            Code::E0016 => "E0016",
+            Code::E0017 => "E0017",
             Code::E0020 => "E0020",
             Code::E0021 => "E0021",
+            Code::E0022 => "E0022",
+            Code::E0023 => "E0023",
             Code::E0030 => "E0030",
             Code::E0031 => "E0031",
+            Code::E0032 => "E0032",
+            Code::E0033 => "E0033",
+            Code::E0034 => "E0034",
+            Code::E0035 => "E0035",
+            Code::W0001 => "W0001",
+            Code::W0002 => "W0002",
         }
     }
 
-    pub const ALL: [Code; 14] = [
+    pub const ALL: [Code; 26] = [
         Code::E0001,
         Code::E0002,
         Code::E0003,
         Code::E0004,
         Code::E0005,
+        Code::E0006,
         Code::E0010,
         Code::E0011,
         Code::E0012,
         Code::E0013,
         Code::E0014,
+        Code::E0015,
+        Code::E0016,
+        Code::E0017,
         Code::E0020,
         Code::E0021,
+        Code::E0022,
+        Code::E0023,
         Code::E0030,
         Code::E0031,
+        Code::E0032,
+        Code::E0033,
+        Code::E0034,
+        Code::E0035,
+        Code::W0001,
+        Code::W0002,
     ];
 
     pub fn from_name(name: &str) -> Option<Code> {
         Code::ALL
             .into_iter()
             .find(|c| c.as_str().eq_ignore_ascii_case(name))
+    }
+
+    /// One line: what the code means.
+    pub fn summary(self) -> &'static str {
+        match self {
+            Code::E0001 => "the file is not valid TOML",
+            Code::E0002 => "a required table or key is missing",
+            Code::E0003 => "a key the language does not define",
+            Code::E0004 => "a value of the wrong type",
+            Code::E0005 => "unsupported format version",
+            Code::E0006 => "a chain stage cannot be loaded",
+            Code::E0010 => "unknown labware kind",
+            Code::E0011 => "unknown robot model",
+            Code::E0012 => "unknown lab primitive",
+            Code::E0013 => "a name that refers to nothing declared",
+            Code::E0014 => "a primitive applied to labware that does not support it",
+            Code::E0015 => "a name declared twice",
+            Code::E0016 => "an unknown or unusable slot",
+            Code::E0017 => "an initial state the labware kind does not have",
+            Code::E0020 => "a quantity with a missing, unknown or wrong unit",
+            Code::E0021 => "a value outside its allowed range",
+            Code::E0022 => "a parameter with no usable domain",
+            Code::E0023 => "an unknown placeholder",
+            Code::E0030 => "a success predicate that cannot be read",
+            Code::E0031 => "a step whose precondition does not hold",
+            Code::E0032 => "a missing or unknown primitive argument",
+            Code::E0033 => "the plan does not reach the success condition",
+            Code::E0034 => "a chain stage that does not fit the chain's scene",
+            Code::E0035 => "an unknown or ill-typed tolerance",
+            Code::W0001 => "the success condition already holds at the start",
+            Code::W0002 => "the state proof sampled parameter combinations",
+        }
     }
 
     /// Long-form documentation, printed by `autobio explain CODE`.
@@ -112,41 +192,83 @@ impl Code {
                 "The protocol file is not valid TOML (an unclosed string or table header, a duplicate key...).\nFix the syntax at the marked place; nothing else in the file is checked until it parses."
             }
             Code::E0002 => {
-                "A table or key that every protocol needs is missing, e.g. `[protocol]`, `protocol.id`,\n`protocol.instruction`, `protocol.time_limit`, or at least one `[[steps]]` entry."
+                "A table or key that every protocol needs is missing: `[protocol]` with `id`, `instruction` and\n`time_limit`, at least one `[[steps]]` with `do`, `[success]` with `all`; in a chain file `[chain]`\nwith `id` and at least one `[[stages]]` with `protocol`."
             }
             Code::E0003 => {
                 "The key is not part of the protocol language (format 1). Usually a typo: the hint names the\nclosest known key. See docs/protocol-language.md for every table and key."
             }
             Code::E0004 => {
-                "The value has the wrong TOML type, e.g. a number where a string is expected."
+                "The value has the wrong TOML type, e.g. a number where a string is expected, or a table where\nan array of tables (`[[steps]]`) is expected."
             }
             Code::E0005 => {
-                "The file declares a `format` this autobio does not read. Format 1 is the current one."
+                "The file declares a `format` this autobio does not read. Format 1 is the current one. A new\nformat number is issued only when a file valid in the old format would be read differently."
             }
-            Code::E0010 => "`kind` names no labware in the catalogue. Known kinds: thermal_cycler.",
+            Code::E0006 => {
+                "A chain's `[[stages]]` entry names a protocol file that cannot be read, is itself a chain, or\nhas errors of its own (reported with their own file and line). Paths are relative to the chain file."
+            }
+            Code::E0010 => {
+                "`kind` names no labware in the catalogue. `autobio describe --catalogue` lists the kinds with\ntheir parts, slots and primitives."
+            }
             Code::E0011 => "`model` names no robot in the catalogue. Known models: ur5e_2f85.",
             Code::E0012 => {
-                "`do` names no lab primitive in the catalogue. Known primitives: open_lid, close_lid."
+                "`do` names no lab primitive in the catalogue. `autobio describe --catalogue` lists every\nprimitive with its arguments, the states it needs and the states it leaves."
             }
             Code::E0013 => {
-                "A step, randomisation or predicate refers to a name that is not declared under\n`[labware]` or `[robots]`."
+                "A step, parameter, randomisation or predicate refers to a name that is not declared under\n`[labware]`, `[robots]` or `[params]`."
             }
             Code::E0014 => {
-                "The primitive exists but this labware kind has no affordance for it (e.g. `open_lid` on\nsomething without a lid)."
+                "The primitive exists but this labware kind has no affordance for it (e.g. `open_lid` on a\ntube, `unscrew_cap` on a rack). The hint lists what the kind supports."
+            }
+            Code::E0015 => {
+                "Robots, labware and parameters share one namespace: every name must be unique in a protocol."
+            }
+            Code::E0016 => {
+                "A location `<holder>.<slot>` names a holder without slots, a slot the holder does not have, a\nslot that does not accept this kind of item, or a slot two items start in."
+            }
+            Code::E0017 => {
+                "`state = { .. }` sets a part, panel value or volume the kind does not have, or a state the part\ncannot start in (a lid cannot start `unlocked`; declare `closed`)."
             }
             Code::E0020 => {
-                "A physical quantity has no unit, an unknown unit, or a unit of the wrong dimension.\nWrite quantities as strings with units (\"30 s\", \"5 deg\", \"10 mm\") or use a unit-suffixed key\n(`pos_m`, `yaw_deg`, `xy_mm`)."
+                "A physical quantity has no unit, an unknown unit, or a unit of the wrong dimension.\nWrite quantities as strings with units (\"30 s\", \"5 deg\", \"10 mm\", \"200 µL\", \"37 °C\",\n\"1200 rpm\") or use a unit-suffixed key (`pos_m`, `yaw_deg`, `xy_mm`)."
             }
             Code::E0021 => {
-                "The value is outside the range the language allows (e.g. a negative time limit, a\nrandomisation range whose low end exceeds its high end)."
+                "The value is outside the range the language or the instrument allows (a negative time limit, a\nrange whose low end exceeds its high end, a panel value the instrument cannot show, a volume\nlarger than the container)."
+            }
+            Code::E0022 => {
+                "A `[params.<name>]` table must have exactly one domain (`choice`, `int`, `real` or `slot`), and\nits exclusions must leave at least one value to draw."
+            }
+            Code::E0023 => {
+                "A `{name}` placeholder in an instruction, step argument, location or predicate names no\nparameter declared under `[params]` (or one declared after the parameter that uses it)."
             }
             Code::E0030 => {
-                "A success predicate must read `<labware>.<part> is <state>`, e.g. \"cycler.lid is closed\";\nthe part and state must exist for that labware kind."
+                "A success predicate must be one of the forms in docs/protocol-language.md, e.g.\n\"cycler.lid is closed\", \"tube in rack.{slot}\", \"tube.volume = 200 µL\",\n\"mixer.speed = {rpm} rpm\", \"arm touches tube\", \"cycler.lid in [-1.95, -1.85] rad\"; the names,\nparts and states must exist for the labware kind."
             }
             Code::E0031 => {
-                "Each primitive declares the labware state it needs; tracing the steps from the declared\ninitial state, this step would start where its precondition does not hold (closing a lid\nthat is already closed)."
+                "Each primitive declares the state it needs; tracing the steps from the declared initial state\n(through every earlier stage of a chain, and for every value of the parameters), this step would\nstart where its precondition does not hold (closing a lid that is already closed, picking with a\nhand that is full, aspirating more than the container holds)."
+            }
+            Code::E0032 => {
+                "The step is missing an argument its primitive requires, or passes one it does not take. The\nhint lists the primitive's signature."
+            }
+            Code::E0033 => {
+                "Traced to its end, the plan leaves a state in which a success predicate is false, so even a\nperfect execution would fail. Fix the steps or the predicate."
+            }
+            Code::E0034 => {
+                "Every stage of a chain runs on the first stage's scene: a later stage must declare the same robots\nand labware (same names and kinds). Its own initial states are ignored; the state is traced."
+            }
+            Code::E0035 => {
+                "`[tolerances]` names a tolerance no predicate of this protocol uses, or gives it a unit of the\nwrong dimension; a predicate's `within` must match what the predicate measures."
+            }
+            Code::W0001 => {
+                "Every success predicate is already true in the initial state, so an episode succeeds before the\nrobot moves. Usually an initial `state` or a predicate is wrong."
+            }
+            Code::W0002 => {
+                "The parameters have too many combinations to trace them all; the proof traced a deterministic\nsample of them. Narrow the domains for an exhaustive proof."
             }
         }
+    }
+
+    pub fn is_warning(self) -> bool {
+        self.as_str().starts_with('W')
     }
 }
 
@@ -165,17 +287,39 @@ pub struct Diagnostic {
     /// Lowercase, quotes the offending input with backticks.
     pub message: String,
     pub hint: Option<String>,
+    /// The file the span points into, when it is not the file being checked (a chain's stage).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub file: Option<String>,
+    /// Extra context lines (`note: ...`), e.g. which parameter values break a proof.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
 }
 
 impl Diagnostic {
     pub fn error(code: Code, span: Span, message: impl Into<String>) -> Self {
         Diagnostic {
             code,
-            severity: Severity::Error,
+            severity: if code.is_warning() {
+                Severity::Warning
+            } else {
+                Severity::Error
+            },
             span,
             message: message.into(),
             hint: None,
+            file: None,
+            notes: Vec::new(),
         }
+    }
+
+    /// A diagnostic of `code`; the severity follows the code (`W` codes are warnings).
+    pub fn new(code: Code, span: Span, message: impl Into<String>) -> Self {
+        Diagnostic::error(code, span, message)
+    }
+
+    pub fn with_note(mut self, note: impl Into<String>) -> Self {
+        self.notes.push(note.into());
+        self
     }
 
     pub fn with_hint(mut self, hint: impl Into<String>) -> Self {

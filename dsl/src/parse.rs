@@ -7,10 +7,11 @@ use crate::{Code, Diagnostic, Span, did_you_mean};
 use toml::de::{DeTable, DeValue};
 
 type Value<'i> = toml::Spanned<DeValue<'i>>;
+type Key<'i> = toml::Spanned<std::borrow::Cow<'i, str>>;
 
-/// Parses a protocol. Never fails and never panics: the AST holds whatever could be read, and the
-/// diagnostics say what could not.
-pub fn parse(source: &str) -> (Protocol, Vec<Diagnostic>) {
+/// Parses a protocol or chain file. Never fails and never panics: the AST holds whatever could be
+/// read, and the diagnostics say what could not. A file with a top-level `[chain]` table is a chain.
+pub fn parse(source: &str) -> (Document, Vec<Diagnostic>) {
     let mut p = Parser { diags: Vec::new() };
     let (doc, errors) = DeTable::parse_recoverable(source);
     if !errors.is_empty() {
@@ -31,10 +32,22 @@ pub fn parse(source: &str) -> (Protocol, Vec<Diagnostic>) {
                 ),
             );
         }
-        return (Protocol::default(), p.diags);
+        return (Document::Protocol(Box::default()), p.diags);
     }
-    let protocol = p.protocol(doc.get_ref());
-    (protocol, p.diags)
+    let doc = doc.get_ref();
+    let document = if doc.iter().any(|(k, _)| k.get_ref() == "chain") {
+        Document::Chain(Box::new(p.chain(doc)))
+    } else {
+        Document::Protocol(Box::new(p.protocol(doc)))
+    };
+    (document, p.diags)
+}
+
+/// A table's entries in document order (toml's map is sorted by key).
+fn ordered<'a, 'i>(t: &'a DeTable<'i>) -> Vec<(&'a Key<'i>, &'a Value<'i>)> {
+    let mut v: Vec<_> = t.iter().collect();
+    v.sort_by_key(|(k, _)| k.span().start);
+    v
 }
 
 fn lowercase_first(s: &str) -> String {
@@ -54,17 +67,25 @@ const TOP_KEYS: &[&str] = &[
     "protocol",
     "robots",
     "labware",
+    "params",
     "randomise",
     "steps",
     "success",
+    "tolerances",
+];
+const CHAIN_TOP_KEYS: &[&str] = &["format", "chain", "stages"];
+const CHAIN_KEYS: &[&str] = &["id", "version", "level", "instruction"];
+const STAGE_KEYS: &[&str] = &["protocol", "instruction", "time_limit"];
+const PARAM_KEYS: &[&str] = &[
+    "choice", "int", "step", "real", "slot", "free", "opposite", "exclude",
 ];
 const PROTOCOL_KEYS: &[&str] = &["id", "version", "level", "instruction", "time_limit"];
 const ROBOT_KEYS: &[&str] = &["model", "base"];
-const LABWARE_KEYS: &[&str] = &["kind", "pose", "state"];
+const LABWARE_KEYS: &[&str] = &["kind", "pose", "at", "state"];
 const POSE_KEYS: &[&str] = &["pos", "yaw"];
 const RANDOM_KEYS: &[&str] = &["joints", "xy", "yaw"];
-const STEP_KEYS: &[&str] = &["do", "on", "with"];
-const SUCCESS_KEYS: &[&str] = &["all"];
+const SUCCESS_KEYS: &[&str] = &["all", "scoring", "weights"];
+const SCORINGS: &[&str] = &["binary", "progress"];
 const LEVELS: &[&str] = &["easy", "medium", "hard"];
 
 fn span_of<T>(v: &toml::Spanned<T>) -> Span {
@@ -100,12 +121,7 @@ impl Parser {
         self.diags.push(d);
     }
 
-    fn unknown_key(
-        &mut self,
-        key: &toml::Spanned<std::borrow::Cow<'_, str>>,
-        allowed: &[&str],
-        table: &str,
-    ) {
+    fn unknown_key(&mut self, key: &Key<'_>, allowed: &[&str], table: &str) {
         let (base, _) = split_unit(key.get_ref());
         let hint = did_you_mean(base, allowed.iter().copied())
             .map(|s| format!("did you mean `{s}`?"))
@@ -299,7 +315,7 @@ impl Parser {
             },
             ..Protocol::default()
         };
-        for (key, value) in doc.iter() {
+        for (key, value) in ordered(doc) {
             match key.get_ref().as_ref() {
                 "format" => p.format = self.integer(value, "format"),
                 "protocol" => p.meta = self.meta(value),
@@ -313,25 +329,16 @@ impl Parser {
                     p.randomise =
                         self.named_tables(value, "[randomise]", |s, n, t| s.randomise(n, t))
                 }
+                "params" => {
+                    p.params = self.named_tables(value, "[params]", |s, n, t| s.param(n, t))
+                }
                 "steps" => p.steps = self.steps(value),
                 "success" => p.success = self.success(value),
+                "tolerances" => p.tolerances = self.tolerances(value),
                 _ => self.unknown_key(key, TOP_KEYS, "the top level"),
             }
         }
-        if let Some(f) = &p.format
-            && f.value != crate::FORMAT_VERSION
-        {
-            let msg = format!("unsupported format `{}`", f.value);
-            self.err(
-                Code::E0005,
-                f.span,
-                msg,
-                Some(format!(
-                    "this autobio reads format = {}",
-                    crate::FORMAT_VERSION
-                )),
-            );
-        }
+        self.check_format(p.format.as_ref());
         if !doc.iter().any(|(k, _)| k.get_ref() == "protocol") {
             self.err(
                 Code::E0002,
@@ -348,7 +355,7 @@ impl Parser {
                 Some("add at least one `[[steps]]` with `do`, `on` and `with`".into()),
             );
         }
-        if p.success.is_empty() && !doc.iter().any(|(k, _)| k.get_ref() == "success") {
+        if p.success.all.is_empty() && !doc.iter().any(|(k, _)| k.get_ref() == "success") {
             self.err(
                 Code::E0002,
                 Span::new(0, 0),
@@ -367,40 +374,14 @@ impl Parser {
         let Some(t) = self.table(v, "`[protocol]`") else {
             return m;
         };
-        for (key, value) in t.iter() {
+        for (key, value) in ordered(t) {
             let k = key.get_ref().as_ref();
             match split_unit(k).0 {
                 "id" => m.id = self.string(value, "protocol.id"),
                 "version" => m.version = self.integer(value, "protocol.version"),
-                "level" => {
-                    m.level = self.string(value, "protocol.level");
-                    if let Some(l) = &m.level
-                        && !LEVELS.contains(&l.value.as_str())
-                    {
-                        let hint = did_you_mean(&l.value, LEVELS.iter().copied())
-                            .map(|s| format!("did you mean `{s}`?"));
-                        self.err(
-                            Code::E0021,
-                            l.span,
-                            format!("unknown level `{}`", l.value),
-                            hint.or(Some("levels: easy, medium, hard".into())),
-                        );
-                    }
-                }
+                "level" => m.level = self.level(value),
                 "instruction" => m.instruction = self.string(value, "protocol.instruction"),
-                "time_limit" => {
-                    m.time_limit = self.quantity(k, value, Dimension::Time);
-                    if let Some(tl) = &m.time_limit
-                        && tl.value <= 0.0
-                    {
-                        self.err(
-                            Code::E0021,
-                            tl.span,
-                            "`time_limit` must be positive".into(),
-                            None,
-                        );
-                    }
-                }
+                "time_limit" => m.time_limit = self.time_limit(k, value),
                 _ => self.unknown_key(key, PROTOCOL_KEYS, "`[protocol]`"),
             }
         }
@@ -428,7 +409,7 @@ impl Parser {
         let Some(t) = self.table(v, &format!("`{what}`")) else {
             return out;
         };
-        for (key, value) in t.iter() {
+        for (key, value) in ordered(t) {
             let name = Spanned::new(key.get_ref().to_string(), span_of(key));
             if let Some(inner) = self.table(value, &format!("`{}` in {what}", name.value)) {
                 out.push(each(self, name, inner));
@@ -443,7 +424,7 @@ impl Parser {
             model: None,
             base: Pose::default(),
         };
-        for (key, value) in t.iter() {
+        for (key, value) in ordered(t) {
             match key.get_ref().as_ref() {
                 "model" => r.model = self.string(value, "model"),
                 "base" => r.base = self.pose(value),
@@ -466,16 +447,18 @@ impl Parser {
             name,
             kind: None,
             pose: Pose::default(),
+            at: None,
             state: Vec::new(),
         };
-        for (key, value) in t.iter() {
+        for (key, value) in ordered(t) {
             match key.get_ref().as_ref() {
                 "kind" => l.kind = self.string(value, "kind"),
                 "pose" => l.pose = self.pose(value),
+                "at" => l.at = self.string(value, "at"),
                 "state" => {
                     if let Some(st) = self.table(value, "`state`") {
-                        for (part, s) in st.iter() {
-                            if let Some(s) = self.string(s, part.get_ref()) {
+                        for (part, s) in ordered(st) {
+                            if let Some(s) = self.scalar(s, part.get_ref()) {
                                 l.state.push((
                                     Spanned::new(part.get_ref().to_string(), span_of(part)),
                                     s,
@@ -503,7 +486,7 @@ impl Parser {
         let Some(t) = self.table(v, "a pose") else {
             return p;
         };
-        for (key, value) in t.iter() {
+        for (key, value) in ordered(t) {
             let k = key.get_ref().as_ref();
             match split_unit(k).0 {
                 "pos" => {
@@ -523,7 +506,7 @@ impl Parser {
             target,
             items: Vec::new(),
         };
-        for (key, value) in t.iter() {
+        for (key, value) in ordered(t) {
             let k = key.get_ref().as_ref();
             match split_unit(k).0 {
                 "joints" => {
@@ -531,7 +514,7 @@ impl Parser {
                         continue;
                     };
                     let (mut low, mut high) = (None, None);
-                    for (jk, jv) in jt.iter() {
+                    for (jk, jv) in ordered(jt) {
                         match jk.get_ref().as_ref() {
                             "low" => low = self.quantity_array(k, jv, Dimension::Angle, None),
                             "high" => high = self.quantity_array(k, jv, Dimension::Angle, None),
@@ -611,16 +594,21 @@ impl Parser {
             };
             let mut s = Step {
                 primitive: None,
-                on: None,
                 with: None,
+                args: Vec::new(),
                 span: span_of(item),
             };
-            for (key, value) in t.iter() {
-                match key.get_ref().as_ref() {
+            for (key, value) in ordered(t) {
+                let k = key.get_ref().as_ref();
+                match k {
                     "do" => s.primitive = self.string(value, "do"),
-                    "on" => s.on = self.string(value, "on"),
                     "with" => s.with = self.string(value, "with"),
-                    _ => self.unknown_key(key, STEP_KEYS, "a step"),
+                    // Arguments are checked against the primitive's signature by the compiler.
+                    _ => {
+                        if let Some(v) = self.scalar(value, k) {
+                            s.args.push((Spanned::new(k.to_string(), span_of(key)), v));
+                        }
+                    }
                 }
             }
             if s.primitive.is_none() {
@@ -636,18 +624,393 @@ impl Parser {
         out
     }
 
-    fn success(&mut self, v: &Value<'_>) -> Vec<Spanned<String>> {
+    /// A string, integer, float or boolean, kept as written.
+    fn scalar(&mut self, v: &Value<'_>, what: &str) -> Option<Spanned<Scalar>> {
+        let span = span_of(v);
+        let value = match v.get_ref() {
+            DeValue::String(s) => Scalar::Str(s.to_string()),
+            DeValue::Boolean(b) => Scalar::Bool(*b),
+            DeValue::Integer(_) => Scalar::Int(self.integer(v, what)?.value),
+            DeValue::Float(_) => Scalar::Float(self.number(v, what)?),
+            other => {
+                let msg = format!(
+                    "`{what}` must be a string, number or boolean, found {}",
+                    type_name(other)
+                );
+                self.err(Code::E0004, span, msg, None);
+                return None;
+            }
+        };
+        Some(Spanned::new(value, span))
+    }
+
+    fn scalars(&mut self, v: &Value<'_>, what: &str) -> Vec<Spanned<Scalar>> {
+        match v.get_ref() {
+            DeValue::Array(items) => items.iter().filter_map(|i| self.scalar(i, what)).collect(),
+            other => {
+                let msg = format!("`{what}` must be an array, found {}", type_name(other));
+                self.err(Code::E0004, span_of(v), msg, None);
+                Vec::new()
+            }
+        }
+    }
+
+    fn boolean(&mut self, v: &Value<'_>, what: &str) -> Option<bool> {
+        match v.get_ref() {
+            DeValue::Boolean(b) => Some(*b),
+            other => {
+                let msg = format!("`{what}` must be a boolean, found {}", type_name(other));
+                self.err(Code::E0004, span_of(v), msg, None);
+                None
+            }
+        }
+    }
+
+    fn param(&mut self, name: Spanned<String>, t: &DeTable<'_>) -> Param {
+        let mut domains: Vec<(Span, ParamDomain)> = Vec::new();
+        let mut exclude = Vec::new();
+        let (mut step, mut free, mut opposite) = (None, None, None);
+        let mut extras: Vec<(&str, Span)> = Vec::new();
+        for (key, value) in ordered(t) {
+            let k = key.get_ref().as_ref();
+            match k {
+                "choice" => {
+                    let items = self.scalars(value, "choice");
+                    if items.is_empty() && matches!(value.get_ref(), DeValue::Array(_)) {
+                        self.err(
+                            Code::E0022,
+                            span_of(value),
+                            format!("`{}` has an empty `choice`", name.value),
+                            Some("list at least one value".into()),
+                        );
+                    }
+                    domains.push((span_of(key), ParamDomain::Choice(items)));
+                }
+                "int" => {
+                    let bounds = self.scalars(value, "int");
+                    let ints: Vec<Spanned<i64>> = bounds
+                        .into_iter()
+                        .filter_map(|b| match b.value {
+                            Scalar::Int(i) => Some(Spanned::new(i, b.span)),
+                            _ => {
+                                self.err(
+                                    Code::E0004,
+                                    b.span,
+                                    "`int` bounds must be integers".into(),
+                                    None,
+                                );
+                                None
+                            }
+                        })
+                        .collect();
+                    if let [low, high] = &ints[..] {
+                        domains.push((
+                            span_of(key),
+                            ParamDomain::Int {
+                                low: low.clone(),
+                                high: high.clone(),
+                                step: None,
+                            },
+                        ));
+                    } else if matches!(value.get_ref(), DeValue::Array(a) if a.len() != 2) {
+                        self.err(
+                            Code::E0004,
+                            span_of(value),
+                            "`int` must be `[low, high]`".into(),
+                            Some("e.g. int = [1, 5] (both ends included)".into()),
+                        );
+                    }
+                }
+                "real" => {
+                    let bounds = self.scalars(value, "real");
+                    let strs: Vec<Spanned<String>> = bounds
+                        .into_iter()
+                        .filter_map(|b| match b.value {
+                            Scalar::Str(s) => Some(Spanned::new(s, b.span)),
+                            _ => {
+                                self.err(
+                                    Code::E0020,
+                                    b.span,
+                                    "`real` bounds are quantities with units".into(),
+                                    Some("e.g. real = [\"10 mm\", \"20 mm\"]".into()),
+                                );
+                                None
+                            }
+                        })
+                        .collect();
+                    if let [low, high] = &strs[..] {
+                        domains.push((
+                            span_of(key),
+                            ParamDomain::Real {
+                                low: low.clone(),
+                                high: high.clone(),
+                            },
+                        ));
+                    } else if matches!(value.get_ref(), DeValue::Array(a) if a.len() != 2) {
+                        self.err(
+                            Code::E0004,
+                            span_of(value),
+                            "`real` must be `[low, high]`".into(),
+                            None,
+                        );
+                    }
+                }
+                "slot" => {
+                    if let Some(of) = self.string(value, "slot") {
+                        domains.push((
+                            span_of(key),
+                            ParamDomain::Slot {
+                                of,
+                                free: false,
+                                opposite: None,
+                            },
+                        ));
+                    }
+                }
+                "step" => {
+                    step = self.integer(value, "step");
+                    extras.push(("step", span_of(key)));
+                }
+                "free" => {
+                    free = self.boolean(value, "free");
+                    extras.push(("free", span_of(key)));
+                }
+                "opposite" => {
+                    opposite = self.string(value, "opposite");
+                    extras.push(("opposite", span_of(key)));
+                }
+                "exclude" => exclude = self.scalars(value, "exclude"),
+                _ => self.unknown_key(key, PARAM_KEYS, "a parameter"),
+            }
+        }
+        if domains.len() > 1 {
+            self.err(
+                Code::E0022,
+                domains[1].0,
+                format!("parameter `{}` has more than one domain", name.value),
+                Some("use exactly one of `choice`, `int`, `real`, `slot`".into()),
+            );
+        }
+        let mut domain = domains.into_iter().next().map(|(_, d)| d);
+        match &mut domain {
+            Some(ParamDomain::Int { step: s, .. }) => *s = step.clone(),
+            Some(ParamDomain::Slot {
+                free: f,
+                opposite: o,
+                ..
+            }) => {
+                *f = free.unwrap_or(false);
+                *o = opposite.clone();
+            }
+            _ => {}
+        }
+        for (extra, span) in extras {
+            let fits = matches!(
+                (&domain, extra),
+                (Some(ParamDomain::Int { .. }), "step")
+                    | (Some(ParamDomain::Slot { .. }), "free" | "opposite")
+            );
+            if !fits && domain.is_some() {
+                let needs = if extra == "step" { "int" } else { "slot" };
+                self.err(
+                    Code::E0003,
+                    span,
+                    format!("`{extra}` applies only to `{needs}` parameters"),
+                    None,
+                );
+            }
+        }
+        if domain.is_none() && !self.diags.iter().any(|d| d.span.start >= name.span.start) {
+            self.err(
+                Code::E0002,
+                name.span,
+                format!("parameter `{}` has no domain", name.value),
+                Some("add one of `choice = [..]`, `int = [low, high]`, `real = [\"..\", \"..\"]`, `slot = \"<holder>\"`".into()),
+            );
+        }
+        Param {
+            span: name.span,
+            name,
+            domain,
+            exclude,
+        }
+    }
+
+    fn tolerances(&mut self, v: &Value<'_>) -> Vec<(Spanned<String>, Spanned<String>)> {
         let mut out = Vec::new();
+        let Some(t) = self.table(v, "`[tolerances]`") else {
+            return out;
+        };
+        for (key, value) in ordered(t) {
+            let name = Spanned::new(key.get_ref().to_string(), span_of(key));
+            match value.get_ref() {
+                DeValue::String(s) => out.push((name, Spanned::new(s.to_string(), span_of(value)))),
+                DeValue::Integer(_) | DeValue::Float(_) => self.err(
+                    Code::E0020,
+                    span_of(value),
+                    format!("tolerance `{}` has no unit", name.value),
+                    Some("write it with a unit, e.g. \"5 mm\" or \"0.02 rad\"".into()),
+                ),
+                other => {
+                    let msg = format!(
+                        "tolerance `{}` must be a quantity, found {}",
+                        name.value,
+                        type_name(other)
+                    );
+                    self.err(Code::E0004, span_of(value), msg, None);
+                }
+            }
+        }
+        out
+    }
+
+    fn chain(&mut self, doc: &DeTable<'_>) -> Chain {
+        let mut c = Chain::default();
+        for (key, value) in ordered(doc) {
+            match key.get_ref().as_ref() {
+                "format" => c.format = self.integer(value, "format"),
+                "chain" => c.meta = self.chain_meta(value),
+                "stages" => c.stages = self.stages(value),
+                _ => self.unknown_key(key, CHAIN_TOP_KEYS, "a chain file"),
+            }
+        }
+        self.check_format(c.format.as_ref());
+        if c.stages.is_empty() && !self.diags.iter().any(|d| d.code == Code::E0004) {
+            self.err(
+                Code::E0002,
+                c.meta.span,
+                "the chain has no `[[stages]]`".into(),
+                Some("add `[[stages]]` with `protocol = \"<file>.toml\"` for each stage".into()),
+            );
+        }
+        c
+    }
+
+    fn chain_meta(&mut self, v: &Value<'_>) -> Meta {
+        let mut m = Meta {
+            span: span_of(v),
+            ..Meta::default()
+        };
+        let Some(t) = self.table(v, "`[chain]`") else {
+            return m;
+        };
+        for (key, value) in ordered(t) {
+            match key.get_ref().as_ref() {
+                "id" => m.id = self.string(value, "chain.id"),
+                "version" => m.version = self.integer(value, "chain.version"),
+                "level" => m.level = self.level(value),
+                "instruction" => m.instruction = self.string(value, "chain.instruction"),
+                _ => self.unknown_key(key, CHAIN_KEYS, "`[chain]`"),
+            }
+        }
+        if m.id.is_none() && !t.iter().any(|(k, _)| k.get_ref() == "id") {
+            self.err(Code::E0002, m.span, "`[chain]` has no `id`".into(), None);
+        }
+        m
+    }
+
+    fn stages(&mut self, v: &Value<'_>) -> Vec<StageRef> {
+        let mut out = Vec::new();
+        let DeValue::Array(items) = v.get_ref() else {
+            let msg = format!(
+                "`stages` must be an array of tables (`[[stages]]`), found {}",
+                type_name(v.get_ref())
+            );
+            self.err(Code::E0004, span_of(v), msg, None);
+            return out;
+        };
+        for item in items.iter() {
+            let Some(t) = self.table(item, "each `[[stages]]` entry") else {
+                continue;
+            };
+            let mut s = StageRef {
+                protocol: None,
+                instruction: None,
+                time_limit: None,
+                span: span_of(item),
+            };
+            for (key, value) in ordered(t) {
+                let k = key.get_ref().as_ref();
+                match split_unit(k).0 {
+                    "protocol" => s.protocol = self.string(value, "protocol"),
+                    "instruction" => s.instruction = self.string(value, "instruction"),
+                    "time_limit" => s.time_limit = self.time_limit(k, value),
+                    _ => self.unknown_key(key, STAGE_KEYS, "a stage"),
+                }
+            }
+            if s.protocol.is_none() {
+                self.err(
+                    Code::E0002,
+                    s.span,
+                    "stage has no `protocol`".into(),
+                    Some("e.g. protocol = \"open_lid.toml\" (relative to this file)".into()),
+                );
+            }
+            out.push(s);
+        }
+        out
+    }
+
+    fn level(&mut self, value: &Value<'_>) -> Option<Spanned<String>> {
+        let level = self.string(value, "level")?;
+        if !LEVELS.contains(&level.value.as_str()) {
+            let hint = did_you_mean(&level.value, LEVELS.iter().copied())
+                .map(|s| format!("did you mean `{s}`?"));
+            self.err(
+                Code::E0021,
+                level.span,
+                format!("unknown level `{}`", level.value),
+                hint.or(Some("levels: easy, medium, hard".into())),
+            );
+        }
+        Some(level)
+    }
+
+    fn time_limit(&mut self, key: &str, value: &Value<'_>) -> Option<Spanned<f64>> {
+        let tl = self.quantity(key, value, Dimension::Time)?;
+        if tl.value <= 0.0 {
+            self.err(
+                Code::E0021,
+                tl.span,
+                "`time_limit` must be positive".into(),
+                None,
+            );
+        }
+        Some(tl)
+    }
+
+    fn check_format(&mut self, format: Option<&Spanned<i64>>) {
+        if let Some(f) = format
+            && f.value != crate::FORMAT_VERSION
+        {
+            let msg = format!("unsupported format `{}`", f.value);
+            self.err(
+                Code::E0005,
+                f.span,
+                msg,
+                Some(format!(
+                    "this autobio reads format = {}",
+                    crate::FORMAT_VERSION
+                )),
+            );
+        }
+    }
+
+    fn success(&mut self, v: &Value<'_>) -> Success {
+        let mut out = Success {
+            span: span_of(v),
+            ..Success::default()
+        };
         let Some(t) = self.table(v, "`[success]`") else {
             return out;
         };
-        for (key, value) in t.iter() {
+        for (key, value) in ordered(t) {
             match key.get_ref().as_ref() {
                 "all" => match value.get_ref() {
                     DeValue::Array(items) => {
                         for item in items.iter() {
                             if let Some(s) = self.string(item, "success.all") {
-                                out.push(s);
+                                out.all.push(s);
                             }
                         }
                     }
@@ -659,10 +1022,45 @@ impl Parser {
                         self.err(Code::E0004, span_of(value), msg, None);
                     }
                 },
+                "scoring" => {
+                    out.scoring = self.string(value, "scoring");
+                    if let Some(sc) = &out.scoring
+                        && !SCORINGS.contains(&sc.value.as_str())
+                    {
+                        let hint = did_you_mean(&sc.value, SCORINGS.iter().copied())
+                            .map(|s| format!("did you mean `{s}`?"))
+                            .unwrap_or_else(|| "scoring is `binary` or `progress`".into());
+                        self.err(
+                            Code::E0021,
+                            sc.span,
+                            format!("unknown scoring `{}`", sc.value),
+                            Some(hint),
+                        );
+                    }
+                }
+                "weights" => {
+                    let items = self.scalars(value, "weights");
+                    let mut ws = Vec::new();
+                    for w in &items {
+                        match w.value {
+                            Scalar::Int(i) if i >= 0 => ws.push(i as f64),
+                            Scalar::Float(f) if f >= 0.0 => ws.push(f),
+                            _ => self.err(
+                                Code::E0021,
+                                w.span,
+                                "a weight must be a non-negative number".into(),
+                                None,
+                            ),
+                        }
+                    }
+                    if ws.len() == items.len() {
+                        out.weights = Some(Spanned::new(ws, span_of(value)));
+                    }
+                }
                 _ => self.unknown_key(key, SUCCESS_KEYS, "`[success]`"),
             }
         }
-        if out.is_empty()
+        if out.all.is_empty()
             && !self
                 .diags
                 .iter()
@@ -684,6 +1082,9 @@ fn example(dim: Dimension) -> &'static str {
         Dimension::Length => "10 mm",
         Dimension::Angle => "5 deg",
         Dimension::Time => "30 s",
+        Dimension::Volume => "200 µL",
+        Dimension::Temperature => "37 °C",
+        Dimension::Speed => "1200 rpm",
     }
 }
 
@@ -692,6 +1093,9 @@ fn unit_of(dim: Dimension) -> &'static str {
         Dimension::Length => "m",
         Dimension::Angle => "deg",
         Dimension::Time => "s",
+        Dimension::Volume => "ul",
+        Dimension::Temperature => "degc",
+        Dimension::Speed => "rpm",
     }
 }
 
@@ -724,15 +1128,22 @@ all = ["cycler.lid is closed"]
 
     #[test]
     fn parses_a_good_protocol() {
-        let (p, d) = parse(GOOD);
+        let (doc, d) = parse(GOOD);
         assert!(d.is_empty(), "{d:?}");
+        let Document::Protocol(p) = doc else {
+            panic!("a protocol")
+        };
         assert_eq!(p.meta.time_limit.unwrap().value, 30.0);
         assert_eq!(
             p.labware[0].pose.pos.as_ref().unwrap().value,
             [-0.05, 0.0, 0.824]
         );
         assert_eq!(p.steps[0].primitive.as_ref().unwrap().value, "close_lid");
-        assert_eq!(p.success.len(), 1);
+        assert_eq!(
+            p.steps[0].arg("on").unwrap().value,
+            Scalar::Str("cycler".into())
+        );
+        assert_eq!(p.success.all.len(), 1);
     }
 
     #[test]

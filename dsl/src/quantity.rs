@@ -1,5 +1,7 @@
-//! Physical quantities with units: "30 s", "5 deg", "10 mm", "-1.2 rad". Values are converted to
-//! SI (m, rad, s) at parse time; the unit's dimension is checked by the caller.
+//! Physical quantities with units: "30 s", "5 deg", "10 mm", "200 µL", "37 °C", "1200 rpm".
+//! Values are converted to each dimension's canonical unit at parse time (m, rad, s, µL, °C, rpm:
+//! SI where lab practice agrees, the lab's own unit where it does not); the caller checks the
+//! dimension.
 
 use serde::Serialize;
 
@@ -9,6 +11,9 @@ pub enum Dimension {
     Length,
     Angle,
     Time,
+    Volume,
+    Temperature,
+    Speed,
 }
 
 impl Dimension {
@@ -17,6 +22,9 @@ impl Dimension {
             Dimension::Length => "length",
             Dimension::Angle => "angle",
             Dimension::Time => "time",
+            Dimension::Volume => "volume",
+            Dimension::Temperature => "temperature",
+            Dimension::Speed => "rotational speed",
         }
     }
 
@@ -25,11 +33,26 @@ impl Dimension {
             Dimension::Length => "m, mm, cm",
             Dimension::Angle => "rad, deg",
             Dimension::Time => "s, ms, min",
+            Dimension::Volume => "µL, uL, mL, L",
+            Dimension::Temperature => "°C, degC",
+            Dimension::Speed => "rpm",
+        }
+    }
+
+    /// The canonical unit values of this dimension are stored in.
+    pub fn canonical_unit(self) -> &'static str {
+        match self {
+            Dimension::Length => "m",
+            Dimension::Angle => "rad",
+            Dimension::Time => "s",
+            Dimension::Volume => "µL",
+            Dimension::Temperature => "°C",
+            Dimension::Speed => "rpm",
         }
     }
 }
 
-/// A value in SI units with its dimension.
+/// A value in its dimension's canonical unit.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Quantity {
     pub si: f64,
@@ -46,6 +69,16 @@ const UNITS: &[(&str, Dimension, f64)] = &[
     ("s", Dimension::Time, 1.0),
     ("ms", Dimension::Time, 0.001),
     ("min", Dimension::Time, 60.0),
+    ("µL", Dimension::Volume, 1.0),
+    ("uL", Dimension::Volume, 1.0),
+    ("ul", Dimension::Volume, 1.0),
+    ("mL", Dimension::Volume, 1000.0),
+    ("ml", Dimension::Volume, 1000.0),
+    ("L", Dimension::Volume, 1e6),
+    ("°C", Dimension::Temperature, 1.0),
+    ("degC", Dimension::Temperature, 1.0),
+    ("degc", Dimension::Temperature, 1.0),
+    ("rpm", Dimension::Speed, 1.0),
 ];
 
 /// Looks up a unit symbol (also used for unit-suffixed keys such as `yaw_deg`).
@@ -98,6 +131,13 @@ mod tests {
             parse_quantity("1.5 min").unwrap().dimension,
             Dimension::Time
         );
+        assert_eq!(parse_quantity("1.5 mL").unwrap().si, 1500.0);
+        assert_eq!(parse_quantity("200 µL").unwrap().si, 200.0);
+        assert_eq!(
+            parse_quantity("37 °C").unwrap().dimension,
+            Dimension::Temperature
+        );
+        assert_eq!(parse_quantity("1200 rpm").unwrap().si, 1200.0);
     }
 
     #[test]

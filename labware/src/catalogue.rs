@@ -1,35 +1,476 @@
-//! The closed catalogue of labware kinds the language knows, with their parts and the states each
-//! part can be in (for initial states and success predicates).
+//! The closed catalogue of labware kinds the protocol language knows: for each kind its parts and
+//! their states, slots, liquid capacity, instrument panel, buttons, joints and named tolerances.
+//!
+//! This is declarative data, read by the compiler (name resolution, state tracing, predicates) and
+//! by the docs. Whether a kind can be *simulated* is the `simulated` flag: only kinds with a
+//! generated model (see [`crate::thermal_cycler`]) run in the runtime; the others compile, are
+//! described and checked, and are refused by the runtime with a clear error until their model lands.
+//! Dimensions and ranges follow `upstream-autobio.md` §3, §5 and §11.
 
-/// A state a part can be declared in or checked for.
+/// A discrete part state, e.g. a lid that is `open`, `closed` or `locked`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PartState {
     pub part: &'static str,
+    /// States a predicate may check for.
     pub states: &'static [&'static str],
-    /// States allowed as an initial state (`state = { lid = "open" }`).
+    /// States a protocol may declare as initial (`state = { lid = "open" }`); the first is the default.
     pub initial: &'static [&'static str],
 }
 
+/// How a holder's slots are named.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SlotLayout {
+    /// Rows `A..` by columns `1..`, named like plate wells: `A1`, `B5`.
+    Grid { rows: u32, cols: u32 },
+    /// `n` positions around a rotor, named `1..n`; slot `i` is opposite `i + n/2`.
+    Ring { n: u32 },
+    /// One named position (the vortex mixer's cup).
+    Single { name: &'static str },
+}
+
+impl SlotLayout {
+    /// Every slot name, in order.
+    pub fn names(&self) -> Vec<String> {
+        match *self {
+            SlotLayout::Grid { rows, cols } => (0..rows)
+                .flat_map(|r| (1..=cols).map(move |c| format!("{}{c}", (b'A' + r as u8) as char)))
+                .collect(),
+            SlotLayout::Ring { n } => (1..=n).map(|i| i.to_string()).collect(),
+            SlotLayout::Single { name } => vec![name.to_string()],
+        }
+    }
+
+    /// The slot diametrically opposite `slot` on a ring.
+    pub fn opposite(&self, slot: &str) -> Option<String> {
+        let SlotLayout::Ring { n } = *self else {
+            return None;
+        };
+        let i: u32 = slot.parse().ok().filter(|i| (1..=n).contains(i))?;
+        Some(((i - 1 + n / 2) % n + 1).to_string())
+    }
+
+    pub fn describe(&self) -> String {
+        match *self {
+            SlotLayout::Grid { rows, cols } => format!(
+                "{rows}x{cols} grid, A1..{}{cols}",
+                (b'A' + rows as u8 - 1) as char
+            ),
+            SlotLayout::Ring { n } => format!("ring of {n}, 1..{n}"),
+            SlotLayout::Single { name } => format!("one slot, `{name}`"),
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Slots {
+    pub layout: SlotLayout,
+    /// Kinds that fit a slot.
+    pub accepts: &'static [&'static str],
+}
+
+/// A value shown on an instrument's display and set by its buttons.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PanelParam {
+    pub name: &'static str,
+    /// Canonical unit symbol of the value (see the language reference): `rpm`, `°C`, `s`.
+    pub unit: &'static str,
+    pub min: f64,
+    pub max: f64,
+    /// One button press changes the value by this much.
+    pub step: f64,
+    pub initial: f64,
+}
+
+/// What pressing a button does to the abstract state.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ButtonEffect {
+    /// Toggles a part between two states.
+    Toggle {
+        part: &'static str,
+        a: &'static str,
+        b: &'static str,
+    },
+    /// Steps a panel value by `sign` steps.
+    Step { param: &'static str, sign: i8 },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Button {
+    pub name: &'static str,
+    pub effect: ButtonEffect,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LabwareKind {
     pub name: &'static str,
     pub description: &'static str,
     pub parts: &'static [PartState],
-    /// Lab primitives this kind has affordances for.
+    pub slots: Option<Slots>,
+    /// Liquid capacity in µL, for containers.
+    pub capacity_ul: Option<f64>,
+    /// Can be picked up and placed.
+    pub movable: bool,
+    pub panel: &'static [PanelParam],
+    pub buttons: &'static [Button],
+    /// Joints a predicate may range-check, with their unit (`rad` or `m`).
+    pub joints: &'static [(&'static str, &'static str)],
+    /// Default named tolerances, in the canonical unit of what they bound.
+    pub tolerances: &'static [(&'static str, f64)],
+    /// Lab primitives this kind has affordances for (as the object `on` a step).
     pub primitives: &'static [&'static str],
+    /// A simulation model exists (the runtime can build it).
+    pub simulated: bool,
 }
 
-pub const KINDS: &[LabwareKind] = &[LabwareKind {
-    name: "thermal_cycler",
-    description: "thermal cycler with a hinged lid and a lock lever (Bio-Rad C1000 proportions)",
-    parts: &[PartState {
-        part: "lid",
-        states: &["open", "closed", "locked", "unlocked"],
-        initial: &["open", "closed", "locked"],
-    }],
-    primitives: &["open_lid", "close_lid"],
-}];
+impl LabwareKind {
+    pub fn part(&self, name: &str) -> Option<&'static PartState> {
+        self.parts.iter().find(|p| p.part == name)
+    }
+
+    pub fn panel_param(&self, name: &str) -> Option<&'static PanelParam> {
+        self.panel.iter().find(|p| p.name == name)
+    }
+
+    pub fn button(&self, name: &str) -> Option<&'static Button> {
+        self.buttons.iter().find(|b| b.name == name)
+    }
+
+    pub fn tolerance(&self, name: &str) -> Option<f64> {
+        self.tolerances
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map(|(_, v)| *v)
+    }
+
+    pub fn supports(&self, primitive: &str) -> bool {
+        self.primitives.contains(&primitive)
+    }
+}
+
+const LID_LOCKING: PartState = PartState {
+    part: "lid",
+    states: &["open", "closed", "locked", "unlocked"],
+    initial: &["open", "closed", "locked"],
+};
+const LID_PLAIN: PartState = PartState {
+    part: "lid",
+    states: &["open", "closed"],
+    initial: &["open", "closed"],
+};
+const CAP: PartState = PartState {
+    part: "cap",
+    states: &["on", "off"],
+    initial: &["on", "off"],
+};
+const LID_PRIMITIVES: &[&str] = &["open_lid", "close_lid", "lock", "unlock"];
+const TUBE_PRIMITIVES: &[&str] = &[
+    "pick",
+    "place",
+    "hold",
+    "hand_over",
+    "unscrew_cap",
+    "screw_cap",
+    "aspirate",
+    "dispense",
+];
+/// Slot tolerances (m): in-plane distance to the slot centre, height above its seat.
+const SLOT_TOLERANCES: &[(&str, f64)] = &[("slot_xy", 0.015), ("slot_z", 0.005)];
+const TUBE_TOLERANCES: &[(&str, f64)] = &[
+    ("slot_xy", 0.015),
+    ("slot_z", 0.005),
+    ("volume", 1.0),
+    ("position", 0.005),
+];
+const TUBE_ACCEPTING_RACK: &[&str] = &["tube_50ml", "tube_15ml"];
+
+const fn tube(name: &'static str, description: &'static str, capacity_ul: f64) -> LabwareKind {
+    LabwareKind {
+        name,
+        description,
+        parts: &[CAP],
+        slots: None,
+        capacity_ul: Some(capacity_ul),
+        movable: true,
+        panel: &[],
+        buttons: &[],
+        joints: &[],
+        tolerances: TUBE_TOLERANCES,
+        primitives: TUBE_PRIMITIVES,
+        simulated: false,
+    }
+}
+
+const fn lidded(
+    name: &'static str,
+    description: &'static str,
+    parts: &'static [PartState],
+    slots: Option<Slots>,
+) -> LabwareKind {
+    LabwareKind {
+        name,
+        description,
+        parts,
+        slots,
+        capacity_ul: None,
+        movable: false,
+        panel: &[],
+        buttons: &[],
+        joints: &[("lid", "rad")],
+        tolerances: &[
+            ("lid_closed", 0.01),
+            ("lid_locked", 0.01),
+            ("lid_open", 0.01),
+            ("lid_unlocked", 0.01),
+        ],
+        primitives: LID_PRIMITIVES,
+        simulated: false,
+    }
+}
+
+pub const KINDS: &[LabwareKind] = &[
+    LabwareKind {
+        name: "thermal_cycler",
+        description: "thermal cycler with a hinged lid and a two-notch lock lever (Bio-Rad C1000 proportions)",
+        parts: &[LID_LOCKING],
+        slots: None,
+        capacity_ul: None,
+        movable: false,
+        panel: &[],
+        buttons: &[],
+        joints: &[("lid", "rad"), ("lever", "rad")],
+        tolerances: &[
+            ("lid_closed", 0.01),
+            ("lid_locked", 0.01),
+            ("lid_open", 0.003),
+            ("lid_unlocked", 0.003),
+        ],
+        primitives: &["open_lid", "close_lid"],
+        simulated: true,
+    },
+    lidded(
+        "centrifuge_5430",
+        "benchtop centrifuge with a latched lid and a 30-place rotor for 1.5 mL tubes (Eppendorf 5430)",
+        &[LID_LOCKING],
+        Some(Slots {
+            layout: SlotLayout::Ring { n: 30 },
+            accepts: &["tube_1_5ml"],
+        }),
+    ),
+    lidded(
+        "centrifuge_5910",
+        "floor-standing centrifuge with a latched lid (Eppendorf 5910 Ri)",
+        &[LID_LOCKING],
+        None,
+    ),
+    lidded(
+        "centrifuge_mini",
+        "mini centrifuge with a lid and no latch (Tiangen TGear mini)",
+        &[LID_PLAIN],
+        None,
+    ),
+    LabwareKind {
+        name: "thermal_mixer",
+        description: "thermal mixer whose speed, temperature and time are set with up/down buttons (Eppendorf ThermoMixer C)",
+        parts: &[],
+        slots: None,
+        capacity_ul: None,
+        movable: false,
+        panel: &[
+            PanelParam {
+                name: "speed",
+                unit: "rpm",
+                min: 300.0,
+                max: 3000.0,
+                step: 50.0,
+                initial: 900.0,
+            },
+            PanelParam {
+                name: "temperature",
+                unit: "°C",
+                min: 4.0,
+                max: 99.0,
+                step: 1.0,
+                initial: 25.0,
+            },
+            PanelParam {
+                name: "time",
+                unit: "s",
+                min: 5.0,
+                max: 595.0,
+                step: 5.0,
+                initial: 60.0,
+            },
+        ],
+        buttons: &[
+            Button {
+                name: "speed_up",
+                effect: ButtonEffect::Step {
+                    param: "speed",
+                    sign: 1,
+                },
+            },
+            Button {
+                name: "speed_down",
+                effect: ButtonEffect::Step {
+                    param: "speed",
+                    sign: -1,
+                },
+            },
+            Button {
+                name: "temperature_up",
+                effect: ButtonEffect::Step {
+                    param: "temperature",
+                    sign: 1,
+                },
+            },
+            Button {
+                name: "temperature_down",
+                effect: ButtonEffect::Step {
+                    param: "temperature",
+                    sign: -1,
+                },
+            },
+            Button {
+                name: "time_up",
+                effect: ButtonEffect::Step {
+                    param: "time",
+                    sign: 1,
+                },
+            },
+            Button {
+                name: "time_down",
+                effect: ButtonEffect::Step {
+                    param: "time",
+                    sign: -1,
+                },
+            },
+        ],
+        joints: &[],
+        tolerances: &[("display", 1e-6)],
+        primitives: &["press", "set_parameter"],
+        simulated: false,
+    },
+    LabwareKind {
+        name: "vortex_mixer",
+        description: "vortex mixer with a power switch and one cup (Scientific Industries Vortex-Genie 2)",
+        parts: &[PartState {
+            part: "power",
+            states: &["off", "on"],
+            initial: &["off", "on"],
+        }],
+        slots: Some(Slots {
+            layout: SlotLayout::Single { name: "cup" },
+            accepts: &["tube_15ml", "tube_50ml", "tube_1_5ml", "cryovial"],
+        }),
+        capacity_ul: None,
+        movable: false,
+        panel: &[],
+        buttons: &[Button {
+            name: "switch",
+            effect: ButtonEffect::Toggle {
+                part: "power",
+                a: "off",
+                b: "on",
+            },
+        }],
+        joints: &[],
+        tolerances: SLOT_TOLERANCES,
+        primitives: &["press"],
+        simulated: false,
+    },
+    LabwareKind {
+        name: "tube_rack",
+        description: "rack of 2x5 places for 15 mL and 50 mL tubes, 36 mm pitch",
+        parts: &[],
+        slots: Some(Slots {
+            layout: SlotLayout::Grid { rows: 2, cols: 5 },
+            accepts: TUBE_ACCEPTING_RACK,
+        }),
+        capacity_ul: None,
+        movable: false,
+        panel: &[],
+        buttons: &[],
+        joints: &[],
+        tolerances: SLOT_TOLERANCES,
+        primitives: &[],
+        simulated: false,
+    },
+    LabwareKind {
+        name: "microtube_rack",
+        description: "rack of 6x10 places for 1.5 mL tubes and cryovials",
+        parts: &[],
+        slots: Some(Slots {
+            layout: SlotLayout::Grid { rows: 6, cols: 10 },
+            accepts: &["tube_1_5ml", "cryovial"],
+        }),
+        capacity_ul: None,
+        movable: false,
+        panel: &[],
+        buttons: &[],
+        joints: &[],
+        tolerances: SLOT_TOLERANCES,
+        primitives: &[],
+        simulated: false,
+    },
+    tube(
+        "tube_1_5ml",
+        "1.5 mL snap-cap microcentrifuge tube, modelled with a screw cap",
+        1500.0,
+    ),
+    tube("tube_15ml", "15 mL screw-cap conical tube", 15_000.0),
+    tube("tube_50ml", "50 mL screw-cap conical tube", 50_000.0),
+    tube("cryovial", "2 mL screw-cap cryovial", 2000.0),
+    LabwareKind {
+        name: "pipette",
+        description: "single-channel air-displacement pipette with a 1000 µL tip",
+        parts: &[],
+        slots: None,
+        capacity_ul: Some(1000.0),
+        movable: true,
+        panel: &[],
+        buttons: &[],
+        joints: &[("plunger", "m")],
+        tolerances: &[("volume", 1.0), ("position", 0.005)],
+        primitives: &["pick", "place", "hand_over"],
+        simulated: false,
+    },
+];
 
 pub fn kind(name: &str) -> Option<&'static LabwareKind> {
     KINDS.iter().find(|k| k.name == name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn slot_names_and_opposites() {
+        let grid = SlotLayout::Grid { rows: 2, cols: 5 };
+        assert_eq!(grid.names().len(), 10);
+        assert_eq!(grid.names()[0], "A1");
+        assert_eq!(grid.names()[9], "B5");
+        let ring = SlotLayout::Ring { n: 30 };
+        assert_eq!(ring.opposite("1").as_deref(), Some("16"));
+        assert_eq!(ring.opposite("20").as_deref(), Some("5"));
+        assert_eq!(ring.opposite("31"), None);
+    }
+
+    #[test]
+    fn every_kind_is_consistent() {
+        for k in KINDS {
+            for p in k.parts {
+                assert!(p.initial.iter().all(|s| p.states.contains(s)), "{}", k.name);
+            }
+            for b in k.buttons {
+                match b.effect {
+                    ButtonEffect::Toggle { part, .. } => assert!(k.part(part).is_some()),
+                    ButtonEffect::Step { param, .. } => assert!(k.panel_param(param).is_some()),
+                }
+            }
+            for p in k.panel {
+                assert!(p.min <= p.initial && p.initial <= p.max, "{}", p.name);
+            }
+        }
+    }
 }

@@ -10,5 +10,7 @@ pub mod catalogue;
 pub mod frame;
 pub mod thermal_cycler;
 
-pub use catalogue::{KINDS, LabwareKind, PartState, kind};
+pub use catalogue::{
+    Button, ButtonEffect, KINDS, LabwareKind, PanelParam, PartState, SlotLayout, Slots, kind,
+};
 pub use frame::{Pose, Quat, Vec3};

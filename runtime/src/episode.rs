@@ -71,7 +71,9 @@ impl Episode {
             self.data.ctrl_mut()[ids.gripper_actuator] = 0.0;
         }
         for (i, (spec, ids)) in self.task.labware.iter().zip(&scene.labware).enumerate() {
-            let LabwareParams::ThermalCycler(p) = &spec.params;
+            let LabwareParams::ThermalCycler(p) = &spec.params else {
+                continue;
+            };
             let state = spec
                 .initial
                 .get("lid")
@@ -123,7 +125,9 @@ impl Episode {
     pub fn physics_step(&mut self) -> Result<(), StepError> {
         let scene = self.scene.clone();
         for (spec, ids) in self.task.labware.iter().zip(&scene.labware) {
-            let LabwareParams::ThermalCycler(p) = &spec.params;
+            let LabwareParams::ThermalCycler(p) = &spec.params else {
+                continue;
+            };
             let (q, v) = (
                 self.data.qpos()[ids.lever_qpos],
                 self.data.qvel()[ids.lever_dof],
@@ -133,7 +137,9 @@ impl Episode {
         self.data.step();
         self.physics_steps += 1;
         for (i, (spec, ids)) in self.task.labware.iter().zip(&scene.labware).enumerate() {
-            let LabwareParams::ThermalCycler(p) = &spec.params;
+            let LabwareParams::ThermalCycler(p) = &spec.params else {
+                continue;
+            };
             let (lid, lever) = (
                 self.data.qpos()[ids.lid_qpos],
                 self.data.qpos()[ids.lever_qpos],

@@ -184,6 +184,8 @@ pub struct RecordingSummary {
     pub task: serde_json::Value,
     pub instance: serde_json::Value,
     pub final_labware: Vec<LabwareState>,
+    /// Every recorded labware state with its time (s), in order; the first is the initial state.
+    pub labware_series: Vec<(f64, Vec<LabwareState>)>,
     pub verdict: Option<serde_json::Value>,
     pub messages: u64,
     pub topics: BTreeMap<String, u64>,
@@ -192,7 +194,8 @@ pub struct RecordingSummary {
 
 pub fn read_recording(path: &Path) -> Result<RecordingSummary, RecordError> {
     let buf = std::fs::read(path)?;
-    let (mut task, mut instance, mut labware, mut verdict) = (None, None, None, None);
+    let (mut task, mut instance, mut verdict) = (None, None, None);
+    let mut series: Vec<(f64, Vec<LabwareState>)> = Vec::new();
     let mut topics = BTreeMap::new();
     let mut messages = 0;
     let mut last_t = 0u64;
@@ -211,20 +214,25 @@ pub fn read_recording(path: &Path) -> Result<RecordingSummary, RecordError> {
                 task = Some(v["task"].clone());
                 instance = Some(v["instance"].clone());
             }
-            "/labware/state" => labware = Some(m.data.clone()),
+            "/labware/state" => {
+                let v = parse("/labware/state")?;
+                let states = serde_json::from_value(v["labware"].clone())
+                    .map_err(|e| RecordError::Bad("/labware/state".into(), e.to_string()))?;
+                series.push((m.log_time as f64 * 1e-9, states));
+            }
             "/verdict" => verdict = Some(parse("/verdict")?),
             _ => {}
         }
     }
-    let labware = labware.ok_or(RecordError::Missing("/labware/state"))?;
-    let v: serde_json::Value = serde_json::from_slice(&labware)
-        .map_err(|e| RecordError::Bad("/labware/state".into(), e.to_string()))?;
-    let final_labware = serde_json::from_value(v["labware"].clone())
-        .map_err(|e| RecordError::Bad("/labware/state".into(), e.to_string()))?;
+    let final_labware = series
+        .last()
+        .map(|(_, s)| s.clone())
+        .ok_or(RecordError::Missing("/labware/state"))?;
     Ok(RecordingSummary {
         task: task.ok_or(RecordError::Missing("/task"))?,
         instance: instance.unwrap_or(serde_json::Value::Null),
         final_labware,
+        labware_series: series,
         verdict,
         messages,
         topics,

@@ -24,6 +24,10 @@ pub enum SceneError {
     Compile(String),
     #[error("the scene has no {0} named `{1}`")]
     MissingName(&'static str, String),
+    #[error(
+        "labware `{0}` is a {1}, which has no simulation model yet; it can be compiled and described, not run"
+    )]
+    Unmodelled(String, String),
 }
 
 /// Per-robot indices into the model.
@@ -211,7 +215,9 @@ pub fn scene_xml(task: &Task, placements: &[Pose]) -> Result<String, SceneError>
         );
     }
     for (l, placement) in task.labware.iter().zip(placements) {
-        let LabwareParams::ThermalCycler(p) = &l.params;
+        let LabwareParams::ThermalCycler(p) = &l.params else {
+            return Err(SceneError::Unmodelled(l.name.clone(), l.kind.clone()));
+        };
         let m = p.mjcf(&l.name, placement);
         world += &m.worldbody;
         equality += &m.equality;

@@ -3,7 +3,7 @@
 //! simulation ends the episode as a failure with its reason; nothing already finished is lost.
 
 use crate::policy::{Observation, Policy, Privileged};
-use crate::verdict::{Verdict, judge};
+use crate::verdict::{Judge, Verdict};
 use compiler::{SceneInstance, Task};
 use runtime::Episode;
 use runtime::record::Recorder;
@@ -66,12 +66,20 @@ pub fn run_episode(
     let mut hasher = Sha256::new();
     let mut steps = 0u64;
     let mut error = None;
-    let mut verdict = judge(task, &ep.labware_state());
-    'episode: while ep.time() < task.time_limit_s && !verdict.success {
+    let initial = ep.labware_state();
+    let mut judge = Judge::new(task, &initial);
+    let mut over = judge.update(ep.time(), &initial);
+    'episode: while !over && ep.time() < task.time_limit_s {
+        let stage = judge.stage();
         let obs = Observation {
             time: ep.time(),
             state: ep.robot_state(0),
-            prompt: &task.instruction,
+            stage,
+            prompt: instance
+                .stage_instructions
+                .get(stage)
+                .map(String::as_str)
+                .unwrap_or(&instance.instruction),
             privileged: Privileged {
                 arm_q: ep.arm_q(0),
                 ctrl: ep.robot_ctrl(0),
@@ -118,12 +126,13 @@ pub fn run_episode(
             for v in ep.data.qpos() {
                 hasher.update(v.to_le_bytes());
             }
-            verdict = judge(task, &ep.labware_state());
-            if verdict.success || ep.time() >= task.time_limit_s {
+            over = judge.update(ep.time(), &ep.labware_state());
+            if over || ep.time() >= task.time_limit_s {
                 break;
             }
         }
     }
+    let mut verdict = judge.verdict();
     if error.is_some() {
         verdict.success = false;
     }

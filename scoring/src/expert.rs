@@ -2,7 +2,7 @@
 //! state when it starts, solves IK for its waypoints and follows the TOPP-timed trajectory.
 
 use crate::policy::{Observation, Policy, PolicyError, StageEvent};
-use compiler::{LabwareParams, SceneInstance, Task};
+use compiler::{LabwareParams, PlannedStep, SceneInstance, Task};
 use labware::Pose;
 use primitives::topp::{Limits, Trajectory, plan_trajectory};
 use primitives::{GripContext, Kinematics, Motion, expand, solve_ik};
@@ -18,7 +18,9 @@ pub const EXPERT_LIMITS: Limits = Limits {
 const SETTLE_S: f64 = 0.2;
 
 struct Queued {
+    /// Index into the flattened plan, and the stage the step belongs to.
     step: usize,
+    stage: usize,
     motion: Motion,
 }
 
@@ -29,6 +31,8 @@ enum Active {
 
 pub struct ExpertPolicy {
     task: Task,
+    /// Every stage's steps in order, with the labware each acts on.
+    plan: Vec<(PlannedStep, usize)>,
     placements: Vec<Pose>,
     kin: ArmKinematics,
     queue: VecDeque<Queued>,
@@ -47,18 +51,33 @@ impl ExpertPolicy {
         instance: &SceneInstance,
     ) -> Result<ExpertPolicy, PolicyError> {
         let mut queue = VecDeque::new();
-        for (i, step) in task.plan.iter().enumerate() {
-            let spec = &task.labware[task
-                .labware_index(&step.labware)
-                .ok_or_else(|| PolicyError::Planning(format!("no labware `{}`", step.labware)))?];
-            let LabwareParams::ThermalCycler(p) = &spec.params;
-            let motions = expand(&step.primitive, p).ok_or_else(|| {
-                PolicyError::Planning(format!("no expansion for `{}`", step.primitive))
-            })?;
-            queue.extend(motions.into_iter().map(|motion| Queued { step: i, motion }));
+        let mut plan = Vec::new();
+        for (i, (stage, step)) in task.steps().enumerate() {
+            let no_expert = || {
+                PolicyError::Planning(format!(
+                    "the expert has no motions for `{}` on this labware yet",
+                    step.primitive
+                ))
+            };
+            let li = step
+                .labware
+                .as_deref()
+                .and_then(|l| task.labware_index(l))
+                .ok_or_else(no_expert)?;
+            let LabwareParams::ThermalCycler(p) = &task.labware[li].params else {
+                return Err(no_expert());
+            };
+            let motions = expand(&step.primitive, p).ok_or_else(no_expert)?;
+            queue.extend(motions.into_iter().map(|motion| Queued {
+                step: i,
+                stage,
+                motion,
+            }));
+            plan.push((step.clone(), li));
         }
         Ok(ExpertPolicy {
             task: task.clone(),
+            plan,
             placements: instance.labware_placement.clone(),
             kin: ArmKinematics::new(scene, 0),
             queue,
@@ -72,17 +91,16 @@ impl ExpertPolicy {
     }
 
     fn start(&mut self, q: Queued, obs: &Observation) -> Result<Active, PolicyError> {
-        let step = &self.task.plan[q.step];
-        let li = self
-            .task
-            .labware_index(&step.labware)
-            .expect("checked in new");
+        let (step, li) = &self.plan[q.step];
+        let li = *li;
         let live = &obs.privileged.labware[li];
         let live = (live.joints["lid"], live.joints["lever"]);
         let target = self.target.clone().expect("set before start");
         let tcp_now = self.kin.tcp(&target);
         if self.context.as_ref().map(|(s, _)| *s) != Some(q.step) {
-            let LabwareParams::ThermalCycler(p) = &self.task.labware[li].params;
+            let LabwareParams::ThermalCycler(p) = &self.task.labware[li].params else {
+                return Err(PolicyError::Planning("checked in new".into()));
+            };
             let (lid, lever) = match q.motion {
                 Motion::Approach { lid, lever, .. } => (lid, lever),
                 _ => live,
@@ -93,7 +111,12 @@ impl ExpertPolicy {
             ));
             self.events.push(StageEvent {
                 time: obs.time,
-                label: format!("step {}: {} {}", q.step, step.primitive, step.labware),
+                label: format!(
+                    "step {}: {} {}",
+                    q.step,
+                    step.primitive,
+                    step.labware.as_deref().unwrap_or("")
+                ),
             });
         }
         self.events.push(StageEvent {
@@ -140,9 +163,13 @@ impl Policy for ExpertPolicy {
         let next_t = obs.time + self.control_dt;
         loop {
             match &self.active {
-                None => match self.queue.pop_front() {
-                    Some(q) => self.active = Some(self.start(q, obs)?),
-                    None => return Ok(vec![self.action()]),
+                // A later stage's steps wait until the judge has moved on to that stage.
+                None => match self.queue.front() {
+                    Some(q) if q.stage <= obs.stage => {
+                        let q = self.queue.pop_front().expect("front exists");
+                        self.active = Some(self.start(q, obs)?);
+                    }
+                    _ => return Ok(vec![self.action()]),
                 },
                 Some(Active::Hold { until }) => {
                     if obs.time + 1e-9 >= *until {

@@ -14,4 +14,4 @@ pub mod verdict;
 pub use episode::{EpisodeOptions, EpisodeResult, run_episode};
 pub use eval::{EvalReport, EvalSummary, RESULTS_SCHEMA_VERSION, evaluate};
 pub use policy::{HoldPolicy, Observation, Policy, PolicyError, StageEvent};
-pub use verdict::{PredicateValue, Verdict, judge};
+pub use verdict::{Judge, PredicateValue, StageVerdict, Verdict};

@@ -8,6 +8,8 @@ pub struct Observation<'a> {
     pub time: f64,
     /// Robot state: 6 arm joints (rad) then the gripper driver angle (rad).
     pub state: Vec<f64>,
+    /// The stage now running (0 for single-stage tasks) and its instruction.
+    pub stage: usize,
     pub prompt: &'a str,
     /// Privileged simulator state, used only by the scripted expert; never sent to models.
     pub privileged: Privileged,

@@ -1,7 +1,9 @@
-//! Verdicts: every success predicate evaluated on labware state, each with its measured value,
-//! target and tolerance. Pure functions of recorded state, so a recording can be re-scored offline.
+//! Verdicts: every success predicate of the current stage evaluated on measured labware state,
+//! each with its value, target, tolerance and progress; stages advanced as their predicates hold.
+//! Pure functions of recorded state, so a recording can be re-scored offline ([`Judge::replay`]).
 
-use compiler::{LabwareParams, Predicate, Task};
+use compiler::predicates::Check;
+use compiler::{LabwareParams, Predicate, Scoring, Task};
 use runtime::LabwareState;
 use serde::{Deserialize, Serialize};
 
@@ -9,58 +11,230 @@ use serde::{Deserialize, Serialize};
 pub struct PredicateValue {
     pub text: String,
     pub holds: bool,
-    /// The measured joint angle (rad) the predicate looks at, its target and the tolerance.
+    /// The measured quantity the predicate looks at (rad or m), its target and the tolerance.
     pub value: f64,
     pub target: f64,
     pub tolerance: f64,
+    /// 0..1: how far the value has come from where the stage started toward the target.
+    pub progress: f64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StageVerdict {
+    pub id: String,
+    pub success: bool,
+    /// 0..1: binary stages score 1 or 0; progress stages the weighted mean of progress.
+    pub score: f64,
+    /// When the stage's predicates all held (simulated seconds), if they did.
+    pub completed_at_s: Option<f64>,
+    pub predicates: Vec<PredicateValue>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Verdict {
     pub success: bool,
-    pub predicates: Vec<PredicateValue>,
+    /// Mean of the stage scores (stages never reached score 0).
+    pub score: f64,
+    pub stages: Vec<StageVerdict>,
 }
 
-fn evaluate(task: &Task, pred: &Predicate, states: &[LabwareState]) -> PredicateValue {
-    let spec = task.labware.iter().find(|l| l.name == pred.labware);
-    let state = states.iter().find(|s| s.name == pred.labware);
-    let (Some(spec), Some(state)) = (spec, state) else {
+impl Verdict {
+    /// The predicates of the last stage reached.
+    pub fn predicates(&self) -> &[PredicateValue] {
+        self.stages
+            .last()
+            .map(|s| s.predicates.as_slice())
+            .unwrap_or(&[])
+    }
+}
+
+/// Measured value, target, tolerance and extra condition of one predicate, where measurable.
+fn measure(task: &Task, check: &Check, states: &[LabwareState]) -> Option<(f64, f64, f64, bool)> {
+    match check {
+        Check::State {
+            labware,
+            state,
+            tolerance,
+            ..
+        } => {
+            let spec = task.labware.iter().find(|l| &l.name == labware)?;
+            let s = states.iter().find(|s| &s.name == labware)?;
+            let LabwareParams::ThermalCycler(p) = &spec.params else {
+                return None;
+            };
+            let lid = s.joints.get("lid").copied()?;
+            let lever = s.joints.get("lever").copied()?;
+            let tol = tolerance.as_ref().map(|t| t.value).unwrap_or(0.01);
+            Some(match state.as_str() {
+                "closed" => (lid, p.lid_closed, tol, true),
+                "locked" => (lever, p.lever_pressed, tol, s.locked),
+                "open" => (lid, p.lid_open, tol, true),
+                _ => (lever, p.lever_raised, tol, !s.locked),
+            })
+        }
+        Check::JointRange {
+            labware,
+            joint,
+            low,
+            high,
+        } => {
+            let s = states.iter().find(|s| &s.name == labware)?;
+            let v = s.joints.get(joint).copied()?;
+            Some((v, (low + high) / 2.0, (high - low) / 2.0, true))
+        }
+        // The remaining checks need labware kinds the runtime cannot build yet.
+        _ => None,
+    }
+}
+
+fn evaluate(
+    task: &Task,
+    pred: &Predicate,
+    states: &[LabwareState],
+    start: &[LabwareState],
+) -> PredicateValue {
+    let Some((value, target, tolerance, extra)) = measure(task, &pred.check, states) else {
         return PredicateValue {
             text: pred.text.clone(),
             holds: false,
             value: f64::NAN,
             target: f64::NAN,
-            tolerance: pred.tolerance,
+            tolerance: f64::NAN,
+            progress: 0.0,
         };
     };
-    let LabwareParams::ThermalCycler(p) = &spec.params;
-    let lid = state.joints.get("lid").copied().unwrap_or(f64::NAN);
-    let lever = state.joints.get("lever").copied().unwrap_or(f64::NAN);
-    let (value, target, extra) = match pred.state.as_str() {
-        "closed" => (lid, p.lid_closed, true),
-        "locked" => (lever, p.lever_pressed, state.locked),
-        "open" => (lid, p.lid_open, true),
-        _ => (lever, p.lever_raised, !state.locked),
+    let holds = (value - target).abs() <= tolerance && extra;
+    let from = measure(task, &pred.check, start)
+        .map(|m| m.0)
+        .unwrap_or(value);
+    let span = (target - from).abs();
+    let progress = if holds {
+        1.0
+    } else if span > tolerance {
+        // Short of holding never scores full marks, even when the value is on target.
+        (1.0 - (value - target).abs() / span).clamp(0.0, 0.99)
+    } else {
+        0.0
     };
-    let holds = (value - target).abs() < pred.tolerance && extra;
     PredicateValue {
         text: pred.text.clone(),
         holds,
         value,
         target,
-        tolerance: pred.tolerance,
+        tolerance,
+        progress,
     }
 }
 
-/// Evaluates every success predicate of the task.
-pub fn judge(task: &Task, states: &[LabwareState]) -> Verdict {
-    let predicates: Vec<PredicateValue> = task
+fn stage_verdict(
+    task: &Task,
+    index: usize,
+    states: &[LabwareState],
+    start: &[LabwareState],
+    completed_at_s: Option<f64>,
+) -> StageVerdict {
+    let stage = &task.stages[index];
+    let predicates: Vec<PredicateValue> = stage
         .success
         .iter()
-        .map(|p| evaluate(task, p, states))
+        .map(|p| evaluate(task, p, states, start))
         .collect();
-    Verdict {
-        success: !predicates.is_empty() && predicates.iter().all(|p| p.holds),
+    let success = !predicates.is_empty() && predicates.iter().all(|p| p.holds);
+    let score = match stage.scoring {
+        Scoring::Binary => f64::from(u8::from(success)),
+        Scoring::Progress => {
+            let total: f64 = stage.success.iter().map(|p| p.weight).sum();
+            let got: f64 = stage
+                .success
+                .iter()
+                .zip(&predicates)
+                .map(|(p, v)| p.weight * v.progress)
+                .sum();
+            if total > 0.0 { got / total } else { 0.0 }
+        }
+    };
+    StageVerdict {
+        id: stage.id.clone(),
+        success,
+        score,
+        completed_at_s: completed_at_s.filter(|_| success),
         predicates,
+    }
+}
+
+/// Follows an episode through its stages: the current stage advances when all its predicates hold;
+/// the episode is over when the last stage completes or the current one runs out of time.
+pub struct Judge<'t> {
+    task: &'t Task,
+    stage: usize,
+    stage_start_s: f64,
+    stage_start: Vec<LabwareState>,
+    done: Vec<StageVerdict>,
+    last: Option<StageVerdict>,
+}
+
+impl<'t> Judge<'t> {
+    pub fn new(task: &'t Task, initial: &[LabwareState]) -> Self {
+        Judge {
+            task,
+            stage: 0,
+            stage_start_s: 0.0,
+            stage_start: initial.to_vec(),
+            done: Vec::new(),
+            last: None,
+        }
+    }
+
+    /// The stage now running (equal to the number of stages once all are done).
+    pub fn stage(&self) -> usize {
+        self.stage
+    }
+
+    /// Feeds the state at `time`; returns true when the episode is over.
+    pub fn update(&mut self, time: f64, states: &[LabwareState]) -> bool {
+        // Whole microseconds: a recording stores nanosecond timestamps, and a replay must agree.
+        let time = (time * 1e6).round() / 1e6;
+        while self.stage < self.task.stages.len() {
+            let v = stage_verdict(self.task, self.stage, states, &self.stage_start, Some(time));
+            if !v.success {
+                let limit = self.task.stages[self.stage].time_limit_s;
+                self.last = Some(v);
+                return time - self.stage_start_s >= limit - 1e-9;
+            }
+            self.done.push(v);
+            self.last = None;
+            self.stage += 1;
+            self.stage_start_s = time;
+            self.stage_start = states.to_vec();
+        }
+        true
+    }
+
+    /// The verdict so far: completed stages, the current one as last evaluated, the rest unreached.
+    pub fn verdict(&self) -> Verdict {
+        let mut stages = self.done.clone();
+        if let Some(v) = &self.last {
+            stages.push(v.clone());
+        }
+        let n = self.task.stages.len().max(1) as f64;
+        Verdict {
+            success: self.done.len() == self.task.stages.len(),
+            score: stages.iter().map(|s| s.score).sum::<f64>() / n,
+            stages,
+        }
+    }
+
+    /// Re-scores a recorded series of (time, labware state), first entry the initial state.
+    pub fn replay(task: &Task, series: &[(f64, Vec<LabwareState>)]) -> Verdict {
+        let Some((_, first)) = series.first() else {
+            return Judge::new(task, &[]).verdict();
+        };
+        let mut j = Judge::new(task, first);
+        for (t, s) in series {
+            if j.update(*t, s) {
+                break;
+            }
+        }
+        j.verdict()
     }
 }

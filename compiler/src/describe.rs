@@ -1,0 +1,244 @@
+//! Task sheets: a compiled task rendered as plain text for people (instruction, parameters,
+//! randomisation, plan, checks, time limits), and the catalogue of labware kinds and primitives.
+//! Generated from the task and the catalogues only, so it never disagrees with what runs.
+
+use crate::params::{Domain, format_number};
+use crate::predicates::Check;
+use crate::primitives::CATALOGUE;
+use crate::task::{Scoring, Task};
+use std::fmt::Write;
+
+/// The task sheet of a compiled task.
+pub fn describe(task: &Task) -> String {
+    let mut out = String::new();
+    let w = &mut out;
+    let _ = writeln!(w, "{} (v{}, {})", task.id, task.version, task.level);
+    let _ = writeln!(w, "  instruction: {}", task.instruction);
+    let _ = writeln!(w, "  source:      {}", task.source);
+    let _ = writeln!(
+        w,
+        "  time limit:  {} s ({} Hz physics, {} Hz control)",
+        format_number(task.time_limit_s),
+        format_number(1.0 / task.physics.timestep_s),
+        format_number(task.physics.control_hz())
+    );
+    let _ = writeln!(w, "\nscene");
+    for r in &task.robots {
+        let p = r.base.pos;
+        let _ = writeln!(
+            w,
+            "  robot {:<10} {} at ({:.3}, {:.3}, {:.3}) m",
+            r.name, r.model, p[0], p[1], p[2]
+        );
+    }
+    for l in &task.labware {
+        let kind = labware::kind(&l.kind);
+        let mut state: Vec<String> = l.initial.iter().map(|(k, v)| format!("{k} {v}")).collect();
+        if let Some(v) = &l.volume {
+            state.push(format!("volume {v}"));
+        }
+        state.extend(l.panel.iter().map(|(k, v)| format!("{k} {v}")));
+        let place = match &l.at {
+            Some(at) => format!("in {at}"),
+            None => {
+                let p = l.placement.pos;
+                format!("at ({:.3}, {:.3}, {:.3}) m", p[0], p[1], p[2])
+            }
+        };
+        let sim = if kind.is_some_and(|k| k.simulated) {
+            ""
+        } else {
+            " [no simulation model yet]"
+        };
+        let _ = writeln!(
+            w,
+            "  labware {:<8} {} {place}{}{sim}",
+            l.name,
+            l.kind,
+            if state.is_empty() {
+                String::new()
+            } else {
+                format!(", {}", state.join(", "))
+            }
+        );
+    }
+    let _ = writeln!(w, "\nrandomisation (per episode, from the seed)");
+    let mut any = false;
+    for r in &task.robots {
+        if let Some(j) = &r.joint_jitter {
+            any = true;
+            let ranges: Vec<String> = j
+                .low
+                .iter()
+                .zip(&j.high)
+                .map(|(l, h)| format!("[{l}, {h}]"))
+                .collect();
+            let _ = writeln!(w, "  {} joints + U{} rad", r.name, ranges.join(" "));
+        }
+    }
+    for l in &task.labware {
+        if l.xy_jitter_m > 0.0 || l.yaw_jitter_rad > 0.0 {
+            any = true;
+            let _ = writeln!(
+                w,
+                "  {} xy ± {} mm, yaw ± {:.1} deg",
+                l.name,
+                format_number(l.xy_jitter_m * 1000.0),
+                l.yaw_jitter_rad.to_degrees()
+            );
+        }
+    }
+    for p in &task.params {
+        any = true;
+        let domain = match &p.domain {
+            Domain::Choice { values } => format!("one of {}", values.join(", ")),
+            Domain::Int { low, high, step } if *step == 1 => format!("integer {low}..={high}"),
+            Domain::Int { low, high, step } => format!("integer {low}..={high} step {step}"),
+            Domain::Real { low, high, unit } => {
+                format!(
+                    "uniform {}..{} {unit}",
+                    format_number(*low),
+                    format_number(*high)
+                )
+            }
+            Domain::Slot { holder, slots } => {
+                format!("a slot of {holder} ({} candidates)", slots.len())
+            }
+            Domain::Opposite { holder, of, .. } => {
+                format!("the slot of {holder} opposite {{{of}}}")
+            }
+        };
+        let excl = if p.exclude.is_empty() {
+            String::new()
+        } else {
+            format!(", never {}", p.exclude.join(", "))
+        };
+        let _ = writeln!(w, "  {{{}}} {domain}{excl}", p.name);
+    }
+    if !any {
+        let _ = writeln!(w, "  none");
+    }
+    for (i, s) in task.stages.iter().enumerate() {
+        let _ = writeln!(
+            w,
+            "\nstage {} `{}` ({} s, {} scoring)",
+            i + 1,
+            s.id,
+            format_number(s.time_limit_s),
+            match s.scoring {
+                Scoring::Binary => "binary",
+                Scoring::Progress => "progress",
+            }
+        );
+        let _ = writeln!(w, "  instruction: {}", s.instruction);
+        let _ = writeln!(w, "  plan:");
+        for (k, step) in s.plan.iter().enumerate() {
+            let args: Vec<String> = step
+                .args
+                .iter()
+                .map(|(a, v)| format!("{a} = {v}"))
+                .collect();
+            let _ = writeln!(
+                w,
+                "    {}. {}({}) with {}",
+                k + 1,
+                step.primitive,
+                args.join(", "),
+                step.robot
+            );
+        }
+        let _ = writeln!(w, "  checks:");
+        for p in &s.success {
+            let tol = match &p.check {
+                Check::State {
+                    tolerance: Some(t), ..
+                } => format!(" [{} = {}]", t.name, format_number(t.value)),
+                Check::InSlot { tolerance: t, .. }
+                | Check::Volume { tolerance: t, .. }
+                | Check::Panel { tolerance: t, .. }
+                | Check::Position { tolerance: t, .. } => {
+                    format!(" [{} = {}]", t.name, format_number(t.value))
+                }
+                _ => String::new(),
+            };
+            let weight = if s.scoring == Scoring::Progress {
+                format!(" (weight {})", format_number(p.weight))
+            } else {
+                String::new()
+            };
+            let _ = writeln!(w, "    - {}{tol}{weight}", p.text);
+        }
+    }
+    out
+}
+
+/// The catalogues: every labware kind and lab primitive.
+pub fn catalogue() -> String {
+    let mut out = String::new();
+    let w = &mut out;
+    let _ = writeln!(w, "lab primitives (every one also takes `with = <robot>`)");
+    for p in CATALOGUE {
+        let _ = writeln!(w, "  {}", p.signature());
+        let _ = writeln!(w, "      {}", p.description);
+        let _ = writeln!(w, "      needs:  {}", p.requires);
+        let _ = writeln!(w, "      leaves: {}", p.leaves);
+    }
+    let _ = writeln!(w, "\nlabware kinds");
+    for k in labware::KINDS {
+        let sim = if k.simulated {
+            ""
+        } else {
+            " [no simulation model yet]"
+        };
+        let _ = writeln!(w, "  {}{sim}", k.name);
+        let _ = writeln!(w, "      {}", k.description);
+        for p in k.parts {
+            let _ = writeln!(
+                w,
+                "      part {}: {} (may start {})",
+                p.part,
+                p.states.join(" | "),
+                p.initial.join(" | ")
+            );
+        }
+        if let Some(s) = k.slots {
+            let _ = writeln!(
+                w,
+                "      slots: {}, take {}",
+                s.layout.describe(),
+                s.accepts.join(", ")
+            );
+        }
+        if let Some(c) = k.capacity_ul {
+            let _ = writeln!(w, "      holds up to {} µL", format_number(c));
+        }
+        for p in k.panel {
+            let _ = writeln!(
+                w,
+                "      panel {}: {}..{} {} in steps of {}, starts {}",
+                p.name,
+                format_number(p.min),
+                format_number(p.max),
+                p.unit,
+                format_number(p.step),
+                format_number(p.initial)
+            );
+        }
+        if !k.buttons.is_empty() {
+            let names: Vec<&str> = k.buttons.iter().map(|b| b.name).collect();
+            let _ = writeln!(w, "      buttons: {}", names.join(", "));
+        }
+        if !k.tolerances.is_empty() {
+            let t: Vec<String> = k
+                .tolerances
+                .iter()
+                .map(|(n, v)| format!("{n} = {}", format_number(*v)))
+                .collect();
+            let _ = writeln!(w, "      tolerances: {}", t.join(", "));
+        }
+        if !k.primitives.is_empty() {
+            let _ = writeln!(w, "      primitives: {}", k.primitives.join(", "));
+        }
+    }
+    out
+}

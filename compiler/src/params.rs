@@ -1,0 +1,320 @@
+//! Episode parameters: their compiled domains, `{name}` templates, per-episode draws from a seed,
+//! and the enumeration of value combinations the compiler's state proof runs over.
+//!
+//! Values are text (a slot name, an integer, a quantity in canonical units), substituted verbatim
+//! into templates. This module does no name resolution beyond the parameters themselves.
+
+use rand_chacha::ChaCha8Rng;
+use rand_core::{RngCore, SeedableRng};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// Drawn values by parameter name.
+pub type Bindings = BTreeMap<String, String>;
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ParamSpec {
+    pub name: String,
+    pub domain: Domain,
+    /// Values never drawn (templates over earlier parameters, rendered before the draw).
+    pub exclude: Vec<String>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Domain {
+    Choice {
+        values: Vec<String>,
+    },
+    Int {
+        low: i64,
+        high: i64,
+        step: i64,
+    },
+    /// Uniform real in canonical `unit`.
+    Real {
+        low: f64,
+        high: f64,
+        unit: String,
+    },
+    /// Slots of `holder` (already without the ones occupied at the start when `free`).
+    Slot {
+        holder: String,
+        slots: Vec<String>,
+    },
+    /// The slot across the ring from `of`'s slot: not drawn.
+    Opposite {
+        holder: String,
+        of: String,
+        ring: u32,
+    },
+}
+
+impl ParamSpec {
+    /// The values the proof considers: all of a finite domain, or low, middle and high of a real one.
+    fn proof_values(&self, bound: &Bindings) -> Vec<String> {
+        let values = match &self.domain {
+            Domain::Choice { values } => values.clone(),
+            Domain::Int { low, high, step } => (0..)
+                .map(|k| low + k * step)
+                .take_while(|v| v <= high)
+                .map(|v| v.to_string())
+                .collect(),
+            Domain::Real { low, high, .. } => [*low, (low + high) / 2.0, *high]
+                .iter()
+                .map(|v| format_number(*v))
+                .collect(),
+            Domain::Slot { slots, .. } => slots.clone(),
+            Domain::Opposite { of, ring, .. } => bound
+                .get(of)
+                .and_then(|s| opposite(s, *ring))
+                .into_iter()
+                .collect(),
+        };
+        let excluded: Vec<String> = self
+            .exclude
+            .iter()
+            .filter_map(|e| render(e, bound).ok())
+            .collect();
+        values
+            .into_iter()
+            .filter(|v| !excluded.contains(v))
+            .collect()
+    }
+
+    /// Draws this parameter's value given the earlier ones.
+    fn draw(&self, rng: &mut ChaCha8Rng, bound: &Bindings) -> Option<String> {
+        if let Domain::Real { low, high, .. } = &self.domain {
+            return Some(format_number(uniform(rng, *low, *high)));
+        }
+        let candidates = self.proof_values(bound);
+        if let Domain::Opposite { .. } = self.domain {
+            return candidates.into_iter().next();
+        }
+        if candidates.is_empty() {
+            return None;
+        }
+        let i = (rng.next_u64() % candidates.len() as u64) as usize;
+        candidates.into_iter().nth(i)
+    }
+}
+
+/// Slot `i` of a ring of `n` and the one across from it (`1..=n`).
+pub fn opposite(slot: &str, n: u32) -> Option<String> {
+    let i: u32 = slot.parse().ok().filter(|i| (1..=n).contains(i))?;
+    Some(((i - 1 + n / 2) % n + 1).to_string())
+}
+
+/// Shortest text that reads back as the same f64 (integers without a fraction).
+pub fn format_number(v: f64) -> String {
+    if v.fract() == 0.0 && v.abs() < 1e15 {
+        format!("{}", v as i64)
+    } else {
+        format!("{v}")
+    }
+}
+
+/// Uniform draw in [lo, hi) from 53 random bits.
+pub(crate) fn uniform(rng: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
+    let u = (rng.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
+    lo + (hi - lo) * u
+}
+
+/// Draws every parameter in order. `None` when exclusions leave a parameter nothing to draw.
+pub fn draw_all(params: &[ParamSpec], rng: &mut ChaCha8Rng) -> Option<Bindings> {
+    let mut bound = Bindings::new();
+    for p in params {
+        let v = p.draw(rng, &bound)?;
+        bound.insert(p.name.clone(), v);
+    }
+    Some(bound)
+}
+
+/// Most combinations the proof traces one by one; beyond this it samples [`PROOF_SAMPLE`].
+pub const PROOF_LIMIT: usize = 4096;
+pub const PROOF_SAMPLE: usize = 256;
+
+/// The parameter combinations the state proof runs over, and whether that is all of them.
+/// The empty parameter list gives one empty combination.
+pub fn proof_assignments(params: &[ParamSpec]) -> (Vec<Bindings>, bool) {
+    let mut out = Vec::new();
+    let mut complete = true;
+    enumerate(params, &mut Bindings::new(), &mut out, &mut complete);
+    if complete {
+        return (out, true);
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(0);
+    let sample = (0..PROOF_SAMPLE)
+        .filter_map(|_| draw_all(params, &mut rng))
+        .collect();
+    (sample, false)
+}
+
+fn enumerate(params: &[ParamSpec], bound: &mut Bindings, out: &mut Vec<Bindings>, ok: &mut bool) {
+    if !*ok {
+        return;
+    }
+    let Some((first, rest)) = params.split_first() else {
+        out.push(bound.clone());
+        if out.len() > PROOF_LIMIT {
+            *ok = false;
+        }
+        return;
+    };
+    for v in first.proof_values(bound) {
+        bound.insert(first.name.clone(), v);
+        enumerate(rest, bound, out, ok);
+        bound.remove(&first.name);
+    }
+}
+
+/// A `{name}` in a template that names no bound parameter.
+#[derive(Clone, Debug, PartialEq)]
+pub struct UnknownPlaceholder(pub String);
+
+/// Substitutes `{name}` placeholders. `{{` and `}}` are literal braces.
+pub fn render(template: &str, bound: &Bindings) -> Result<String, UnknownPlaceholder> {
+    let mut out = String::with_capacity(template.len());
+    let mut rest = template;
+    while let Some(i) = rest.find(['{', '}']) {
+        out.push_str(&rest[..i]);
+        let tail = &rest[i..];
+        if tail.starts_with("{{") || tail.starts_with("}}") {
+            out.push_str(&tail[..1]);
+            rest = &tail[2..];
+            continue;
+        }
+        if let Some(after) = tail.strip_prefix('}') {
+            out.push('}');
+            rest = after;
+            continue;
+        }
+        match tail[1..].find('}') {
+            Some(j) => {
+                let name = tail[1..1 + j].trim();
+                let v = bound
+                    .get(name)
+                    .ok_or_else(|| UnknownPlaceholder(name.to_string()))?;
+                out.push_str(v);
+                rest = &tail[j + 2..];
+            }
+            None => {
+                out.push_str(tail);
+                rest = "";
+            }
+        }
+    }
+    out.push_str(rest);
+    Ok(out)
+}
+
+/// Every placeholder name a template uses, with its byte offset in the template.
+pub fn placeholders(template: &str) -> Vec<(usize, String)> {
+    let mut out = Vec::new();
+    let b = template.as_bytes();
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'{' {
+            if b.get(i + 1) == Some(&b'{') {
+                i += 2;
+                continue;
+            }
+            if let Some(j) = template[i + 1..].find('}') {
+                out.push((i, template[i + 1..i + 1 + j].trim().to_string()));
+                i += j + 2;
+                continue;
+            }
+        }
+        i += 1;
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spec(name: &str, domain: Domain, exclude: &[&str]) -> ParamSpec {
+        ParamSpec {
+            name: name.into(),
+            domain,
+            exclude: exclude.iter().map(|s| s.to_string()).collect(),
+        }
+    }
+
+    #[test]
+    fn renders_templates() {
+        let b: Bindings = [("row".to_string(), "B".to_string())].into();
+        assert_eq!(render("rack.{row}3", &b).unwrap(), "rack.B3");
+        assert_eq!(render("{{literal}}", &b).unwrap(), "{literal}");
+        assert_eq!(
+            render("{col}", &b),
+            Err(UnknownPlaceholder("col".to_string()))
+        );
+        assert_eq!(placeholders("a {x} b {{y}} {z}").len(), 2);
+    }
+
+    #[test]
+    fn exclusions_and_opposites() {
+        let ps = vec![
+            spec(
+                "first",
+                Domain::Choice {
+                    values: vec!["1".into(), "2".into()],
+                },
+                &[],
+            ),
+            spec(
+                "second",
+                Domain::Opposite {
+                    holder: "rotor".into(),
+                    of: "first".into(),
+                    ring: 30,
+                },
+                &[],
+            ),
+            spec(
+                "temp",
+                Domain::Int {
+                    low: 24,
+                    high: 26,
+                    step: 1,
+                },
+                &["25"],
+            ),
+        ];
+        let (all, complete) = proof_assignments(&ps);
+        assert!(complete);
+        assert_eq!(all.len(), 4);
+        assert!(all.iter().all(|b| b["temp"] != "25"));
+        assert!(
+            all.iter()
+                .all(|b| opposite(&b["first"], 30).as_ref() == Some(&b["second"]))
+        );
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        for _ in 0..50 {
+            let b = draw_all(&ps, &mut rng).unwrap();
+            assert_ne!(b["temp"], "25");
+        }
+    }
+
+    #[test]
+    fn large_spaces_are_sampled() {
+        let ps: Vec<ParamSpec> = (0..4)
+            .map(|i| {
+                spec(
+                    &format!("p{i}"),
+                    Domain::Int {
+                        low: 0,
+                        high: 20,
+                        step: 1,
+                    },
+                    &[],
+                )
+            })
+            .collect();
+        let (sample, complete) = proof_assignments(&ps);
+        assert!(!complete);
+        assert_eq!(sample.len(), PROOF_SAMPLE);
+    }
+}

@@ -1,0 +1,369 @@
+//! Success predicates: the small grammar of `[success] all = [..]`, the compiled [`Check`]s, and
+//! their evaluation on the abstract world (for the compiler's proof; the scoring crate evaluates
+//! them on measured state).
+//!
+//! Forms (`{param}` placeholders may stand for names, slots and values):
+//! - `<labware>.<part> is <state>`                 part state (lid closed, cap off, power on)
+//! - `<labware>.<joint> in [<lo>, <hi>] <unit>`    joint range (rad, deg or m)
+//! - `<item> in <holder>.<slot>`                   object in slot
+//! - `<container>.volume <op> <quantity>`          volume, op one of `=`, `>=`, `<=`
+//! - `<instrument>.<panel value> = <quantity>`     display value
+//! - `<robot> touches <item>`                      contact
+//! - `<item> near [<x>, <y>, <z>] <unit>`          pose within tolerance
+//!
+//! Any form but contact and joint range may end in `within <quantity>` to give its tolerance inline.
+
+use crate::params::{Bindings, render};
+use crate::world::{Hand, Location, World};
+use dsl::{Dimension, parse_quantity};
+use serde::{Deserialize, Serialize};
+
+/// A tolerance with the name a `[tolerances]` table can override it by.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Tolerance {
+    pub name: String,
+    /// In the canonical unit of what it bounds (rad, m, µL, the panel's unit).
+    pub value: f64,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Cmp {
+    #[serde(rename = "=")]
+    Eq,
+    #[serde(rename = ">=")]
+    Ge,
+    #[serde(rename = "<=")]
+    Le,
+}
+
+/// One compiled predicate. Fields documented as templates may hold `{param}` placeholders.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "check", rename_all = "snake_case")]
+pub enum Check {
+    State {
+        labware: String,
+        part: String,
+        state: String,
+        tolerance: Option<Tolerance>,
+    },
+    JointRange {
+        labware: String,
+        joint: String,
+        low: f64,
+        high: f64,
+    },
+    InSlot {
+        item: String,
+        /// Template `holder.slot`.
+        location: String,
+        tolerance: Tolerance,
+    },
+    Volume {
+        container: String,
+        cmp: Cmp,
+        /// Template quantity text.
+        value: String,
+        tolerance: Tolerance,
+    },
+    Panel {
+        instrument: String,
+        param: String,
+        /// The panel value's unit and the value it shows at the start.
+        unit: String,
+        initial: f64,
+        /// Template quantity text.
+        value: String,
+        tolerance: Tolerance,
+    },
+    Contact {
+        robot: String,
+        item: String,
+    },
+    Position {
+        item: String,
+        pos: [f64; 3],
+        tolerance: Tolerance,
+    },
+}
+
+/// The predicate's syntactic shape before names are resolved.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Form {
+    State {
+        labware: String,
+        part: String,
+        state: String,
+    },
+    JointRange {
+        labware: String,
+        joint: String,
+        low: f64,
+        high: f64,
+    },
+    InSlot {
+        item: String,
+        location: String,
+    },
+    Compare {
+        labware: String,
+        field: String,
+        cmp: Cmp,
+        value: String,
+    },
+    Contact {
+        robot: String,
+        item: String,
+    },
+    Near {
+        item: String,
+        pos: [f64; 3],
+    },
+}
+
+/// A parsed predicate: its form and an inline `within` tolerance (value and dimension).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Parsed {
+    pub form: Form,
+    pub within: Option<(f64, Dimension)>,
+}
+
+fn split_dot(s: &str) -> Option<(String, String)> {
+    let (a, b) = s.split_once('.')?;
+    (!a.is_empty() && !b.is_empty() && !b.contains('.')).then(|| (a.to_string(), b.to_string()))
+}
+
+fn bracketed(s: &str, n: usize) -> Result<(Vec<f64>, &str), String> {
+    let s = s.trim_start();
+    let inner_end = s.find(']').ok_or("a `[` without its `]`")?;
+    let inner = s
+        .strip_prefix('[')
+        .ok_or("expected `[`")?
+        .get(..inner_end - 1)
+        .ok_or("expected `[..]`")?;
+    let nums: Result<Vec<f64>, _> = inner.split(',').map(|x| x.trim().parse::<f64>()).collect();
+    let nums = nums.map_err(|_| format!("`[{inner}]` must hold numbers"))?;
+    if nums.len() != n || nums.iter().any(|x| !x.is_finite()) {
+        return Err(format!("`[{inner}]` must hold {n} numbers"));
+    }
+    Ok((nums, s[inner_end + 1..].trim()))
+}
+
+/// Reads one predicate. Errors are lowercase and say which form was expected.
+pub fn parse(text: &str) -> Result<Parsed, String> {
+    let text = text.trim();
+    let (body, within) = match text.rsplit_once(" within ") {
+        Some((b, q)) => {
+            let q = parse_quantity(q)?;
+            (b.trim(), Some((q.si, q.dimension)))
+        }
+        None => (text, None),
+    };
+    let form = if let Some((lhs, state)) = body.split_once(" is ") {
+        let (labware, part) = split_dot(lhs.trim())
+            .ok_or_else(|| format!("`{}` must be `<labware>.<part>`", lhs.trim()))?;
+        let state = state.trim();
+        if state.is_empty() || state.contains(' ') {
+            return Err(format!("`{state}` is not a state name"));
+        }
+        Form::State {
+            labware,
+            part,
+            state: state.to_string(),
+        }
+    } else if let Some((lhs, rest)) = body.split_once(" in ") {
+        let lhs = lhs.trim();
+        let rest = rest.trim();
+        if rest.starts_with('[') {
+            let (labware, joint) =
+                split_dot(lhs).ok_or_else(|| format!("`{lhs}` must be `<labware>.<joint>`"))?;
+            let (v, unit) = bracketed(rest, 2)?;
+            let q = parse_quantity(&format!("1 {unit}"))
+                .map_err(|_| format!("`{unit}` is not a unit of angle or length"))?;
+            if !matches!(q.dimension, Dimension::Angle | Dimension::Length) {
+                return Err(format!(
+                    "a joint range is an angle or a length, not a {}",
+                    q.dimension.name()
+                ));
+            }
+            if v[0] > v[1] {
+                return Err(format!("the range [{}, {}] is empty", v[0], v[1]));
+            }
+            Form::JointRange {
+                labware,
+                joint,
+                low: v[0] * q.si,
+                high: v[1] * q.si,
+            }
+        } else {
+            if lhs.contains(' ') || lhs.is_empty() {
+                return Err(format!("`{lhs}` is not an item name"));
+            }
+            split_dot(rest).ok_or_else(|| format!("`{rest}` must be `<holder>.<slot>`"))?;
+            Form::InSlot {
+                item: lhs.to_string(),
+                location: rest.to_string(),
+            }
+        }
+    } else if let Some((robot, item)) = body.split_once(" touches ") {
+        let (robot, item) = (robot.trim(), item.trim());
+        if robot.contains(' ') || item.contains(' ') || robot.is_empty() || item.is_empty() {
+            return Err("write `<robot> touches <item>`".into());
+        }
+        Form::Contact {
+            robot: robot.into(),
+            item: item.into(),
+        }
+    } else if let Some((item, rest)) = body.split_once(" near ") {
+        let (v, unit) = bracketed(rest, 3)?;
+        let q = parse_quantity(&format!("1 {unit}"))
+            .ok()
+            .filter(|q| q.dimension == Dimension::Length)
+            .ok_or_else(|| format!("`{unit}` is not a unit of length"))?;
+        Form::Near {
+            item: item.trim().to_string(),
+            pos: [v[0] * q.si, v[1] * q.si, v[2] * q.si],
+        }
+    } else {
+        let (lhs, cmp, rhs) = [(">=", Cmp::Ge), ("<=", Cmp::Le), ("=", Cmp::Eq)]
+            .iter()
+            .find_map(|(op, c)| body.split_once(op).map(|(l, r)| (l, *c, r)))
+            .ok_or_else(|| {
+                "expected `is`, `in`, `=`, `>=`, `<=`, `touches` or `near`".to_string()
+            })?;
+        let (labware, field) = split_dot(lhs.trim())
+            .ok_or_else(|| format!("`{}` must be `<labware>.<value>`", lhs.trim()))?;
+        let value = rhs.trim();
+        if value.is_empty() {
+            return Err("a comparison needs a value with a unit".into());
+        }
+        Form::Compare {
+            labware,
+            field,
+            cmp,
+            value: value.to_string(),
+        }
+    };
+    Ok(Parsed { form, within })
+}
+
+/// A template quantity rendered and read in `dim`.
+pub fn quantity(template: &str, bound: &Bindings, dim: Dimension) -> Result<f64, String> {
+    let text = render(template, bound).map_err(|u| format!("unknown placeholder `{{{}}}`", u.0))?;
+    let q = parse_quantity(&text)?;
+    if q.dimension != dim {
+        return Err(format!(
+            "`{text}` is a {}, but a {} is needed",
+            q.dimension.name(),
+            dim.name()
+        ));
+    }
+    Ok(q.si)
+}
+
+impl Check {
+    /// The value of this check in the abstract world, when the abstract world decides it (part
+    /// states, slots, volumes, panel values, carrying); `None` for what only physics can tell.
+    pub fn eval_abstract(&self, w: &World, bound: &Bindings) -> Option<bool> {
+        match self {
+            Check::State {
+                labware,
+                part,
+                state,
+                ..
+            } => {
+                let s = w.part(labware, part)?;
+                Some(match state.as_str() {
+                    // A locked lid is also closed; an open or merely closed one is unlocked.
+                    "closed" => s == "closed" || s == "locked",
+                    "unlocked" => s != "locked",
+                    st => s == st,
+                })
+            }
+            Check::InSlot { item, location, .. } => {
+                let loc = render(location, bound).ok()?;
+                let (holder, slot) = loc.split_once('.')?;
+                Some(
+                    matches!(w.locations.get(item), Some(Location::Slot { holder: h, slot: s }) if h == holder && s == slot),
+                )
+            }
+            Check::Volume {
+                container,
+                cmp,
+                value,
+                tolerance,
+            } => {
+                let target = quantity(value, bound, Dimension::Volume).ok()?;
+                let v = w.volumes.get(container).copied().unwrap_or(0.0);
+                Some(compare(v, *cmp, target, tolerance.value))
+            }
+            Check::Panel {
+                instrument,
+                param,
+                unit,
+                initial,
+                value,
+                tolerance,
+            } => {
+                let target =
+                    quantity(value, bound, crate::primitives::panel_dimension(unit)).ok()?;
+                let v = w
+                    .panel
+                    .get(&(instrument.clone(), param.clone()))
+                    .copied()
+                    .unwrap_or(*initial);
+                Some(compare(v, Cmp::Eq, target, tolerance.value))
+            }
+            Check::Contact { robot, item } => match w.hand(robot) {
+                Hand::Item(i) | Hand::Stabilising(i) if i == item => Some(true),
+                _ => None,
+            },
+            Check::JointRange { .. } | Check::Position { .. } => None,
+        }
+    }
+}
+
+pub fn compare(value: f64, cmp: Cmp, target: f64, tolerance: f64) -> bool {
+    match cmp {
+        Cmp::Eq => (value - target).abs() <= tolerance,
+        Cmp::Ge => value >= target - tolerance,
+        Cmp::Le => value <= target + tolerance,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reads_every_form() {
+        let ok = [
+            "cycler.lid is closed",
+            "cycler.lid in [-1.95, -1.85] rad",
+            "tube in rack.{slot}",
+            "tube.volume >= 200 µL",
+            "mixer.speed = {rpm} rpm",
+            "arm touches tube",
+            "tube near [0.3, 0.2, 0.83] m within 5 mm",
+        ];
+        for t in ok {
+            assert!(parse(t).is_ok(), "{t}: {:?}", parse(t));
+        }
+        let p = parse("tube near [0.3, 0.2, 0.83] m within 5 mm").unwrap();
+        assert_eq!(p.within, Some((0.005, Dimension::Length)));
+    }
+
+    #[test]
+    fn rejects_malformed_forms() {
+        for t in [
+            "cycler lid closed",
+            "cycler.lid is",
+            "cycler.lid in [1] rad",
+            "cycler.lid in [2, 1] rad",
+            "tube near [1, 2] m",
+            "tube.volume = ",
+            "cycler.lid is closed within 3 parsecs",
+        ] {
+            assert!(parse(t).is_err(), "{t} should not parse");
+        }
+    }
+}

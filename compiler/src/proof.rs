@@ -1,0 +1,238 @@
+//! The state proof: traces every stage's steps through the abstract [`World`], from the declared
+//! initial state, for every parameter combination (or a deterministic sample when there are too
+//! many), and reports each step whose precondition fails, each stage whose plan cannot reach its
+//! success condition, and success conditions that hold before anything happens.
+
+use crate::check::{CheckedPredicate, CheckedStep, Cx};
+use crate::params::{Bindings, ParamSpec, proof_assignments, render};
+use crate::predicates;
+use crate::primitives::{self, BoundStep, Env};
+use crate::task::LabwareSpec;
+use crate::world::{Hand, Location, World};
+use dsl::{Code, Diagnostic, Dimension, Span};
+use labware::LabwareKind;
+use std::collections::BTreeMap;
+
+/// One stage as the proof sees it.
+pub(crate) struct ProofStage<'a> {
+    pub id: String,
+    pub file: Option<String>,
+    pub steps: &'a [CheckedStep<'a>],
+    pub predicates: &'a [CheckedPredicate],
+}
+
+/// The scene the stages share.
+pub(crate) struct ProofScene<'a> {
+    pub labware: &'a [LabwareSpec],
+    pub kinds: &'a BTreeMap<String, &'static LabwareKind>,
+    pub robots: Vec<String>,
+    /// Where to point for a labware's initial placement (first stage's file).
+    pub labware_spans: &'a BTreeMap<String, Span>,
+    pub file: Option<String>,
+}
+
+fn describe(bound: &Bindings) -> Option<String> {
+    (!bound.is_empty()).then(|| {
+        let parts: Vec<String> = bound.iter().map(|(k, v)| format!("{k} = {v}")).collect();
+        format!("with {}", parts.join(", "))
+    })
+}
+
+fn initial_world(cx: &mut Cx, scene: &ProofScene, bound: &Bindings) -> Option<World> {
+    let mut w = World::default();
+    let env = Env {
+        kinds: scene.kinds,
+        robots: &scene.robots,
+    };
+    cx.file = scene.file.clone();
+    let mut ok = true;
+    for spec in scene.labware {
+        let span = scene
+            .labware_spans
+            .get(&spec.name)
+            .copied()
+            .unwrap_or_default();
+        let kind = scene.kinds[&spec.name];
+        for (part, state) in &spec.initial {
+            w.set_part(&spec.name, part, state);
+        }
+        if let Some(at) = &spec.at {
+            let at = render(at, bound).unwrap_or_else(|_| at.clone());
+            match primitives::resolve_location(&env, &at) {
+                Ok((holder, slot, hkind)) => {
+                    let accepts = hkind.slots.map(|s| s.accepts).unwrap_or(&[]);
+                    if !accepts.contains(&kind.name) {
+                        let mut d = Diagnostic::new(
+                            Code::E0016,
+                            span,
+                            format!(
+                                "a slot of `{holder}` (a {}) does not take a {}",
+                                hkind.name, kind.name
+                            ),
+                        )
+                        .with_hint(format!("it takes: {}", accepts.join(", ")));
+                        d.notes.extend(describe(bound));
+                        cx.push(d);
+                        ok = false;
+                    } else if let Some(other) = w.occupant(&holder, &slot) {
+                        let mut d = Diagnostic::new(
+                            Code::E0016,
+                            span,
+                            format!("`{}` and `{other}` both start in `{at}`", spec.name),
+                        )
+                        .with_hint("draw the slot with `slot = .., free = true` or exclude the other's slot");
+                        d.notes.extend(describe(bound));
+                        cx.push(d);
+                        ok = false;
+                    } else {
+                        w.locations
+                            .insert(spec.name.clone(), Location::Slot { holder, slot });
+                    }
+                }
+                Err(m) => {
+                    cx.push(Diagnostic::new(Code::E0016, span, m));
+                    ok = false;
+                }
+            }
+        } else if kind.movable {
+            w.locations.insert(spec.name.clone(), Location::Bench);
+        }
+        if let Some(v) = &spec.volume {
+            match predicates::quantity(v, bound, Dimension::Volume) {
+                Ok(x) if x <= kind.capacity_ul.unwrap_or(0.0) && x >= 0.0 => {
+                    w.volumes.insert(spec.name.clone(), x);
+                }
+                Ok(x) => {
+                    let mut d = Diagnostic::new(
+                        Code::E0021,
+                        span,
+                        format!(
+                            "`{}` starts with {x} µL, but holds at most {} µL",
+                            spec.name,
+                            kind.capacity_ul.unwrap_or(0.0)
+                        ),
+                    );
+                    d.notes.extend(describe(bound));
+                    cx.push(d);
+                    ok = false;
+                }
+                Err(m) => {
+                    cx.push(Diagnostic::new(Code::E0020, span, m));
+                    ok = false;
+                }
+            }
+        }
+        for (param, v) in &spec.panel {
+            let Some(p) = kind.panel_param(param) else {
+                continue;
+            };
+            if let Ok(x) = predicates::quantity(v, bound, primitives::panel_dimension(p.unit)) {
+                w.panel.insert((spec.name.clone(), param.clone()), x);
+            }
+        }
+    }
+    for r in &scene.robots {
+        w.hands.insert(r.clone(), Hand::Empty);
+    }
+    ok.then_some(w)
+}
+
+/// Runs the proof and reports into `cx`. Stops tracing a combination at its first failure.
+pub(crate) fn prove(cx: &mut Cx, scene: &ProofScene, stages: &[ProofStage], params: &[ParamSpec]) {
+    let (assignments, complete) = proof_assignments(params);
+    if !complete {
+        cx.file = scene.file.clone();
+        cx.push(
+            Diagnostic::new(
+                Code::W0002,
+                Span::default(),
+                format!(
+                    "the state proof traced {} sampled parameter combinations, not all",
+                    assignments.len()
+                ),
+            )
+            .with_hint("narrow the parameter domains for an exhaustive proof"),
+        );
+    }
+    let env = Env {
+        kinds: scene.kinds,
+        robots: &scene.robots,
+    };
+    let mut warned_trivial = vec![false; stages.len()];
+    'combination: for bound in &assignments {
+        let Some(mut w) = initial_world(cx, scene, bound) else {
+            continue;
+        };
+        for (si, stage) in stages.iter().enumerate() {
+            cx.file = stage.file.clone();
+            let origin = (si > 0).then(|| {
+                format!(
+                    "stage {} (`{}`) starts where stage {} (`{}`) ends",
+                    si + 1,
+                    stage.id,
+                    si,
+                    stages[si - 1].id
+                )
+            });
+            let holds: Vec<Option<bool>> = stage
+                .predicates
+                .iter()
+                .map(|p| p.predicate.check.eval_abstract(&w, bound))
+                .collect();
+            if !warned_trivial[si]
+                && !holds.is_empty()
+                && holds.iter().all(|h| *h == Some(true))
+                && let Some(first) = stage.predicates.first()
+            {
+                warned_trivial[si] = true;
+                let mut d = Diagnostic::new(
+                    Code::W0001,
+                    first.span,
+                    "every success predicate already holds before the first step".to_string(),
+                )
+                .with_hint("check the initial `state` and the predicates");
+                d.notes.extend(describe(bound));
+                d.notes.extend(origin.clone());
+                cx.push(d);
+            }
+            for step in stage.steps {
+                let mut args = BTreeMap::new();
+                for (k, v) in &step.planned.args {
+                    args.insert(k.clone(), render(v, bound).unwrap_or_else(|_| v.clone()));
+                }
+                let bound_step = BoundStep {
+                    primitive: step.primitive,
+                    robot: &step.planned.robot,
+                    args: &args,
+                };
+                if let Err(v) = primitives::apply(&mut w, &env, &bound_step) {
+                    let span = v
+                        .arg
+                        .and_then(|a| step.ast.arg(a))
+                        .map(|a| a.span)
+                        .or(step.ast.primitive.as_ref().map(|p| p.span))
+                        .unwrap_or(step.ast.span);
+                    let mut d = Diagnostic::new(v.code, span, v.message);
+                    d.hint = v.hint;
+                    d.notes.extend(describe(bound));
+                    d.notes.extend(origin.clone());
+                    cx.push(d);
+                    continue 'combination;
+                }
+            }
+            for p in stage.predicates {
+                if p.predicate.check.eval_abstract(&w, bound) == Some(false) {
+                    let mut d = Diagnostic::new(
+                        Code::E0033,
+                        p.span,
+                        format!("after the last step, `{}` is false", p.predicate.text),
+                    )
+                    .with_hint("add the steps that make it true, or fix the predicate");
+                    d.notes.extend(describe(bound));
+                    cx.push(d);
+                    continue 'combination;
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,99 @@
+//! The abstract world the compiler traces a plan through: part states, where each movable item
+//! is, liquid volumes, instrument panel values and what each robot's hand holds. No geometry and
+//! no physics: just the facts the primitives' preconditions and effects talk about.
+
+use std::collections::BTreeMap;
+use std::fmt;
+
+/// Where a movable item is.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Location {
+    /// Standing on the bench at its declared pose.
+    Bench,
+    /// In a holder's slot.
+    Slot { holder: String, slot: String },
+    /// In a robot's gripper.
+    Held { robot: String },
+}
+
+impl fmt::Display for Location {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Location::Bench => f.write_str("on the bench"),
+            Location::Slot { holder, slot } => write!(f, "in `{holder}.{slot}`"),
+            Location::Held { robot } => write!(f, "held by `{robot}`"),
+        }
+    }
+}
+
+/// What a robot's hand is doing.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Hand {
+    Empty,
+    /// Carrying an item (it moves with the hand).
+    Item(String),
+    /// Holding the cap unscrewed from this tube.
+    Cap(String),
+    /// Gripping an item to keep it still where it is (`hold`).
+    Stabilising(String),
+}
+
+impl fmt::Display for Hand {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Hand::Empty => f.write_str("empty"),
+            Hand::Item(i) => write!(f, "holding `{i}`"),
+            Hand::Cap(t) => write!(f, "holding the cap of `{t}`"),
+            Hand::Stabilising(i) => write!(f, "holding `{i}` steady"),
+        }
+    }
+}
+
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct World {
+    /// (labware, part) -> state.
+    pub parts: BTreeMap<(String, String), String>,
+    /// Movable labware -> location.
+    pub locations: BTreeMap<String, Location>,
+    /// Containers -> volume (µL).
+    pub volumes: BTreeMap<String, f64>,
+    /// (instrument, panel parameter) -> displayed value (its canonical unit).
+    pub panel: BTreeMap<(String, String), f64>,
+    pub hands: BTreeMap<String, Hand>,
+}
+
+impl World {
+    pub fn part(&self, labware: &str, part: &str) -> Option<&str> {
+        self.parts
+            .get(&(labware.to_string(), part.to_string()))
+            .map(String::as_str)
+    }
+
+    pub fn set_part(&mut self, labware: &str, part: &str, state: &str) {
+        self.parts
+            .insert((labware.to_string(), part.to_string()), state.to_string());
+    }
+
+    pub fn hand(&self, robot: &str) -> &Hand {
+        self.hands.get(robot).unwrap_or(&Hand::Empty)
+    }
+
+    /// The item in a holder's slot, if any.
+    pub fn occupant(&self, holder: &str, slot: &str) -> Option<&str> {
+        self.locations.iter().find_map(|(item, loc)| match loc {
+            Location::Slot { holder: h, slot: s } if h == holder && s == slot => {
+                Some(item.as_str())
+            }
+            _ => None,
+        })
+    }
+
+    /// Robots gripping `item` (carrying or steadying it).
+    pub fn grippers_of(&self, item: &str) -> Vec<&str> {
+        self.hands
+            .iter()
+            .filter(|(_, h)| matches!(h, Hand::Item(i) | Hand::Stabilising(i) if i == item))
+            .map(|(r, _)| r.as_str())
+            .collect()
+    }
+}
