@@ -9,12 +9,15 @@ setup:
 build: setup
 	$(CARGO) build --release
 
-# The main job: the scripted expert on both thermal-cycler protocols, 20 seeded episodes each,
-# a results table, results JSON and one MCAP recording per episode under out/demo/.
+# The main job: check every shipped protocol, then the scripted expert on both thermal-cycler
+# protocols and the close-then-open chain, 20 seeded episodes each, a results table, results JSON
+# and one MCAP recording per episode under out/demo/.
 demo: build
+	$(CARGO) run --release --quiet -- check protocols/*/*.toml
 	$(CARGO) run --release --quiet -- eval \
 	  --protocol protocols/thermal_cycler/close_lid.toml \
 	  --protocol protocols/thermal_cycler/open_lid.toml \
+	  --protocol protocols/thermal_cycler/close_then_open.toml \
 	  --episodes 20 --seed 0 --out out/demo --record
 
 test: setup

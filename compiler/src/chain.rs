@@ -70,7 +70,7 @@ pub(crate) fn compile_chain(
         }
     }
     cx.file = None;
-    if cx.has_errors() || lowered.len() != c.stages.len() {
+    if cx.has_errors() || lowered.is_empty() || lowered.len() != c.stages.len() {
         return (None, cx.diags);
     }
     let first = &lowered[0].2;

@@ -96,7 +96,9 @@ pub(crate) fn lower<'a>(cx: &mut Cx, p: &'a Protocol, file: &str) -> Option<Lowe
     let mut labware_ok: Vec<Option<LabwareSpec>> = labware;
     randomise(cx, p, &mut robots_ok, &mut labware_ok);
     let params = lower_params(cx, p, &kinds, &labware_ok);
-    let param_names: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
+    // Every declared parameter counts for placeholders, also one whose domain had an error (that
+    // error is reported once, at the parameter).
+    let param_names: Vec<&str> = p.params.iter().map(|p| p.name.value.as_str()).collect();
     if let Some(i) = &p.meta.instruction {
         check_placeholders(cx, i, &param_names);
     }
@@ -112,7 +114,8 @@ pub(crate) fn lower<'a>(cx: &mut Cx, p: &'a Protocol, file: &str) -> Option<Lowe
     }
     let robot_names: Vec<String> = p.robots.iter().map(|r| r.name.value.clone()).collect();
     let steps = check_steps(cx, p, &robot_names, &param_names);
-    let predicates = lower_predicates(cx, p, &kinds, &robot_names, &param_names);
+    let declared: Vec<&str> = p.labware.iter().map(|l| l.name.value.as_str()).collect();
+    let predicates = lower_predicates(cx, p, &kinds, &robot_names, &param_names, &declared);
     let m = &p.meta;
     let labware_spans = p
         .labware
@@ -463,6 +466,8 @@ fn lower_params(
             continue;
         };
         let domain = match domain {
+            // Reported by the parser.
+            ParamDomain::Choice(values) if values.is_empty() => continue,
             ParamDomain::Choice(values) => {
                 let mut seen = BTreeSet::new();
                 for v in values {
@@ -789,6 +794,7 @@ fn lower_predicates(
     kinds: &KindMap,
     robots: &[String],
     params: &[&str],
+    declared: &[&str],
 ) -> Vec<CheckedPredicate> {
     let overrides: BTreeMap<&str, (&Spanned<String>, &Spanned<String>)> = p
         .tolerances
@@ -831,7 +837,8 @@ fn lower_predicates(
                 continue;
             }
         };
-        let Some((check, dim)) = resolve_check(cx, text, &parsed.form, kinds, robots) else {
+        let Some((check, dim)) = resolve_check(cx, text, &parsed.form, kinds, robots, declared)
+        else {
             continue;
         };
         let check = apply_tolerance(
@@ -891,6 +898,7 @@ fn resolve_check(
     form: &Form,
     kinds: &KindMap,
     robots: &[String],
+    declared: &[&str],
 ) -> Option<(Check, Option<NamedTolerance>)> {
     let labware_names: Vec<&str> = kinds.keys().map(String::as_str).collect();
     let lookup = |cx: &mut Cx, name: &str| -> Option<&'static LabwareKind> {
@@ -904,7 +912,8 @@ fn resolve_check(
             return None;
         }
         let k = kinds.get(name).copied();
-        if k.is_none() {
+        // Declared with an unknown kind: that was reported at the kind.
+        if k.is_none() && !declared.contains(&name) {
             cx.err(
                 Code::E0013,
                 text.span,

@@ -50,16 +50,35 @@ pub enum Domain {
     },
 }
 
+/// Largest integer domain enumerated value by value; larger ones are drawn by rejection.
+const ENUMERABLE: i128 = 10_000;
+
 impl ParamSpec {
+    /// How many values the proof considers for this parameter, before exclusions.
+    fn size(&self) -> u128 {
+        match &self.domain {
+            Domain::Choice { values } => values.len() as u128,
+            Domain::Int { low, high, step } => {
+                ((*high as i128 - *low as i128) / (*step).max(1) as i128 + 1).max(0) as u128
+            }
+            Domain::Real { .. } => 3,
+            Domain::Slot { slots, .. } => slots.len() as u128,
+            Domain::Opposite { .. } => 1,
+        }
+    }
+
     /// The values the proof considers: all of a finite domain, or low, middle and high of a real one.
     fn proof_values(&self, bound: &Bindings) -> Vec<String> {
         let values = match &self.domain {
             Domain::Choice { values } => values.clone(),
-            Domain::Int { low, high, step } => (0..)
-                .map(|k| low + k * step)
-                .take_while(|v| v <= high)
-                .map(|v| v.to_string())
-                .collect(),
+            Domain::Int { low, high, step } => {
+                let (low, high, step) = (*low as i128, *high as i128, (*step).max(1) as i128);
+                (0..ENUMERABLE)
+                    .map(|k| low + k * step)
+                    .take_while(|v| *v <= high)
+                    .map(|v| v.to_string())
+                    .collect()
+            }
             Domain::Real { low, high, .. } => [*low, (low + high) / 2.0, *high]
                 .iter()
                 .map(|v| format_number(*v))
@@ -86,6 +105,24 @@ impl ParamSpec {
     fn draw(&self, rng: &mut ChaCha8Rng, bound: &Bindings) -> Option<String> {
         if let Domain::Real { low, high, .. } = &self.domain {
             return Some(format_number(uniform(rng, *low, *high)));
+        }
+        if let Domain::Int { low, step, .. } = &self.domain
+            && self.size() > ENUMERABLE as u128
+        {
+            // Too many values to list: draw, rejecting exclusions, a bounded number of times.
+            let excluded: Vec<String> = self
+                .exclude
+                .iter()
+                .filter_map(|e| render(e, bound).ok())
+                .collect();
+            for _ in 0..64 {
+                let k = (rng.next_u64() as u128 % self.size()) as i128;
+                let v = (*low as i128 + k * (*step).max(1) as i128).to_string();
+                if !excluded.contains(&v) {
+                    return Some(v);
+                }
+            }
+            return None;
         }
         let candidates = self.proof_values(bound);
         if let Domain::Opposite { .. } = self.domain {
@@ -131,17 +168,20 @@ pub fn draw_all(params: &[ParamSpec], rng: &mut ChaCha8Rng) -> Option<Bindings> 
 }
 
 /// Most combinations the proof traces one by one; beyond this it samples [`PROOF_SAMPLE`].
-pub const PROOF_LIMIT: usize = 4096;
+pub const PROOF_LIMIT: usize = 65_536;
 pub const PROOF_SAMPLE: usize = 256;
 
 /// The parameter combinations the state proof runs over, and whether that is all of them.
 /// The empty parameter list gives one empty combination.
 pub fn proof_assignments(params: &[ParamSpec]) -> (Vec<Bindings>, bool) {
-    let mut out = Vec::new();
-    let mut complete = true;
-    enumerate(params, &mut Bindings::new(), &mut out, &mut complete);
-    if complete {
-        return (out, true);
+    let size = params
+        .iter()
+        .fold(1u128, |acc, p| acc.saturating_mul(p.size().max(1)));
+    if size <= PROOF_LIMIT as u128 {
+        let mut out = Vec::new();
+        let mut complete = true;
+        enumerate(params, &mut Bindings::new(), &mut out, &mut complete);
+        return (out, complete);
     }
     let mut rng = ChaCha8Rng::seed_from_u64(0);
     let sample = (0..PROOF_SAMPLE)
@@ -300,7 +340,7 @@ mod tests {
 
     #[test]
     fn large_spaces_are_sampled() {
-        let ps: Vec<ParamSpec> = (0..4)
+        let ps: Vec<ParamSpec> = (0..5)
             .map(|i| {
                 spec(
                     &format!("p{i}"),
@@ -314,6 +354,27 @@ mod tests {
             })
             .collect();
         let (sample, complete) = proof_assignments(&ps);
+        assert!(!complete);
+        assert_eq!(sample.len(), PROOF_SAMPLE);
+    }
+}
+
+#[cfg(test)]
+mod huge {
+    use super::*;
+
+    #[test]
+    fn huge_integer_domains_are_drawn_not_listed() {
+        let p = ParamSpec {
+            name: "n".into(),
+            domain: Domain::Int {
+                low: i64::MIN,
+                high: i64::MAX,
+                step: 1,
+            },
+            exclude: vec!["0".into()],
+        };
+        let (sample, complete) = proof_assignments(std::slice::from_ref(&p));
         assert!(!complete);
         assert_eq!(sample.len(), PROOF_SAMPLE);
     }

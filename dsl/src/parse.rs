@@ -431,7 +431,7 @@ impl Parser {
                 _ => self.unknown_key(key, ROBOT_KEYS, "a robot"),
             }
         }
-        if r.model.is_none() {
+        if !t.iter().any(|(k, _)| k.get_ref() == "model") {
             self.err(
                 Code::E0002,
                 r.name.span,
@@ -470,7 +470,7 @@ impl Parser {
                 _ => self.unknown_key(key, LABWARE_KEYS, "a labware entry"),
             }
         }
-        if l.kind.is_none() {
+        if !t.iter().any(|(k, _)| k.get_ref() == "kind") {
             self.err(
                 Code::E0002,
                 l.name.span,

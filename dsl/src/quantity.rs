@@ -20,7 +20,8 @@ impl Dimension {
     pub fn name(self) -> &'static str {
         match self {
             Dimension::Length => "length",
-            Dimension::Angle => "angle",
+            // "plane angle" reads right after "a", as every other name does.
+            Dimension::Angle => "plane angle",
             Dimension::Time => "time",
             Dimension::Volume => "volume",
             Dimension::Temperature => "temperature",

@@ -1,0 +1,12 @@
+#!/usr/bin/env bash
+# Fuzzes parse + check + prove + lower for SECONDS (default 600), seeded with every shipped protocol
+# and the faulty corpus. The toolchain is stable; cargo-fuzz needs nightly flags, hence
+# RUSTC_BOOTSTRAP. Findings land in fuzz/artifacts/; add each to tests/corpus/fuzz/ once fixed.
+set -euo pipefail
+cd "$(dirname "$0")"
+seconds="${1:-600}"
+command -v cargo-fuzz >/dev/null || cargo install cargo-fuzz --locked
+mkdir -p corpus/parse_check_compile
+cp ../protocols/*/*.toml ../tests/corpus/faulty/*.toml corpus/parse_check_compile/
+RUSTC_BOOTSTRAP=1 cargo fuzz run -O parse_check_compile corpus/parse_check_compile -- \
+  -dict=protocol.dict -max_total_time="$seconds" -rss_limit_mb=2048 -print_final_stats=1

@@ -1,0 +1,175 @@
+//! Long-horizon chains and the language's CLI on real files: both thermal-cycler chains run with
+//! the expert to success stage by stage on real MuJoCo, an impossible chain is rejected at compile
+//! time at the offending step, progress scoring gives partial credit, and `describe` / `explain`
+//! / `check --json` work as processes.
+
+use scoring::episode::{EpisodeOptions, run_episode};
+use scoring::expert::ExpertPolicy;
+use std::process::Command;
+use std::sync::Arc;
+
+fn compile(path: &str) -> compiler::Task {
+    let source = std::fs::read_to_string(path).unwrap();
+    let (task, diags) = compiler::compile_source(&source, path);
+    task.unwrap_or_else(|| panic!("{path}: {diags:#?}"))
+}
+
+fn expert(task: &compiler::Task, seed: u64) -> scoring::EpisodeResult {
+    let instance = task.sample(seed);
+    let scene = Arc::new(runtime::Scene::build(task, &instance).unwrap());
+    let mut policy = ExpertPolicy::new(task, &scene, &instance).unwrap();
+    run_episode(
+        task,
+        &scene,
+        &instance,
+        &mut policy,
+        &EpisodeOptions::default(),
+    )
+    .unwrap()
+}
+
+#[test]
+fn both_chains_run_to_success_stage_by_stage() {
+    for (path, first, second) in [
+        (
+            "protocols/thermal_cycler/close_then_open.toml",
+            "thermal_cycler.close_lid",
+            "thermal_cycler.open_lid",
+        ),
+        (
+            "protocols/thermal_cycler/open_then_close.toml",
+            "thermal_cycler.open_lid",
+            "thermal_cycler.close_lid",
+        ),
+    ] {
+        let task = compile(path);
+        assert_eq!(task.stages.len(), 2);
+        assert_eq!(
+            task.time_limit_s,
+            task.stages[0].time_limit_s + task.stages[1].time_limit_s
+        );
+        let r = expert(&task, 21);
+        assert!(r.success, "{path}: {:?} {:#?}", r.error, r.verdict);
+        let v = &r.verdict;
+        assert_eq!(v.stages.len(), 2);
+        assert_eq!(
+            (v.stages[0].id.as_str(), v.stages[1].id.as_str()),
+            (first, second)
+        );
+        let (t1, t2) = (
+            v.stages[0].completed_at_s.unwrap(),
+            v.stages[1].completed_at_s.unwrap(),
+        );
+        assert!(0.0 < t1 && t1 < t2, "{t1} {t2}");
+        assert_eq!(v.score, 1.0);
+    }
+}
+
+#[test]
+fn a_chain_that_closes_a_closed_lid_is_rejected_at_the_step() {
+    let path = "tests/corpus/faulty/chain_close_twice.toml";
+    let source = std::fs::read_to_string(path).unwrap();
+    let (task, diags) = compiler::compile_source(&source, path);
+    assert!(task.is_none());
+    let d = diags.iter().find(|d| d.code == dsl::Code::E0031).unwrap();
+    let file = d.file.as_deref().unwrap();
+    assert!(file.ends_with("close_lid.toml"), "{file}");
+    let text = std::fs::read_to_string(file).unwrap();
+    assert_eq!(&text[d.span.start..d.span.end], "\"close_lid\"");
+    assert!(
+        d.notes.iter().any(|n| n.contains("starts where stage 1")),
+        "{d:?}"
+    );
+    // And the CLI renders it against the stage's file.
+    let out = Command::new(env!("CARGO_BIN_EXE_autobio"))
+        .args(["check", path])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("error[E0031]"), "{err}");
+    assert!(err.contains("close_lid.toml:25:6"), "{err}");
+}
+
+#[test]
+fn progress_scoring_gives_partial_credit() {
+    let source = std::fs::read_to_string("protocols/thermal_cycler/close_lid.toml")
+        .unwrap()
+        .replace("time_limit = \"31.5 s\"", "time_limit = \"7 s\"")
+        .replace(
+            "all = [\"cycler.lid is closed\", \"cycler.lid is locked\"]",
+            "all = [\"cycler.lid is closed\", \"cycler.lid is locked\"]\nscoring = \"progress\"\nweights = [3, 1]",
+        );
+    let (task, diags) = compiler::compile_source(&source, "close_lid_progress.toml");
+    let task = task.unwrap_or_else(|| panic!("{diags:#?}"));
+    assert_eq!(task.stages[0].scoring, compiler::Scoring::Progress);
+    let r = expert(&task, 5);
+    assert!(!r.success, "7 s is too short to close and lock");
+    let v = &r.verdict.stages[0];
+    let closed = &v.predicates[0];
+    assert!(closed.progress > 0.1 && closed.progress < 1.0, "{closed:?}");
+    let expected = (3.0 * closed.progress + v.predicates[1].progress) / 4.0;
+    assert!((v.score - expected).abs() < 1e-12, "{v:?}");
+    assert!(r.verdict.score > 0.0 && r.verdict.score < 1.0);
+}
+
+#[test]
+fn describe_explain_and_json_check_as_processes() {
+    let bin = env!("CARGO_BIN_EXE_autobio");
+    let out = Command::new(bin)
+        .args(["describe", "protocols/thermal_mixer/set_parameters.toml"])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let sheet = String::from_utf8_lossy(&out.stdout);
+    for needle in [
+        "{rpm} integer 300..=1500 step 50, never 900",
+        "set_parameter(on = mixer, param = speed, value = {rpm} rpm) with arm",
+        "mixer.temperature = {temp} °C [display = 0.000001] (weight 0.5)",
+        "progress scoring",
+    ] {
+        assert!(sheet.contains(needle), "{needle} not in\n{sheet}");
+    }
+    let out = Command::new(bin)
+        .args(["describe", "--catalogue"])
+        .output()
+        .unwrap();
+    let cat = String::from_utf8_lossy(&out.stdout);
+    for p in compiler::primitives::CATALOGUE {
+        assert!(cat.contains(&p.signature()), "{}", p.name);
+    }
+    let out = Command::new(bin)
+        .args(["explain", "e0031"])
+        .output()
+        .unwrap();
+    assert!(String::from_utf8_lossy(&out.stdout).contains("precondition"));
+    let out = Command::new(bin)
+        .args(["explain", "--all"])
+        .output()
+        .unwrap();
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout).lines().count(),
+        dsl::Code::ALL.len()
+    );
+    let out = Command::new(bin)
+        .args(["check", "--json", "tests/corpus/faulty/unknown_level.toml"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let line: serde_json::Value =
+        serde_json::from_str(String::from_utf8_lossy(&out.stdout).lines().next().unwrap()).unwrap();
+    assert_eq!(line["code"], "E0021");
+    assert_eq!(
+        (line["line"].as_u64(), line["column"].as_u64()),
+        (Some(7), Some(9))
+    );
+}
+
+#[test]
+fn unmodelled_labware_is_refused_by_the_runtime_with_a_reason() {
+    let task = compile("protocols/tube/transfer.toml");
+    let err = runtime::Scene::build(&task, &task.sample(0))
+        .err()
+        .expect("no tube model yet");
+    assert!(err.to_string().contains("no simulation model yet"), "{err}");
+}
