@@ -43,6 +43,9 @@ enum Command {
         /// Print the catalogue of labware kinds and lab primitives instead
         #[arg(long)]
         catalogue: bool,
+        /// Also show the parameters and instruction one episode with this seed draws
+        #[arg(long)]
+        seed: Option<u64>,
     },
     /// Compile a protocol and print the task as JSON
     Compile { file: PathBuf },
@@ -151,7 +154,11 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 ),
             }
         }
-        Command::Describe { file, catalogue } => {
+        Command::Describe {
+            file,
+            catalogue,
+            seed,
+        } => {
             if catalogue {
                 print!("{}", compiler::describe::catalogue());
                 return Ok(ExitCode::SUCCESS);
@@ -159,6 +166,9 @@ fn run(cli: Cli) -> Result<ExitCode> {
             let file = file.context("a protocol or chain file is needed")?;
             let task = load(&file)?;
             print!("{}", compiler::describe(&task));
+            if let Some(seed) = seed {
+                print!("{}", compiler::describe::example(&task, seed));
+            }
             Ok(ExitCode::SUCCESS)
         }
         Command::Compile { file } => {
@@ -235,17 +245,18 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 rows.push(report);
             }
             println!(
-                "{:<28} {:>9} {:>16} {:>9} {:>10}",
-                "task", "policy", "success (±SEM)", "episodes", "wall time"
+                "{:<32} {:>7} {:>16} {:>6} {:>9} {:>10}",
+                "task", "policy", "success (±SEM)", "score", "episodes", "wall time"
             );
             for r in &rows {
                 let s = &r.summary;
                 println!(
-                    "{:<28} {:>9} {:>8.1}% ± {:>4.1} {:>9} {:>9.1}s",
+                    "{:<32} {:>7} {:>8.1}% ± {:>4.1} {:>6.3} {:>9} {:>9.1}s",
                     r.task_id,
                     r.policy,
                     100.0 * s.success_rate,
                     100.0 * s.sem,
+                    s.mean_score,
                     s.episodes,
                     s.wall_time_s
                 );

@@ -172,6 +172,22 @@ pub fn describe(task: &Task) -> String {
     out
 }
 
+/// One episode of the task as `seed` draws it: parameter values and the instructions.
+pub fn example(task: &Task, seed: u64) -> String {
+    let inst = task.sample(seed);
+    let mut out = format!("\nepisode with seed {seed}\n");
+    for (k, v) in &inst.params {
+        let _ = writeln!(out, "  {{{k}}} = {v}");
+    }
+    let _ = writeln!(out, "  instruction: {}", inst.instruction);
+    if task.stages.len() > 1 {
+        for (i, s) in inst.stage_instructions.iter().enumerate() {
+            let _ = writeln!(out, "  stage {}: {s}", i + 1);
+        }
+    }
+    out
+}
+
 /// The catalogues: every labware kind and lab primitive.
 pub fn catalogue() -> String {
     let mut out = String::new();

@@ -12,7 +12,8 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
-pub const RESULTS_SCHEMA_VERSION: u32 = 1;
+/// 2: verdicts per stage with scores; `mean_score` in the summary.
+pub const RESULTS_SCHEMA_VERSION: u32 = 2;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EvalSummary {
@@ -21,6 +22,8 @@ pub struct EvalSummary {
     pub success_rate: f64,
     /// Standard error of the mean success rate.
     pub sem: f64,
+    /// Mean episode score (binary or progress, averaged over stages).
+    pub mean_score: f64,
     pub wall_time_s: f64,
 }
 
@@ -59,6 +62,11 @@ pub fn summarise(episodes: &[EpisodeResult], wall: f64) -> EvalSummary {
         successes: k,
         success_rate: p,
         sem,
+        mean_score: if n > 0 {
+            episodes.iter().map(|e| e.verdict.score).sum::<f64>() / n as f64
+        } else {
+            0.0
+        },
         wall_time_s: wall,
     }
 }
