@@ -1,0 +1,18 @@
+//! Lab physics for autobio, the four mechanisms of the paper's "AutoBio Physics":
+//! - [`thread`]: screw threads as bounded-helix SDFs (MuJoCo SDF plugin `autobio.thread`);
+//! - [`detent`]: click positions as a passive force (MuJoCo passive plugin `autobio.detent`);
+//! - [`eccentric`]: the vortex mixer's orbit from two negatively coupled hinges (pure MJCF);
+//! - [`liquid`]: quasi-static liquid (surface normal as a damped spherical pendulum, surface height
+//!   from the volume) with exact volume bookkeeping between containers.
+//!
+//! [`plugin`] is the only code in autobio that touches MuJoCo's plugin FFI; call [`register`]
+//! before compiling a model that names `autobio.*` plugins. This crate generates MJCF fragments and
+//! computes forces and geometry; it does not assemble scenes (runtime) or know about protocols.
+
+pub mod detent;
+pub mod eccentric;
+pub mod liquid;
+pub mod plugin;
+pub mod thread;
+
+pub use plugin::{PluginError, instance_errors, register};

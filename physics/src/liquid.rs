@@ -1,0 +1,431 @@
+//! Quasi-static liquid (the paper's appendix): the liquid surface is a plane `n·x = d` in the
+//! container's frame. Its normal `n` follows the container's apparent acceleration (gravity included)
+//! as a damped spherical pendulum; its offset `d` is solved from the volume by Newton steps on the
+//! cross-section area with a bisection fallback, warm-started from the last offset. The liquid body
+//! is the part of the container's interior (a closed triangle mesh) on the low side of the plane.
+//!
+//! Beyond upstream, volume moves between containers ([`transfer`]) and is conserved exactly: it is
+//! bookkept in whole nanolitres. This module is pure geometry and dynamics; a MuJoCo scene feeds it
+//! the acceleration and shows the result (see `runtime`/the tests).
+
+use std::f64::consts::TAU;
+
+pub type V3 = [f64; 3];
+
+fn sub(a: V3, b: V3) -> V3 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn dot(a: V3, b: V3) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn cross(a: V3, b: V3) -> V3 {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+fn norm(a: V3) -> f64 {
+    dot(a, a).sqrt()
+}
+fn lerp(a: V3, b: V3, t: f64) -> V3 {
+    [
+        a[0] + (b[0] - a[0]) * t,
+        a[1] + (b[1] - a[1]) * t,
+        a[2] + (b[2] - a[2]) * t,
+    ]
+}
+
+/// A container's interior: a closed, outward-oriented triangle mesh in the container's frame (m).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Container {
+    pub vertices: Vec<V3>,
+    pub triangles: Vec<[usize; 3]>,
+}
+
+impl Container {
+    /// A tube's interior: a cylinder of `radius` from the top of a conical tip of depth `tip` up to
+    /// `height` (bottom of the tip at z = 0), with `segments` sides.
+    pub fn tube(radius: f64, height: f64, tip: f64, segments: usize) -> Container {
+        let segments = segments.max(3);
+        let mut vertices = vec![[0.0, 0.0, 0.0]];
+        for (z, _) in [(tip, 0), (height, 1)] {
+            for i in 0..segments {
+                let a = TAU * i as f64 / segments as f64;
+                vertices.push([radius * a.cos(), radius * a.sin(), z]);
+            }
+        }
+        let top = vertices.len();
+        vertices.push([0.0, 0.0, height]);
+        let ring = |k: usize, i: usize| 1 + k * segments + i % segments;
+        let mut triangles = Vec::new();
+        for i in 0..segments {
+            triangles.push([0, ring(0, i + 1), ring(0, i)]);
+            triangles.push([ring(0, i), ring(0, i + 1), ring(1, i + 1)]);
+            triangles.push([ring(0, i), ring(1, i + 1), ring(1, i)]);
+            triangles.push([top, ring(1, i), ring(1, i + 1)]);
+        }
+        Container {
+            vertices,
+            triangles,
+        }
+    }
+
+    /// Volume and cross-section area of the part with `n·x <= d` (`n` a unit vector): the
+    /// divergence theorem over the clipped triangles, with the reference point on the plane so the
+    /// cut face contributes no volume; the area is the cut polygon's, from the cut segments.
+    pub fn volume_below(&self, n: V3, d: f64) -> (f64, f64) {
+        let o = [n[0] * d, n[1] * d, n[2] * d];
+        let mut volume = 0.0;
+        let mut area = 0.0;
+        let tet = |a: V3, b: V3, c: V3| dot(sub(a, o), cross(sub(b, o), sub(c, o))) / 6.0;
+        for t in &self.triangles {
+            let p = [
+                self.vertices[t[0]],
+                self.vertices[t[1]],
+                self.vertices[t[2]],
+            ];
+            let s = [dot(n, p[0]) - d, dot(n, p[1]) - d, dot(n, p[2]) - d];
+            let below = s.iter().filter(|x| **x <= 0.0).count();
+            match below {
+                0 => {}
+                3 => volume += tet(p[0], p[1], p[2]),
+                _ => {
+                    // Walk the triangle's edges, keeping the part below and the two cut points.
+                    let mut poly: Vec<V3> = Vec::with_capacity(4);
+                    let mut cut: Vec<V3> = Vec::with_capacity(2);
+                    for i in 0..3 {
+                        let j = (i + 1) % 3;
+                        if s[i] <= 0.0 {
+                            poly.push(p[i]);
+                        }
+                        if (s[i] <= 0.0) != (s[j] <= 0.0) {
+                            let x = lerp(p[i], p[j], s[i] / (s[i] - s[j]));
+                            poly.push(x);
+                            cut.push(x);
+                        }
+                    }
+                    for k in 1..poly.len() - 1 {
+                        volume += tet(poly[0], poly[k], poly[k + 1]);
+                    }
+                    if let [a, b] = cut[..] {
+                        // The segment is oriented by the triangle's winding; the cut polygon is
+                        // traversed the opposite way round its outward normal n.
+                        area += dot(n, cross(sub(a, o), sub(b, o))) / 2.0;
+                    }
+                }
+            }
+        }
+        (volume, area.abs())
+    }
+
+    /// The whole interior's volume.
+    pub fn capacity(&self) -> f64 {
+        let (_, hi) = self.range([0.0, 0.0, 1.0]);
+        self.volume_below([0.0, 0.0, 1.0], hi + 1.0).0
+    }
+
+    /// The range of `n·x` over the mesh.
+    pub fn range(&self, n: V3) -> (f64, f64) {
+        self.vertices
+            .iter()
+            .map(|v| dot(n, *v))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+                (a.min(x), b.max(x))
+            })
+    }
+
+    /// The plane offset `d` with `volume_below(n, d) = volume`, within `tol` (m³), from `guess`.
+    /// Newton steps on the area; a step that leaves the bracket or fails to shrink the residual is
+    /// replaced by bisection. Returns the offset and the number of iterations.
+    pub fn solve_offset(&self, n: V3, volume: f64, guess: f64, tol: f64) -> (f64, u32) {
+        let (mut lo, mut hi) = self.range(n);
+        let mut d = guess.clamp(lo, hi);
+        let mut last = f64::INFINITY;
+        for it in 1..=100 {
+            let (v, a) = self.volume_below(n, d);
+            let r = v - volume;
+            if r.abs() <= tol {
+                return (d, it);
+            }
+            if r > 0.0 {
+                hi = d;
+            } else {
+                lo = d;
+            }
+            let newton = if a > 0.0 { d - r / a } else { f64::NAN };
+            // The first Newton step is always tried; later ones must halve the residual.
+            let converging = last.is_infinite() || r.abs() < 0.5 * last;
+            d = if newton > lo && newton < hi && converging {
+                newton
+            } else {
+                (lo + hi) / 2.0
+            };
+            last = r.abs();
+        }
+        (d, 100)
+    }
+}
+
+/// The surface normal as a damped spherical pendulum. State `(φ, θ, φ̇, θ̇)`, normal
+/// `n = (sin θ cos φ, sin θ sin φ, -cos θ)`; at rest under gravity `n` points up (θ = π).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Surface {
+    pub phi: f64,
+    pub theta: f64,
+    pub dphi: f64,
+    pub dtheta: f64,
+    /// Damping ratios of the two coordinates.
+    pub damping_phi: f64,
+    pub damping_theta: f64,
+}
+
+/// Guard on `sin²θ` in the φ equation (the paper's ε).
+pub const EPSILON: f64 = 1e-4;
+
+impl Surface {
+    /// At rest with normal `n` (any length).
+    pub fn new(n: V3, damping: f64) -> Surface {
+        let l = norm(n).max(1e-12);
+        let n = [n[0] / l, n[1] / l, n[2] / l];
+        Surface {
+            phi: n[1].atan2(n[0]),
+            theta: (-n[2]).clamp(-1.0, 1.0).acos(),
+            dphi: 0.0,
+            dtheta: 0.0,
+            damping_phi: damping,
+            damping_theta: damping,
+        }
+    }
+
+    pub fn normal(&self) -> V3 {
+        let (st, ct) = self.theta.sin_cos();
+        let (sp, cp) = self.phi.sin_cos();
+        [st * cp, st * sp, -ct]
+    }
+
+    fn derivative(&self, s: [f64; 4], g: V3, length: f64) -> [f64; 4] {
+        let [phi, theta, dphi, dtheta] = s;
+        let (st, ct) = theta.sin_cos();
+        let (sp, cp) = phi.sin_cos();
+        let n_theta = [ct * cp, ct * sp, st];
+        let n_phi = [-st * sp, st * cp, 0.0];
+        let w = (norm(g) / length).sqrt();
+        let ddtheta = st * ct * dphi * dphi + dot(g, n_theta) / length
+            - 2.0 * self.damping_theta * w * dtheta;
+        let ddphi = (-2.0 * st * ct * dtheta * dphi + dot(g, n_phi) / length
+            - 2.0 * self.damping_phi * w * dphi)
+            / (st * st).max(EPSILON);
+        [dphi, dtheta, ddphi, ddtheta]
+    }
+
+    /// Advances by `dt` under apparent acceleration `g` (container frame, gravity included: at rest
+    /// it is +9.81 up) with pendulum length `length`: classical RK4 in `substeps` steps.
+    pub fn step(&mut self, g: V3, length: f64, dt: f64, substeps: u32) {
+        let h = dt / substeps.max(1) as f64;
+        let mut s = [self.phi, self.theta, self.dphi, self.dtheta];
+        let add = |a: [f64; 4], k: [f64; 4], f: f64| {
+            [
+                a[0] + f * k[0],
+                a[1] + f * k[1],
+                a[2] + f * k[2],
+                a[3] + f * k[3],
+            ]
+        };
+        for _ in 0..substeps.max(1) {
+            let k1 = self.derivative(s, g, length);
+            let k2 = self.derivative(add(s, k1, h / 2.0), g, length);
+            let k3 = self.derivative(add(s, k2, h / 2.0), g, length);
+            let k4 = self.derivative(add(s, k3, h), g, length);
+            for i in 0..4 {
+                s[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+            }
+        }
+        [self.phi, self.theta, self.dphi, self.dtheta] = s;
+    }
+
+    /// The small-oscillation relaxation time `1 / (ζ ω)` for apparent gravity `g` and `length`.
+    pub fn relaxation_time(&self, g: f64, length: f64) -> f64 {
+        1.0 / (self.damping_theta * (g / length).sqrt())
+    }
+}
+
+/// Volume in whole nanolitres, so transfers add and subtract exactly.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord)]
+pub struct Nanolitres(pub u64);
+
+impl Nanolitres {
+    pub fn from_microlitres(ul: f64) -> Nanolitres {
+        Nanolitres((ul * 1000.0).round().max(0.0) as u64)
+    }
+    pub fn microlitres(self) -> f64 {
+        self.0 as f64 / 1000.0
+    }
+    /// In m³.
+    pub fn cubic_metres(self) -> f64 {
+        self.0 as f64 * 1e-12
+    }
+}
+
+/// The liquid in one container: volume, surface dynamics and the solved offset.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Liquid {
+    pub container: Container,
+    pub volume: Nanolitres,
+    pub surface: Surface,
+    /// Plane offset along the normal (m), container frame.
+    pub offset: f64,
+    /// Pendulum length (m): upstream's 3·sqrt(half width · half height) of the surface, fixed here
+    /// at three container radii.
+    pub length: f64,
+    /// Newton/bisection iterations of the last solve.
+    pub iterations: u32,
+}
+
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum LiquidError {
+    #[error("{have} µL cannot leave a container holding {left} µL")]
+    NotEnough { have: f64, left: f64 },
+    #[error("{volume} µL does not fit: {room} µL of room")]
+    NoRoom { volume: f64, room: f64 },
+}
+
+impl Liquid {
+    pub fn new(container: Container, volume: Nanolitres, damping: f64) -> Liquid {
+        let (lo, hi) = container.range([0.0, 0.0, 1.0]);
+        let r = container
+            .vertices
+            .iter()
+            .map(|v| v[0].hypot(v[1]))
+            .fold(0.0, f64::max);
+        let mut l = Liquid {
+            container,
+            volume,
+            surface: Surface::new([0.0, 0.0, 1.0], damping),
+            offset: (lo + hi) / 2.0,
+            length: 3.0 * r.max(1e-3),
+            iterations: 0,
+        };
+        l.solve();
+        l
+    }
+
+    /// Room left, as the container's capacity minus the volume (µL).
+    pub fn room(&self) -> Nanolitres {
+        let cap = Nanolitres((self.container.capacity() * 1e12).floor() as u64);
+        Nanolitres(cap.0.saturating_sub(self.volume.0))
+    }
+
+    /// Re-solves the offset for the current normal and volume, warm-started from the last offset.
+    pub fn solve(&mut self) {
+        let target = self.volume.cubic_metres();
+        let tol = 1e-6 * self.container.capacity().max(1e-12);
+        let (d, it) = self
+            .container
+            .solve_offset(self.surface.normal(), target, self.offset, tol);
+        self.offset = d;
+        self.iterations = it;
+    }
+
+    /// One physics step: `accel` is the container's apparent acceleration in its own frame (what an
+    /// accelerometer on it reads: +9.81 up at rest).
+    pub fn step(&mut self, accel: V3, dt: f64) {
+        self.surface.step(accel, self.length, dt, 4);
+        self.solve();
+    }
+
+    /// Centre of the surface's cut polygon (mean of its vertices) and its radius (m), container
+    /// frame: where a renderer puts the surface disk.
+    pub fn surface_disk(&self) -> (V3, f64) {
+        let n = self.surface.normal();
+        let mut pts: Vec<V3> = Vec::new();
+        for t in &self.container.triangles {
+            for i in 0..3 {
+                let (a, b) = (
+                    self.container.vertices[t[i]],
+                    self.container.vertices[t[(i + 1) % 3]],
+                );
+                let (sa, sb) = (dot(n, a) - self.offset, dot(n, b) - self.offset);
+                if (sa <= 0.0) != (sb <= 0.0) {
+                    pts.push(lerp(a, b, sa / (sa - sb)));
+                }
+            }
+        }
+        if pts.is_empty() {
+            return ([0.0, 0.0, 0.0], 0.0);
+        }
+        let k = pts.len() as f64;
+        let c = pts.iter().fold([0.0; 3], |acc, p| {
+            [acc[0] + p[0] / k, acc[1] + p[1] / k, acc[2] + p[2] / k]
+        });
+        let r = pts.iter().map(|p| norm(sub(*p, c))).fold(0.0, f64::max);
+        (c, r)
+    }
+}
+
+/// Moves `volume` from one container to another (aspirate into a tip, dispense out of it). Either
+/// all of it moves or nothing does; the total is conserved exactly.
+pub fn transfer(from: &mut Liquid, to: &mut Liquid, volume: Nanolitres) -> Result<(), LiquidError> {
+    if from.volume < volume {
+        return Err(LiquidError::NotEnough {
+            have: volume.microlitres(),
+            left: from.volume.microlitres(),
+        });
+    }
+    if to.room() < volume {
+        return Err(LiquidError::NoRoom {
+            volume: volume.microlitres(),
+            room: to.room().microlitres(),
+        });
+    }
+    from.volume = Nanolitres(from.volume.0 - volume.0);
+    to.volume = Nanolitres(to.volume.0 + volume.0);
+    from.solve();
+    to.solve();
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn volumes_of_a_cylinder_match_the_formula() {
+        let c = Container::tube(0.01, 0.1, 0.0, 256);
+        let area = 0.5 * 256.0 * 0.01f64.powi(2) * (TAU / 256.0).sin();
+        let (v, a) = c.volume_below([0.0, 0.0, 1.0], 0.05);
+        assert!((v - area * 0.05).abs() < 1e-12, "{v}");
+        assert!((a - area).abs() < 1e-12, "{a}");
+        assert!((c.capacity() - area * 0.1).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_solver_finds_the_offset_for_tilted_planes() {
+        let c = Container::tube(0.014, 0.1, 0.02, 64);
+        for tilt in [0.0f64, 0.3, 0.8, 1.2] {
+            let n = [tilt.sin(), 0.0, tilt.cos()];
+            let target = 0.4 * c.capacity();
+            let (d, it) = c.solve_offset(n, target, 0.0, 1e-12);
+            let (v, _) = c.volume_below(n, d);
+            assert!((v - target).abs() <= 1e-12, "tilt {tilt}: {v} vs {target}");
+            assert!(it < 30, "tilt {tilt}: {it} iterations");
+        }
+    }
+
+    #[test]
+    fn transfers_conserve_volume_exactly() {
+        let tube = Container::tube(0.014, 0.1, 0.02, 32);
+        let tip = Container::tube(0.003, 0.06, 0.01, 16);
+        let mut a = Liquid::new(tube, Nanolitres::from_microlitres(20_000.0), 0.03);
+        let mut b = Liquid::new(tip, Nanolitres(0), 0.03);
+        let total = a.volume.0 + b.volume.0;
+        for ul in [200.0, 150.5, 0.001, 33.333] {
+            transfer(&mut a, &mut b, Nanolitres::from_microlitres(ul)).unwrap();
+            transfer(&mut b, &mut a, Nanolitres::from_microlitres(ul / 2.0)).unwrap();
+            assert_eq!(a.volume.0 + b.volume.0, total);
+        }
+        let too_much = Nanolitres(b.volume.0 + 1);
+        assert!(transfer(&mut b, &mut a, too_much).is_err());
+        assert_eq!(a.volume.0 + b.volume.0, total);
+    }
+}
