@@ -167,14 +167,18 @@ impl Container {
     }
 }
 
-/// The surface normal as a damped spherical pendulum. State `(φ, θ, φ̇, θ̇)`, normal
-/// `n = (sin θ cos φ, sin θ sin φ, -cos θ)`; at rest under gravity `n` points up (θ = π).
+/// The surface normal as a damped spherical pendulum (the paper's Euler-Lagrange equations, with
+/// damping ratios and the ε guard). The pendulum's resting state, the normal straight up, is a pole
+/// of the spherical coordinates `n = (sin θ cos φ, sin θ sin φ, -cos θ)`, where the φ equation is
+/// singular. So the state is kept as the normal and its rate in the container frame, and each step
+/// integrates the equations in a chart whose pole axis is perpendicular to the current normal:
+/// the normal sits on that chart's equator, the ε guard never engages in practice, and damping is
+/// the same in every direction.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Surface {
-    pub phi: f64,
-    pub theta: f64,
-    pub dphi: f64,
-    pub dtheta: f64,
+    /// Unit normal and its rate of change (tangent to the sphere), container frame.
+    pub normal: V3,
+    pub rate: V3,
     /// Damping ratios of the two coordinates.
     pub damping_phi: f64,
     pub damping_theta: f64,
@@ -183,27 +187,56 @@ pub struct Surface {
 /// Guard on `sin²θ` in the φ equation (the paper's ε).
 pub const EPSILON: f64 = 1e-4;
 
+fn scale(a: V3, k: f64) -> V3 {
+    [a[0] * k, a[1] * k, a[2] * k]
+}
+
+fn unit(a: V3) -> V3 {
+    scale(a, 1.0 / norm(a).max(1e-300))
+}
+
+/// An orthonormal chart frame (columns) whose third axis is perpendicular to `n`.
+fn chart(n: V3) -> [V3; 3] {
+    let axes = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    let e = axes
+        .iter()
+        .min_by(|a, b| dot(**a, n).abs().total_cmp(&dot(**b, n).abs()))
+        .copied()
+        .unwrap_or(axes[0]);
+    let z = unit(sub(e, scale(n, dot(e, n))));
+    let x = unit(sub(n, scale(z, dot(n, z))));
+    let y = cross(z, x);
+    [x, y, z]
+}
+
+fn to_chart(f: &[V3; 3], v: V3) -> V3 {
+    [dot(f[0], v), dot(f[1], v), dot(f[2], v)]
+}
+
+fn from_chart(f: &[V3; 3], v: V3) -> V3 {
+    [
+        f[0][0] * v[0] + f[1][0] * v[1] + f[2][0] * v[2],
+        f[0][1] * v[0] + f[1][1] * v[1] + f[2][1] * v[2],
+        f[0][2] * v[0] + f[1][2] * v[1] + f[2][2] * v[2],
+    ]
+}
+
 impl Surface {
     /// At rest with normal `n` (any length).
     pub fn new(n: V3, damping: f64) -> Surface {
-        let l = norm(n).max(1e-12);
-        let n = [n[0] / l, n[1] / l, n[2] / l];
         Surface {
-            phi: n[1].atan2(n[0]),
-            theta: (-n[2]).clamp(-1.0, 1.0).acos(),
-            dphi: 0.0,
-            dtheta: 0.0,
+            normal: unit(n),
+            rate: [0.0; 3],
             damping_phi: damping,
             damping_theta: damping,
         }
     }
 
     pub fn normal(&self) -> V3 {
-        let (st, ct) = self.theta.sin_cos();
-        let (sp, cp) = self.phi.sin_cos();
-        [st * cp, st * sp, -ct]
+        self.normal
     }
 
+    /// The paper's equations: `(φ, θ, φ̇, θ̇)` to their derivatives under `g` (chart frame).
     fn derivative(&self, s: [f64; 4], g: V3, length: f64) -> [f64; 4] {
         let [phi, theta, dphi, dtheta] = s;
         let (st, ct) = theta.sin_cos();
@@ -219,11 +252,38 @@ impl Surface {
         [dphi, dtheta, ddphi, ddtheta]
     }
 
+    /// RK4 substeps for `dt`: enough for the pendulum's frequency and damping (in the equatorial
+    /// chart `sin²θ` is near 1, so the ε guard does not make the equations stiff).
+    pub fn substeps(&self, g: V3, length: f64, dt: f64) -> u32 {
+        let w = (norm(g) / length).sqrt();
+        let rate = 2.0 * self.damping_phi.max(self.damping_theta) * w + 2.0 * w;
+        ((dt * rate / 0.5).ceil() as u32).clamp(2, 1000)
+    }
+
     /// Advances by `dt` under apparent acceleration `g` (container frame, gravity included: at rest
-    /// it is +9.81 up) with pendulum length `length`: classical RK4 in `substeps` steps.
-    pub fn step(&mut self, g: V3, length: f64, dt: f64, substeps: u32) {
-        let h = dt / substeps.max(1) as f64;
-        let mut s = [self.phi, self.theta, self.dphi, self.dtheta];
+    /// it is +9.81 up) with pendulum length `length`. Should the state ever stop being finite, it
+    /// restarts at rest along `g`.
+    pub fn step(&mut self, g: V3, length: f64, dt: f64) {
+        let f = chart(self.normal);
+        let (n, v, gc) = (
+            to_chart(&f, self.normal),
+            to_chart(&f, self.rate),
+            to_chart(&f, g),
+        );
+        let theta = (-n[2]).clamp(-1.0, 1.0).acos();
+        let phi = n[1].atan2(n[0]);
+        let (st, ct) = theta.sin_cos();
+        let (sp, cp) = phi.sin_cos();
+        let n_theta = [ct * cp, ct * sp, st];
+        let n_phi = [-st * sp, st * cp, 0.0];
+        let mut s = [
+            phi,
+            theta,
+            dot(v, n_phi) / (st * st).max(EPSILON),
+            dot(v, n_theta),
+        ];
+        let substeps = self.substeps(g, length, dt);
+        let h = dt / substeps as f64;
         let add = |a: [f64; 4], k: [f64; 4], f: f64| {
             [
                 a[0] + f * k[0],
@@ -232,16 +292,31 @@ impl Surface {
                 a[3] + f * k[3],
             ]
         };
-        for _ in 0..substeps.max(1) {
-            let k1 = self.derivative(s, g, length);
-            let k2 = self.derivative(add(s, k1, h / 2.0), g, length);
-            let k3 = self.derivative(add(s, k2, h / 2.0), g, length);
-            let k4 = self.derivative(add(s, k3, h), g, length);
+        for _ in 0..substeps {
+            let k1 = self.derivative(s, gc, length);
+            let k2 = self.derivative(add(s, k1, h / 2.0), gc, length);
+            let k3 = self.derivative(add(s, k2, h / 2.0), gc, length);
+            let k4 = self.derivative(add(s, k3, h), gc, length);
             for i in 0..4 {
                 s[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
             }
         }
-        [self.phi, self.theta, self.dphi, self.dtheta] = s;
+        let [phi, theta, dphi, dtheta] = s;
+        let (st, ct) = theta.sin_cos();
+        let (sp, cp) = phi.sin_cos();
+        let n = [st * cp, st * sp, -ct];
+        let v = [
+            dtheta * ct * cp - dphi * st * sp,
+            dtheta * ct * sp + dphi * st * cp,
+            dtheta * st,
+        ];
+        let (n, v) = (from_chart(&f, n), from_chart(&f, v));
+        if n.iter().chain(&v).all(|x| x.is_finite()) {
+            self.normal = unit(n);
+            self.rate = v;
+        } else {
+            *self = Surface::new(g, self.damping_theta);
+        }
     }
 
     /// The small-oscillation relaxation time `1 / (ζ ω)` for apparent gravity `g` and `length`.
@@ -330,7 +405,7 @@ impl Liquid {
     /// One physics step: `accel` is the container's apparent acceleration in its own frame (what an
     /// accelerometer on it reads: +9.81 up at rest).
     pub fn step(&mut self, accel: V3, dt: f64) {
-        self.surface.step(accel, self.length, dt, 4);
+        self.surface.step(accel, self.length, dt);
         self.solve();
     }
 
@@ -410,6 +485,26 @@ mod tests {
             assert!((v - target).abs() <= 1e-12, "tilt {tilt}: {v} vs {target}");
             assert!(it < 30, "tilt {tilt}: {it} iterations");
         }
+    }
+
+    #[test]
+    fn a_resting_surface_stays_level_and_a_tilted_one_swings_back() {
+        let mut s = Surface::new([0.0, 0.0, 1.0], 0.05);
+        for _ in 0..1000 {
+            s.step([0.0, 0.0, 9.81], 0.04, 0.002);
+        }
+        assert!((s.normal()[2] - 1.0).abs() < 1e-12, "{:?}", s.normal());
+        // Gravity tilted by 20° in the y-z plane: the normal follows it and settles there.
+        let g = [
+            0.0,
+            9.81 * 20f64.to_radians().sin(),
+            9.81 * 20f64.to_radians().cos(),
+        ];
+        for _ in 0..10_000 {
+            s.step(g, 0.04, 0.002);
+        }
+        let n = s.normal();
+        assert!((dot(n, g) / norm(g) - 1.0).abs() < 1e-6, "{n:?}");
     }
 
     #[test]

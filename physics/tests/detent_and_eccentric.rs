@@ -48,6 +48,7 @@ fn a_released_knob_settles_at_the_nearest_position() {
         }
         let q = data.qpos()[0];
         let want = detent.nearest(start);
+        eprintln!("detent: from {start} settled at {q:.6} (nearest {want:.2})");
         assert!(
             (q - want).abs() < 1e-3,
             "from {start}: settled at {q}, nearest position {want}"
@@ -110,6 +111,9 @@ fn the_vortex_cup_orbits_without_turning_at_2500_rpm() {
     }
     assert!(data.qpos().iter().all(|q| q.is_finite()));
     let speed = data.qvel()[0];
+    eprintln!(
+        "eccentric: {speed:.1} rad/s, {turns:.0} turns, orbit radius {r_min:.6}..{r_max:.6} m, cup turned at most {max_turn:.2e} rad"
+    );
     assert!(
         (speed - omega).abs() / omega < 0.02,
         "drive at {speed} rad/s"

@@ -121,6 +121,7 @@ fn screws_on(name: &str, cap: &ScrewCap) {
     assert!(turns < -0.5, "{name}: the cap turned {turns} turns");
     let advance = (z1 - z0) / turns.abs();
     let pitch = cap.bolt.pitch;
+    eprintln!("thread {name}: {advance:.6} m per turn over {turns:.2} turns (pitch {pitch})");
     assert!(
         (advance + pitch).abs() < 0.1 * pitch,
         "{name}: advance {advance} m per turn, pitch {pitch}"
@@ -134,11 +135,21 @@ fn with_friction_a_cap_holds_under_gravity_and_without_it_runs_down() {
     let locked = simulate(&Run::new(&scene(&cap, 1.0, 1.0, true)), 1.0, 0.0, 0.0);
     let (z0, y0, _) = locked[0];
     let (z1, y1, _) = *locked.last().unwrap();
+    eprintln!(
+        "thread: friction 1 moved {:.2e} m, turned {:.2e} rad in 1 s",
+        z1 - z0,
+        y1 - y0
+    );
     assert!((y1 - y0).abs() < 0.02, "turned {} rad", y1 - y0);
     assert!((z1 - z0).abs() < 1e-4, "moved {} m", z1 - z0);
     // Nearly frictionless: its weight screws it down the thread.
     let free = simulate(&Run::new(&scene(&cap, 1.0, 0.01, true)), 1.0, 0.0, 0.0);
     let (z2, y2, _) = *free.last().unwrap();
+    eprintln!(
+        "thread: friction 0.01 descended {:.4} m, turned {:.2} rad in 1 s",
+        z2 - free[0].0,
+        y2 - free[0].1
+    );
     assert!(z2 - free[0].0 < -1e-3, "descended {} m", z2 - free[0].0);
     assert!(y2 - free[0].1 < -0.5, "and turned {} rad", y2 - free[0].1);
 }
@@ -160,5 +171,8 @@ fn unscrewing_past_the_last_turn_frees_the_cap() {
         .position(|t| t.2 == 0 && t.0 - z0 > 2.0 * cap.bolt.pitch)
         .expect("the cap comes off the thread within 3 s");
     let turns = (unscrew[off].1 - y0) / std::f64::consts::TAU;
+    eprintln!(
+        "thread: engaged cap rose {rise:.2e} m under 1.5x its weight; came off after {turns:.2} turns"
+    );
     assert!(turns > 1.5, "came off after {turns} turns");
 }

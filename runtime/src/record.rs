@@ -11,6 +11,7 @@
 //! | `/camera/<name>` | `foxglove.RawImage` | `image_every` control steps (default 10 Hz) | 224x224 `rgb8`, base64 |
 //! | `/stage` | `autobio.StageEvent` | on event | expert motion / lab-step starts |
 //! | `/verdict` | `autobio.Verdict` | once, at the end | success and every predicate's value |
+//! | `/liquid/<name>` | `autobio.Liquid` | physics or control | volume (µL), surface normal and offset (container frame), the surface disk's world pose and radius |
 
 use crate::LabwareState;
 use crate::render::Image;
@@ -164,6 +165,11 @@ impl Recorder {
         )
     }
 
+    /// One liquid's state (see the channel table).
+    pub fn liquid(&mut self, t: f64, name: &str, frame: &LiquidFrame) -> Result<(), RecordError> {
+        self.write(&format!("/liquid/{name}"), "autobio.Liquid", t, frame)
+    }
+
     pub fn stage(&mut self, t: f64, label: &str) -> Result<(), RecordError> {
         self.write(
             "/stage",
@@ -190,6 +196,19 @@ pub struct RecordingSummary {
     pub messages: u64,
     pub topics: BTreeMap<String, u64>,
     pub duration_s: f64,
+}
+
+/// A liquid's state as recorded on `/liquid/<name>`.
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
+pub struct LiquidFrame {
+    pub volume_ul: f64,
+    /// Surface normal and plane offset (m) in the container's frame.
+    pub normal: [f64; 3],
+    pub offset_m: f64,
+    /// The surface disk in the world: centre, orientation (w, x, y, z), radius (m).
+    pub centre: [f64; 3],
+    pub quat: [f64; 4],
+    pub radius_m: f64,
 }
 
 pub fn read_recording(path: &Path) -> Result<RecordingSummary, RecordError> {
