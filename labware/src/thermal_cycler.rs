@@ -232,12 +232,6 @@ impl Params {
         }
     }
 
-    /// Detent torque on the lever: a spring toward the nearest notch with damping.
-    pub fn detent_torque(&self, lever: f64, lever_vel: f64) -> f64 {
-        self.detent_stiffness * (self.nearest_notch(lever) - lever)
-            - self.detent_damping * lever_vel
-    }
-
     pub fn lid_is_closed(&self, lid: f64) -> bool {
         (lid - self.lid_closed).abs() < self.closed_tolerance
     }
@@ -314,7 +308,5 @@ mod tests {
     #[test]
     fn detent_pulls_to_the_nearest_notch() {
         let p = Params::default();
-        assert!(p.detent_torque(-0.2, 0.0) > 0.0);
-        assert!(p.detent_torque(-0.6, 0.0) < 0.0);
     }
 }

@@ -121,19 +121,10 @@ impl Episode {
         Ok(())
     }
 
-    /// One physics step: detent torques, `mj_step`, then latches.
+    /// One physics step: `mj_step` (the lever's detent is the `autobio.detent` plugin inside it),
+    /// then the latches.
     pub fn physics_step(&mut self) -> Result<(), StepError> {
         let scene = self.scene.clone();
-        for (spec, ids) in self.task.labware.iter().zip(&scene.labware) {
-            let LabwareParams::ThermalCycler(p) = &spec.params else {
-                continue;
-            };
-            let (q, v) = (
-                self.data.qpos()[ids.lever_qpos],
-                self.data.qvel()[ids.lever_dof],
-            );
-            self.data.qfrc_applied_mut()[ids.lever_dof] = p.detent_torque(q, v);
-        }
         self.data.step();
         self.physics_steps += 1;
         for (i, (spec, ids)) in self.task.labware.iter().zip(&scene.labware).enumerate() {

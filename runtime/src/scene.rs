@@ -214,11 +214,22 @@ pub fn scene_xml(task: &Task, placements: &[Pose]) -> Result<String, SceneError>
             n = r.name
         );
     }
+    let mut detents = String::new();
     for (l, placement) in task.labware.iter().zip(placements) {
         let LabwareParams::ThermalCycler(p) = &l.params else {
             return Err(SceneError::Unmodelled(l.name.clone(), l.kind.clone()));
         };
         let m = p.mjcf(&l.name, placement);
+        // The lever's two notches: the `autobio.detent` plugin.
+        let lever = physics::detent::Detent {
+            lo: p.lever_pressed.min(p.lever_raised),
+            hi: p.lever_pressed.max(p.lever_raised),
+            n: 2,
+            stiffness: p.detent_stiffness,
+            damping: p.detent_damping,
+        };
+        let joint = labware::thermal_cycler::Names::new(&l.name).lever_joint;
+        detents += &lever.mjcf_instance(&format!("{}/lever_detent", l.name), &joint);
         world += &m.worldbody;
         equality += &m.equality;
         contact += &m.contact;
@@ -234,6 +245,9 @@ pub fn scene_xml(task: &Task, placements: &[Pose]) -> Result<String, SceneError>
     <quality shadowsize="0" offsamples="0"/>
     <headlight ambient="0.45 0.45 0.45" diffuse="0.5 0.5 0.5" specular="0.1 0.1 0.1"/>
   </visual>
+  <extension>
+    <plugin plugin="autobio.detent">{detents}</plugin>
+  </extension>
   <asset>
     <model name="ur5e_2f85" file="{robot}"/>
   </asset>
@@ -271,9 +285,14 @@ impl Scene {
     /// Builds the model for one scene instance of a task.
     pub fn build(task: &Task, instance: &SceneInstance) -> Result<Scene, SceneError> {
         let placements = instance.labware_placement.clone();
+        physics::register().map_err(|e| SceneError::Compile(e.to_string()))?;
         let xml = scene_xml(task, &placements)?;
         let model =
             MjModel::from_xml_string(&xml).map_err(|e| SceneError::Compile(e.to_string()))?;
+        let errors = physics::instance_errors(model.ffi(), MjData::new(&model).ffi());
+        if !errors.is_empty() {
+            return Err(SceneError::Compile(errors.join("; ")));
+        }
         let m = &model;
         let mut robots = Vec::new();
         for r in &task.robots {
