@@ -306,7 +306,9 @@ mod tests {
     }
 
     #[test]
-    fn detent_pulls_to_the_nearest_notch() {
+    fn the_lever_reads_as_its_nearest_notch() {
         let p = Params::default();
+        assert_eq!(p.nearest_notch(-0.2), p.lever_raised);
+        assert_eq!(p.nearest_notch(-0.6), p.lever_pressed);
     }
 }
