@@ -2,7 +2,8 @@
 //! - physics: harness steps/s (episode stepping with instrument logic) vs a bare `mj_step` loop on
 //!   the same compiled model and initial state;
 //! - rendering: frames/s of one 224x224 camera image (both task cameras, alternating);
-//! - expert: full scripted-expert episodes per minute (no recording).
+//! - expert: full scripted-expert episodes per minute (no recording);
+//! - lab physics: each mechanism's scene with it and without it (ratio), and one liquid solve.
 
 use anyhow::Result;
 use mujoco_rs::prelude::*;
@@ -83,6 +84,156 @@ pub fn run(task: &compiler::Task) -> Result<()> {
         sim,
         sim / report.summary.wall_time_s,
         report.summary.successes
+    );
+    physics_figures(1.0 / bare_rate)
+}
+
+/// Steps/s of a model from its XML: the best of three timed runs of `steps` steps, `drive` called
+/// before each step (actuator commands, liquid updates).
+fn rate(xml: &str, steps: usize, mut drive: impl FnMut(&mut MjData<&MjModel>)) -> Result<f64> {
+    physics::register()?;
+    let model = MjModel::from_xml_string(xml).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let mut best = f64::MAX;
+    for _ in 0..3 {
+        let mut data = MjData::new(&model);
+        let t = Instant::now();
+        for _ in 0..steps {
+            drive(&mut data);
+            data.step();
+        }
+        best = best.min(t.elapsed().as_secs_f64());
+    }
+    Ok(steps as f64 / best)
+}
+
+fn row(name: &str, with: f64, without: f64, note: &str) {
+    println!(
+        "plugin   {name:<14} {with:>10.0} steps/s   without {without:>10.0}   ratio {:.3}x  {note}",
+        with / without
+    );
+}
+
+/// The lab-physics figures: each mechanism's scene with it and without it, in the same run, and
+/// the cost of one liquid surface solve.
+/// `task_step_s` is one physics step of the task scene measured above: the liquid's per-step cost
+/// is reported against it.
+pub fn physics_figures(task_step_s: f64) -> Result<()> {
+    use physics::detent::Detent;
+    use physics::eccentric::{Eccentric, rpm_to_rad_s};
+    use physics::liquid::{Container, Liquid, Nanolitres};
+    use physics::scenes;
+    use physics::thread::ScrewCap;
+
+    let knob = Detent {
+        lo: 0.0,
+        hi: 4.6,
+        n: 11,
+        stiffness: 0.0401,
+        damping: 0.004,
+    };
+    let kick = |d: &mut MjData<&MjModel>| {
+        if d.time() == 0.0 {
+            d.qpos_mut()[0] = 1.0;
+        }
+    };
+    let with = rate(&scenes::knob(&knob, true), 200_000, kick)?;
+    let without = rate(&scenes::knob(&knob, false), 200_000, kick)?;
+    row("detent", with, without, "(knob, 11 positions)");
+
+    // A 1.5 mL cap half a turn up its thread, settling under gravity with upstream's friction.
+    let cap = ScrewCap::new(physics::thread::CONTAINERS[0].1);
+    let with = rate(
+        &scenes::screw_cap(&cap, 0.5, 1.0, true, true),
+        5_000,
+        |_| {},
+    )?;
+    let without = rate(
+        &scenes::screw_cap(&cap, 0.5, 1.0, true, false),
+        5_000,
+        |_| {},
+    )?;
+    row(
+        "thread",
+        with,
+        without,
+        "(screwed 1.5 mL tube, 1 ms steps; target >= 2000 steps/s)",
+    );
+
+    let drive = Eccentric::default();
+    let spin = |d: &mut MjData<&MjModel>| d.ctrl_mut()[0] = rpm_to_rad_s(2500.0);
+    let with = rate(&scenes::vortex(&drive, true), 100_000, spin)?;
+    let without = rate(&scenes::vortex(&drive, false), 100_000, spin)?;
+    row("eccentric", with, without, "(vortex cup at 2,500 rpm)");
+
+    let (r, h, tip, sides) = scenes::TUBE;
+    let container = Container::tube(r, h, tip, sides);
+    let mut liquid = Liquid::new(
+        container.clone(),
+        Nanolitres::from_microlitres(20_000.0),
+        0.03,
+    );
+    let shake = |d: &mut MjData<&MjModel>| {
+        let t = d.time();
+        d.ctrl_mut()[0] = 0.03 * (std::f64::consts::TAU * 2.0 * t).sin();
+        d.ctrl_mut()[1] = 0.6 * (std::f64::consts::TAU * 0.5 * t).sin();
+    };
+    // The normal every physics step, the surface solved for each 50 Hz frame that shows it.
+    let mut k = 0u64;
+    let with = rate(&scenes::shaken_tube(), 20_000, |d| {
+        shake(d);
+        let a = d.sensordata();
+        liquid.step([a[0], a[1], a[2]], 0.002);
+        k += 1;
+        if k.is_multiple_of(10) {
+            liquid.offset();
+        }
+    })?;
+    let without = rate(&scenes::shaken_tube(), 20_000, shake)?;
+    let cost = 1.0 / with - 1.0 / without;
+    row(
+        "liquid",
+        with,
+        without,
+        &format!(
+            "(50 mL tube shaken; {:.2} µs per step = {:.1}% of a task-scene step; target < 10%)",
+            cost * 1e6,
+            100.0 * cost / task_step_s
+        ),
+    );
+
+    // One surface solve: warm-started from the last offset after a small change of normal (as in
+    // a step), and cold from the middle of the range.
+    let normals: Vec<[f64; 3]> = (0..1000)
+        .map(|i| {
+            let a = 1.0 * (i as f64 / 1000.0);
+            [a.sin() * 0.6, 0.0, a.cos()]
+        })
+        .collect();
+    let target = 20e-6;
+    let tol = 1e-6 * container.capacity();
+    let t = Instant::now();
+    let mut d = 0.05;
+    let mut iterations = 0;
+    for n in &normals {
+        let l = (n[0] * n[0] + n[2] * n[2]).sqrt();
+        let (x, it) = container.solve_offset([n[0] / l, 0.0, n[2] / l], target, d, tol);
+        d = x;
+        iterations += it;
+    }
+    let warm = t.elapsed().as_secs_f64() / normals.len() as f64;
+    let t = Instant::now();
+    for n in &normals {
+        let l = (n[0] * n[0] + n[2] * n[2]).sqrt();
+        let (lo, hi) = container.range([n[0] / l, 0.0, n[2] / l]);
+        container.solve_offset([n[0] / l, 0.0, n[2] / l], target, (lo + hi) / 2.0, tol);
+    }
+    let cold = t.elapsed().as_secs_f64() / normals.len() as f64;
+    println!(
+        "liquid   height solve   {:>10.1} µs warm ({:.1} iterations)   {:.1} µs cold   ({} triangles)",
+        warm * 1e6,
+        iterations as f64 / normals.len() as f64,
+        cold * 1e6,
+        container.triangles.len()
     );
     Ok(())
 }

@@ -9,39 +9,14 @@ use mujoco_rs::prelude::*;
 use physics::liquid::{Container, Liquid, Nanolitres, V3};
 use runtime::record::{LiquidFrame, Recorder, read_recording};
 
-const R: f64 = 0.014;
-const H: f64 = 0.1;
-const TIP: f64 = 0.02;
-const SEGMENTS: usize = 64;
+const R: f64 = physics::scenes::TUBE.0;
+const H: f64 = physics::scenes::TUBE.1;
+const TIP: f64 = physics::scenes::TUBE.2;
+const SEGMENTS: usize = physics::scenes::TUBE.3;
 const DT: f64 = 0.002;
 
 fn scene() -> String {
-    format!(
-        r#"<mujoco>
-  <compiler angle="radian"/>
-  <option timestep="{DT}" integrator="implicitfast"/>
-  <worldbody>
-    <body name="carriage" pos="0 0 0.1">
-      <joint name="slide" type="slide" axis="0 1 0" range="-0.5 0.5"/>
-      <geom type="box" size="0.03 0.03 0.005" mass="1" contype="0" conaffinity="0"/>
-      <body name="tube" pos="0 0 0.01">
-        <joint name="tilt" type="hinge" axis="1 0 0" range="-1.3 1.3"/>
-        <geom type="cylinder" size="{R} {hh}" pos="0 0 {hh}" mass="0.05" rgba="0.9 0.9 0.95 0.3" contype="0" conaffinity="0"/>
-        <site name="tube" pos="0 0 0"/>
-      </body>
-    </body>
-    <body name="surface" mocap="true">
-      <geom type="cylinder" size="{R} 0.0004" rgba="0.2 0.5 1 0.8" contype="0" conaffinity="0"/>
-    </body>
-  </worldbody>
-  <actuator>
-    <position name="slide" joint="slide" kp="4000" kv="120"/>
-    <position name="tilt" joint="tilt" kp="40" kv="4"/>
-  </actuator>
-  <sensor><accelerometer name="accel" site="tube"/></sensor>
-</mujoco>"#,
-        hh = H / 2.0
-    )
+    physics::scenes::shaken_tube()
 }
 
 /// Volume of the 64-sided tube mesh below `n·x = d`, by slicing along z (Simpson, 4,000 slices)
@@ -142,7 +117,7 @@ impl Sim {
         LiquidFrame {
             volume_ul: liquid.volume.microlitres(),
             normal: liquid.surface.normal(),
-            offset_m: liquid.offset,
+            offset_m: liquid.offset(),
             centre,
             quat,
             radius_m: radius,
@@ -182,7 +157,7 @@ fn volume_holds_while_the_tube_tilts_and_shakes() {
         let first = data.mocap_pos()[sim.mocap];
         moved = moved.max((first[1]).abs());
         if k % 50 == 0 {
-            let v = sliced_volume(liquid.surface.normal(), liquid.offset) * 1e9;
+            let v = sliced_volume(liquid.surface.normal(), liquid.offset()) * 1e9;
             worst = worst.max((v - target_ul).abs() / target_ul);
         }
     }

@@ -13,6 +13,7 @@ pub mod detent;
 pub mod eccentric;
 pub mod liquid;
 pub mod plugin;
+pub mod scenes;
 pub mod thread;
 
 pub use plugin::{PluginError, instance_errors, register};

@@ -41,9 +41,38 @@ fn lerp(a: V3, b: V3, t: f64) -> V3 {
 pub struct Container {
     pub vertices: Vec<V3>,
     pub triangles: Vec<[usize; 3]>,
+    /// Per triangle `a·(b×c)` and `a×b + b×c + c×a`: the signed tetrahedron volume against any
+    /// reference point `o` is `(det - o·n) / 6`, one dot product per whole triangle.
+    terms: Vec<(f64, V3)>,
 }
 
 impl Container {
+    /// From a closed, outward-oriented triangle mesh.
+    pub fn from_mesh(vertices: Vec<V3>, triangles: Vec<[usize; 3]>) -> Container {
+        let terms = triangles
+            .iter()
+            .map(|t| {
+                let (a, b, c) = (vertices[t[0]], vertices[t[1]], vertices[t[2]]);
+                let n = cross(a, b);
+                let n2 = cross(b, c);
+                let n3 = cross(c, a);
+                (
+                    dot(a, cross(b, c)),
+                    [
+                        n[0] + n2[0] + n3[0],
+                        n[1] + n2[1] + n3[1],
+                        n[2] + n2[2] + n3[2],
+                    ],
+                )
+            })
+            .collect();
+        Container {
+            vertices,
+            triangles,
+            terms,
+        }
+    }
+
     /// A tube's interior: a cylinder of `radius` from the top of a conical tip of depth `tip` up to
     /// `height` (bottom of the tip at z = 0), with `segments` sides.
     pub fn tube(radius: f64, height: f64, tip: f64, segments: usize) -> Container {
@@ -65,10 +94,7 @@ impl Container {
             triangles.push([ring(0, i), ring(1, i + 1), ring(1, i)]);
             triangles.push([top, ring(1, i), ring(1, i + 1)]);
         }
-        Container {
-            vertices,
-            triangles,
-        }
+        Container::from_mesh(vertices, triangles)
     }
 
     /// Volume and cross-section area of the part with `n·x <= d` (`n` a unit vector): the
@@ -79,41 +105,49 @@ impl Container {
         let mut volume = 0.0;
         let mut area = 0.0;
         let tet = |a: V3, b: V3, c: V3| dot(sub(a, o), cross(sub(b, o), sub(c, o))) / 6.0;
-        for t in &self.triangles {
+        let heights: Vec<f64> = self.vertices.iter().map(|v| dot(n, *v) - d).collect();
+        for (t, (det, tn)) in self.triangles.iter().zip(&self.terms) {
+            let s = [heights[t[0]], heights[t[1]], heights[t[2]]];
+            let below = s.iter().filter(|x| **x <= 0.0).count();
+            if below == 0 {
+                continue;
+            }
+            if below == 3 {
+                volume += (det - dot(o, *tn)) / 6.0;
+                continue;
+            }
             let p = [
                 self.vertices[t[0]],
                 self.vertices[t[1]],
                 self.vertices[t[2]],
             ];
-            let s = [dot(n, p[0]) - d, dot(n, p[1]) - d, dot(n, p[2]) - d];
-            let below = s.iter().filter(|x| **x <= 0.0).count();
-            match below {
-                0 => {}
-                3 => volume += tet(p[0], p[1], p[2]),
-                _ => {
-                    // Walk the triangle's edges, keeping the part below and the two cut points.
-                    let mut poly: Vec<V3> = Vec::with_capacity(4);
-                    let mut cut: Vec<V3> = Vec::with_capacity(2);
-                    for i in 0..3 {
-                        let j = (i + 1) % 3;
-                        if s[i] <= 0.0 {
-                            poly.push(p[i]);
-                        }
-                        if (s[i] <= 0.0) != (s[j] <= 0.0) {
-                            let x = lerp(p[i], p[j], s[i] / (s[i] - s[j]));
-                            poly.push(x);
-                            cut.push(x);
-                        }
-                    }
-                    for k in 1..poly.len() - 1 {
-                        volume += tet(poly[0], poly[k], poly[k + 1]);
-                    }
-                    if let [a, b] = cut[..] {
-                        // The segment is oriented by the triangle's winding; the cut polygon is
-                        // traversed the opposite way round its outward normal n.
-                        area += dot(n, cross(sub(a, o), sub(b, o))) / 2.0;
-                    }
+            // Walk the triangle's edges, keeping the part below and the two cut points
+            // (fixed-size buffers: this runs for every wall triangle the plane crosses).
+            let mut poly = [[0.0; 3]; 4];
+            let mut np = 0;
+            let mut cut = [[0.0; 3]; 2];
+            let mut nc = 0;
+            for i in 0..3 {
+                let j = (i + 1) % 3;
+                if s[i] <= 0.0 {
+                    poly[np] = p[i];
+                    np += 1;
                 }
+                if (s[i] <= 0.0) != (s[j] <= 0.0) && nc < 2 {
+                    let x = lerp(p[i], p[j], s[i] / (s[i] - s[j]));
+                    poly[np] = x;
+                    np += 1;
+                    cut[nc] = x;
+                    nc += 1;
+                }
+            }
+            for k in 1..np - 1 {
+                volume += tet(poly[0], poly[k], poly[k + 1]);
+            }
+            if nc == 2 {
+                // The segment is oriented by the triangle's winding; the cut polygon is
+                // traversed the opposite way round its outward normal n.
+                area += dot(n, cross(sub(cut[0], o), sub(cut[1], o))) / 2.0;
             }
         }
         (volume, area.abs())
@@ -257,7 +291,7 @@ impl Surface {
     pub fn substeps(&self, g: V3, length: f64, dt: f64) -> u32 {
         let w = (norm(g) / length).sqrt();
         let rate = 2.0 * self.damping_phi.max(self.damping_theta) * w + 2.0 * w;
-        ((dt * rate / 0.5).ceil() as u32).clamp(2, 1000)
+        ((dt * rate / 0.5).ceil() as u32).clamp(1, 1000)
     }
 
     /// Advances by `dt` under apparent acceleration `g` (container frame, gravity included: at rest
@@ -348,8 +382,10 @@ pub struct Liquid {
     pub container: Container,
     pub volume: Nanolitres,
     pub surface: Surface,
-    /// Plane offset along the normal (m), container frame.
-    pub offset: f64,
+    /// Plane offset along the normal (m), container frame, as last solved; see [`Liquid::offset`].
+    offset: f64,
+    /// The normal and volume `offset` was solved for.
+    solved_for: Option<(V3, Nanolitres)>,
     /// Pendulum length (m): upstream's 3·sqrt(half width · half height) of the surface, fixed here
     /// at three container radii.
     pub length: f64,
@@ -378,10 +414,11 @@ impl Liquid {
             volume,
             surface: Surface::new([0.0, 0.0, 1.0], damping),
             offset: (lo + hi) / 2.0,
+            solved_for: None,
             length: 3.0 * r.max(1e-3),
             iterations: 0,
         };
-        l.solve();
+        l.offset();
         l
     }
 
@@ -391,27 +428,33 @@ impl Liquid {
         Nanolitres(cap.0.saturating_sub(self.volume.0))
     }
 
-    /// Re-solves the offset for the current normal and volume, warm-started from the last offset.
-    pub fn solve(&mut self) {
-        let target = self.volume.cubic_metres();
-        let tol = 1e-6 * self.container.capacity().max(1e-12);
-        let (d, it) = self
-            .container
-            .solve_offset(self.surface.normal(), target, self.offset, tol);
-        self.offset = d;
-        self.iterations = it;
+    /// The surface's plane offset for the current normal and volume (m, container frame). Solved
+    /// on demand, warm-started from the last solve, and cached: the liquid is quasi-static, so the
+    /// offset is a function of the normal and the volume, and only frames that show or check the
+    /// liquid pay for it.
+    pub fn offset(&mut self) -> f64 {
+        let key = (self.surface.normal(), self.volume);
+        if self.solved_for != Some(key) {
+            let target = self.volume.cubic_metres();
+            let tol = 1e-6 * self.container.capacity().max(1e-12);
+            let (d, it) = self.container.solve_offset(key.0, target, self.offset, tol);
+            self.offset = d;
+            self.iterations = it;
+            self.solved_for = Some(key);
+        }
+        self.offset
     }
 
-    /// One physics step: `accel` is the container's apparent acceleration in its own frame (what an
-    /// accelerometer on it reads: +9.81 up at rest).
+    /// One physics step of the surface's normal: `accel` is the container's apparent acceleration
+    /// in its own frame (what an accelerometer on it reads: +9.81 up at rest).
     pub fn step(&mut self, accel: V3, dt: f64) {
         self.surface.step(accel, self.length, dt);
-        self.solve();
     }
 
     /// Centre of the surface's cut polygon (mean of its vertices) and its radius (m), container
     /// frame: where a renderer puts the surface disk.
-    pub fn surface_disk(&self) -> (V3, f64) {
+    pub fn surface_disk(&mut self) -> (V3, f64) {
+        let offset = self.offset();
         let n = self.surface.normal();
         let mut pts: Vec<V3> = Vec::new();
         for t in &self.container.triangles {
@@ -420,7 +463,7 @@ impl Liquid {
                     self.container.vertices[t[i]],
                     self.container.vertices[t[(i + 1) % 3]],
                 );
-                let (sa, sb) = (dot(n, a) - self.offset, dot(n, b) - self.offset);
+                let (sa, sb) = (dot(n, a) - offset, dot(n, b) - offset);
                 if (sa <= 0.0) != (sb <= 0.0) {
                     pts.push(lerp(a, b, sa / (sa - sb)));
                 }
@@ -455,8 +498,6 @@ pub fn transfer(from: &mut Liquid, to: &mut Liquid, volume: Nanolitres) -> Resul
     }
     from.volume = Nanolitres(from.volume.0 - volume.0);
     to.volume = Nanolitres(to.volume.0 + volume.0);
-    from.solve();
-    to.solve();
     Ok(())
 }
 
@@ -519,6 +560,10 @@ mod tests {
             transfer(&mut b, &mut a, Nanolitres::from_microlitres(ul / 2.0)).unwrap();
             assert_eq!(a.volume.0 + b.volume.0, total);
         }
+        // The surface follows the new volume.
+        let d = b.offset();
+        let (v, _) = b.container.volume_below(b.surface.normal(), d);
+        assert!((v - b.volume.cubic_metres()).abs() <= 1e-6 * b.container.capacity());
         let too_much = Nanolitres(b.volume.0 + 1);
         assert!(transfer(&mut b, &mut a, too_much).is_err());
         assert_eq!(a.volume.0 + b.volume.0, total);

@@ -8,23 +8,7 @@ use physics::eccentric::{Eccentric, rpm_to_rad_s};
 
 fn knob_model(detent: &Detent) -> MjModel {
     physics::register().unwrap();
-    let xml = format!(
-        r#"<mujoco>
-  <compiler angle="radian"/>
-  <option timestep="0.002"/>
-  <extension><plugin plugin="autobio.detent">{}</plugin></extension>
-  <worldbody>
-    <body name="knob">
-      <joint name="knob" type="hinge" axis="0 0 1" range="{} {}" armature="0.0001"/>
-      <geom type="cylinder" size="0.02 0.01" mass="0.05"/>
-    </body>
-  </worldbody>
-</mujoco>"#,
-        detent.mjcf_instance("knob_detent", "knob"),
-        detent.lo,
-        detent.hi
-    );
-    MjModel::from_xml_string(&xml).unwrap()
+    MjModel::from_xml_string(&physics::scenes::knob(detent, true)).unwrap()
 }
 
 #[test]
@@ -75,16 +59,7 @@ fn a_detent_on_a_missing_joint_reports_instead_of_crashing() {
 #[test]
 fn the_vortex_cup_orbits_without_turning_at_2500_rpm() {
     let drive = Eccentric::default();
-    let m = drive.mjcf("vortex", [0.0, 0.0, 0.1]);
-    let xml = format!(
-        r#"<mujoco>
-  <option timestep="0.002" integrator="implicitfast"/>
-  <worldbody>{}</worldbody>
-  <equality>{}</equality>
-  <actuator>{}</actuator>
-</mujoco>"#,
-        m.body, m.equality, m.actuator
-    );
+    let xml = physics::scenes::vortex(&drive, true);
     let model = MjModel::from_xml_string(&xml).unwrap();
     let mut data = MjData::new(&model);
     let cup = model

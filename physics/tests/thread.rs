@@ -3,54 +3,10 @@
 use mujoco_rs::prelude::*;
 use physics::thread::ScrewCap;
 
-const TIMESTEP: f64 = 0.001;
+use physics::scenes::{SCREW_TIMESTEP as TIMESTEP, cap_mass, cap_torque, screw_cap};
 
 fn scene(cap: &ScrewCap, lift_turns: f64, friction: f64, gravity: bool) -> String {
-    // As upstream's tubes: the nut geom sits 5 mm below the (flipped) cap's origin and half a
-    // pitch above the bolt geom, so the two helices interleave.
-    let bolt_z = 0.038;
-    let cap_z = bolt_z + cap.bolt.pitch / 2.0 + 0.005 + lift_turns * cap.bolt.pitch;
-    // Cap mass and inertia scale with the thread radius (1.5 mL cap: about 1 g).
-    let r = cap.bolt.radius;
-    let mass = 0.002 * (r / 0.006).powi(2);
-    let iz = 0.5 * mass * (r + 0.002).powi(2);
-    let yaw = -lift_turns * std::f64::consts::TAU;
-    format!(
-        r#"<mujoco>
-  <compiler angle="radian"/>
-  <option timestep="{TIMESTEP}" gravity="0 0 {g}" sdf_iterations="5" sdf_initpoints="20"/>
-  <extension><plugin plugin="autobio.thread">{bolt}{nut}</plugin></extension>
-  <asset>
-    <mesh name="bolt"><plugin instance="bolt"/></mesh>
-    <mesh name="nut"><plugin instance="nut"/></mesh>
-  </asset>
-  <worldbody>
-    <body name="tube">
-      <geom name="bolt" type="sdf" mesh="bolt" pos="0 0 {bolt_z}" contype="0" conaffinity="0" rgba="0.9 0.9 0.9 1">
-        <plugin instance="bolt"/>
-      </geom>
-      <geom name="core" type="cylinder" size="{core} 0.01" pos="0 0 {bolt_z}" contype="0" conaffinity="0" group="5"/>
-    </body>
-    <body name="cap" pos="0 0 {cap_z}" euler="0 0 {yaw}">
-      <freejoint/>
-      <inertial pos="0 0 0" mass="{mass}" diaginertia="{iz} {iz} {iz}"/>
-      <body euler="3.141592653589793 0 0">
-        <geom name="nut" type="sdf" mesh="nut" pos="0 0 0.005" contype="0" conaffinity="0" rgba="0.2 0.4 0.9 1">
-          <plugin instance="nut"/>
-        </geom>
-      </body>
-    </body>
-  </worldbody>
-  <contact>
-    <pair geom1="nut" geom2="bolt" friction="{friction} {friction} 0.001 0.0001 0.0001" solref="0.002 1"/>
-    <pair geom1="nut" geom2="core" friction="0.01 0.01 0.001 0.0001 0.0001" solimp="0.9 0.95 0.001"/>
-  </contact>
-</mujoco>"#,
-        g = if gravity { -9.81 } else { 0.0 },
-        bolt = cap.bolt.mjcf_instance("bolt"),
-        nut = cap.nut.mjcf_instance("nut"),
-        core = cap.bolt.radius - 0.0012,
-    )
+    screw_cap(cap, lift_turns, friction, gravity, true)
 }
 
 struct Run {
@@ -66,9 +22,16 @@ impl Run {
     }
 }
 
-/// Cap height (m), unwrapped yaw (rad) and nut-bolt contacts over time, with `torque` about +z
-/// and `lift` (N) along +z applied to the cap.
-fn simulate(run: &Run, seconds: f64, torque: f64, lift: f64) -> Vec<(f64, f64, usize)> {
+/// Cap height (m), unwrapped yaw (rad) and contacts over time, with `torque` about +z and `lift`
+/// (N) along +z applied to the cap, until `seconds` pass or `done` says so (a free cap under a
+/// constant torque would spin up without bound). Asserts the simulation stayed stable.
+fn simulate_until(
+    run: &Run,
+    seconds: f64,
+    torque: f64,
+    lift: f64,
+    done: impl Fn(&[(f64, f64, usize)]) -> bool,
+) -> Vec<(f64, f64, usize)> {
     let mut data = MjData::new(&run.model);
     let cap = run.model.name_to_id(MjtObjBase::mjOBJ_BODY, "cap").unwrap();
     let mut out = Vec::new();
@@ -88,14 +51,21 @@ fn simulate(run: &Run, seconds: f64, torque: f64, lift: f64) -> Vec<(f64, f64, u
         }
         last = Some(a);
         out.push((data.xpos()[cap][2], yaw, data.ncon() as usize));
+        if done(&out) {
+            break;
+        }
     }
-    assert!(data.qpos().iter().all(|q| q.is_finite()));
+    let unstable = data.ffi().warning[MjtWarning::mjWARN_BADQACC as usize].number;
+    assert_eq!(unstable, 0, "the simulation went unstable");
     out
 }
 
-/// A torque that turns a cap of this size briskly without tearing it off the thread.
+fn simulate(run: &Run, seconds: f64, torque: f64, lift: f64) -> Vec<(f64, f64, usize)> {
+    simulate_until(run, seconds, torque, lift, |_| false)
+}
+
 fn torque(cap: &ScrewCap) -> f64 {
-    2e-4 * (cap.bolt.radius / 0.006).powi(3)
+    cap_torque(cap)
 }
 
 #[test]
@@ -110,7 +80,9 @@ fn screws_on(name: &str, cap: &ScrewCap) {
     let run = Run::new(&scene(cap, 1.0, 0.3, false));
     // Clockwise seen from above tightens a right-handed thread. Measured over the first turn and
     // a half, while the threads overlap (the model has no shoulder to stop the cap).
-    let trace = simulate(&run, 2.0, -torque(cap), 0.0);
+    let trace = simulate_until(&run, 2.0, -torque(cap), 0.0, |t| {
+        t.last().unwrap().1 - t[0].1 < -1.6 * std::f64::consts::TAU
+    });
     let (z0, y0, _) = trace[0];
     let end = trace
         .iter()
@@ -158,13 +130,17 @@ fn with_friction_a_cap_holds_under_gravity_and_without_it_runs_down() {
 fn unscrewing_past_the_last_turn_frees_the_cap() {
     let cap = ScrewCap::new(0.005992);
     let run = Run::new(&scene(&cap, 0.0, 0.3, true));
-    let weight = 0.002 * 9.81;
+    let weight = cap_mass(&cap) * 9.81;
     // Engaged, a pull of 1.5 times its weight does not lift it: the thread holds axially.
     let held = simulate(&run, 0.5, 0.0, 1.5 * weight);
     let rise = held.last().unwrap().0 - held[0].0;
     assert!(rise.abs() < 2e-4, "an engaged cap rose {rise} m");
     // Turning it anticlockwise walks it up and off the thread.
-    let unscrew = simulate(&run, 3.0, torque(&cap), 0.0);
+    let z_start = held[0].0;
+    let unscrew = simulate_until(&run, 3.0, torque(&cap), 0.0, |t| {
+        let last = t.last().unwrap();
+        last.2 == 0 && last.0 - z_start > 2.0 * cap.bolt.pitch
+    });
     let (z0, y0, _) = unscrew[0];
     let off = unscrew
         .iter()
