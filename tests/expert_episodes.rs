@@ -125,5 +125,40 @@ fn recording_rescores_offline_to_the_same_verdict() {
         String::from_utf8_lossy(&out.stderr)
     );
     assert!(String::from_utf8_lossy(&out.stdout).contains("re-scored: success"));
+    // Foxglove's own reader (the `mcap` Python package that `make setup` installs) agrees on the
+    // channels, their schemas and every message count.
+    let script = r#"
+import sys, collections
+from mcap.reader import make_reader
+with open(sys.argv[1], "rb") as f:
+    r = make_reader(f)
+    s = r.get_summary()
+    counts = collections.Counter(c.topic for _, c, _ in r.iter_messages())
+    for c in s.channels.values():
+        print(c.topic, s.schemas[c.schema_id].name, counts[c.topic])
+    print("total", s.statistics.message_count)
+"#;
+    let deps = Path::new(env!("CARGO_MANIFEST_DIR")).join(".deps/python");
+    let out = std::process::Command::new("python3")
+        .args(["-c", script])
+        .arg(&path)
+        .env("PYTHONPATH", &deps)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let listing = String::from_utf8_lossy(&out.stdout);
+    for (topic, n) in &rec.topics {
+        let line = listing
+            .lines()
+            .find(|l| l.starts_with(&format!("{topic} ")))
+            .unwrap_or_else(|| panic!("{topic} missing from {listing}"));
+        assert!(line.ends_with(&format!(" {n}")), "{line} vs {n}");
+    }
+    assert!(listing.contains("/camera/table_front foxglove.RawImage"));
+    assert!(listing.contains(&format!("total {}", rec.messages)));
     std::fs::remove_dir_all(&dir).unwrap();
 }
