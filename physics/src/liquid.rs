@@ -101,11 +101,29 @@ impl Container {
     /// divergence theorem over the clipped triangles, with the reference point on the plane so the
     /// cut face contributes no volume; the area is the cut polygon's, from the cut segments.
     pub fn volume_below(&self, n: V3, d: f64) -> (f64, f64) {
+        let (v, a, _) = self.cut(n, d);
+        (v, a)
+    }
+
+    /// [`Container::volume_below`] plus the centroid of the cut polygon (the surface).
+    pub fn cut(&self, n: V3, d: f64) -> (f64, f64, V3) {
         let o = [n[0] * d, n[1] * d, n[2] * d];
         let mut volume = 0.0;
         let mut area = 0.0;
+        let mut moment = [0.0; 3];
         let tet = |a: V3, b: V3, c: V3| dot(sub(a, o), cross(sub(b, o), sub(c, o))) / 6.0;
-        let heights: Vec<f64> = self.vertices.iter().map(|v| dot(n, *v) - d).collect();
+        // Signed heights of the vertices above the plane; on the stack for meshes of the usual size.
+        let mut stack = [0.0f64; 512];
+        let mut heap = Vec::new();
+        let heights: &mut [f64] = if self.vertices.len() <= stack.len() {
+            &mut stack[..self.vertices.len()]
+        } else {
+            heap.resize(self.vertices.len(), 0.0);
+            &mut heap
+        };
+        for (h, v) in heights.iter_mut().zip(&self.vertices) {
+            *h = dot(n, *v) - d;
+        }
         for (t, (det, tn)) in self.triangles.iter().zip(&self.terms) {
             let s = [heights[t[0]], heights[t[1]], heights[t[2]]];
             let below = s.iter().filter(|x| **x <= 0.0).count();
@@ -146,11 +164,21 @@ impl Container {
             }
             if nc == 2 {
                 // The segment is oriented by the triangle's winding; the cut polygon is
-                // traversed the opposite way round its outward normal n.
-                area += dot(n, cross(sub(cut[0], o), sub(cut[1], o))) / 2.0;
+                // traversed the opposite way round its outward normal n. Each segment and `o`
+                // make one triangle of a fan over the polygon.
+                let a = dot(n, cross(sub(cut[0], o), sub(cut[1], o))) / 2.0;
+                area += a;
+                for k in 0..3 {
+                    moment[k] += a * (o[k] + cut[0][k] + cut[1][k]) / 3.0;
+                }
             }
         }
-        (volume, area.abs())
+        let centroid = if area.abs() > 0.0 {
+            [moment[0] / area, moment[1] / area, moment[2] / area]
+        } else {
+            o
+        };
+        (volume, area.abs(), centroid)
     }
 
     /// The whole interior's volume.
@@ -173,14 +201,26 @@ impl Container {
     /// Newton steps on the area; a step that leaves the bracket or fails to shrink the residual is
     /// replaced by bisection. Returns the offset and the number of iterations.
     pub fn solve_offset(&self, n: V3, volume: f64, guess: f64, tol: f64) -> (f64, u32) {
+        let s = self.solve(n, volume, guess, tol);
+        (s.offset, s.iterations)
+    }
+
+    /// [`Container::solve_offset`] with the surface's centroid at the solution.
+    pub fn solve(&self, n: V3, volume: f64, guess: f64, tol: f64) -> Solved {
         let (mut lo, mut hi) = self.range(n);
         let mut d = guess.clamp(lo, hi);
         let mut last = f64::INFINITY;
+        let mut centroid = [0.0; 3];
         for it in 1..=100 {
-            let (v, a) = self.volume_below(n, d);
+            let (v, a, c) = self.cut(n, d);
+            centroid = c;
             let r = v - volume;
             if r.abs() <= tol {
-                return (d, it);
+                return Solved {
+                    offset: d,
+                    iterations: it,
+                    centroid,
+                };
             }
             if r > 0.0 {
                 hi = d;
@@ -197,8 +237,20 @@ impl Container {
             };
             last = r.abs();
         }
-        (d, 100)
+        Solved {
+            offset: d,
+            iterations: 100,
+            centroid,
+        }
     }
+}
+
+/// A solved surface: its offset, the iterations it took, and its centroid.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Solved {
+    pub offset: f64,
+    pub iterations: u32,
+    pub centroid: V3,
 }
 
 /// The surface normal as a damped spherical pendulum (the paper's Euler-Lagrange equations, with
@@ -384,6 +436,9 @@ pub struct Liquid {
     pub surface: Surface,
     /// Plane offset along the normal (m), container frame, as last solved; see [`Liquid::offset`].
     offset: f64,
+    /// Centroid of the surface at the last solve: turning the plane about it keeps the volume to
+    /// first order, so `n·centroid` is the next solve's starting guess.
+    centroid: Option<V3>,
     /// The normal and volume `offset` was solved for.
     solved_for: Option<(V3, Nanolitres)>,
     /// Pendulum length (m): upstream's 3·sqrt(half width · half height) of the surface, fixed here
@@ -414,6 +469,7 @@ impl Liquid {
             volume,
             surface: Surface::new([0.0, 0.0, 1.0], damping),
             offset: (lo + hi) / 2.0,
+            centroid: None,
             solved_for: None,
             length: 3.0 * r.max(1e-3),
             iterations: 0,
@@ -437,9 +493,14 @@ impl Liquid {
         if self.solved_for != Some(key) {
             let target = self.volume.cubic_metres();
             let tol = 1e-6 * self.container.capacity().max(1e-12);
-            let (d, it) = self.container.solve_offset(key.0, target, self.offset, tol);
-            self.offset = d;
-            self.iterations = it;
+            let guess = match self.centroid {
+                Some(c) if self.solved_for.map(|s| s.1) == Some(self.volume) => dot(key.0, c),
+                _ => self.offset,
+            };
+            let solved = self.container.solve(key.0, target, guess, tol);
+            self.offset = solved.offset;
+            self.iterations = solved.iterations;
+            self.centroid = Some(solved.centroid);
             self.solved_for = Some(key);
         }
         self.offset
