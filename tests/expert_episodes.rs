@@ -114,17 +114,12 @@ fn recording_rescores_offline_to_the_same_verdict() {
     assert_eq!(replayed, t);
     assert_eq!(Judge::replay(&replayed, &rec.labware_series), r.verdict);
     // The CLI agrees, without simulating.
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_autobio"))
-        .arg("replay")
-        .arg(&path)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let replay = stdout_of(
+        std::process::Command::new(env!("CARGO_BIN_EXE_autobio"))
+            .arg("replay")
+            .arg(&path),
     );
-    assert!(String::from_utf8_lossy(&out.stdout).contains("re-scored: success"));
+    assert!(replay.contains("re-scored: success"));
     // Foxglove's own reader (the `mcap` Python package that `make setup` installs) agrees on the
     // channels, their schemas and every message count.
     let script = r#"
@@ -139,18 +134,12 @@ with open(sys.argv[1], "rb") as f:
     print("total", s.statistics.message_count)
 "#;
     let deps = Path::new(env!("CARGO_MANIFEST_DIR")).join(".deps/python");
-    let out = std::process::Command::new("python3")
-        .args(["-c", script])
-        .arg(&path)
-        .env("PYTHONPATH", &deps)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let listing = stdout_of(
+        std::process::Command::new("python3")
+            .args(["-c", script])
+            .arg(&path)
+            .env("PYTHONPATH", &deps),
     );
-    let listing = String::from_utf8_lossy(&out.stdout);
     for (topic, n) in &rec.topics {
         let line = listing
             .lines()
@@ -161,4 +150,15 @@ with open(sys.argv[1], "rb") as f:
     assert!(listing.contains("/camera/table_front foxglove.RawImage"));
     assert!(listing.contains(&format!("total {}", rec.messages)));
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Runs a command, asserts it succeeded, and returns its standard output.
+fn stdout_of(cmd: &mut std::process::Command) -> String {
+    let out = cmd.output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
 }

@@ -366,25 +366,33 @@ fn stabilised(w: &World, tube: &str, robot: &str) -> bool {
 pub fn apply(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
     let robot = step.robot;
     let name = step.primitive.name;
-    let on = if step.primitive.args.iter().any(|a| a.name == "on") {
-        let (lw, kind) = step.labware(env, "on")?;
-        if !kind.supports(name) {
-            return Err(Violation {
-                code: Code::E0014,
-                arg: None,
-                message: format!("`{name}` cannot be applied to `{lw}` (a {})", kind.name),
-                hint: Some(if kind.primitives.is_empty() {
-                    format!("a {} supports no primitive as `on`", kind.name)
-                } else {
-                    format!("a {} supports: {}", kind.name, kind.primitives.join(", "))
-                }),
-            });
+    // `release` is the one primitive without an object: it only empties a steadying hand.
+    if name == "release" {
+        if !matches!(w.hand(robot), Hand::Stabilising(_)) {
+            return Err(precondition(
+                format!(
+                    "`release` needs `{robot}` to hold something steady, but its hand is {}",
+                    w.hand(robot)
+                ),
+                "use `place` to put down a carried item",
+            ));
         }
-        Some((lw, kind))
-    } else {
-        None
-    };
-    let (lw, kind) = on.clone().unwrap_or_default_pair();
+        w.hands.insert(robot.into(), Hand::Empty);
+        return Ok(());
+    }
+    let (lw, kind) = step.labware(env, "on")?;
+    if !kind.supports(name) {
+        return Err(Violation {
+            code: Code::E0014,
+            arg: None,
+            message: format!("`{name}` cannot be applied to `{lw}` (a {})", kind.name),
+            hint: Some(if kind.primitives.is_empty() {
+                format!("a {} supports no primitive as `on`", kind.name)
+            } else {
+                format!("a {} supports: {}", kind.name, kind.primitives.join(", "))
+            }),
+        });
+    }
     match name {
         "pick" => {
             require_empty_hand(w, robot, name)?;
@@ -638,18 +646,6 @@ pub fn apply(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation
             require_empty_hand(w, robot, name)?;
             w.hands.insert(robot.into(), Hand::Stabilising(lw));
         }
-        "release" => {
-            if !matches!(w.hand(robot), Hand::Stabilising(_)) {
-                return Err(precondition(
-                    format!(
-                        "`release` needs `{robot}` to hold something steady, but its hand is {}",
-                        w.hand(robot)
-                    ),
-                    "use `place` to put down a carried item",
-                ));
-            }
-            w.hands.insert(robot.into(), Hand::Empty);
-        }
         "hand_over" => {
             let to = step.text("to")?.to_string();
             if !env.robots.contains(&to) {
@@ -701,16 +697,6 @@ pub fn panel_dimension(unit: &str) -> Dimension {
         "rpm" => Dimension::Speed,
         "°C" => Dimension::Temperature,
         _ => Dimension::Time,
-    }
-}
-
-trait PairDefault {
-    fn unwrap_or_default_pair(self) -> (String, &'static LabwareKind);
-}
-
-impl PairDefault for Option<(String, &'static LabwareKind)> {
-    fn unwrap_or_default_pair(self) -> (String, &'static LabwareKind) {
-        self.unwrap_or_else(|| (String::new(), &labware::KINDS[0]))
     }
 }
 

@@ -578,25 +578,37 @@ impl Parser {
         r
     }
 
-    fn steps(&mut self, v: &Value<'_>) -> Vec<Step> {
-        let mut out = Vec::new();
+    /// The tables of an array of tables (`[[key]]`), each with its span; reports anything else.
+    fn array_of_tables<'a, 'i>(
+        &mut self,
+        v: &'a Value<'i>,
+        key: &str,
+    ) -> Vec<(&'a DeTable<'i>, Span)> {
         let DeValue::Array(items) = v.get_ref() else {
             let msg = format!(
-                "`steps` must be an array of tables (`[[steps]]`), found {}",
+                "`{key}` must be an array of tables (`[[{key}]]`), found {}",
                 type_name(v.get_ref())
             );
             self.err(Code::E0004, span_of(v), msg, None);
-            return out;
+            return Vec::new();
         };
-        for item in items.iter() {
-            let Some(t) = self.table(item, "each `[[steps]]` entry") else {
-                continue;
-            };
+        items
+            .iter()
+            .filter_map(|item| {
+                let t = self.table(item, &format!("each `[[{key}]]` entry"))?;
+                Some((t, span_of(item)))
+            })
+            .collect()
+    }
+
+    fn steps(&mut self, v: &Value<'_>) -> Vec<Step> {
+        let mut out = Vec::new();
+        for (t, span) in self.array_of_tables(v, "steps") {
             let mut s = Step {
                 primitive: None,
                 with: None,
                 args: Vec::new(),
-                span: span_of(item),
+                span,
             };
             for (key, value) in ordered(t) {
                 let k = key.get_ref().as_ref();
@@ -911,23 +923,12 @@ impl Parser {
 
     fn stages(&mut self, v: &Value<'_>) -> Vec<StageRef> {
         let mut out = Vec::new();
-        let DeValue::Array(items) = v.get_ref() else {
-            let msg = format!(
-                "`stages` must be an array of tables (`[[stages]]`), found {}",
-                type_name(v.get_ref())
-            );
-            self.err(Code::E0004, span_of(v), msg, None);
-            return out;
-        };
-        for item in items.iter() {
-            let Some(t) = self.table(item, "each `[[stages]]` entry") else {
-                continue;
-            };
+        for (t, span) in self.array_of_tables(v, "stages") {
             let mut s = StageRef {
                 protocol: None,
                 instruction: None,
                 time_limit: None,
-                span: span_of(item),
+                span,
             };
             for (key, value) in ordered(t) {
                 let k = key.get_ref().as_ref();
