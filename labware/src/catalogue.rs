@@ -200,6 +200,28 @@ const fn tube(name: &'static str, description: &'static str, capacity_ul: f64) -
     }
 }
 
+const fn rack(
+    name: &'static str,
+    description: &'static str,
+    layout: SlotLayout,
+    accepts: &'static [&'static str],
+) -> LabwareKind {
+    LabwareKind {
+        name,
+        description,
+        parts: &[],
+        slots: Some(Slots { layout, accepts }),
+        capacity_ul: None,
+        movable: false,
+        panel: &[],
+        buttons: &[],
+        joints: &[],
+        tolerances: SLOT_TOLERANCES,
+        primitives: &[],
+        simulated: false,
+    }
+}
+
 const fn lidded(
     name: &'static str,
     description: &'static str,
@@ -378,40 +400,18 @@ pub const KINDS: &[LabwareKind] = &[
         primitives: &["press"],
         simulated: false,
     },
-    LabwareKind {
-        name: "tube_rack",
-        description: "rack of 2x5 places for 15 mL and 50 mL tubes, 36 mm pitch",
-        parts: &[],
-        slots: Some(Slots {
-            layout: SlotLayout::Grid { rows: 2, cols: 5 },
-            accepts: TUBE_ACCEPTING_RACK,
-        }),
-        capacity_ul: None,
-        movable: false,
-        panel: &[],
-        buttons: &[],
-        joints: &[],
-        tolerances: SLOT_TOLERANCES,
-        primitives: &[],
-        simulated: false,
-    },
-    LabwareKind {
-        name: "microtube_rack",
-        description: "rack of 6x10 places for 1.5 mL tubes and cryovials",
-        parts: &[],
-        slots: Some(Slots {
-            layout: SlotLayout::Grid { rows: 6, cols: 10 },
-            accepts: &["tube_1_5ml", "cryovial"],
-        }),
-        capacity_ul: None,
-        movable: false,
-        panel: &[],
-        buttons: &[],
-        joints: &[],
-        tolerances: SLOT_TOLERANCES,
-        primitives: &[],
-        simulated: false,
-    },
+    rack(
+        "tube_rack",
+        "rack of 2x5 places for 15 mL and 50 mL tubes, 36 mm pitch",
+        SlotLayout::Grid { rows: 2, cols: 5 },
+        TUBE_ACCEPTING_RACK,
+    ),
+    rack(
+        "microtube_rack",
+        "rack of 6x10 places for 1.5 mL tubes and cryovials",
+        SlotLayout::Grid { rows: 6, cols: 10 },
+        &["tube_1_5ml", "cryovial"],
+    ),
     tube(
         "tube_1_5ml",
         "1.5 mL snap-cap microcentrifuge tube, modelled with a screw cap",
