@@ -70,6 +70,7 @@ pub fn run(task: &compiler::Task) -> Result<()> {
 
     let n = 3;
     let opts = scoring::eval::EvalOptions {
+        policy: "expert".into(),
         episodes: n,
         seed: 0,
         out: None,

@@ -64,6 +64,8 @@ enum Command {
     Eval {
         #[arg(long, required = true)]
         protocol: Vec<PathBuf>,
+        /// The policy: `expert` (the scripted expert) or `hold` (no motion: the control every task
+        /// must fail)
         #[arg(long, default_value = "expert")]
         policy: String,
         #[arg(long, default_value_t = 20)]
@@ -184,6 +186,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         } => {
             let task = load(&protocol)?;
             let opts = scoring::eval::EvalOptions {
+                policy: "expert".into(),
                 episodes,
                 seed,
                 out: Some(out.clone()),
@@ -217,15 +220,17 @@ fn run(cli: Cli) -> Result<ExitCode> {
             out,
             record,
         } => {
-            if policy != "expert" {
+            if !scoring::POLICIES.contains(&policy.as_str()) {
                 bail!(
-                    "unknown policy `{policy}`: this build evaluates `expert` (model servers over websocket come with `--model`)"
+                    "unknown policy `{policy}`: this build evaluates {} (model servers over websocket come with `--model`)",
+                    scoring::POLICIES.join(", ")
                 );
             }
             let mut rows = Vec::new();
             for p in &protocol {
                 let task = load(p)?;
                 let opts = scoring::eval::EvalOptions {
+                    policy: policy.clone(),
                     episodes,
                     seed,
                     out: out.clone(),
@@ -271,7 +276,9 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 .with_context(|| format!("cannot read {}", recording.display()))?;
             let task: compiler::Task = serde_json::from_value(rec.task.clone())
                 .context("the recording's task does not match this autobio's task schema")?;
-            let verdict = scoring::Judge::replay(&task, &rec.labware_series);
+            let params: compiler::params::Bindings =
+                serde_json::from_value(rec.instance["params"].clone()).unwrap_or_default();
+            let verdict = scoring::Judge::replay(&task, &params, &rec.labware_series);
             println!(
                 "{}: {} messages over {:.2} s",
                 recording.display(),

@@ -167,9 +167,9 @@ fn describe_explain_and_json_check_as_processes() {
 
 #[test]
 fn unmodelled_labware_is_refused_by_the_runtime_with_a_reason() {
-    let task = compile("protocols/tube/transfer.toml");
+    let task = compile("protocols/thermal_mixer/set_parameters.toml");
     let err = runtime::Scene::build(&task, &task.sample(0))
         .err()
-        .expect("no tube model yet");
+        .expect("no thermal mixer model yet");
     assert!(err.to_string().contains("no simulation model yet"), "{err}");
 }

@@ -107,12 +107,18 @@ fn recording_rescores_offline_to_the_same_verdict() {
     assert!(r.success);
     let rec = runtime::record::read_recording(&path).unwrap();
     assert_eq!(rec.topics["/task"], 1);
-    assert_eq!(rec.topics["/robot/joint_state"], r.control_steps);
+    assert_eq!(rec.topics["/robot/arm/joint_state"], r.control_steps);
+    assert_eq!(rec.topics["/robot/arm/action"], r.control_steps);
     assert!(rec.topics["/camera/table_front"] >= r.control_steps / 25);
     assert!(rec.topics["/camera/arm/wrist"] >= 1);
     let replayed: compiler::Task = serde_json::from_value(rec.task).unwrap();
     assert_eq!(replayed, t);
-    assert_eq!(Judge::replay(&replayed, &rec.labware_series), r.verdict);
+    let params: compiler::params::Bindings =
+        serde_json::from_value(rec.instance["params"].clone()).unwrap();
+    assert_eq!(
+        Judge::replay(&replayed, &params, &rec.labware_series),
+        r.verdict
+    );
     // The CLI agrees, without simulating.
     let replay = stdout_of(
         std::process::Command::new(env!("CARGO_BIN_EXE_autobio"))

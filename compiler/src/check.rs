@@ -5,11 +5,10 @@
 use crate::params::{Domain, ParamSpec, placeholders};
 use crate::predicates::{self, Check, Cmp, Form, Tolerance};
 use crate::primitives::{self, LabPrimitive, resolve_location};
-use crate::robots;
 use crate::task::*;
 use dsl::ast::{ParamDomain, Protocol, RandomItem, Scalar, Spanned, Step};
 use dsl::{Code, Diagnostic, Dimension, Span, did_you_mean, parse_quantity};
-use labware::{LabwareKind, Pose, thermal_cycler};
+use labware::{LabwareKind, Model, Pose};
 use std::collections::{BTreeMap, BTreeSet};
 
 pub(crate) fn hint_for(input: &str, candidates: &[&str], what: &str) -> String {
@@ -246,12 +245,7 @@ fn lower_labware(cx: &mut Cx, p: &Protocol) -> (Vec<Option<LabwareSpec>>, KindMa
                 at: l.at.as_ref().map(|a| a.value.clone()),
                 volume: None,
                 panel: BTreeMap::new(),
-                params: match k.name {
-                    "thermal_cycler" => {
-                        LabwareParams::ThermalCycler(thermal_cycler::Params::default())
-                    }
-                    _ => LabwareParams::Unmodelled,
-                },
+                params: Model::for_kind(k.name).unwrap_or(Model::Unmodelled),
             };
             if let Some(at) = &l.at
                 && !k.movable
@@ -1198,7 +1192,7 @@ fn apply_tolerance(
 
 pub(crate) fn pose(p: &dsl::ast::Pose) -> Pose {
     let pos = p.pos.as_ref().map(|s| s.value).unwrap_or([0.0; 3]);
-    Pose::yaw(pos, p.yaw.as_ref().map(|y| y.value).unwrap_or(0.0))
+    labware::frame::yaw(pos, p.yaw.as_ref().map(|y| y.value).unwrap_or(0.0))
 }
 
 /// The fixed bench camera (in front of the bench, looking across it and 20° down) and one wrist

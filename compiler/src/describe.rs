@@ -24,7 +24,7 @@ pub fn describe(task: &Task) -> String {
     );
     let _ = writeln!(w, "\nscene");
     for r in &task.robots {
-        let p = r.base.pos;
+        let p = labware::frame::position(&r.base);
         let _ = writeln!(
             w,
             "  robot {:<10} {} at ({:.3}, {:.3}, {:.3}) m",
@@ -41,11 +41,11 @@ pub fn describe(task: &Task) -> String {
         let place = match &l.at {
             Some(at) => format!("in {at}"),
             None => {
-                let p = l.placement.pos;
+                let p = labware::frame::position(&l.placement);
                 format!("at ({:.3}, {:.3}, {:.3}) m", p[0], p[1], p[2])
             }
         };
-        let sim = if kind.is_some_and(|k| k.simulated) {
+        let sim = if kind.is_some_and(|k| k.simulated()) {
             ""
         } else {
             " [no simulation model yet]"
@@ -201,7 +201,7 @@ pub fn catalogue() -> String {
     }
     let _ = writeln!(w, "\nlabware kinds");
     for k in labware::KINDS {
-        let sim = if k.simulated {
+        let sim = if k.simulated() {
             ""
         } else {
             " [no simulation model yet]"

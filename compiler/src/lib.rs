@@ -12,11 +12,11 @@
 mod chain;
 mod check;
 pub mod describe;
+pub mod motion;
 pub mod params;
 pub mod predicates;
 pub mod primitives;
 mod proof;
-pub mod robots;
 mod task;
 pub mod world;
 

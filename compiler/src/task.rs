@@ -3,7 +3,8 @@
 
 use crate::params::{Bindings, ParamSpec, draw_all, render, uniform};
 use crate::predicates::Check;
-use labware::{Pose, thermal_cycler};
+use labware::frame::{serde_pose, serde_poses};
+use labware::{Model, Pose};
 use rand_core::SeedableRng;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -71,6 +72,7 @@ impl Physics {
 pub struct RobotSpec {
     pub name: String,
     pub model: String,
+    #[serde(with = "serde_pose")]
     pub base: Pose,
     pub home: Vec<f64>,
     /// Uniform per-joint offsets added to `home` (rad), if randomised.
@@ -87,6 +89,7 @@ pub struct JointJitter {
 pub struct LabwareSpec {
     pub name: String,
     pub kind: String,
+    #[serde(with = "serde_pose")]
     pub placement: Pose,
     /// ± metres of uniform planar jitter, ± radians of uniform yaw jitter.
     pub xy_jitter_m: f64,
@@ -99,16 +102,8 @@ pub struct LabwareSpec {
     pub volume: Option<String>,
     /// Initial panel values (template quantities) that differ from the kind's defaults.
     pub panel: BTreeMap<String, String>,
-    pub params: LabwareParams,
-}
-
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case")]
-pub enum LabwareParams {
-    ThermalCycler(thermal_cycler::Params),
-    /// A catalogue kind without a simulation model yet: it compiles and is checked, and the
-    /// runtime refuses to build it.
-    Unmodelled,
+    /// The kind's simulation model and its parameters (`Model::Unmodelled` when it has none).
+    pub params: Model,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -158,6 +153,7 @@ pub struct SceneInstance {
     /// Initial arm joint angles per robot, in task order.
     pub robot_q: Vec<Vec<f64>>,
     /// Placement per labware, in task order.
+    #[serde(with = "serde_poses")]
     pub labware_placement: Vec<Pose>,
     /// The drawn parameter values.
     pub params: Bindings,
@@ -194,12 +190,10 @@ impl Task {
                 let dx = uniform(&mut rng, -l.xy_jitter_m, l.xy_jitter_m);
                 let dy = uniform(&mut rng, -l.xy_jitter_m, l.xy_jitter_m);
                 let dyaw = uniform(&mut rng, -l.yaw_jitter_rad, l.yaw_jitter_rad);
-                let p = l.placement.pos;
-                Pose::new(
+                let p = labware::frame::position(&l.placement);
+                labware::frame::pose(
                     [p[0] + dx, p[1] + dy, p[2]],
-                    l.placement
-                        .quat
-                        .times(labware::Quat::from_axis_angle([0.0, 0.0, 1.0], dyaw)),
+                    l.placement.rotation * labware::frame::axis_angle([0.0, 0.0, 1.0], dyaw),
                 )
             })
             .collect();

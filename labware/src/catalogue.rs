@@ -2,9 +2,9 @@
 //! their states, slots, liquid capacity, instrument panel, buttons, joints and named tolerances.
 //!
 //! This is declarative data, read by the compiler (name resolution, state tracing, predicates) and
-//! by the docs. Whether a kind can be *simulated* is the `simulated` flag: only kinds with a
-//! generated model (see [`crate::thermal_cycler`]) run in the runtime; the others compile, are
-//! described and checked, and are refused by the runtime with a clear error until their model lands.
+//! by the docs. Whether a kind can be *simulated* is derived from [`crate::registry`]: only kinds
+//! with a model run in the runtime; the others compile, are described and checked, and are refused
+//! by the runtime with a clear error until their model lands.
 //! Dimensions and ranges follow `upstream-autobio.md` §3, §5 and §11.
 
 /// A discrete part state, e.g. a lid that is `open`, `closed` or `locked`.
@@ -118,8 +118,6 @@ pub struct LabwareKind {
     pub tolerances: &'static [(&'static str, f64)],
     /// Lab primitives this kind has affordances for (as the object `on` a step).
     pub primitives: &'static [&'static str],
-    /// A simulation model exists (the runtime can build it).
-    pub simulated: bool,
 }
 
 impl LabwareKind {
@@ -144,6 +142,11 @@ impl LabwareKind {
 
     pub fn supports(&self, primitive: &str) -> bool {
         self.primitives.contains(&primitive)
+    }
+
+    /// A simulation model exists in [`crate::registry`] (the runtime can build it).
+    pub fn simulated(&self) -> bool {
+        crate::registry::Model::for_kind(self.name).is_some()
     }
 }
 
@@ -196,7 +199,6 @@ const fn tube(name: &'static str, description: &'static str, capacity_ul: f64) -
         joints: &[],
         tolerances: TUBE_TOLERANCES,
         primitives: TUBE_PRIMITIVES,
-        simulated: false,
     }
 }
 
@@ -218,7 +220,6 @@ const fn rack(
         joints: &[],
         tolerances: SLOT_TOLERANCES,
         primitives: &[],
-        simulated: false,
     }
 }
 
@@ -245,7 +246,6 @@ const fn lidded(
             ("lid_unlocked", 0.01),
         ],
         primitives: LID_PRIMITIVES,
-        simulated: false,
     }
 }
 
@@ -267,7 +267,6 @@ pub const KINDS: &[LabwareKind] = &[
             ("lid_unlocked", 0.003),
         ],
         primitives: &["open_lid", "close_lid"],
-        simulated: true,
     },
     lidded(
         "centrifuge_5430",
@@ -370,7 +369,6 @@ pub const KINDS: &[LabwareKind] = &[
         joints: &[],
         tolerances: &[("display", 1e-6)],
         primitives: &["press", "set_parameter"],
-        simulated: false,
     },
     LabwareKind {
         name: "vortex_mixer",
@@ -398,7 +396,6 @@ pub const KINDS: &[LabwareKind] = &[
         joints: &[],
         tolerances: SLOT_TOLERANCES,
         primitives: &["press"],
-        simulated: false,
     },
     rack(
         "tube_rack",
@@ -432,7 +429,6 @@ pub const KINDS: &[LabwareKind] = &[
         joints: &[("plunger", "m")],
         tolerances: &[("volume", 1.0), ("position", 0.005)],
         primitives: &["pick", "place", "hand_over"],
-        simulated: false,
     },
 ];
 

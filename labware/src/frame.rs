@@ -1,185 +1,151 @@
-//! Minimal rigid-body frame math (3-vectors, unit quaternions w-x-y-z, poses) shared by labware
-//! affordances and the motion primitives. Conventions follow MuJoCo: quaternions are (w, x, y, z),
-//! rotation matrices are row-major.
+//! Rigid-body frames on nalgebra: [`Pose`] is an `Isometry3<f64>`, [`Rot`] a `UnitQuaternion<f64>`.
+//! This module adds only what nalgebra leaves to the caller: constructors from the plain arrays the
+//! task contract and MuJoCo use (MuJoCo quaternions are w-x-y-z, its matrices row-major), pose
+//! interpolation, and the task contract's serde form of a pose (`{"pos": [x, y, z], "quat": [w, x,
+//! y, z]}`), kept so compiled tasks and recordings read the same as before the move to nalgebra.
 
-use serde::{Deserialize, Serialize};
+use nalgebra::{Isometry3, Matrix3, Quaternion, Rotation3, Translation3, UnitQuaternion, Vector3};
 
+/// A plain 3-vector as parameters and the task contract store it (metres).
 pub type Vec3 = [f64; 3];
+pub type Pose = Isometry3<f64>;
+pub type Rot = UnitQuaternion<f64>;
 
-pub fn add(a: Vec3, b: Vec3) -> Vec3 {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-pub fn sub(a: Vec3, b: Vec3) -> Vec3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-pub fn scale(a: Vec3, s: f64) -> Vec3 {
-    [a[0] * s, a[1] * s, a[2] * s]
-}
-pub fn dot(a: Vec3, b: Vec3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-pub fn norm(a: Vec3) -> f64 {
-    dot(a, a).sqrt()
+pub fn vector(v: Vec3) -> Vector3<f64> {
+    Vector3::new(v[0], v[1], v[2])
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Quat(pub [f64; 4]);
+pub fn pose(pos: Vec3, rot: Rot) -> Pose {
+    Isometry3::from_parts(Translation3::new(pos[0], pos[1], pos[2]), rot)
+}
 
-impl Quat {
-    pub const IDENTITY: Quat = Quat([1.0, 0.0, 0.0, 0.0]);
+/// A pose at `pos` turned by `yaw` about +z.
+pub fn yaw(pos: Vec3, yaw: f64) -> Pose {
+    pose(pos, axis_angle([0.0, 0.0, 1.0], yaw))
+}
 
-    pub fn from_axis_angle(axis: Vec3, angle: f64) -> Quat {
-        let n = norm(axis);
-        let (s, c) = (angle / 2.0).sin_cos();
-        Quat([c, axis[0] / n * s, axis[1] / n * s, axis[2] / n * s])
-    }
+pub fn translation(pos: Vec3) -> Pose {
+    pose(pos, Rot::identity())
+}
 
-    pub fn times(self, o: Quat) -> Quat {
-        let [a1, b1, c1, d1] = self.0;
-        let [a2, b2, c2, d2] = o.0;
-        Quat([
-            a1 * a2 - b1 * b2 - c1 * c2 - d1 * d2,
-            a1 * b2 + b1 * a2 + c1 * d2 - d1 * c2,
-            a1 * c2 - b1 * d2 + c1 * a2 + d1 * b2,
-            a1 * d2 + b1 * c2 - c1 * b2 + d1 * a2,
-        ])
-    }
-
-    pub fn conj(self) -> Quat {
-        let [w, x, y, z] = self.0;
-        Quat([w, -x, -y, -z])
-    }
-
-    pub fn normalized(self) -> Quat {
-        let n = self.0.iter().map(|v| v * v).sum::<f64>().sqrt();
-        Quat(self.0.map(|v| v / n))
-    }
-
-    pub fn rotate(self, v: Vec3) -> Vec3 {
-        let p = Quat([0.0, v[0], v[1], v[2]]);
-        let r = self.times(p).times(self.conj());
-        [r.0[1], r.0[2], r.0[3]]
-    }
-
-    /// Row-major rotation matrix.
-    pub fn to_mat(self) -> [f64; 9] {
-        let [w, x, y, z] = self.0;
-        [
-            1.0 - 2.0 * (y * y + z * z),
-            2.0 * (x * y - w * z),
-            2.0 * (x * z + w * y),
-            2.0 * (x * y + w * z),
-            1.0 - 2.0 * (x * x + z * z),
-            2.0 * (y * z - w * x),
-            2.0 * (x * z - w * y),
-            2.0 * (y * z + w * x),
-            1.0 - 2.0 * (x * x + y * y),
-        ]
-    }
-
-    pub fn from_mat(m: &[f64; 9]) -> Quat {
-        let tr = m[0] + m[4] + m[8];
-        let q = if tr > 0.0 {
-            let s = (tr + 1.0).sqrt() * 2.0;
-            [
-                0.25 * s,
-                (m[7] - m[5]) / s,
-                (m[2] - m[6]) / s,
-                (m[3] - m[1]) / s,
-            ]
-        } else if m[0] > m[4] && m[0] > m[8] {
-            let s = (1.0 + m[0] - m[4] - m[8]).sqrt() * 2.0;
-            [
-                (m[7] - m[5]) / s,
-                0.25 * s,
-                (m[1] + m[3]) / s,
-                (m[2] + m[6]) / s,
-            ]
-        } else if m[4] > m[8] {
-            let s = (1.0 + m[4] - m[0] - m[8]).sqrt() * 2.0;
-            [
-                (m[2] - m[6]) / s,
-                (m[1] + m[3]) / s,
-                0.25 * s,
-                (m[5] + m[7]) / s,
-            ]
-        } else {
-            let s = (1.0 + m[8] - m[0] - m[4]).sqrt() * 2.0;
-            [
-                (m[3] - m[1]) / s,
-                (m[2] + m[6]) / s,
-                (m[5] + m[7]) / s,
-                0.25 * s,
-            ]
-        };
-        Quat(q).normalized()
-    }
-
-    /// Rotation vector (axis * angle) of this rotation, angle in [0, pi].
-    pub fn log(self) -> Vec3 {
-        let q = if self.0[0] < 0.0 {
-            Quat(self.0.map(|v| -v))
-        } else {
-            self
-        };
-        let v = [q.0[1], q.0[2], q.0[3]];
-        let s = norm(v);
-        if s < 1e-12 {
-            return scale(v, 2.0);
-        }
-        let angle = 2.0 * s.atan2(q.0[0]);
-        scale(v, angle / s)
-    }
-
-    /// Spherical interpolation from self (t=0) to o (t=1).
-    pub fn slerp(self, o: Quat, t: f64) -> Quat {
-        let rel = self.conj().times(o);
-        let w = rel.log();
-        let angle = norm(w);
-        if angle < 1e-12 {
-            return self;
-        }
-        self.times(Quat::from_axis_angle(w, angle * t)).normalized()
+pub fn axis_angle(axis: Vec3, angle: f64) -> Rot {
+    match nalgebra::Unit::try_new(vector(axis), 1e-12) {
+        Some(a) => Rot::from_axis_angle(&a, angle),
+        None => Rot::identity(),
     }
 }
 
-/// A rigid transform: position (m) and orientation.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Pose {
-    pub pos: Vec3,
-    pub quat: Quat,
+pub fn position(p: &Pose) -> Vec3 {
+    let t = p.translation.vector;
+    [t.x, t.y, t.z]
 }
 
-impl Pose {
-    pub const IDENTITY: Pose = Pose {
-        pos: [0.0; 3],
-        quat: Quat::IDENTITY,
-    };
+/// MuJoCo's quaternion order: w, x, y, z.
+pub fn wxyz(r: &Rot) -> [f64; 4] {
+    let q = r.quaternion();
+    [q.w, q.i, q.j, q.k]
+}
 
-    pub fn new(pos: Vec3, quat: Quat) -> Pose {
-        Pose { pos, quat }
-    }
+pub fn from_wxyz(q: [f64; 4]) -> Rot {
+    Rot::from_quaternion(Quaternion::new(q[0], q[1], q[2], q[3]))
+}
 
-    /// self * o: `o` expressed in self's frame, mapped to self's parent frame.
-    pub fn compose(&self, o: &Pose) -> Pose {
-        Pose {
-            pos: add(self.pos, self.quat.rotate(o.pos)),
-            quat: self.quat.times(o.quat).normalized(),
+/// From a row-major rotation matrix (MuJoCo's `xmat`).
+pub fn from_rows(m: &[f64; 9]) -> Rot {
+    let mat = Matrix3::new(m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8]);
+    Rot::from_rotation_matrix(&Rotation3::from_matrix_unchecked(mat))
+}
+
+/// The rotation taking the world axes to the given tool axes (columns x, y, z).
+pub fn from_axes(x: Vec3, y: Vec3, z: Vec3) -> Rot {
+    let mat = Matrix3::from_columns(&[vector(x), vector(y), vector(z)]);
+    Rot::from_rotation_matrix(&Rotation3::from_matrix_unchecked(mat))
+}
+
+/// Straight-line position and spherical rotation interpolation from `a` (t=0) to `b` (t=1).
+pub fn interpolate(a: &Pose, b: &Pose, t: f64) -> Pose {
+    let ta = a.translation.vector;
+    let tb = b.translation.vector;
+    let rot = a
+        .rotation
+        .try_slerp(&b.rotation, t, 1e-9)
+        .unwrap_or(if t < 0.5 { a.rotation } else { b.rotation });
+    Isometry3::from_parts(Translation3::from(ta + (tb - ta) * t), rot)
+}
+
+/// A pose moved by `offset` along its own axes.
+pub fn translated_local(p: &Pose, offset: Vec3) -> Pose {
+    p * translation(offset)
+}
+
+/// The task contract's form of a pose: `{"pos": [x, y, z], "quat": [w, x, y, z]}`.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct PoseForm {
+    pos: Vec3,
+    quat: [f64; 4],
+}
+
+impl From<&Pose> for PoseForm {
+    fn from(p: &Pose) -> Self {
+        PoseForm {
+            pos: position(p),
+            quat: wxyz(&p.rotation),
         }
     }
+}
 
-    pub fn translated_local(&self, offset: Vec3) -> Pose {
-        Pose {
-            pos: add(self.pos, self.quat.rotate(offset)),
-            quat: self.quat,
-        }
+impl From<PoseForm> for Pose {
+    fn from(f: PoseForm) -> Self {
+        pose(f.pos, from_wxyz(f.quat))
+    }
+}
+
+/// `#[serde(with = "labware::frame::serde_pose")]` for a `Pose` field.
+pub mod serde_pose {
+    use super::{Pose, PoseForm};
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    pub fn serialize<S: Serializer>(p: &Pose, s: S) -> Result<S::Ok, S::Error> {
+        PoseForm::from(p).serialize(s)
     }
 
-    pub fn yaw(pos: Vec3, yaw: f64) -> Pose {
-        Pose {
-            pos,
-            quat: Quat::from_axis_angle([0.0, 0.0, 1.0], yaw),
-        }
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Pose, D::Error> {
+        PoseForm::deserialize(d).map(Pose::from)
+    }
+}
+
+/// `#[serde(with = "labware::frame::serde_poses")]` for a `Vec<Pose>` field.
+pub mod serde_poses {
+    use super::{Pose, PoseForm};
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    pub fn serialize<S: Serializer>(p: &[Pose], s: S) -> Result<S::Ok, S::Error> {
+        let forms: Vec<PoseForm> = p.iter().map(PoseForm::from).collect();
+        forms.serialize(s)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<Pose>, D::Error> {
+        Vec::<PoseForm>::deserialize(d).map(|v| v.into_iter().map(Pose::from).collect())
+    }
+}
+
+/// `#[serde(with = "labware::frame::serde_pose_map")]` for a `BTreeMap<String, Pose>` field.
+pub mod serde_pose_map {
+    use super::{Pose, PoseForm};
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+    use std::collections::BTreeMap;
+
+    pub fn serialize<S: Serializer>(m: &BTreeMap<String, Pose>, s: S) -> Result<S::Ok, S::Error> {
+        let forms: BTreeMap<&String, PoseForm> =
+            m.iter().map(|(k, p)| (k, PoseForm::from(p))).collect();
+        forms.serialize(s)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(
+        d: D,
+    ) -> Result<BTreeMap<String, Pose>, D::Error> {
+        BTreeMap::<String, PoseForm>::deserialize(d)
+            .map(|m| m.into_iter().map(|(k, f)| (k, Pose::from(f))).collect())
     }
 }
 
@@ -188,15 +154,26 @@ mod tests {
     use super::*;
 
     #[test]
-    fn rotation_round_trips() {
-        let q = Quat::from_axis_angle([1.0, 2.0, 3.0], 0.7);
-        let back = Quat::from_mat(&q.to_mat());
-        assert!(q.0.iter().zip(back.0).all(|(a, b)| (a - b).abs() < 1e-12));
-        let r = Quat::from_axis_angle([0.0, 0.0, 1.0], std::f64::consts::FRAC_PI_2)
-            .rotate([1.0, 0.0, 0.0]);
-        assert!((r[1] - 1.0).abs() < 1e-12 && r[0].abs() < 1e-12);
-        assert!((norm(q.log()) - 0.7).abs() < 1e-12);
-        let half = Quat::IDENTITY.slerp(q, 0.5);
-        assert!((norm(half.log()) - 0.35).abs() < 1e-12);
+    fn mujoco_conventions_round_trip() {
+        let r = axis_angle([1.0, 2.0, 3.0], 0.7);
+        let m = r.to_rotation_matrix();
+        let rows: [f64; 9] = std::array::from_fn(|i| m[(i / 3, i % 3)]);
+        assert!(from_rows(&rows).angle_to(&r) < 1e-12);
+        assert!(from_wxyz(wxyz(&r)).angle_to(&r) < 1e-12);
+        // A quarter turn about z takes +x to +y.
+        let v = axis_angle([0.0, 0.0, 1.0], std::f64::consts::FRAC_PI_2) * vector([1.0, 0.0, 0.0]);
+        assert!((v.y - 1.0).abs() < 1e-12 && v.x.abs() < 1e-12);
+        let half = interpolate(&Pose::identity(), &pose([2.0, 0.0, 0.0], r), 0.5);
+        assert!((half.rotation.angle() - 0.35).abs() < 1e-12);
+        assert!((position(&half)[0] - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_contract_form_is_w_first() {
+        let p = yaw([1.0, 2.0, 3.0], std::f64::consts::PI);
+        let json = serde_json::to_value(PoseForm::from(&p)).unwrap();
+        assert_eq!(json["pos"], serde_json::json!([1.0, 2.0, 3.0]));
+        assert!(json["quat"][0].as_f64().unwrap().abs() < 1e-12);
+        assert!((json["quat"][3].as_f64().unwrap() - 1.0).abs() < 1e-12);
     }
 }

@@ -1,16 +1,25 @@
-//! Parametric labware: each kind generates its MJCF from parameters, names its affordances (grasp
-//! frames, joints, press points) for the primitives, and carries its instrument logic (latches,
-//! detents) for the runtime.
+//! Parametric labware: the closed catalogue of kinds the protocol language knows, and a simulation
+//! model per kind that has one. A model ([`model::Instrument`]) generates its MJCF from parameters,
+//! names its joints, switches and mechanisms by role, resets from declared part states, runs its
+//! per-step logic, reads out part states for the judge and offers affordances for the expert.
+//! [`registry`] is the one place a kind meets its model.
 //!
-//! No meshes are read or written: geometry is primitive geoms sized from parameters
-//! (dimensions from the public description of the instruments). This crate knows nothing of
-//! protocols, MuJoCo's API or robots: it produces text and plain numbers.
+//! No meshes are read or written: geometry is primitive geoms sized from parameters (dimensions
+//! from the public description of the instruments). This crate knows nothing of protocols,
+//! MuJoCo's API or robots: it produces text and plain numbers.
 
 pub mod catalogue;
 pub mod frame;
+pub mod mjcf;
+pub mod model;
+pub mod rack;
+pub mod registry;
 pub mod thermal_cycler;
+pub mod tube;
 
 pub use catalogue::{
     Button, ButtonEffect, KINDS, LabwareKind, PanelParam, PartState, SlotLayout, Slots, kind,
 };
-pub use frame::{Pose, Quat, Vec3};
+pub use frame::{Pose, Rot, Vec3};
+pub use model::{Affordance, Instrument, LabwareState, Logic, Measure, Mechanism, Symmetry};
+pub use registry::Model;

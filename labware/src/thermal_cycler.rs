@@ -7,8 +7,13 @@
 //! the lid opens from), +z up. Joint conventions follow the upstream task: lid 0 = open,
 //! -1.9 rad = closed; lever 0 = raised, -0.94 rad = pressed.
 
-use crate::frame::{Pose, Quat, Vec3};
+use crate::frame::{Pose, Rot, Vec3, axis_angle, pose, translation};
+use crate::mjcf::{Fragment, box_inertia, pose_attrs, v3};
+use crate::model::{
+    Affordance, Instrument, LabwareState, Logic, Measure, Mechanism, Reset, Symmetry,
+};
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 
 /// Every dimension of the instrument (metres, radians, kilograms, SI gains).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -71,19 +76,18 @@ impl Default for Params {
 }
 
 /// MuJoCo names of one placed instrument, all prefixed by its protocol name.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Names {
-    pub base: String,
-    pub lid_body: String,
-    pub lever_body: String,
-    pub lid_joint: String,
-    pub lever_joint: String,
-    pub grip_site: String,
-    pub lock: String,
+struct Names {
+    base: String,
+    lid_body: String,
+    lever_body: String,
+    lid_joint: String,
+    lever_joint: String,
+    grip_site: String,
+    lock: String,
 }
 
 impl Names {
-    pub fn new(prefix: &str) -> Names {
+    fn new(prefix: &str) -> Names {
         Names {
             base: format!("{prefix}/base"),
             lid_body: format!("{prefix}/lid"),
@@ -96,31 +100,89 @@ impl Names {
     }
 }
 
-/// MJCF fragments for one instrument, to be spliced into a scene.
-#[derive(Clone, Debug, Default)]
-pub struct Mjcf {
-    pub worldbody: String,
-    pub equality: String,
-    pub contact: String,
-}
-
-fn v3(v: Vec3) -> String {
-    format!("{} {} {}", v[0], v[1], v[2])
-}
-fn q4(q: Quat) -> String {
-    format!("{} {} {} {}", q.0[0], q.0[1], q.0[2], q.0[3])
+fn x_turn(angle: f64) -> Rot {
+    axis_angle([1.0, 0.0, 0.0], angle)
 }
 
 impl Params {
     /// Orientation of the lid body at joint angle 0: the closed geometry turned open about +x.
-    fn lid_rest(&self) -> Quat {
-        Quat::from_axis_angle([1.0, 0.0, 0.0], self.lid_open - self.lid_closed)
+    fn lid_rest(&self) -> Rot {
+        x_turn(self.lid_open - self.lid_closed)
     }
 
-    pub fn mjcf(&self, prefix: &str, placement: &Pose) -> Mjcf {
-        let n = Names::new(prefix);
+    /// Pose of the grip bar's centre for given joint angles, in the frame `placement` is given in.
+    /// Axes: x along the bar, y pointing away from the lever pivot, z = x × y.
+    pub fn grip_pose(&self, placement: &Pose, lid: f64, lever: f64) -> Pose {
+        let lid_frame = pose(self.hinge, self.lid_rest() * x_turn(lid));
+        let lever_frame = pose([0.0, self.lid_depth, 0.0], x_turn(lever));
+        placement * lid_frame * lever_frame * translation([0.0, self.lever_arm, 0.0])
+    }
+
+    /// The notch nearest to a lever angle.
+    pub fn nearest_notch(&self, lever: f64) -> f64 {
+        if (lever - self.lever_pressed).abs() < (lever - self.lever_raised).abs() {
+            self.lever_pressed
+        } else {
+            self.lever_raised
+        }
+    }
+
+    pub fn lid_is_closed(&self, lid: f64) -> bool {
+        (lid - self.lid_closed).abs() < self.closed_tolerance
+    }
+
+    /// TCP frame gripping the bar: at the bar's centre, oriented as the bar frame would be with the
+    /// lever raised (approach z = -grip y; fingers, x, along grip z). The bar is round, so it turns
+    /// inside the closed fingers while the lever moves: the tool follows the lid's rotation but not
+    /// the lever's, and never has to come at the pressed lever from below.
+    fn grip_affordance(&self, placement: &Pose, lid: f64, lever: f64) -> Pose {
+        let mut grip = self.grip_pose(placement, lid, self.lever_raised);
+        grip.translation = self.grip_pose(placement, lid, lever).translation;
+        let tool = crate::frame::from_axes([0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]);
+        grip * pose([0.0; 3], tool)
+    }
+}
+
+/// The lid latch's state machine, evaluated after every physics step.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Latch {
+    /// The lever was pressed while the lid was open; cleared when the lever is raised.
+    pub jammed: bool,
+    pub locked: bool,
+}
+
+impl Latch {
+    fn from_logic(l: &Logic) -> Latch {
+        Latch {
+            jammed: l.get("jammed").is_some_and(|v| *v != 0.0),
+            locked: l.get("locked").is_some_and(|v| *v != 0.0),
+        }
+    }
+
+    fn store(&self, l: &mut Logic) {
+        l.insert("jammed".into(), f64::from(u8::from(self.jammed)));
+        l.insert("locked".into(), f64::from(u8::from(self.locked)));
+    }
+
+    /// Updates from the current joint angles; returns whether the lock constraint is active.
+    pub fn update(&mut self, p: &Params, lid: f64, lever: f64) -> bool {
+        let pressed = p.nearest_notch(lever) == p.lever_pressed;
+        if !pressed {
+            self.jammed = false;
+            self.locked = false;
+        } else if !self.locked && !p.lid_is_closed(lid) {
+            self.jammed = true;
+        } else if !self.jammed {
+            self.locked = true;
+        }
+        self.locked
+    }
+}
+
+impl Instrument for Params {
+    fn fragment(&self, name: &str, placement: &Pose) -> Fragment {
+        let n = Names::new(name);
         let b = self.base_half;
-        let lid_rest = self.lid_rest();
         let lid_rel_hinge = [0.0, self.lid_depth / 2.0, 0.0];
         let lid_half = [
             self.lid_half_width,
@@ -138,11 +200,11 @@ impl Params {
             self.lever_pressed.max(self.lever_raised),
         );
         let worldbody = format!(
-            r#"<body name="{base}" pos="{pos}" quat="{quat}">
+            r#"<body name="{base}" {placement}>
   <geom name="{base}/body" type="box" size="{bh}" pos="0 0 {bz}" rgba="0.82 0.83 0.85 1"/>
   <geom name="{base}/block" type="box" size="0.075 0.065 0.004" pos="0 {blocky} {blockz}" rgba="0.55 0.57 0.6 1" contype="0" conaffinity="0"/>
   <geom name="{base}/panel" type="box" size="0.12 0.004 0.04" pos="0 {panely} 0.1" rgba="0.15 0.2 0.3 1" contype="0" conaffinity="0"/>
-  <body name="{lid}" pos="{hinge}" quat="{lidq}">
+  <body name="{lid}" {lidframe}>
     <joint name="{lidj}" type="hinge" axis="1 0 0" range="{lo} {hi}" damping="{lidd}" solreflimit="0.004 1" solimplimit="0.95 0.99 0.0005"/>
     <inertial pos="{lidc}" mass="{lidm}" diaginertia="{lidi}"/>
     <geom name="{lid}/shell" type="box" size="{lidh}" pos="{lidc}" rgba="0.86 0.87 0.9 1"/>
@@ -159,16 +221,14 @@ impl Params {
 </body>
 "#,
             base = n.base,
-            pos = v3(placement.pos),
-            quat = q4(placement.quat),
+            placement = pose_attrs(placement),
             bh = v3(b),
             bz = b[2],
             blocky = 0.02,
             blockz = 2.0 * b[2] + 0.004,
             panely = b[1] + 0.002,
             lid = n.lid_body,
-            hinge = v3(self.hinge),
-            lidq = q4(lid_rest),
+            lidframe = pose_attrs(&pose(self.hinge, self.lid_rest())),
             lidj = n.lid_joint,
             lidd = self.lid_damping,
             lidc = v3(lid_rel_hinge),
@@ -200,73 +260,115 @@ impl Params {
             "<exclude body1=\"{}\" body2=\"{}\"/>\n",
             n.base, n.lever_body
         );
-        Mjcf {
+        Fragment {
+            asset: String::new(),
             worldbody,
             equality,
             contact,
         }
     }
 
-    /// Pose of the grip bar's centre for given joint angles, in the frame `placement` is given in.
-    /// Axes: x along the bar, y pointing away from the lever pivot, z = x × y.
-    pub fn grip_pose(&self, placement: &Pose, lid: f64, lever: f64) -> Pose {
-        let x = [1.0, 0.0, 0.0];
-        let lid_frame = Pose::new(
-            self.hinge,
-            self.lid_rest().times(Quat::from_axis_angle(x, lid)),
-        );
-        let lever_frame = Pose::new([0.0, self.lid_depth, 0.0], Quat::from_axis_angle(x, lever));
-        let grip = Pose::new([0.0, self.lever_arm, 0.0], Quat::IDENTITY);
-        placement
-            .compose(&lid_frame)
-            .compose(&lever_frame)
-            .compose(&grip)
+    /// The lever's two notches.
+    fn mechanisms(&self, name: &str) -> Vec<Mechanism> {
+        vec![Mechanism::Detent {
+            instance: format!("{name}/lever_detent"),
+            joint: Names::new(name).lever_joint,
+            lo: self.lever_pressed.min(self.lever_raised),
+            hi: self.lever_pressed.max(self.lever_raised),
+            notches: 2,
+            stiffness: self.detent_stiffness,
+            damping: self.detent_damping,
+        }]
     }
 
-    /// The notch nearest to a lever angle.
-    pub fn nearest_notch(&self, lever: f64) -> f64 {
-        if (lever - self.lever_pressed).abs() < (lever - self.lever_raised).abs() {
-            self.lever_pressed
+    fn joints(&self, name: &str) -> Vec<(&'static str, String)> {
+        let n = Names::new(name);
+        vec![("lid", n.lid_joint), ("lever", n.lever_joint)]
+    }
+
+    fn switches(&self, name: &str) -> Vec<(&'static str, String)> {
+        vec![("lock", Names::new(name).lock)]
+    }
+
+    fn reset(&self, initial: &BTreeMap<String, String>) -> Reset {
+        let (lid, lever) = match initial.get("lid").map(String::as_str).unwrap_or("open") {
+            "open" => (self.lid_open, self.lever_raised),
+            "closed" => (self.lid_closed, self.lever_raised),
+            _ => (self.lid_closed, self.lever_pressed),
+        };
+        let mut logic = Logic::new();
+        Latch::default().store(&mut logic);
+        Reset {
+            joints: vec![("lid", lid), ("lever", lever)],
+            logic,
+        }
+    }
+
+    fn step(&self, joints: &BTreeMap<String, f64>, logic: &mut Logic) -> Vec<(&'static str, bool)> {
+        let mut latch = Latch::from_logic(logic);
+        let lid = joints.get("lid").copied().unwrap_or(self.lid_open);
+        let lever = joints.get("lever").copied().unwrap_or(self.lever_raised);
+        let locked = latch.update(self, lid, lever);
+        latch.store(logic);
+        vec![("lock", locked)]
+    }
+
+    fn joint_goal(&self, role: &str, goal: &str) -> Option<f64> {
+        Some(match (role, goal) {
+            ("lid", "open") => self.lid_open,
+            ("lid", "closed") => self.lid_closed,
+            ("lever", "raised") => self.lever_raised,
+            ("lever", "pressed") => self.lever_pressed,
+            // Pushed nine tenths of the way: the detent carries it into the notch.
+            ("lever", "press") => self.lever_pressed * 0.9 + self.lever_raised * 0.1,
+            _ => return None,
+        })
+    }
+
+    fn measure(
+        &self,
+        part: &str,
+        state: &str,
+        tolerance: Option<f64>,
+        s: &LabwareState,
+    ) -> Option<Measure> {
+        if part != "lid" {
+            return None;
+        }
+        let (lid, lever) = (s.joint("lid"), s.joint("lever"));
+        let locked = s.flag("locked");
+        let (value, target, extra, default) = match state {
+            "closed" => (lid, self.lid_closed, true, self.closed_tolerance),
+            "locked" => (lever, self.lever_pressed, locked, self.locked_tolerance),
+            "open" => (lid, self.lid_open, true, self.open_tolerance),
+            "unlocked" => (lever, self.lever_raised, !locked, self.unlocked_tolerance),
+            _ => return None,
+        };
+        let tolerance = tolerance.unwrap_or(default);
+        Some(Measure {
+            value,
+            target,
+            tolerance,
+            holds: (value - target).abs() <= tolerance && extra,
+        })
+    }
+
+    fn readout(&self, s: &LabwareState) -> BTreeMap<String, String> {
+        let state = if s.flag("locked") {
+            "locked"
+        } else if self.lid_is_closed(s.joint("lid")) {
+            "closed"
         } else {
-            self.lever_raised
-        }
+            "open"
+        };
+        BTreeMap::from([("lid".to_string(), state.to_string())])
     }
 
-    pub fn lid_is_closed(&self, lid: f64) -> bool {
-        (lid - self.lid_closed).abs() < self.closed_tolerance
-    }
-}
-
-fn box_inertia(m: f64, h: Vec3) -> Vec3 {
-    let (a, b, c) = (2.0 * h[0], 2.0 * h[1], 2.0 * h[2]);
-    [
-        m * (b * b + c * c) / 12.0,
-        m * (a * a + c * c) / 12.0,
-        m * (a * a + b * b) / 12.0,
-    ]
-}
-
-/// The lid latch's state machine, evaluated after every physics step.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Latch {
-    /// The lever was pressed while the lid was open; cleared when the lever is raised.
-    pub jammed: bool,
-    pub locked: bool,
-}
-
-impl Latch {
-    /// Updates from the current joint angles; returns whether the lock constraint is active.
-    pub fn update(&mut self, p: &Params, lid: f64, lever: f64) -> bool {
-        let pressed = p.nearest_notch(lever) == p.lever_pressed;
-        if !pressed {
-            self.jammed = false;
-            self.locked = false;
-        } else if !self.locked && !p.lid_is_closed(lid) {
-            self.jammed = true;
-        } else if !self.jammed {
-            self.locked = true;
-        }
-        self.locked
+    fn affordance(&self, name: &str, s: &LabwareState) -> Option<Affordance> {
+        (name == "grip").then(|| Affordance {
+            pose: self.grip_affordance(&s.pose, s.joint("lid"), s.joint("lever")),
+            symmetry: Symmetry::HalfTurn,
+        })
     }
 }
 
@@ -294,14 +396,19 @@ mod tests {
     #[test]
     fn grip_moves_on_the_lid_arc() {
         let p = Params::default();
-        let open = p.grip_pose(&Pose::IDENTITY, p.lid_open, 0.0);
-        let closed = p.grip_pose(&Pose::IDENTITY, p.lid_closed, 0.0);
+        let open = p.grip_pose(&Pose::identity(), p.lid_open, 0.0);
+        let closed = p.grip_pose(&Pose::identity(), p.lid_closed, 0.0);
         // Closed: the bar lies in front of the hinge at hinge height; open: above and behind the front edge.
-        assert!((closed.pos[2] - p.hinge[2]).abs() < 1e-9);
-        assert!((closed.pos[1] - (p.hinge[1] + p.lid_depth + p.lever_arm)).abs() < 1e-9);
-        assert!(open.pos[2] > closed.pos[2] + 0.2);
-        let r =
-            |q: &Pose| ((q.pos[1] - p.hinge[1]).powi(2) + (q.pos[2] - p.hinge[2]).powi(2)).sqrt();
+        assert!((closed.translation.vector[2] - p.hinge[2]).abs() < 1e-9);
+        assert!(
+            (closed.translation.vector[1] - (p.hinge[1] + p.lid_depth + p.lever_arm)).abs() < 1e-9
+        );
+        assert!(open.translation.vector[2] > closed.translation.vector[2] + 0.2);
+        let r = |q: &Pose| {
+            ((q.translation.vector[1] - p.hinge[1]).powi(2)
+                + (q.translation.vector[2] - p.hinge[2]).powi(2))
+            .sqrt()
+        };
         assert!((r(&open) - r(&closed)).abs() < 1e-9);
     }
 

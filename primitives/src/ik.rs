@@ -7,7 +7,6 @@ use clarabel::solver::{
     DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SupportedConeT,
 };
 use labware::Pose;
-use labware::frame::{norm, sub};
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum IkError {
@@ -39,9 +38,9 @@ impl Default for IkOptions {
 
 /// Pose error as a 6-vector (position; rotation vector), world frame.
 pub fn pose_error(target: &Pose, current: &Pose) -> [f64; 6] {
-    let p = sub(target.pos, current.pos);
-    let r = target.quat.times(current.quat.conj()).log();
-    [p[0], p[1], p[2], r[0], r[1], r[2]]
+    let p = target.translation.vector - current.translation.vector;
+    let r = (target.rotation * current.rotation.inverse()).scaled_axis();
+    [p.x, p.y, p.z, r.x, r.y, r.z]
 }
 
 /// Solves for joint angles reaching `target`, starting from `seed`.
@@ -58,8 +57,8 @@ pub fn solve_ik(
     for _ in 0..opt.iterations {
         let (pose, jac) = kin.jacobian(&q);
         let e = pose_error(target, &pose);
-        pos_err = norm([e[0], e[1], e[2]]);
-        rot_err = norm([e[3], e[4], e[5]]);
+        pos_err = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
+        rot_err = (e[3] * e[3] + e[4] * e[4] + e[5] * e[5]).sqrt();
         if pos_err < opt.pos_tol && rot_err < opt.rot_tol {
             return Ok(q);
         }

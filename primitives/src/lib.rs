@@ -1,19 +1,19 @@
-//! Lab primitives to motions for the scripted expert.
+//! Lab primitives to robot motion for the scripted expert.
 //!
-//! A planned lab primitive (`close_lid` on a thermal cycler) expands into [`Motion`]s (approach,
-//! grasp, follow the lid's arc, press, release, retreat). Each Cartesian motion is resolved
-//! against live labware state into TCP poses, turned into joint waypoints by a clarabel QP
-//! inverse kinematics ([`ik`]) and timed under velocity/acceleration limits by TOPP ([`topp`]).
-//! Kinematics come from outside through the [`Kinematics`] trait (the runtime implements it on
-//! MuJoCo), so this crate runs no simulation.
+//! A planned lab step's motions (its expansion, declared beside the primitive in
+//! `compiler::primitives`) are resolved against live labware state into tool poses
+//! ([`resolve`]), turned into joint waypoints by a clarabel QP inverse kinematics ([`ik`]) and
+//! timed under velocity/acceleration limits by TOPP ([`topp`]). Kinematics come from outside
+//! through the [`Kinematics`] trait (the runtime implements it on MuJoCo), so this crate runs no
+//! simulation and names no instrument: affordances and joint goals come from the labware models.
 
-pub mod expand;
 pub mod ik;
+pub mod resolve;
 pub mod spline;
 pub mod topp;
 
-pub use expand::{GripContext, Motion, expand};
 pub use ik::{IkError, solve_ik};
+pub use resolve::{Lab, PlanError, StepFrame};
 pub use topp::{Limits, Trajectory, plan_trajectory};
 
 use labware::Pose;

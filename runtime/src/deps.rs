@@ -1,4 +1,4 @@
-//! Where `make setup` put the third-party parts (MuJoCo, robot models): `.deps/` of the checkout,
+//! Where `make setup` put the third-party parts (MuJoCo, robot packages): `.deps/` of the checkout,
 //! compiled in from `.cargo/config.toml`, or `$AUTOBIO_DEPS` at run time.
 
 use std::path::PathBuf;
@@ -8,8 +8,4 @@ pub fn deps_dir() -> PathBuf {
         return PathBuf::from(p);
     }
     PathBuf::from(option_env!("AUTOBIO_DEPS").unwrap_or(".deps"))
-}
-
-pub fn robot_dir(package: &str) -> PathBuf {
-    deps_dir().join("robots").join(package)
 }

@@ -1,11 +1,17 @@
 //! One episode on MuJoCo: reset to a scene instance, apply actions, step physics with instrument
 //! logic after every step, and report robot and labware state.
+//!
+//! Layouts: an action is every robot's action concatenated in task order (each robot's layout from
+//! its robot model: arm joint targets, then the gripper command); a state likewise. Labware is
+//! reached only through each item's instrument model: reset from declared part states, its logic
+//! after each physics step (the only writer of `eq_active`), and its readings by role.
 
-use crate::scene::{GRIPPER_CLOSED, Scene};
-use compiler::{LabwareParams, SceneInstance, Task};
-use labware::thermal_cycler::Latch;
+use crate::scene::{LabwareIds, Scene};
+use compiler::params::render;
+use compiler::{SceneInstance, Task};
+use labware::frame::{from_wxyz, position, wxyz};
+use labware::{Instrument, LabwareState, Logic, Pose};
 use mujoco_rs::prelude::*;
-use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
@@ -14,24 +20,17 @@ use std::sync::Arc;
 pub enum StepError {
     #[error("simulation became unstable at t={time:.3} s: {what}")]
     Unstable { time: f64, what: String },
-    #[error("action has {got} values, the robot takes {want}")]
+    #[error("action has {got} values, the robots take {want}")]
     BadAction { got: usize, want: usize },
-}
-
-/// Joint-level state of one labware item, enough to evaluate any predicate on it offline.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct LabwareState {
-    pub name: String,
-    pub joints: BTreeMap<String, f64>,
-    pub locked: bool,
-    pub jammed: bool,
 }
 
 pub struct Episode {
     pub scene: Arc<Scene>,
     pub task: Task,
     pub data: MjData<Arc<MjModel>>,
-    latches: Vec<Latch>,
+    /// Each item's logic state and its joints by role (kept between steps to avoid allocation).
+    logic: Vec<Logic>,
+    joints: Vec<BTreeMap<String, f64>>,
     pub physics_steps: u64,
 }
 
@@ -43,22 +42,54 @@ const FATAL_WARNINGS: [(usize, &str); 4] = [
     (6, "bad ctrl"),
 ];
 
+fn instrument(task: &Task, i: usize) -> &dyn Instrument {
+    task.labware[i]
+        .params
+        .instrument()
+        .expect("Scene::build refuses labware without a model")
+}
+
 impl Episode {
     pub fn new(scene: Arc<Scene>, task: &Task, instance: &SceneInstance) -> Episode {
         let data = MjData::new(scene.model.clone());
+        let n = task.labware.len();
         let mut ep = Episode {
-            latches: vec![Latch::default(); task.labware.len()],
             scene,
             task: task.clone(),
             data,
+            logic: vec![Logic::new(); n],
+            joints: vec![BTreeMap::new(); n],
             physics_steps: 0,
         };
         ep.reset(instance);
         ep
     }
 
+    /// Where a movable item starts: the seat of its `at` slot (on the holder as placed in this
+    /// instance), else its own placement.
+    fn start_pose(&self, i: usize, instance: &SceneInstance) -> Pose {
+        let spec = &self.task.labware[i];
+        let placed = instance.labware_placement[i];
+        let Some(at) = &spec.at else {
+            return placed;
+        };
+        let at = render(at, &instance.params).unwrap_or_else(|_| at.clone());
+        let seat = at.split_once('.').and_then(|(holder, slot)| {
+            let h = self.task.labware_index(holder)?;
+            let holder_state = LabwareState {
+                name: holder.to_string(),
+                pose: instance.labware_placement[h],
+                joints: BTreeMap::new(),
+                parts: BTreeMap::new(),
+                logic: Logic::new(),
+            };
+            instrument(&self.task, h).slot_seat(slot, &holder_state)
+        });
+        seat.unwrap_or(placed)
+    }
+
     /// Resets physics to the instance: arm joints (and their position targets) from the sample,
-    /// grippers open, labware in its declared initial state.
+    /// grippers open, labware in its declared initial state and place.
     pub fn reset(&mut self, instance: &SceneInstance) {
         self.data.reset();
         self.physics_steps = 0;
@@ -68,42 +99,59 @@ impl Episode {
                 self.data.qpos_mut()[adr] = instance.robot_q[r][k];
                 self.data.ctrl_mut()[ids.actuators[k]] = instance.robot_q[r][k];
             }
-            self.data.ctrl_mut()[ids.gripper_actuator] = 0.0;
+            self.data.ctrl_mut()[ids.gripper_actuator] = ids.model.gripper.open;
         }
-        for (i, (spec, ids)) in self.task.labware.iter().zip(&scene.labware).enumerate() {
-            let LabwareParams::ThermalCycler(p) = &spec.params else {
-                continue;
-            };
-            let state = spec
-                .initial
-                .get("lid")
-                .map(String::as_str)
-                .unwrap_or("open");
-            let (lid, lever) = match state {
-                "open" => (p.lid_open, p.lever_raised),
-                "closed" => (p.lid_closed, p.lever_raised),
-                _ => (p.lid_closed, p.lever_pressed),
-            };
-            self.data.qpos_mut()[ids.lid_qpos] = lid;
-            self.data.qpos_mut()[ids.lever_qpos] = lever;
-            self.latches[i] = Latch::default();
-            let locked = self.latches[i].update(p, lid, lever);
-            self.data.eq_active_mut()[ids.lock_eq] = locked;
+        for (i, ids) in scene.labware.iter().enumerate() {
+            let model = instrument(&self.task, i);
+            let reset = model.reset(&self.task.labware[i].initial);
+            for (role, v) in reset.joints {
+                if let Some((_, adr)) = ids.joints.iter().find(|(r, _)| *r == role) {
+                    self.data.qpos_mut()[*adr] = v;
+                }
+            }
+            self.logic[i] = reset.logic;
+            let root = self.start_pose(i, instance);
+            for (joint, pose) in model.place(&self.task.labware[i].name, &root) {
+                if let Some(f) = ids.free.iter().find(|f| f.name == joint) {
+                    let (p, q) = (position(&pose), wxyz(&pose.rotation));
+                    let qpos = self.data.qpos_mut();
+                    qpos[f.qpos..f.qpos + 3].copy_from_slice(&p);
+                    qpos[f.qpos + 3..f.qpos + 7].copy_from_slice(&q);
+                    self.data.qvel_mut()[f.dof..f.dof + 6].fill(0.0);
+                }
+            }
         }
+        self.run_logic();
         self.data.forward();
+    }
+
+    /// Every item's per-step logic, and the switches it asks for.
+    fn run_logic(&mut self) {
+        let scene = self.scene.clone();
+        for (i, ids) in scene.labware.iter().enumerate() {
+            for (role, adr) in &ids.joints {
+                self.joints[i].insert(role.to_string(), self.data.qpos()[*adr]);
+            }
+            let switches = instrument(&self.task, i).step(&self.joints[i], &mut self.logic[i]);
+            for (role, on) in switches {
+                if let Some((_, eq)) = ids.switches.iter().find(|(r, _)| *r == role) {
+                    self.data.eq_active_mut()[*eq] = on;
+                }
+            }
+        }
     }
 
     pub fn time(&self) -> f64 {
         self.data.time()
     }
 
-    /// Sets one robot's targets: its arm joint angles (rad) then the gripper (0 open .. 255 closed).
-    pub fn apply(&mut self, robot: usize, action: &[f64]) -> Result<(), StepError> {
-        let ids = &self.scene.robots[robot];
-        if action.len() != ids.actuators.len() + 1 {
+    /// Sets every robot's targets from one concatenated action (see the module doc).
+    pub fn apply(&mut self, action: &[f64]) -> Result<(), StepError> {
+        let want = self.scene.action_len();
+        if action.len() != want {
             return Err(StepError::BadAction {
                 got: action.len(),
-                want: ids.actuators.len() + 1,
+                want,
             });
         }
         if let Some(bad) = action.iter().position(|v| !v.is_finite()) {
@@ -112,32 +160,26 @@ impl Episode {
                 what: format!("action element {bad} is not finite"),
             });
         }
-        let acts = ids.actuators.clone();
-        let grip = ids.gripper_actuator;
-        for (k, a) in acts.iter().enumerate() {
-            self.data.ctrl_mut()[*a] = action[k];
+        let scene = self.scene.clone();
+        let mut rest = action;
+        for ids in &scene.robots {
+            let (mine, others) = rest.split_at(ids.model.action_len());
+            rest = others;
+            for (k, a) in ids.actuators.iter().enumerate() {
+                self.data.ctrl_mut()[*a] = mine[k];
+            }
+            self.data.ctrl_mut()[ids.gripper_actuator] =
+                ids.model.gripper.clamp(mine[ids.actuators.len()]);
         }
-        self.data.ctrl_mut()[grip] = action[acts.len()].clamp(0.0, GRIPPER_CLOSED);
         Ok(())
     }
 
-    /// One physics step: `mj_step` (the lever's detent is the `autobio.detent` plugin inside it),
-    /// then the latches.
+    /// One physics step: `mj_step` (detents and threads are plugins inside it), then every item's
+    /// logic.
     pub fn physics_step(&mut self) -> Result<(), StepError> {
-        let scene = self.scene.clone();
         self.data.step();
         self.physics_steps += 1;
-        for (i, (spec, ids)) in self.task.labware.iter().zip(&scene.labware).enumerate() {
-            let LabwareParams::ThermalCycler(p) = &spec.params else {
-                continue;
-            };
-            let (lid, lever) = (
-                self.data.qpos()[ids.lid_qpos],
-                self.data.qpos()[ids.lever_qpos],
-            );
-            let locked = self.latches[i].update(p, lid, lever);
-            self.data.eq_active_mut()[ids.lock_eq] = locked;
-        }
+        self.run_logic();
         let warnings = &self.data.ffi().warning;
         for (idx, what) in FATAL_WARNINGS {
             if warnings[idx].number > 0 {
@@ -164,7 +206,7 @@ impl Episode {
         Ok(())
     }
 
-    /// Arm joint angles of a robot.
+    /// Arm joint angles of one robot.
     pub fn arm_q(&self, robot: usize) -> Vec<f64> {
         self.scene.robots[robot]
             .qpos
@@ -173,14 +215,14 @@ impl Episode {
             .collect()
     }
 
-    /// Observation state of a robot: arm joints (rad) then the gripper driver angle (rad, 0..0.8).
+    /// Observation state of one robot: arm joints (rad) then the gripper driver angle (rad).
     pub fn robot_state(&self, robot: usize) -> Vec<f64> {
         let mut s = self.arm_q(robot);
         s.push(self.data.qpos()[self.scene.robots[robot].gripper_qpos]);
         s
     }
 
-    /// The current targets of a robot, in action layout.
+    /// The current targets of one robot, in its action layout.
     pub fn robot_ctrl(&self, robot: usize) -> Vec<f64> {
         let ids = &self.scene.robots[robot];
         let mut c: Vec<f64> = ids.actuators.iter().map(|&a| self.data.ctrl()[a]).collect();
@@ -188,21 +230,49 @@ impl Episode {
         c
     }
 
+    /// Every robot's state, concatenated in task order.
+    pub fn state(&self) -> Vec<f64> {
+        (0..self.scene.robots.len())
+            .flat_map(|r| self.robot_state(r))
+            .collect()
+    }
+
+    /// Every robot's current targets, concatenated in task order (the "no motion" action).
+    pub fn ctrl(&self) -> Vec<f64> {
+        (0..self.scene.robots.len())
+            .flat_map(|r| self.robot_ctrl(r))
+            .collect()
+    }
+
+    fn body_pose(&self, body: usize) -> Pose {
+        labware::frame::pose(self.data.xpos()[body], from_wxyz(self.data.xquat()[body]))
+    }
+
+    fn item_state(&self, i: usize, ids: &LabwareIds) -> LabwareState {
+        LabwareState {
+            name: self.task.labware[i].name.clone(),
+            pose: self.body_pose(ids.root_body),
+            joints: ids
+                .joints
+                .iter()
+                .map(|(role, adr)| (role.to_string(), self.data.qpos()[*adr]))
+                .collect(),
+            parts: ids
+                .parts
+                .iter()
+                .map(|(role, body)| (role.to_string(), self.body_pose(*body)))
+                .collect(),
+            logic: self.logic[i].clone(),
+        }
+    }
+
+    /// Every labware item's live state, in task order.
     pub fn labware_state(&self) -> Vec<LabwareState> {
-        self.task
+        self.scene
             .labware
             .iter()
-            .zip(&self.scene.labware)
-            .zip(&self.latches)
-            .map(|((spec, ids), latch)| LabwareState {
-                name: spec.name.clone(),
-                joints: BTreeMap::from([
-                    ("lid".to_string(), self.data.qpos()[ids.lid_qpos]),
-                    ("lever".to_string(), self.data.qpos()[ids.lever_qpos]),
-                ]),
-                locked: latch.locked,
-                jammed: latch.jammed,
-            })
+            .enumerate()
+            .map(|(i, ids)| self.item_state(i, ids))
             .collect()
     }
 }

@@ -2,7 +2,7 @@
 //! computed on a private `MjData` so the episode's state is never touched.
 
 use crate::scene::{RobotIds, Scene};
-use labware::{Pose, Quat};
+use labware::Pose;
 use mujoco_rs::prelude::*;
 use std::sync::Arc;
 
@@ -17,12 +17,9 @@ impl ArmKinematics {
         let ids = scene.robots[robot].clone();
         let m = &scene.model;
         let limits = ids
-            .qpos
+            .joints
             .iter()
-            .map(|&adr| {
-                let j = (0..m.ffi().njnt as usize)
-                    .find(|&j| m.jnt_qposadr()[j] as usize == adr)
-                    .expect("arm joint exists");
+            .map(|&j| {
                 let r = m.jnt_range()[j];
                 (r[0], r[1])
             })
@@ -43,9 +40,9 @@ impl ArmKinematics {
 
     fn site_pose(&self) -> Pose {
         let s = self.ids.tcp_site;
-        Pose::new(
+        labware::frame::pose(
             self.data.site_xpos()[s],
-            Quat::from_mat(&self.data.site_xmat()[s]),
+            labware::frame::from_rows(&self.data.site_xmat()[s]),
         )
     }
 }

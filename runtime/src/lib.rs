@@ -1,8 +1,9 @@
 //! The autobio runtime: runs a compiled [`compiler::Task`] on MuJoCo.
 //!
-//! It assembles the scene (installed robot models + table + generated labware), steps physics at
-//! 500 Hz with each control action held for the task's substeps, runs instrument logic after every
-//! physics step (detents, latches), renders cameras headless (EGL) and records episodes as MCAP.
+//! It assembles the scene (robot models prepared from installed packages + table + labware from
+//! each item's instrument model), steps physics at 500 Hz with each control action held for the
+//! task's substeps, runs instrument logic after every physics step (latches; detents and threads
+//! are plugins), renders cameras headless (EGL) and records episodes as MCAP, one channel per robot.
 //! It does not decide what to do (policies live in `scoring`) nor whether an episode succeeded
 //! (verdicts live in `scoring`); it reports state.
 
@@ -13,5 +14,6 @@ pub mod record;
 pub mod render;
 pub mod scene;
 
-pub use episode::{Episode, LabwareState, StepError};
+pub use episode::{Episode, StepError};
+pub use labware::LabwareState;
 pub use scene::{Scene, SceneError};

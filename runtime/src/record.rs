@@ -5,9 +5,9 @@
 //! | topic | schema | rate | content |
 //! |---|---|---|---|
 //! | `/task` | `autobio.Task` | once | compiled task, scene instance, seed |
-//! | `/robot/joint_state` | `autobio.JointState` | control (50 Hz) | `position` (6 arm joints + gripper driver, rad), `ctrl` |
-//! | `/robot/action` | `autobio.Action` | control | the action applied for the next period |
-//! | `/labware/state` | `autobio.LabwareState` | control | per labware: joint angles, `locked`, `jammed` |
+//! | `/robot/<name>/joint_state` | `autobio.JointState` | control (50 Hz) | one robot's `position` (its state layout: arm joints + gripper driver, rad) and `ctrl` |
+//! | `/robot/<name>/action` | `autobio.Action` | control | that robot's part of the action applied for the next period |
+//! | `/labware/state` | `autobio.LabwareState` | control | per labware: root pose, joints by role, loose parts' poses, logic state (latch flags) |
 //! | `/camera/<name>` | `foxglove.RawImage` | `image_every` control steps (default 10 Hz) | 224x224 `rgb8`, base64 |
 //! | `/stage` | `autobio.StageEvent` | on event | expert motion / lab-step starts |
 //! | `/verdict` | `autobio.Verdict` | once, at the end | success and every predicate's value |
@@ -23,7 +23,8 @@ use std::fs::File;
 use std::io::BufWriter;
 use std::path::Path;
 
-pub const RECORDING_SCHEMA_VERSION: u32 = 1;
+/// 2: one joint-state and action channel per robot; labware state with poses, parts and logic.
+pub const RECORDING_SCHEMA_VERSION: u32 = 2;
 
 #[derive(Debug, thiserror::Error)]
 pub enum RecordError {
@@ -121,20 +122,21 @@ impl Recorder {
     pub fn joint_state(
         &mut self,
         t: f64,
+        robot: &str,
         position: &[f64],
         ctrl: &[f64],
     ) -> Result<(), RecordError> {
         self.write(
-            "/robot/joint_state",
+            &format!("/robot/{robot}/joint_state"),
             "autobio.JointState",
             t,
             &json!({"t": t, "position": position, "ctrl": ctrl}),
         )
     }
 
-    pub fn action(&mut self, t: f64, action: &[f64]) -> Result<(), RecordError> {
+    pub fn action(&mut self, t: f64, robot: &str, action: &[f64]) -> Result<(), RecordError> {
         self.write(
-            "/robot/action",
+            &format!("/robot/{robot}/action"),
             "autobio.Action",
             t,
             &json!({"t": t, "action": action}),

@@ -1,25 +1,26 @@
 //! Scene assembly: a compiled task (and one sampled instance of it) to a MuJoCo model, plus the
-//! indices the episode needs (joint addresses, actuators, sites, equality constraints).
+//! indices the episode needs, found by the roles the robot and labware models name.
 //!
-//! Robots come from the installed MuJoCo Menagerie files (never from the repository): the UR5e and
-//! the 2F-85 are copied into a content-addressed folder under the temp dir with absolute mesh paths,
-//! gravity compensation on every body, the gripper attached at the flange, a wrist camera and a TCP
-//! site added. The scene then `<attach>`es that robot file once per robot with a name prefix.
+//! Robots come from their robot model ([`robots::RobotModel`]): its `prepare` writes the robot
+//! file from the installed packages, and the scene `<attach>`es it once per robot with the robot's
+//! name as prefix. Labware comes from each item's instrument model ([`labware::Instrument`]): its
+//! MJCF fragment, and the mechanisms it asks for, which become `autobio.*` plugin instances here.
+//! Nothing in this file knows an instrument kind or a robot's joint.
 
 use crate::deps;
-use compiler::{CameraMount, LabwareParams, SceneInstance, Task};
-use labware::{Pose, Quat};
+use compiler::{CameraMount, SceneInstance, Task};
+use labware::mjcf::{Fragment, pose_attrs};
+use labware::{Mechanism, Pose};
 use mujoco_rs::prelude::*;
-use sha2::{Digest, Sha256};
-use std::path::{Path, PathBuf};
+use robots::RobotModel;
 use std::sync::Arc;
 
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
-    #[error("robot model files not found under {0} (run `make setup`)")]
-    MissingRobot(PathBuf),
-    #[error("cannot prepare the robot model: {0}")]
-    Io(#[from] std::io::Error),
+    #[error(transparent)]
+    Robot(#[from] robots::AssetError),
+    #[error("robot `{0}` names the model `{1}`, which is not in the robot registry")]
+    UnknownRobot(String, String),
     #[error("mujoco rejected the scene: {0}")]
     Compile(String),
     #[error("the scene has no {0} named `{1}`")]
@@ -33,6 +34,9 @@ pub enum SceneError {
 /// Per-robot indices into the model.
 #[derive(Clone, Debug)]
 pub struct RobotIds {
+    pub name: String,
+    pub model: &'static RobotModel,
+    pub joints: Vec<usize>,
     pub qpos: Vec<usize>,
     pub dof: Vec<usize>,
     pub actuators: Vec<usize>,
@@ -41,15 +45,25 @@ pub struct RobotIds {
     pub tcp_site: usize,
 }
 
-/// Per-labware indices (thermal cycler).
+/// A free joint of a movable item: its name (as the model's `place` names it) and addresses.
+#[derive(Clone, Debug)]
+pub struct FreeJoint {
+    pub name: String,
+    pub qpos: usize,
+    pub dof: usize,
+}
+
+/// Per-labware indices, by the roles its model names.
 #[derive(Clone, Debug)]
 pub struct LabwareIds {
-    pub lid_qpos: usize,
-    pub lid_dof: usize,
-    pub lever_qpos: usize,
-    pub lever_dof: usize,
-    pub lock_eq: usize,
-    pub grip_site: usize,
+    pub root_body: usize,
+    /// Hinge and slide joints: role, qpos address.
+    pub joints: Vec<(&'static str, usize)>,
+    /// Equality constraints the logic switches: role, equality id.
+    pub switches: Vec<(&'static str, usize)>,
+    pub free: Vec<FreeJoint>,
+    /// Loose parts: role, body id.
+    pub parts: Vec<(&'static str, usize)>,
 }
 
 /// A compiled MuJoCo model for a task with its indices. Cheap to share (`Arc`).
@@ -63,125 +77,63 @@ pub struct Scene {
     pub placements: Vec<Pose>,
 }
 
-pub const ARM_JOINTS: [&str; 6] = [
-    "shoulder_pan_joint",
-    "shoulder_lift_joint",
-    "elbow_joint",
-    "wrist_1_joint",
-    "wrist_2_joint",
-    "wrist_3_joint",
-];
-pub const ARM_ACTUATORS: [&str; 6] = [
-    "shoulder_pan",
-    "shoulder_lift",
-    "elbow",
-    "wrist_1",
-    "wrist_2",
-    "wrist_3",
-];
-/// Gripper actuator range: 0 open, 255 closed.
-pub const GRIPPER_CLOSED: f64 = 255.0;
-/// Distance from the flange to the 2F-85's pinch point along the tool axis (m).
-pub const TCP_OFFSET: f64 = 0.1558;
-
-fn v3(v: [f64; 3]) -> String {
-    format!("{} {} {}", v[0], v[1], v[2])
-}
-fn q4(q: Quat) -> String {
-    format!("{} {} {} {}", q.0[0], q.0[1], q.0[2], q.0[3])
-}
-
-/// Writes the UR5e + 2F-85 robot file (idempotent, content-addressed) and returns its path.
-pub fn prepare_ur5e_2f85() -> Result<PathBuf, SceneError> {
-    let ur_dir = deps::robot_dir("universal_robots_ur5e");
-    let gr_dir = deps::robot_dir("robotiq_2f85");
-    let (ur_file, gr_file) = (ur_dir.join("ur5e.xml"), gr_dir.join("2f85.xml"));
-    if !ur_file.exists() || !gr_file.exists() {
-        return Err(SceneError::MissingRobot(deps::robot_dir("")));
-    }
-    let abs = |p: &Path| std::fs::canonicalize(p).map(|p| p.display().to_string());
-    let gravcomp = |s: &str| s.replace("<body ", "<body gravcomp=\"1\" ");
-    let mut gripper = std::fs::read_to_string(&gr_file)?;
-    gripper = strip_element(&gripper, "<option", "/>");
-    gripper = gravcomp(&gripper).replace(
-        "meshdir=\"assets\"",
-        &format!("meshdir=\"{}\"", abs(&gr_dir.join("assets"))?),
-    );
-    let mut arm = std::fs::read_to_string(&ur_file)?;
-    arm = gravcomp(&arm).replace(
-        "meshdir=\"assets\"",
-        &format!("meshdir=\"{}\"", abs(&ur_dir.join("assets"))?),
-    );
-    arm = strip_element(&arm, "<keyframe>", "</keyframe>");
-    arm = strip_element(&arm, "<light name=\"spotlight\"", "/>");
-    arm = strip_element(&arm, "<option", "/>");
-    let dir = std::env::temp_dir().join(format!(
-        "autobio-robot-{}",
-        short_hash(&(arm.clone() + &gripper))
-    ));
-    std::fs::create_dir_all(&dir)?;
-    let gripper_path = dir.join("2f85.xml");
-    // The tool frame: z along the approach, fingers closing along x. The camera sits on the -y side
-    // looking at the pinch point (RealSense D405-like fov).
-    let tool = format!(
-        r#"<site name="attachment_site" pos="0 0.1 0" quat="-1 1 0 0"/>
-                  <body name="tool" pos="0 0.1 0" quat="-1 1 0 0">
-                    <attach model="gripper" body="base_mount" prefix="gripper/"/>
-                    <site name="tcp" pos="0 0 {TCP_OFFSET}" size="0.004" group="4"/>
-                    <camera name="wrist_cam" pos="0 -0.08 0.02" xyaxes="1 0 0 0 -0.868 0.496" fovy="58"/>
-                  </body>"#
-    );
-    arm = arm.replace(
-        r#"<site name="attachment_site" pos="0 0.1 0" quat="-1 1 0 0"/>"#,
-        &tool,
-    );
-    arm = arm.replace(
-        "<asset>",
-        &format!(
-            "<asset>\n    <model name=\"gripper\" file=\"{}\"/>",
-            gripper_path.display()
-        ),
-    );
-    let arm_path = dir.join("ur5e_2f85.xml");
-    write_if_changed(&gripper_path, &gripper)?;
-    write_if_changed(&arm_path, &arm)?;
-    Ok(arm_path)
-}
-
-fn strip_element(s: &str, open: &str, close: &str) -> String {
-    match s.find(open) {
-        Some(a) => match s[a..].find(close) {
-            Some(b) => format!("{}{}", &s[..a], &s[a + b + close.len()..]),
-            None => s.to_string(),
-        },
-        None => s.to_string(),
+impl Scene {
+    /// The total action length: every robot's action, concatenated in task order.
+    pub fn action_len(&self) -> usize {
+        self.robots.iter().map(|r| r.model.action_len()).sum()
     }
 }
 
-fn short_hash(s: &str) -> String {
-    let d = Sha256::digest(s.as_bytes());
-    d.iter().take(8).map(|b| format!("{b:02x}")).collect()
+fn robot_model(task: &Task, index: usize) -> Result<&'static RobotModel, SceneError> {
+    let r = &task.robots[index];
+    robots::model(&r.model).ok_or_else(|| SceneError::UnknownRobot(r.name.clone(), r.model.clone()))
 }
 
-fn write_if_changed(path: &Path, text: &str) -> std::io::Result<()> {
-    if std::fs::read_to_string(path).ok().as_deref() == Some(text) {
-        return Ok(());
+/// A mechanism as the plugin instance the physics crate writes, with the plugin it belongs to.
+fn plugin_instance(m: &Mechanism) -> (&'static str, String) {
+    match m {
+        Mechanism::Detent {
+            instance,
+            joint,
+            lo,
+            hi,
+            notches,
+            stiffness,
+            damping,
+        } => {
+            let d = physics::detent::Detent {
+                lo: *lo,
+                hi: *hi,
+                n: *notches,
+                stiffness: *stiffness,
+                damping: *damping,
+            };
+            ("autobio.detent", d.mjcf_instance(instance, joint))
+        }
+        Mechanism::Thread {
+            instance,
+            radius,
+            gauge,
+            pitch,
+            low,
+            high,
+        } => {
+            let t = physics::thread::Thread {
+                radius: *radius,
+                gauge: *gauge,
+                pitch: *pitch,
+                low: *low,
+                high: *high,
+            };
+            ("autobio.thread", t.mjcf_instance(instance))
+        }
     }
-    // Unique per process and per call: tests build scenes from several threads at once, and a shared
-    // temporary name lets one thread rename the other's file away.
-    static WRITES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-    let n = WRITES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let tmp = path.with_extension(format!("tmp{}-{n}", std::process::id()));
-    std::fs::write(&tmp, text)?;
-    std::fs::rename(tmp, path)
 }
 
 /// The scene MJCF for a task with the given labware placements.
 pub fn scene_xml(task: &Task, placements: &[Pose]) -> Result<String, SceneError> {
-    let robot_file = prepare_ur5e_2f85()?;
     let mut world = String::new();
-    let mut equality = String::new();
-    let mut contact = String::new();
+    let mut assets = String::new();
     for cam in &task.cameras {
         if let CameraMount::Fixed {
             pos,
@@ -191,53 +143,57 @@ pub fn scene_xml(task: &Task, placements: &[Pose]) -> Result<String, SceneError>
         {
             let a = xyaxes;
             world += &format!(
-                "<camera name=\"{}\" pos=\"{}\" xyaxes=\"{} {} {} {} {} {}\" fovy=\"{fovy_deg}\"/>\n",
-                cam.name,
-                v3(*pos),
-                a[0],
-                a[1],
-                a[2],
-                a[3],
-                a[4],
-                a[5]
+                "<camera name=\"{}\" pos=\"{} {} {}\" xyaxes=\"{} {} {} {} {} {}\" fovy=\"{fovy_deg}\"/>\n",
+                cam.name, pos[0], pos[1], pos[2], a[0], a[1], a[2], a[3], a[4], a[5]
             );
         }
     }
-    // The Menagerie UR5e faces -x at zero pan; turn it so that a mount yaw of 0 reaches along +x.
-    let facing = Quat::from_axis_angle([0.0, 0.0, 1.0], std::f64::consts::PI);
-    for r in &task.robots {
+    let mut prepared: Vec<&str> = Vec::new();
+    for (i, r) in task.robots.iter().enumerate() {
+        let model = robot_model(task, i)?;
+        if !prepared.contains(&model.name) {
+            let file = (model.prepare)(&deps::deps_dir())?;
+            assets += &format!(
+                "<model name=\"{}\" file=\"{}\"/>\n",
+                model.name,
+                file.display()
+            );
+            prepared.push(model.name);
+        }
+        let mount = r.base * labware::frame::axis_angle([0.0, 0.0, 1.0], model.mount_yaw);
         world += &format!(
-            "<body name=\"{n}/mount\" pos=\"{}\" quat=\"{}\">\n  <attach model=\"{}\" body=\"base\" prefix=\"{n}/\"/>\n</body>\n",
-            v3(r.base.pos),
-            q4(r.base.quat.times(facing)),
-            r.model,
+            "<body name=\"{n}/mount\" {}>\n  <attach model=\"{}\" body=\"{}\" prefix=\"{n}/\"/>\n</body>\n",
+            pose_attrs(&mount),
+            model.name,
+            model.root_body,
             n = r.name
         );
     }
-    let mut detents = String::new();
+    let mut labware = Fragment::default();
+    let mut plugins: Vec<(&'static str, String)> = Vec::new();
     for (l, placement) in task.labware.iter().zip(placements) {
-        let LabwareParams::ThermalCycler(p) = &l.params else {
-            return Err(SceneError::Unmodelled(l.name.clone(), l.kind.clone()));
-        };
-        let m = p.mjcf(&l.name, placement);
-        // The lever's two notches: the `autobio.detent` plugin.
-        let lever = physics::detent::Detent {
-            lo: p.lever_pressed.min(p.lever_raised),
-            hi: p.lever_pressed.max(p.lever_raised),
-            n: 2,
-            stiffness: p.detent_stiffness,
-            damping: p.detent_damping,
-        };
-        let joint = labware::thermal_cycler::Names::new(&l.name).lever_joint;
-        detents += &lever.mjcf_instance(&format!("{}/lever_detent", l.name), &joint);
-        world += &m.worldbody;
-        equality += &m.equality;
-        contact += &m.contact;
+        let model = l
+            .params
+            .instrument()
+            .ok_or_else(|| SceneError::Unmodelled(l.name.clone(), l.kind.clone()))?;
+        labware.append(model.fragment(&l.name, placement));
+        plugins.extend(model.mechanisms(&l.name).iter().map(plugin_instance));
+    }
+    let mut extension = String::new();
+    for plugin in ["autobio.detent", "autobio.thread"] {
+        let instances: String = plugins
+            .iter()
+            .filter(|(p, _)| *p == plugin)
+            .map(|(_, i)| i.as_str())
+            .collect();
+        if !instances.is_empty() {
+            extension += &format!("<plugin plugin=\"{plugin}\">{instances}</plugin>\n");
+        }
     }
     Ok(format!(
         r#"<mujoco model="autobio:{id}">
   <compiler angle="radian" autolimits="true"/>
-  <option timestep="{dt}" integrator="implicitfast" cone="elliptic" impratio="10" noslip_iterations="2">
+  <option timestep="{dt}" integrator="implicitfast" cone="elliptic" impratio="10" noslip_iterations="2" sdf_iterations="3" sdf_initpoints="8">
     <flag multiccd="enable"/>
   </option>
   <visual>
@@ -246,18 +202,16 @@ pub fn scene_xml(task: &Task, placements: &[Pose]) -> Result<String, SceneError>
     <headlight ambient="0.45 0.45 0.45" diffuse="0.5 0.5 0.5" specular="0.1 0.1 0.1"/>
   </visual>
   <extension>
-    <plugin plugin="autobio.detent">{detents}</plugin>
-  </extension>
+{extension}  </extension>
   <asset>
-    <model name="ur5e_2f85" file="{robot}"/>
-  </asset>
+{assets}{labware_assets}  </asset>
   <worldbody>
     <light name="ceiling" pos="0 0 3" dir="0 0 -1" directional="true" castshadow="false" diffuse="0.4 0.4 0.4"/>
     <geom name="floor" type="plane" size="4 4 0.1" rgba="0.42 0.43 0.45 1"/>
     <body name="table">
       <geom name="table/top" type="box" size="0.409 0.652 0.412" pos="0 0 0.412" rgba="0.72 0.66 0.56 1"/>
     </body>
-{world}  </worldbody>
+{world}{labware_world}  </worldbody>
   <equality>
 {equality}  </equality>
   <contact>
@@ -266,7 +220,10 @@ pub fn scene_xml(task: &Task, placements: &[Pose]) -> Result<String, SceneError>
 "#,
         id = task.id,
         dt = task.physics.timestep_s,
-        robot = robot_file.display(),
+        labware_assets = labware.asset,
+        labware_world = labware.worldbody,
+        equality = labware.equality,
+        contact = labware.contact,
     ))
 }
 
@@ -279,6 +236,83 @@ fn id_of(
     model
         .name_to_id(ty, name)
         .ok_or_else(|| SceneError::MissingName(what, name.to_string()))
+}
+
+fn joint_id(m: &MjModel, name: &str) -> Result<usize, SceneError> {
+    id_of(m, MjtObjBase::mjOBJ_JOINT, "joint", name)
+}
+
+fn robot_ids(m: &MjModel, name: &str, model: &'static RobotModel) -> Result<RobotIds, SceneError> {
+    let full = |n: &str| format!("{name}/{n}");
+    let joints = model
+        .arm_joints
+        .iter()
+        .map(|j| joint_id(m, &full(j)))
+        .collect::<Result<Vec<_>, _>>()?;
+    let actuators = model
+        .arm_actuators
+        .iter()
+        .map(|a| id_of(m, MjtObjBase::mjOBJ_ACTUATOR, "actuator", &full(a)))
+        .collect::<Result<Vec<_>, _>>()?;
+    let driver = joint_id(m, &full(model.gripper.driver_joint))?;
+    Ok(RobotIds {
+        name: name.to_string(),
+        model,
+        qpos: joints.iter().map(|&j| joint_qposadr(m, j)).collect(),
+        dof: joints.iter().map(|&j| joint_dofadr(m, j)).collect(),
+        joints,
+        actuators,
+        gripper_actuator: id_of(
+            m,
+            MjtObjBase::mjOBJ_ACTUATOR,
+            "actuator",
+            &full(model.gripper.actuator),
+        )?,
+        gripper_qpos: joint_qposadr(m, driver),
+        tcp_site: id_of(m, MjtObjBase::mjOBJ_SITE, "site", &full(model.tcp_site))?,
+    })
+}
+
+fn labware_ids(m: &MjModel, l: &compiler::LabwareSpec) -> Result<LabwareIds, SceneError> {
+    let model = l
+        .params
+        .instrument()
+        .ok_or_else(|| SceneError::Unmodelled(l.name.clone(), l.kind.clone()))?;
+    let name = &l.name;
+    let joints = model
+        .joints(name)
+        .into_iter()
+        .map(|(role, j)| Ok((role, joint_qposadr(m, joint_id(m, &j)?))))
+        .collect::<Result<Vec<_>, SceneError>>()?;
+    let switches = model
+        .switches(name)
+        .into_iter()
+        .map(|(role, e)| Ok((role, id_of(m, MjtObjBase::mjOBJ_EQUALITY, "equality", &e)?)))
+        .collect::<Result<Vec<_>, SceneError>>()?;
+    let free = model
+        .place(name, &Pose::identity())
+        .into_iter()
+        .map(|(j, _)| {
+            let id = joint_id(m, &j)?;
+            Ok(FreeJoint {
+                name: j,
+                qpos: joint_qposadr(m, id),
+                dof: joint_dofadr(m, id),
+            })
+        })
+        .collect::<Result<Vec<_>, SceneError>>()?;
+    let parts = model
+        .part_bodies(name)
+        .into_iter()
+        .map(|(role, b)| Ok((role, id_of(m, MjtObjBase::mjOBJ_BODY, "body", &b)?)))
+        .collect::<Result<Vec<_>, SceneError>>()?;
+    Ok(LabwareIds {
+        root_body: id_of(m, MjtObjBase::mjOBJ_BODY, "body", &model.root_body(name))?,
+        joints,
+        switches,
+        free,
+        parts,
+    })
 }
 
 impl Scene {
@@ -294,71 +328,24 @@ impl Scene {
             return Err(SceneError::Compile(errors.join("; ")));
         }
         let m = &model;
-        let mut robots = Vec::new();
-        for r in &task.robots {
-            let mut qpos = Vec::new();
-            let mut dof = Vec::new();
-            let mut actuators = Vec::new();
-            for (j, a) in ARM_JOINTS.iter().zip(ARM_ACTUATORS) {
-                let jid = id_of(
-                    m,
-                    MjtObjBase::mjOBJ_JOINT,
-                    "joint",
-                    &format!("{}/{j}", r.name),
-                )?;
-                qpos.push(joint_qposadr(m, jid));
-                dof.push(joint_dofadr(m, jid));
-                actuators.push(id_of(
-                    m,
-                    MjtObjBase::mjOBJ_ACTUATOR,
-                    "actuator",
-                    &format!("{}/{a}", r.name),
-                )?);
-            }
-            let driver = id_of(
-                m,
-                MjtObjBase::mjOBJ_JOINT,
-                "joint",
-                &format!("{}/gripper/right_driver_joint", r.name),
-            )?;
-            robots.push(RobotIds {
-                qpos,
-                dof,
-                actuators,
-                gripper_actuator: id_of(
-                    m,
-                    MjtObjBase::mjOBJ_ACTUATOR,
-                    "actuator",
-                    &format!("{}/gripper/fingers_actuator", r.name),
-                )?,
-                gripper_qpos: joint_qposadr(m, driver),
-                tcp_site: id_of(
-                    m,
-                    MjtObjBase::mjOBJ_SITE,
-                    "site",
-                    &format!("{}/tcp", r.name),
-                )?,
-            });
-        }
-        let mut labware = Vec::new();
-        for l in &task.labware {
-            let n = labware::thermal_cycler::Names::new(&l.name);
-            let lid = id_of(m, MjtObjBase::mjOBJ_JOINT, "joint", &n.lid_joint)?;
-            let lever = id_of(m, MjtObjBase::mjOBJ_JOINT, "joint", &n.lever_joint)?;
-            labware.push(LabwareIds {
-                lid_qpos: joint_qposadr(m, lid),
-                lid_dof: joint_dofadr(m, lid),
-                lever_qpos: joint_qposadr(m, lever),
-                lever_dof: joint_dofadr(m, lever),
-                lock_eq: id_of(m, MjtObjBase::mjOBJ_EQUALITY, "equality", &n.lock)?,
-                grip_site: id_of(m, MjtObjBase::mjOBJ_SITE, "site", &n.grip_site)?,
-            });
-        }
+        let robots = (0..task.robots.len())
+            .map(|i| robot_ids(m, &task.robots[i].name, robot_model(task, i)?))
+            .collect::<Result<Vec<_>, _>>()?;
+        let labware = task
+            .labware
+            .iter()
+            .map(|l| labware_ids(m, l))
+            .collect::<Result<Vec<_>, _>>()?;
         let mut cameras = Vec::new();
         for c in &task.cameras {
             let name = match &c.mount {
                 CameraMount::Fixed { .. } => c.name.clone(),
-                CameraMount::Wrist { robot } => format!("{robot}/wrist_cam"),
+                CameraMount::Wrist { robot } => {
+                    let r = task
+                        .robot_index(robot)
+                        .ok_or_else(|| SceneError::MissingName("robot", robot.clone()))?;
+                    format!("{robot}/{}", robot_model(task, r)?.wrist_camera)
+                }
             };
             cameras.push(id_of(m, MjtObjBase::mjOBJ_CAMERA, "camera", &name)?);
         }

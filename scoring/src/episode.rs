@@ -2,7 +2,7 @@
 //! success (checked after every control period) or the time limit. A policy failure or an unstable
 //! simulation ends the episode as a failure with its reason; nothing already finished is lost.
 
-use crate::policy::{Observation, Policy, Privileged};
+use crate::policy::{Observation, Policy, Privileged, RobotPrivileged};
 use crate::verdict::{Judge, Verdict};
 use compiler::{SceneInstance, Task};
 use runtime::Episode;
@@ -67,13 +67,14 @@ pub fn run_episode(
     let mut steps = 0u64;
     let mut error = None;
     let initial = ep.labware_state();
-    let mut judge = Judge::new(task, &initial);
+    let mut judge = Judge::new(task, &instance.params, &initial);
+    let robots = ep.scene.robots.clone();
     let mut over = judge.update(ep.time(), &initial);
     'episode: while !over && ep.time() < task.time_limit_s {
         let stage = judge.stage();
         let obs = Observation {
             time: ep.time(),
-            state: ep.robot_state(0),
+            state: ep.state(),
             stage,
             prompt: instance
                 .stage_instructions
@@ -81,8 +82,12 @@ pub fn run_episode(
                 .map(String::as_str)
                 .unwrap_or(&instance.instruction),
             privileged: Privileged {
-                arm_q: ep.arm_q(0),
-                ctrl: ep.robot_ctrl(0),
+                robots: (0..robots.len())
+                    .map(|r| RobotPrivileged {
+                        arm_q: ep.arm_q(r),
+                        ctrl: ep.robot_ctrl(r),
+                    })
+                    .collect(),
                 labware: ep.labware_state(),
             },
         };
@@ -105,9 +110,14 @@ pub fn run_episode(
         for action in chunk {
             let t = ep.time();
             if let Some(r) = rec.as_mut() {
-                r.joint_state(t, &ep.robot_state(0), &ep.robot_ctrl(0))
-                    .map_err(|e| e.to_string())?;
-                r.action(t, &action).map_err(|e| e.to_string())?;
+                let mut rest = action.as_slice();
+                for (k, ids) in robots.iter().enumerate() {
+                    let (mine, others) = rest.split_at(ids.model.action_len().min(rest.len()));
+                    rest = others;
+                    r.joint_state(t, &ids.name, &ep.robot_state(k), &ep.robot_ctrl(k))
+                        .map_err(|e| e.to_string())?;
+                    r.action(t, &ids.name, mine).map_err(|e| e.to_string())?;
+                }
                 r.labware(t, &ep.labware_state())
                     .map_err(|e| e.to_string())?;
                 if let Some(c) = cameras.as_mut()
@@ -118,7 +128,7 @@ pub fn run_episode(
                     }
                 }
             }
-            if let Err(e) = ep.apply(0, &action).and_then(|_| ep.control_step()) {
+            if let Err(e) = ep.apply(&action).and_then(|_| ep.control_step()) {
                 error = Some(e.to_string());
                 break 'episode;
             }

@@ -1,10 +1,10 @@
-//! Evaluation runs: N seeded episodes of one task with one policy. Each finished episode is
+//! Evaluation runs: N seeded episodes of one task with one policy, made per episode by name through
+//! [`crate::policy::make`]. Each finished episode is
 //! appended to a JSONL journal immediately (so nothing finished is lost if the run dies), and the
 //! run ends with a versioned results JSON.
 
 use crate::episode::{EpisodeOptions, EpisodeResult, run_episode};
-use crate::expert::ExpertPolicy;
-use crate::policy::Policy;
+use crate::policy;
 use compiler::Task;
 use serde::{Deserialize, Serialize};
 use std::io::Write;
@@ -40,6 +40,8 @@ pub struct EvalReport {
 }
 
 pub struct EvalOptions {
+    /// The policy's name (see [`crate::policy::POLICIES`]).
+    pub policy: String,
     pub episodes: usize,
     pub seed: u64,
     /// Where to write recordings (`<task>_seed<seed>.mcap`), the journal and results.json.
@@ -71,7 +73,7 @@ pub fn summarise(episodes: &[EpisodeResult], wall: f64) -> EvalSummary {
     }
 }
 
-/// Runs the scripted expert on `task`. `progress` is called after each episode.
+/// Runs the named policy on `task`. `progress` is called after each episode.
 pub fn evaluate(
     task: &Task,
     opts: &EvalOptions,
@@ -97,6 +99,7 @@ pub fn evaluate(
     };
     let mut scene: Option<Arc<runtime::Scene>> = None;
     let mut results = Vec::new();
+    let mut policy_name = opts.policy.clone();
     for i in 0..opts.episodes {
         let seed = opts.seed.wrapping_add(i as u64);
         let instance = task.sample(seed);
@@ -109,7 +112,9 @@ pub fn evaluate(
             ));
         }
         let sc = scene.as_ref().expect("built above");
-        let mut policy = ExpertPolicy::new(task, sc, &instance).map_err(|e| e.to_string())?;
+        let mut policy =
+            policy::make(&opts.policy, task, sc, &instance).map_err(|e| e.to_string())?;
+        policy_name = policy.name();
         let record = match (&opts.out, opts.record) {
             (Some(d), true) => Some(recording_path(d, task, seed)),
             _ => None,
@@ -118,7 +123,7 @@ pub fn evaluate(
             record,
             image_every: opts.image_every,
         };
-        let r = run_episode(task, sc, &instance, &mut policy as &mut dyn Policy, &eo)?;
+        let r = run_episode(task, sc, &instance, policy.as_mut(), &eo)?;
         if let Some(j) = journal.as_mut() {
             let line = serde_json::to_string(&r).map_err(|e| e.to_string())?;
             writeln!(j, "{line}")
@@ -132,7 +137,7 @@ pub fn evaluate(
         schema_version: RESULTS_SCHEMA_VERSION,
         task_id: task.id.clone(),
         protocol: task.source.clone(),
-        policy: "expert".into(),
+        policy: policy_name,
         seed: opts.seed,
         summary: summarise(&results, start.elapsed().as_secs_f64()),
         episodes: results,

@@ -1,27 +1,37 @@
-//! The scripted expert: expands the task's plan into motions, resolves each against live labware
-//! state when it starts, solves IK for its waypoints and follows the TOPP-timed trajectory.
+//! The scripted expert: each planned step goes to the robot its `with` names, expands into the
+//! motions its primitive declares (`compiler::primitives`), and each motion is resolved against
+//! live labware state when it starts (`primitives::resolve`), solved by IK for that robot and
+//! followed along a TOPP-timed trajectory. Steps run one after another; the robots not moving hold.
+//! Gripper values, settle times and speed limits come from each robot's model.
 
 use crate::policy::{Observation, Policy, PolicyError, StageEvent};
-use compiler::{LabwareParams, PlannedStep, SceneInstance, Task};
-use labware::Pose;
+use compiler::motion::{Motion, MotionStep};
+use compiler::params::{Bindings, render};
+use compiler::{SceneInstance, Task};
 use primitives::topp::{Limits, Trajectory, plan_trajectory};
-use primitives::{GripContext, Kinematics, Motion, expand, solve_ik};
+use primitives::{Kinematics, Lab, StepFrame, solve_ik};
+use robots::RobotModel;
 use runtime::Scene;
 use runtime::kinematics::ArmKinematics;
-use std::collections::VecDeque;
+use std::collections::{BTreeMap, VecDeque};
 
-/// Joint velocity and acceleration limits of the expert (as the upstream thermal-cycler expert).
-pub const EXPERT_LIMITS: Limits = Limits {
-    vmax: 1.5,
-    amax: 1.0,
-};
+/// Pause after each path so the arm settles on its last waypoint (s).
 const SETTLE_S: f64 = 0.2;
 
 struct Queued {
-    /// Index into the flattened plan, and the stage the step belongs to.
+    /// Index into the plan, and the stage the step belongs to.
     step: usize,
     stage: usize,
     motion: Motion,
+}
+
+/// One planned step, routed and expanded.
+struct Step {
+    robot: usize,
+    /// The `on` item, rendered (what a `place` carries).
+    on: Option<String>,
+    label: String,
+    motions: Vec<Motion>,
 }
 
 enum Active {
@@ -29,19 +39,28 @@ enum Active {
     Hold { until: f64 },
 }
 
+struct Arm {
+    model: &'static RobotModel,
+    kin: ArmKinematics,
+    target: Vec<f64>,
+    gripper: f64,
+}
+
 pub struct ExpertPolicy {
     task: Task,
-    /// Every stage's steps in order, with the labware each acts on.
-    plan: Vec<(PlannedStep, usize)>,
-    placements: Vec<Pose>,
-    kin: ArmKinematics,
+    params: Bindings,
+    steps: Vec<Step>,
+    arms: Vec<Arm>,
+    started: bool,
     queue: VecDeque<Queued>,
     active: Option<Active>,
-    context: Option<(usize, GripContext)>,
-    target: Option<Vec<f64>>,
-    gripper: f64,
+    frame: Option<(usize, StepFrame)>,
     control_dt: f64,
     events: Vec<StageEvent>,
+}
+
+fn planning(e: impl std::fmt::Display) -> PolicyError {
+    PolicyError::Planning(e.to_string())
 }
 
 impl ExpertPolicy {
@@ -51,102 +70,133 @@ impl ExpertPolicy {
         instance: &SceneInstance,
     ) -> Result<ExpertPolicy, PolicyError> {
         let mut queue = VecDeque::new();
-        let mut plan = Vec::new();
+        let mut steps = Vec::new();
         for (i, (stage, step)) in task.steps().enumerate() {
-            let no_expert = || {
-                PolicyError::Planning(format!(
-                    "the expert has no motions for `{}` on this labware yet",
-                    step.primitive
-                ))
-            };
-            let li = step
-                .labware
-                .as_deref()
-                .and_then(|l| task.labware_index(l))
-                .ok_or_else(no_expert)?;
-            let LabwareParams::ThermalCycler(p) = &task.labware[li].params else {
-                return Err(no_expert());
-            };
-            let motions = expand(&step.primitive, p).ok_or_else(no_expert)?;
-            queue.extend(motions.into_iter().map(|motion| Queued {
+            let robot = task
+                .robot_index(&step.robot)
+                .ok_or_else(|| PolicyError::Planning(format!("no robot named `{}`", step.robot)))?;
+            let expand = compiler::primitives::primitive(&step.primitive)
+                .and_then(|p| p.motions)
+                .ok_or_else(|| {
+                    PolicyError::Planning(format!(
+                        "the expert has no motions for `{}` yet",
+                        step.primitive
+                    ))
+                })?;
+            let args: BTreeMap<String, String> = step
+                .args
+                .iter()
+                .map(|(k, v)| {
+                    let v = render(v, &instance.params).unwrap_or_else(|_| v.clone());
+                    (k.clone(), v)
+                })
+                .collect();
+            let motions = expand(&MotionStep { args: &args });
+            queue.extend(motions.iter().map(|motion| Queued {
                 step: i,
                 stage,
-                motion,
+                motion: motion.clone(),
             }));
-            plan.push((step.clone(), li));
+            steps.push(Step {
+                robot,
+                on: args.get("on").cloned(),
+                label: format!(
+                    "step {i}: {} {} with {}",
+                    step.primitive,
+                    args.get("on").map(String::as_str).unwrap_or(""),
+                    step.robot
+                ),
+                motions,
+            });
         }
+        let arms = scene
+            .robots
+            .iter()
+            .enumerate()
+            .map(|(r, ids)| Arm {
+                model: ids.model,
+                kin: ArmKinematics::new(scene, r),
+                target: instance.robot_q[r].clone(),
+                gripper: ids.model.gripper.open,
+            })
+            .collect();
         Ok(ExpertPolicy {
             task: task.clone(),
-            plan,
-            placements: instance.labware_placement.clone(),
-            kin: ArmKinematics::new(scene, 0),
+            params: instance.params.clone(),
+            steps,
+            arms,
+            started: false,
             queue,
             active: None,
-            context: None,
-            target: None,
-            gripper: 0.0,
+            frame: None,
             control_dt: 1.0 / task.physics.control_hz(),
             events: Vec::new(),
         })
     }
 
     fn start(&mut self, q: Queued, obs: &Observation) -> Result<Active, PolicyError> {
-        let (step, li) = &self.plan[q.step];
-        let li = *li;
-        let live = &obs.privileged.labware[li];
-        let live = (live.joints["lid"], live.joints["lever"]);
-        let target = self.target.clone().expect("set before start");
-        let tcp_now = self.kin.tcp(&target);
-        if self.context.as_ref().map(|(s, _)| *s) != Some(q.step) {
-            let LabwareParams::ThermalCycler(p) = &self.task.labware[li].params else {
-                return Err(PolicyError::Planning("checked in new".into()));
-            };
-            let (lid, lever) = match q.motion {
-                Motion::Approach { lid, lever, .. } => (lid, lever),
-                _ => live,
-            };
-            self.context = Some((
-                q.step,
-                GripContext::new(p.clone(), self.placements[li], lid, lever, &tcp_now),
-            ));
+        let step = &self.steps[q.step];
+        let lab = Lab::new(&self.task, &obs.privileged.labware, &self.params);
+        let arm = &mut self.arms[step.robot];
+        let tcp_now = arm.kin.tcp(&arm.target);
+        if self.frame.as_ref().map(|(s, _)| *s) != Some(q.step) {
+            let frame = StepFrame::new(&step.motions, &lab, &tcp_now, step.on.as_deref())
+                .map_err(planning)?;
+            self.frame = Some((q.step, frame));
             self.events.push(StageEvent {
                 time: obs.time,
-                label: format!(
-                    "step {}: {} {}",
-                    q.step,
-                    step.primitive,
-                    step.labware.as_deref().unwrap_or("")
-                ),
+                label: step.label.clone(),
             });
         }
         self.events.push(StageEvent {
             time: obs.time,
             label: q.motion.label().to_string(),
         });
-        let cx = &self.context.as_ref().expect("set above").1;
-        if let Motion::Gripper { ctrl, duration_s } = q.motion {
-            self.gripper = ctrl;
-            return Ok(Active::Hold {
-                until: obs.time + duration_s,
-            });
+        let gripper = arm.model.gripper;
+        match q.motion {
+            Motion::Grasp | Motion::Release => {
+                arm.gripper = if matches!(q.motion, Motion::Grasp) {
+                    gripper.closed
+                } else {
+                    gripper.open
+                };
+                return Ok(Active::Hold {
+                    until: obs.time + gripper.settle_s,
+                });
+            }
+            _ => {}
         }
-        let poses = cx.poses(&q.motion, &tcp_now, live);
-        let mut waypoints = vec![target.clone()];
-        let mut seed = target;
+        let frame = &self.frame.as_ref().expect("set above").1;
+        let poses = frame
+            .poses(&q.motion, &lab, &tcp_now)
+            .map_err(|e| planning(format!("{}: {e}", q.motion.label())))?;
+        let mut waypoints = vec![arm.target.clone()];
+        let mut seed = arm.target.clone();
         for pose in poses.iter().skip(1) {
-            let qn = solve_ik(&mut self.kin, pose, &seed, &Default::default())
-                .map_err(|e| PolicyError::Planning(format!("{}: {e}", q.motion.label())))?;
+            let qn = solve_ik(&mut arm.kin, pose, &seed, &Default::default())
+                .map_err(|e| planning(format!("{}: {e}", q.motion.label())))?;
             waypoints.push(qn.clone());
             seed = qn;
         }
-        let traj = plan_trajectory(waypoints, &EXPERT_LIMITS, 200);
+        let limits = Limits {
+            vmax: arm.model.expert_limits.vmax,
+            amax: arm.model.expert_limits.amax,
+        };
+        let traj = plan_trajectory(waypoints, &limits, 200);
         Ok(Active::Path { traj, t0: obs.time })
     }
 
+    /// Every robot's targets, concatenated.
     fn action(&self) -> Vec<f64> {
-        let mut a = self.target.clone().expect("set in act");
-        a.push(self.gripper);
-        a
+        self.arms
+            .iter()
+            .flat_map(|a| a.target.iter().copied().chain([a.gripper]))
+            .collect()
+    }
+
+    /// The robot the current step moves.
+    fn moving(&self) -> Option<usize> {
+        self.frame.as_ref().map(|(s, _)| self.steps[*s].robot)
     }
 }
 
@@ -156,9 +206,12 @@ impl Policy for ExpertPolicy {
     }
 
     fn act(&mut self, obs: &Observation) -> Result<Vec<Vec<f64>>, PolicyError> {
-        if self.target.is_none() {
-            self.target = Some(obs.privileged.arm_q.clone());
-            self.gripper = obs.privileged.ctrl.last().copied().unwrap_or(0.0);
+        if !self.started {
+            for (arm, live) in self.arms.iter_mut().zip(&obs.privileged.robots) {
+                arm.target = live.arm_q.clone();
+                arm.gripper = live.ctrl.last().copied().unwrap_or(arm.model.gripper.open);
+            }
+            self.started = true;
         }
         let next_t = obs.time + self.control_dt;
         loop {
@@ -180,12 +233,13 @@ impl Policy for ExpertPolicy {
                 }
                 Some(Active::Path { traj, t0 }) => {
                     let t = next_t - t0;
+                    let robot = self.moving().expect("a path belongs to a step");
                     if t > traj.duration() + SETTLE_S {
-                        self.target = Some(traj.end());
+                        self.arms[robot].target = traj.end();
                         self.active = None;
                         continue;
                     }
-                    self.target = Some(traj.sample(t));
+                    self.arms[robot].target = traj.sample(t);
                     return Ok(vec![self.action()]);
                 }
             }

@@ -1,4 +1,5 @@
-//! Scoring: policies (the scripted expert now; replays and websocket models later), the episode
+//! Scoring: policies made by name (the scripted expert and the no-motion control now; replays and
+//! websocket models later), the episode
 //! loop that couples a policy to the runtime, verdicts from success predicates, and evaluation runs
 //! that write versioned results.
 //!
@@ -13,5 +14,5 @@ pub mod verdict;
 
 pub use episode::{EpisodeOptions, EpisodeResult, run_episode};
 pub use eval::{EvalReport, EvalSummary, RESULTS_SCHEMA_VERSION, evaluate};
-pub use policy::{HoldPolicy, Observation, Policy, PolicyError, StageEvent};
+pub use policy::{HoldPolicy, Observation, POLICIES, Policy, PolicyError, StageEvent};
 pub use verdict::{Judge, PredicateValue, StageVerdict, Verdict};

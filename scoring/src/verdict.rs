@@ -1,9 +1,13 @@
 //! Verdicts: every success predicate of the current stage evaluated on measured labware state,
 //! each with its value, target, tolerance and progress; stages advanced as their predicates hold.
-//! Pure functions of recorded state, so a recording can be re-scored offline ([`Judge::replay`]).
+//! Part states are read out by each item's instrument model (nothing here re-derives "closed" from
+//! angles); slots by the holder's model. Pure functions of recorded state and the episode's drawn
+//! parameters, so a recording can be re-scored offline ([`Judge::replay`]).
 
+use compiler::params::{Bindings, render};
 use compiler::predicates::Check;
-use compiler::{LabwareParams, Predicate, Scoring, Task};
+use compiler::{Predicate, Scoring, Task};
+use labware::Measure;
 use runtime::LabwareState;
 use serde::{Deserialize, Serialize};
 
@@ -48,29 +52,32 @@ impl Verdict {
     }
 }
 
-/// Measured value, target, tolerance and extra condition of one predicate, where measurable.
-fn measure(task: &Task, check: &Check, states: &[LabwareState]) -> Option<(f64, f64, f64, bool)> {
+/// Largest tilt (rad) of an item that still stands upright in a slot.
+const UPRIGHT_TILT: f64 = 0.15;
+
+/// The measured value of one predicate, where the judge can measure it.
+fn measure(
+    task: &Task,
+    params: &Bindings,
+    check: &Check,
+    states: &[LabwareState],
+) -> Option<Measure> {
+    let state_of = |name: &str| states.iter().find(|s| s.name == name);
+    let spec_of = |name: &str| task.labware.iter().find(|l| l.name == name);
     match check {
         Check::State {
             labware,
+            part,
             state,
             tolerance,
-            ..
         } => {
-            let spec = task.labware.iter().find(|l| &l.name == labware)?;
-            let s = states.iter().find(|s| &s.name == labware)?;
-            let LabwareParams::ThermalCycler(p) = &spec.params else {
-                return None;
-            };
-            let lid = s.joints.get("lid").copied()?;
-            let lever = s.joints.get("lever").copied()?;
-            let tol = tolerance.as_ref().map(|t| t.value).unwrap_or(0.01);
-            Some(match state.as_str() {
-                "closed" => (lid, p.lid_closed, tol, true),
-                "locked" => (lever, p.lever_pressed, tol, s.locked),
-                "open" => (lid, p.lid_open, tol, true),
-                _ => (lever, p.lever_raised, tol, !s.locked),
-            })
+            let model = spec_of(labware)?.params.instrument()?;
+            model.measure(
+                part,
+                state,
+                tolerance.as_ref().map(|t| t.value),
+                state_of(labware)?,
+            )
         }
         Check::JointRange {
             labware,
@@ -78,22 +85,56 @@ fn measure(task: &Task, check: &Check, states: &[LabwareState]) -> Option<(f64, 
             low,
             high,
         } => {
-            let s = states.iter().find(|s| &s.name == labware)?;
-            let v = s.joints.get(joint).copied()?;
-            Some((v, (low + high) / 2.0, (high - low) / 2.0, true))
+            let value = state_of(labware)?.joints.get(joint).copied()?;
+            let (target, tolerance) = ((low + high) / 2.0, (high - low) / 2.0);
+            Some(Measure {
+                value,
+                target,
+                tolerance,
+                holds: (value - target).abs() <= tolerance,
+            })
         }
-        // The remaining checks need labware kinds the runtime cannot build yet.
+        Check::InSlot {
+            item,
+            location,
+            tolerance,
+        } => {
+            let location = render(location, params).ok()?;
+            let (holder, slot) = location.split_once('.')?;
+            let seat = spec_of(holder)?
+                .params
+                .instrument()?
+                .slot_seat(slot, state_of(holder)?)?;
+            let height = labware::kind(&spec_of(item)?.kind)
+                .and_then(|k| k.tolerance("slot_z"))
+                .unwrap_or(0.005);
+            Some(labware::model::seated(
+                &seat,
+                &state_of(item)?.pose,
+                tolerance.value,
+                height,
+                UPRIGHT_TILT,
+            ))
+        }
+        // Volumes, panels, contacts and positions need instruments the runtime cannot build yet.
         _ => None,
     }
 }
 
 fn evaluate(
     task: &Task,
+    params: &Bindings,
     pred: &Predicate,
     states: &[LabwareState],
     start: &[LabwareState],
 ) -> PredicateValue {
-    let Some((value, target, tolerance, extra)) = measure(task, &pred.check, states) else {
+    let Some(Measure {
+        value,
+        target,
+        tolerance,
+        holds,
+    }) = measure(task, params, &pred.check, states)
+    else {
         return PredicateValue {
             text: pred.text.clone(),
             holds: false,
@@ -103,9 +144,8 @@ fn evaluate(
             progress: 0.0,
         };
     };
-    let holds = (value - target).abs() <= tolerance && extra;
-    let from = measure(task, &pred.check, start)
-        .map(|m| m.0)
+    let from = measure(task, params, &pred.check, start)
+        .map(|m| m.value)
         .unwrap_or(value);
     let span = (target - from).abs();
     let progress = if holds {
@@ -128,6 +168,7 @@ fn evaluate(
 
 fn stage_verdict(
     task: &Task,
+    params: &Bindings,
     index: usize,
     states: &[LabwareState],
     start: &[LabwareState],
@@ -137,7 +178,7 @@ fn stage_verdict(
     let predicates: Vec<PredicateValue> = stage
         .success
         .iter()
-        .map(|p| evaluate(task, p, states, start))
+        .map(|p| evaluate(task, params, p, states, start))
         .collect();
     let success = !predicates.is_empty() && predicates.iter().all(|p| p.holds);
     let score = match stage.scoring {
@@ -166,6 +207,7 @@ fn stage_verdict(
 /// the episode is over when the last stage completes or the current one runs out of time.
 pub struct Judge<'t> {
     task: &'t Task,
+    params: &'t Bindings,
     stage: usize,
     stage_start_s: f64,
     stage_start: Vec<LabwareState>,
@@ -174,9 +216,11 @@ pub struct Judge<'t> {
 }
 
 impl<'t> Judge<'t> {
-    pub fn new(task: &'t Task, initial: &[LabwareState]) -> Self {
+    /// A judge for one episode of `task` with its drawn parameters.
+    pub fn new(task: &'t Task, params: &'t Bindings, initial: &[LabwareState]) -> Self {
         Judge {
             task,
+            params,
             stage: 0,
             stage_start_s: 0.0,
             stage_start: initial.to_vec(),
@@ -195,7 +239,14 @@ impl<'t> Judge<'t> {
         // Whole microseconds: a recording stores nanosecond timestamps, and a replay must agree.
         let time = (time * 1e6).round() / 1e6;
         while self.stage < self.task.stages.len() {
-            let v = stage_verdict(self.task, self.stage, states, &self.stage_start, Some(time));
+            let v = stage_verdict(
+                self.task,
+                self.params,
+                self.stage,
+                states,
+                &self.stage_start,
+                Some(time),
+            );
             if !v.success {
                 let limit = self.task.stages[self.stage].time_limit_s;
                 self.last = Some(v);
@@ -225,11 +276,11 @@ impl<'t> Judge<'t> {
     }
 
     /// Re-scores a recorded series of (time, labware state), first entry the initial state.
-    pub fn replay(task: &Task, series: &[(f64, Vec<LabwareState>)]) -> Verdict {
+    pub fn replay(task: &Task, params: &Bindings, series: &[(f64, Vec<LabwareState>)]) -> Verdict {
         let Some((_, first)) = series.first() else {
-            return Judge::new(task, &[]).verdict();
+            return Judge::new(task, params, &[]).verdict();
         };
-        let mut j = Judge::new(task, first);
+        let mut j = Judge::new(task, params, first);
         for (t, s) in series {
             if j.update(*t, s) {
                 break;

@@ -1,0 +1,88 @@
+//! The scripted expert's vocabulary: what a lab primitive's motion expansion says, as data. Motions
+//! aim at affordances of labware items and at joint goals by role (`("lid", "closed")`), never at
+//! an instrument's fields; the `primitives` crate resolves them against live state into tool poses
+//! and joint trajectories for the robot the step names. Gripper values and settle times come from
+//! the robot model.
+
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// Joint goals by role and goal name, e.g. `[("lid", "closed"), ("lever", "raised")]`.
+pub type Goals = Vec<(String, String)>;
+
+/// Where a motion takes the tool.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "target", rename_all = "snake_case")]
+pub enum Target {
+    /// A labware item's affordance, with some of its joints at named goals (the rest live).
+    Affordance {
+        labware: String,
+        name: String,
+        goals: Goals,
+    },
+    /// The tool pose that stands the carried item's base on a slot's seat (`holder.slot`, a
+    /// template over the task's parameters), raised by `above` metres.
+    Seat { location: String, above: f64 },
+}
+
+/// One motion of the scripted expert.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "motion", rename_all = "snake_case")]
+pub enum Motion {
+    /// A lifted arc from the current tool pose to `standoff` metres back along the target's
+    /// approach axis.
+    Approach { target: Target, standoff: f64 },
+    /// A straight line to the target.
+    Reach { target: Target },
+    /// A straight horizontal move to above the target, at the current height.
+    Transit { target: Target },
+    /// Follow an affordance while the item's joints move from their live values to the goals.
+    Follow {
+        labware: String,
+        affordance: String,
+        goals: Goals,
+        samples: usize,
+    },
+    /// Close the gripper and wait for it to settle.
+    Grasp,
+    /// Open the gripper and wait for it to settle.
+    Release,
+    /// Straight up (world z).
+    Lift { height: f64 },
+    /// Back off along the tool's approach axis.
+    Retreat { distance: f64 },
+}
+
+impl Motion {
+    pub fn label(&self) -> &'static str {
+        match self {
+            Motion::Approach { .. } => "approach",
+            Motion::Reach { .. } => "reach",
+            Motion::Transit { .. } => "transit",
+            Motion::Follow { .. } => "follow",
+            Motion::Grasp => "grasp",
+            Motion::Release => "release",
+            Motion::Lift { .. } => "lift",
+            Motion::Retreat { .. } => "retreat",
+        }
+    }
+}
+
+/// A planned step with its arguments rendered for one episode.
+pub struct MotionStep<'a> {
+    pub args: &'a BTreeMap<String, String>,
+}
+
+impl MotionStep<'_> {
+    pub fn arg(&self, name: &str) -> String {
+        self.args.get(name).cloned().unwrap_or_default()
+    }
+}
+
+/// Goals from `(role, goal)` pairs.
+pub fn goals(pairs: &[(&str, &str)]) -> Goals {
+    pairs
+        .iter()
+        .map(|(r, g)| (r.to_string(), g.to_string()))
+        .collect()
+}

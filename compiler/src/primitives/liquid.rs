@@ -1,0 +1,56 @@
+//! What `aspirate` and `dispense` share: moving a volume between an open container and the pipette
+//! the robot carries.
+
+use super::prelude::*;
+
+pub(super) fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
+    let robot = step.robot;
+    let name = step.primitive.name;
+    let (lw, _) = step.on(env)?;
+    let volume = step.quantity("volume", Dimension::Volume)?;
+    if volume <= 0.0 {
+        return Err(violation(
+            Code::E0021,
+            Some("volume"),
+            format!("`{name}` needs a positive volume, found {volume} µL"),
+        ));
+    }
+    let pipette = match w.hand(robot) {
+        Hand::Item(p) if env.kinds.get(p).is_some_and(|k| k.name == "pipette") => p.clone(),
+        h => {
+            return Err(precondition(
+                format!("`{name}` needs `{robot}` to carry a pipette, but its hand is {h}"),
+                "add a `pick` of the pipette before this step",
+            ));
+        }
+    };
+    if w.part(&lw, "cap") == Some("on") {
+        return Err(precondition(
+            format!("`{name}` needs `{lw}` open, but its cap is on"),
+            "add an `unscrew_cap` step before this one",
+        ));
+    }
+    let (from, to) = if name == "aspirate" {
+        (lw.clone(), pipette)
+    } else {
+        (pipette, lw.clone())
+    };
+    let have = w.volumes.get(&from).copied().unwrap_or(0.0);
+    let room =
+        env.kinds[&to].capacity_ul.unwrap_or(0.0) - w.volumes.get(&to).copied().unwrap_or(0.0);
+    if have < volume {
+        return Err(precondition(
+            format!("`{name}` of {volume} µL needs that much in `{from}`, but it holds {have} µL"),
+            "lower the volume or fill the container first",
+        ));
+    }
+    if room < volume {
+        return Err(precondition(
+            format!("`{name}` of {volume} µL needs that much room in `{to}`, but it has {room} µL"),
+            "lower the volume or empty it first",
+        ));
+    }
+    *w.volumes.entry(from).or_default() -= volume;
+    *w.volumes.entry(to).or_default() += volume;
+    Ok(())
+}

@@ -1,0 +1,317 @@
+//! The closed catalogue of lab primitives, one file per primitive, gathered in [`CATALOGUE`]. Each
+//! primitive's file holds everything about it side by side: its signature (arguments, prose for
+//! the docs and `autobio describe`), its executable effect on the abstract [`World`] (what the
+//! state proof traces), and its expert motion expansion ([`crate::motion`]), which the
+//! `primitives` crate resolves into robot trajectories. Adding a primitive: a new file here and one
+//! line in [`CATALOGUE`].
+
+use crate::motion::{Motion, MotionStep};
+use crate::world::{Hand, Location, World};
+use dsl::{Code, Dimension, parse_quantity};
+use labware::LabwareKind;
+use std::collections::BTreeMap;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ArgKind {
+    /// A declared labware item.
+    Labware,
+    /// `"<holder>.<slot>"`.
+    Location,
+    /// A declared robot.
+    Robot,
+    /// A volume quantity.
+    Volume,
+    /// A button of the instrument named by `on`.
+    Button,
+    /// A panel value of the instrument named by `on`.
+    PanelParam,
+    /// A quantity in the unit of that panel value.
+    PanelValue,
+}
+
+impl ArgKind {
+    pub fn describe(self) -> &'static str {
+        match self {
+            ArgKind::Labware => "labware name",
+            ArgKind::Location => "\"<holder>.<slot>\"",
+            ArgKind::Robot => "robot name",
+            ArgKind::Volume => "volume, e.g. \"200 µL\"",
+            ArgKind::Button => "button name",
+            ArgKind::PanelParam => "panel value name",
+            ArgKind::PanelValue => "quantity in the panel value's unit",
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Arg {
+    pub name: &'static str,
+    pub kind: ArgKind,
+    pub doc: &'static str,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct LabPrimitive {
+    pub name: &'static str,
+    pub description: &'static str,
+    /// Arguments besides `with` (the robot that does it), all required.
+    pub args: &'static [Arg],
+    pub requires: &'static str,
+    pub leaves: &'static str,
+    /// Checks the step's preconditions on the abstract world and applies its effect.
+    pub effect: fn(&mut World, &Env, &BoundStep) -> Result<(), Violation>,
+    /// The scripted expert's motions for one rendered step; `None`: no expert motions yet.
+    pub motions: Option<fn(&MotionStep) -> Vec<Motion>>,
+}
+
+impl LabPrimitive {
+    pub fn signature(&self) -> String {
+        let args: Vec<String> = self
+            .args
+            .iter()
+            .map(|a| format!("{} = <{}>", a.name, a.kind.describe()))
+            .chain(std::iter::once("with = <robot name>".to_string()))
+            .collect();
+        format!("{}({})", self.name, args.join(", "))
+    }
+}
+
+mod aspirate;
+mod close_lid;
+mod dispense;
+mod hand_over;
+mod hold;
+mod lid;
+mod liquid;
+mod lock;
+mod open_lid;
+mod pick;
+mod place;
+mod press;
+mod release;
+mod screw_cap;
+mod set_parameter;
+mod unlock;
+mod unscrew_cap;
+
+pub(super) const ON: Arg = Arg {
+    name: "on",
+    kind: ArgKind::Labware,
+    doc: "the labware acted on",
+};
+pub(super) const VOLUME: Arg = Arg {
+    name: "volume",
+    kind: ArgKind::Volume,
+    doc: "how much liquid",
+};
+
+/// Every lab primitive, in the order the docs list them: one line each.
+pub const CATALOGUE: &[&LabPrimitive] = &[
+    &pick::PRIMITIVE,
+    &place::PRIMITIVE,
+    &open_lid::PRIMITIVE,
+    &close_lid::PRIMITIVE,
+    &lock::PRIMITIVE,
+    &unlock::PRIMITIVE,
+    &unscrew_cap::PRIMITIVE,
+    &screw_cap::PRIMITIVE,
+    &aspirate::PRIMITIVE,
+    &dispense::PRIMITIVE,
+    &press::PRIMITIVE,
+    &set_parameter::PRIMITIVE,
+    &hold::PRIMITIVE,
+    &release::PRIMITIVE,
+    &hand_over::PRIMITIVE,
+];
+
+/// What every primitive's file imports.
+mod prelude {
+    pub(super) use super::{
+        Arg, ArgKind, BoundStep, Env, LabPrimitive, ON, VOLUME, Violation, panel_dimension,
+        precondition, require_empty_hand, resolve_location, stabilised, violation,
+    };
+    pub(super) use crate::world::{Hand, Location, World};
+    pub(super) use dsl::{Code, Dimension};
+    pub(super) use labware::{ButtonEffect, LabwareKind};
+}
+
+pub fn primitive(name: &str) -> Option<&'static LabPrimitive> {
+    CATALOGUE.iter().copied().find(|p| p.name == name)
+}
+
+/// The scene a step resolves its names against.
+pub struct Env<'a> {
+    pub kinds: &'a BTreeMap<String, &'static LabwareKind>,
+    pub robots: &'a [String],
+}
+
+/// Why a step cannot run: the code, the argument to point at (`None`: the step's `do`), message
+/// and hint.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Violation {
+    pub code: Code,
+    pub arg: Option<&'static str>,
+    pub message: String,
+    pub hint: Option<String>,
+}
+
+pub(super) fn violation(code: Code, arg: Option<&'static str>, message: String) -> Violation {
+    Violation {
+        code,
+        arg,
+        message,
+        hint: None,
+    }
+}
+
+pub(super) fn precondition(message: String, hint: &str) -> Violation {
+    Violation {
+        code: Code::E0031,
+        arg: None,
+        message,
+        hint: Some(hint.to_string()),
+    }
+}
+
+/// A step with its argument templates rendered for one parameter combination.
+pub struct BoundStep<'a> {
+    pub primitive: &'static LabPrimitive,
+    pub robot: &'a str,
+    pub args: &'a BTreeMap<String, String>,
+}
+
+impl BoundStep<'_> {
+    fn text(&self, name: &'static str) -> Result<&str, Violation> {
+        self.args.get(name).map(String::as_str).ok_or_else(|| {
+            violation(
+                Code::E0032,
+                None,
+                format!("`{}` needs `{name}`", self.primitive.name),
+            )
+        })
+    }
+
+    fn labware(
+        &self,
+        env: &Env,
+        name: &'static str,
+    ) -> Result<(String, &'static LabwareKind), Violation> {
+        let v = self.text(name)?;
+        match env.kinds.get(v) {
+            Some(k) => Ok((v.to_string(), *k)),
+            None => Err(violation(
+                Code::E0013,
+                Some(name),
+                format!("no labware named `{v}`"),
+            )),
+        }
+    }
+
+    /// The `on` labware, checked to support this primitive.
+    fn on(&self, env: &Env) -> Result<(String, &'static LabwareKind), Violation> {
+        let name = self.primitive.name;
+        let (lw, kind) = self.labware(env, "on")?;
+        if !kind.supports(name) {
+            return Err(Violation {
+                code: Code::E0014,
+                arg: None,
+                message: format!("`{name}` cannot be applied to `{lw}` (a {})", kind.name),
+                hint: Some(if kind.primitives.is_empty() {
+                    format!("a {} supports no primitive as `on`", kind.name)
+                } else {
+                    format!("a {} supports: {}", kind.name, kind.primitives.join(", "))
+                }),
+            });
+        }
+        Ok((lw, kind))
+    }
+
+    fn quantity(&self, name: &'static str, dim: Dimension) -> Result<f64, Violation> {
+        let v = self.text(name)?;
+        match parse_quantity(v) {
+            Ok(q) if q.dimension == dim => Ok(q.si),
+            Ok(q) => Err(violation(
+                Code::E0020,
+                Some(name),
+                format!(
+                    "`{v}` is a {}, but `{name}` is a {}",
+                    q.dimension.name(),
+                    dim.name()
+                ),
+            )),
+            Err(e) => Err(violation(Code::E0020, Some(name), e)),
+        }
+    }
+}
+
+/// A location text `holder.slot` resolved against the scene: checks the holder has that slot.
+pub fn resolve_location(
+    env: &Env,
+    text: &str,
+) -> Result<(String, String, &'static LabwareKind), String> {
+    let Some((holder, slot)) = text.split_once('.') else {
+        return Err(format!(
+            "`{text}` is not a location; write `<holder>.<slot>`"
+        ));
+    };
+    let Some(kind) = env.kinds.get(holder) else {
+        return Err(format!("no labware named `{holder}`"));
+    };
+    let Some(slots) = kind.slots else {
+        return Err(format!("`{holder}` (a {}) has no slots", kind.name));
+    };
+    if !slots.layout.names().iter().any(|s| s == slot) {
+        return Err(format!(
+            "`{holder}` has no slot `{slot}` (its slots: {})",
+            slots.layout.describe()
+        ));
+    }
+    Ok((holder.to_string(), slot.to_string(), kind))
+}
+
+pub(super) fn require_empty_hand(w: &World, robot: &str, what: &str) -> Result<(), Violation> {
+    match w.hand(robot) {
+        Hand::Empty => Ok(()),
+        h => Err(precondition(
+            format!("`{what}` needs `{robot}`'s hand empty, but it is {h}"),
+            "add a `place`, `release` or `screw_cap` step before this one",
+        )),
+    }
+}
+
+pub(super) fn stabilised(w: &World, tube: &str, robot: &str) -> bool {
+    matches!(w.locations.get(tube), Some(Location::Slot { .. }))
+        || w.grippers_of(tube).iter().any(|r| *r != robot)
+}
+
+/// Runs one step on the world: checks its preconditions and applies its effects.
+pub fn apply(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
+    (step.primitive.effect)(w, env, step)
+}
+
+/// The dimension of a panel value from its unit symbol.
+pub fn panel_dimension(unit: &str) -> Dimension {
+    match unit {
+        "rpm" => Dimension::Speed,
+        "°C" => Dimension::Temperature,
+        _ => Dimension::Time,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_primitive_has_an_effect_and_a_kind() {
+        for p in CATALOGUE.iter() {
+            let used = labware::KINDS.iter().any(|k| k.supports(p.name));
+            assert!(used || p.name == "release", "{} is used by no kind", p.name);
+        }
+        for k in labware::KINDS {
+            for p in k.primitives {
+                assert!(primitive(p).is_some(), "{} lists unknown {p}", k.name);
+            }
+        }
+    }
+}

@@ -1,0 +1,68 @@
+//! `set_parameter`: step a panel value to a target.
+
+use super::prelude::*;
+
+pub const PRIMITIVE: LabPrimitive = LabPrimitive {
+    name: "set_parameter",
+    description: "step an instrument's panel value to a target with its buttons",
+    args: &[
+        ON,
+        Arg {
+            name: "param",
+            kind: ArgKind::PanelParam,
+            doc: "which panel value",
+        },
+        Arg {
+            name: "value",
+            kind: ArgKind::PanelValue,
+            doc: "the target, e.g. \"{rpm} rpm\"",
+        },
+    ],
+    requires: "the hand is empty; the target is within the panel's range and on its button grid",
+    leaves: "the panel value at the target",
+    effect,
+    motions: None,
+};
+
+fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
+    let robot = step.robot;
+    let name = step.primitive.name;
+    let (lw, kind) = step.on(env)?;
+    require_empty_hand(w, robot, name)?;
+    let pname = step.text("param")?;
+    let Some(p) = kind.panel_param(pname) else {
+        let names: Vec<&str> = kind.panel.iter().map(|p| p.name).collect();
+        return Err(Violation {
+            code: Code::E0013,
+            arg: Some("param"),
+            message: format!("`{lw}` (a {}) has no panel value `{pname}`", kind.name),
+            hint: Some(crate::check::hint_for(pname, &names, "panel values")),
+        });
+    };
+    let dim = panel_dimension(p.unit);
+    let value = step.quantity("value", dim)?;
+    if value < p.min || value > p.max {
+        return Err(violation(
+            Code::E0021,
+            Some("value"),
+            format!(
+                "`{lw}.{pname}` ranges {}..{} {}, but the target is {value} {}",
+                p.min, p.max, p.unit, p.unit
+            ),
+        ));
+    }
+    let steps = (value - p.initial) / p.step;
+    if (steps - steps.round()).abs() > 1e-6 {
+        return Err(Violation {
+            code: Code::E0021,
+            arg: Some("value"),
+            message: format!(
+                "`{lw}.{pname}` moves in steps of {} {} from {}, so it cannot show {value}",
+                p.step, p.unit, p.initial
+            ),
+            hint: Some("pick a value on the button grid".into()),
+        });
+    }
+    w.panel.insert((lw.clone(), pname.to_string()), value);
+    Ok(())
+}

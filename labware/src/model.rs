@@ -1,0 +1,209 @@
+//! The instrument model: what one labware kind tells the rest of the system about itself. Each kind
+//! with a simulation model implements [`Instrument`] in its own file; the runtime, the judge and the
+//! expert reach instruments only through this trait (and [`crate::registry::Model`], which maps a
+//! kind to its model). Pure: numbers and MJCF text, no MuJoCo API.
+//!
+//! What a model owns: its MJCF (through [`crate::mjcf`]), the mechanisms it asks the runtime for
+//! ([`Mechanism`]), its joints and equality switches by role, reset from declared part states, the
+//! per-step logic hook (latches now; buttons and displays next), the readout the judge scores
+//! ([`Instrument::measure`], [`Instrument::readout`]), and affordances as functions of live state.
+
+use crate::frame::{Pose, serde_pose};
+use crate::mjcf::Fragment;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// Instrument logic state that is not a joint (latch flags, panel values), by name.
+pub type Logic = BTreeMap<String, f64>;
+
+/// Live state of one placed labware item: everything a predicate, an affordance or a replay needs.
+/// The runtime fills it after every control step; recordings store it as `/labware/state`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LabwareState {
+    pub name: String,
+    /// World pose of the item's root body (where a movable item is now).
+    #[serde(with = "serde_pose")]
+    pub pose: Pose,
+    /// Joint values by role (rad or m).
+    pub joints: BTreeMap<String, f64>,
+    /// World poses of loose parts by role (a tube's cap).
+    #[serde(default, with = "crate::frame::serde_pose_map")]
+    pub parts: BTreeMap<String, Pose>,
+    pub logic: Logic,
+}
+
+impl LabwareState {
+    pub fn joint(&self, role: &str) -> f64 {
+        self.joints.get(role).copied().unwrap_or(f64::NAN)
+    }
+
+    pub fn flag(&self, name: &str) -> bool {
+        self.logic.get(name).is_some_and(|v| *v != 0.0)
+    }
+
+    /// The same state with some joints set to other values (for affordances at planned angles).
+    pub fn with_joints(&self, joints: &[(String, f64)]) -> LabwareState {
+        let mut s = self.clone();
+        for (role, v) in joints {
+            s.joints.insert(role.clone(), *v);
+        }
+        s
+    }
+}
+
+/// A lab mechanism a model asks the runtime for; the runtime turns it into a plugin instance.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Mechanism {
+    /// `autobio.detent`: `notches` evenly spaced rest positions over `[lo, hi]` of a joint.
+    Detent {
+        instance: String,
+        joint: String,
+        lo: f64,
+        hi: f64,
+        notches: u32,
+        stiffness: f64,
+        damping: f64,
+    },
+    /// `autobio.thread`: one helical thread SDF (a bolt or a nut); the model's MJCF names the mesh
+    /// and geom that use `instance` and the contact pair between bolt and nut.
+    Thread {
+        instance: String,
+        radius: f64,
+        gauge: f64,
+        pitch: f64,
+        low: f64,
+        high: f64,
+    },
+}
+
+/// A predicate's measured value against its target, and whether it holds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Measure {
+    pub value: f64,
+    pub target: f64,
+    pub tolerance: f64,
+    pub holds: bool,
+}
+
+/// How an affordance frame may be turned and still be the same grasp.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Symmetry {
+    None,
+    /// Turned half a turn about its z (approach) axis: a bar held with the fingers swapped.
+    HalfTurn,
+    /// Any turn about its z axis: a round cap grasped from above.
+    Axial,
+}
+
+/// A frame a robot tool can be brought to: z is the approach direction, x the fingers' closing
+/// direction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Affordance {
+    pub pose: Pose,
+    pub symmetry: Symmetry,
+}
+
+/// Joint values and logic state an item starts an episode with.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Reset {
+    pub joints: Vec<(&'static str, f64)>,
+    pub logic: Logic,
+}
+
+/// Everything the system knows about one labware kind's simulation. `name` is the item's name in
+/// the protocol: every MuJoCo name a model generates starts with `name/`.
+pub trait Instrument {
+    /// The item's MJCF at `placement` (world frame). Movable items get a free joint.
+    fn fragment(&self, name: &str, placement: &Pose) -> Fragment;
+
+    /// Plugin instances the item needs.
+    fn mechanisms(&self, _name: &str) -> Vec<Mechanism> {
+        Vec::new()
+    }
+
+    /// The body whose world pose is [`LabwareState::pose`].
+    fn root_body(&self, name: &str) -> String {
+        format!("{name}/base")
+    }
+
+    /// Hinge and slide joints by role, with their MuJoCo names.
+    fn joints(&self, _name: &str) -> Vec<(&'static str, String)> {
+        Vec::new()
+    }
+
+    /// The free joints of a movable item and their poses when its root body is at `root`.
+    fn place(&self, _name: &str, _root: &Pose) -> Vec<(String, Pose)> {
+        Vec::new()
+    }
+
+    /// Loose parts (bodies on their own free joints) by role, whose world poses the runtime reports.
+    fn part_bodies(&self, _name: &str) -> Vec<(&'static str, String)> {
+        Vec::new()
+    }
+
+    /// Equality constraints the logic switches on and off, by role.
+    fn switches(&self, _name: &str) -> Vec<(&'static str, String)> {
+        Vec::new()
+    }
+
+    /// Joint values and logic for the declared initial part states.
+    fn reset(&self, _initial: &BTreeMap<String, String>) -> Reset {
+        Reset::default()
+    }
+
+    /// Instrument logic after each physics step: updates `logic` from the joints and returns each
+    /// switch's wanted state. Also called once right after reset.
+    fn step(
+        &self,
+        _joints: &BTreeMap<String, f64>,
+        _logic: &mut Logic,
+    ) -> Vec<(&'static str, bool)> {
+        Vec::new()
+    }
+
+    /// A named joint goal, e.g. `("lid", "closed")` -> the lid's closed angle.
+    fn joint_goal(&self, _role: &str, _goal: &str) -> Option<f64> {
+        None
+    }
+
+    /// The measured value of `part is state` (tolerance: the predicate's, else the model's).
+    fn measure(
+        &self,
+        _part: &str,
+        _state: &str,
+        _tolerance: Option<f64>,
+        _s: &LabwareState,
+    ) -> Option<Measure> {
+        None
+    }
+
+    /// The current state of every part (for recordings and reports).
+    fn readout(&self, _s: &LabwareState) -> BTreeMap<String, String> {
+        BTreeMap::new()
+    }
+
+    /// A named affordance in the world frame, from live (or planned) state.
+    fn affordance(&self, _name: &str, _s: &LabwareState) -> Option<Affordance> {
+        None
+    }
+
+    /// Where an item stands in one of this holder's slots: its base frame (z up), world frame.
+    fn slot_seat(&self, _slot: &str, _s: &LabwareState) -> Option<Pose> {
+        None
+    }
+}
+
+/// Whether an item with root pose `item` stands in a slot seated at `seat`: in-plane distance
+/// (value) within `xy`, height within `z` and tilt within `tilt` (rad).
+pub fn seated(seat: &Pose, item: &Pose, xy: f64, z: f64, tilt: f64) -> Measure {
+    let d = item.translation.vector - seat.translation.vector;
+    let planar = (d.x * d.x + d.y * d.y).sqrt();
+    let up = item.rotation * nalgebra::Vector3::z();
+    let tilted = up.z.clamp(-1.0, 1.0).acos();
+    Measure {
+        value: planar,
+        target: 0.0,
+        tolerance: xy,
+        holds: planar <= xy && d.z.abs() <= z && tilted <= tilt,
+    }
+}

@@ -1,0 +1,330 @@
+//! Screw-cap tubes (50 mL and 15 mL conical tubes, 1.5 mL microtubes, cryovials): a free body
+//! with a free cap held on by the `autobio.thread` mechanism (a bolt thread on the tube's neck, a
+//! nut thread in the cap, and a hidden core cylinder that keeps the nut centred). Collision is one
+//! cylinder for the tube and one for the cap, so a tube in a rack costs a few primitive contacts
+//! plus the thread's SDF contact.
+//!
+//! Frame: origin at the centre of the tube's bottom, +z along the tube to the cap. Dimensions and
+//! masses from `upstream-autobio.md` §11.4; thread as upstream's (pitch 3 mm, bolt turns [-1, 1.2]
+//! with gauge 0.9 mm, nut turns [-1.2, 1] with gauge 0.6 mm).
+
+use crate::frame::{Pose, translation};
+use crate::mjcf::{Fragment, cylinder_inertia, pose_attrs};
+use crate::model::{Affordance, Instrument, LabwareState, Measure, Mechanism, Symmetry};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// Balls in a cap's centring bearing (two rings of four).
+const BEARING_BALLS: usize = 8;
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Params {
+    /// Tube body: outer radius and height (m), mass (kg).
+    pub radius: f64,
+    pub height: f64,
+    pub mass: f64,
+    /// Cap: outer radius and height (m), mass (kg).
+    pub cap_radius: f64,
+    pub cap_height: f64,
+    pub cap_mass: f64,
+    /// Helix radius of the thread (m).
+    pub thread_radius: f64,
+    pub pitch: f64,
+    /// How far the cap has to rise off its seat to count as off (m).
+    pub cap_off_rise: f64,
+    pub rgba: [f64; 4],
+    pub cap_rgba: [f64; 4],
+}
+
+impl Params {
+    pub fn conical_50ml() -> Params {
+        Params {
+            radius: 0.01395,
+            height: 0.1147,
+            mass: 0.0144,
+            cap_radius: 0.01775,
+            cap_height: 0.0123,
+            cap_mass: 0.0193,
+            thread_radius: 0.014,
+            pitch: 0.003,
+            cap_off_rise: 0.01,
+            rgba: [0.92, 0.93, 0.95, 0.7],
+            cap_rgba: [0.2, 0.45, 0.85, 1.0],
+        }
+    }
+
+    pub fn conical_15ml() -> Params {
+        Params {
+            radius: 0.0078,
+            height: 0.119,
+            mass: 0.0247,
+            cap_radius: 0.012,
+            cap_height: 0.0102,
+            cap_mass: 0.0069,
+            thread_radius: 0.00784,
+            cap_rgba: [0.95, 0.55, 0.15, 1.0],
+            ..Params::conical_50ml()
+        }
+    }
+
+    pub fn microtube() -> Params {
+        Params {
+            radius: 0.00535,
+            height: 0.0426,
+            mass: 0.002,
+            cap_radius: 0.0075,
+            cap_height: 0.0086,
+            cap_mass: 0.0011,
+            thread_radius: 0.00599,
+            cap_off_rise: 0.005,
+            cap_rgba: [0.85, 0.2, 0.25, 1.0],
+            ..Params::conical_50ml()
+        }
+    }
+
+    pub fn cryovial() -> Params {
+        Params {
+            radius: 0.00495,
+            height: 0.0349,
+            mass: 0.0036,
+            cap_radius: 0.0065,
+            cap_height: 0.0115,
+            cap_mass: 0.0007,
+            thread_radius: 0.00511,
+            cap_off_rise: 0.005,
+            cap_rgba: [0.55, 0.3, 0.75, 1.0],
+            ..Params::conical_50ml()
+        }
+    }
+
+    /// Height of the bolt thread's axis origin on the tube (tube frame).
+    fn bolt_z(&self) -> f64 {
+        self.height - 0.005
+    }
+
+    /// The cap body's origin when fully screwed on (tube frame): half a pitch above the bolt and
+    /// 5 mm above the nut, as upstream's tubes.
+    fn cap_seat_z(&self) -> f64 {
+        self.bolt_z() + self.pitch / 2.0 + 0.005
+    }
+
+    /// Radius of the hidden core on the tube's neck that keeps the cap centred.
+    fn core_radius(&self) -> f64 {
+        self.thread_radius - 0.0012
+    }
+
+    /// Small hidden balls in the cap, two rings around the core at the nut's top and bottom:
+    /// they keep the nut centred on the bolt (a thread has no shoulder) with cheap sphere
+    /// contacts instead of a second SDF contact.
+    fn bearing(&self, name: &str) -> String {
+        let r = 0.001;
+        let ring = self.core_radius() + r;
+        (0..BEARING_BALLS)
+            .map(|i| {
+                let a = std::f64::consts::TAU * (i % 4) as f64 / 4.0;
+                let z = -0.005 + if i < 4 { 0.004 } else { -0.004 };
+                format!(
+                    "  <geom name=\"{name}/bearing{i}\" type=\"sphere\" size=\"{r}\" pos=\"{} {} {z}\" contype=\"0\" conaffinity=\"0\" group=\"5\"/>\n",
+                    ring * a.cos(),
+                    ring * a.sin()
+                )
+            })
+            .collect()
+    }
+
+    fn threads(&self, name: &str) -> [Mechanism; 2] {
+        let thread = |part: &str, gauge: f64, low: f64, high: f64| Mechanism::Thread {
+            instance: format!("{name}/{part}"),
+            radius: self.thread_radius,
+            gauge,
+            pitch: self.pitch,
+            low,
+            high,
+        };
+        [
+            thread("bolt", 0.0009, -1.0, 1.2),
+            thread("nut", 0.0006, -1.2, 1.0),
+        ]
+    }
+}
+
+impl Instrument for Params {
+    fn fragment(&self, name: &str, placement: &Pose) -> Fragment {
+        let (r, h) = (self.radius, self.height);
+        let body_i = cylinder_inertia(self.mass, r, h / 2.0);
+        let cap_i = cylinder_inertia(self.cap_mass, self.cap_radius, self.cap_height / 2.0);
+        let cap_pose = placement * translation([0.0, 0.0, self.cap_seat_z()]);
+        let cap_z = -self.cap_height / 2.0 + 0.004;
+        let (tube_c, cap_c) = (
+            crate::mjcf::rgba(self.rgba),
+            crate::mjcf::rgba(self.cap_rgba),
+        );
+        let worldbody = format!(
+            r#"<body name="{name}/base" {place}>
+  <freejoint name="{name}/free"/>
+  <inertial pos="0 0 {hz}" mass="{m}" diaginertia="{bi0} {bi0} {bi2}"/>
+  <geom name="{name}/body" type="cylinder" size="{r} {hz}" pos="0 0 {hz}" rgba="{tube_c}" friction="1 0.01 0.0001"/>
+  <geom name="{name}/bolt" type="sdf" mesh="{name}/bolt" pos="0 0 {bolt_z}" contype="0" conaffinity="0" group="5">
+    <plugin instance="{name}/bolt"/>
+  </geom>
+  <geom name="{name}/core" type="cylinder" size="{core} 0.01" pos="0 0 {bolt_z}" contype="0" conaffinity="0" group="5"/>
+</body>
+<body name="{name}/cap" {cap_place}>
+  <freejoint name="{name}/cap_free"/>
+  <inertial pos="0 0 {cap_z}" mass="{cm}" diaginertia="{ci0} {ci0} {ci2}"/>
+  <geom name="{name}/cap_shell" type="cylinder" size="{cr} {chz}" pos="0 0 {cap_z}" rgba="{cap_c}" friction="1.5 0.01 0.0001"/>
+{bearing}  <body name="{name}/nut_frame" euler="3.141592653589793 0 0">
+    <geom name="{name}/nut" type="sdf" mesh="{name}/nut" pos="0 0 0.005" contype="0" conaffinity="0" group="5">
+      <plugin instance="{name}/nut"/>
+    </geom>
+  </body>
+</body>
+"#,
+            place = pose_attrs(placement),
+            cap_place = pose_attrs(&cap_pose),
+            hz = h / 2.0,
+            m = self.mass,
+            bi0 = body_i[0],
+            bi2 = body_i[2],
+            bolt_z = self.bolt_z(),
+            core = self.core_radius(),
+            cm = self.cap_mass,
+            ci0 = cap_i[0],
+            ci2 = cap_i[2],
+            cr = self.cap_radius,
+            chz = self.cap_height / 2.0,
+            bearing = self.bearing(name),
+        );
+        let asset = format!(
+            r#"<mesh name="{name}/bolt"><plugin instance="{name}/bolt"/></mesh>
+<mesh name="{name}/nut"><plugin instance="{name}/nut"/></mesh>
+"#
+        );
+        let mut contact = format!(
+            r#"<exclude body1="{name}/base" body2="{name}/cap"/>
+<pair geom1="{name}/nut" geom2="{name}/bolt" friction="1 1 0.001 0.0001 0.0001" solref="0.004 1"/>
+"#
+        );
+        for i in 0..BEARING_BALLS {
+            contact += &format!(
+                r#"<pair geom1="{name}/bearing{i}" geom2="{name}/core" friction="0.01 0.01 0.001 0.0001 0.0001" solimp="0.9 0.95 0.001"/>
+"#
+            );
+        }
+        Fragment {
+            asset,
+            worldbody,
+            equality: String::new(),
+            contact,
+        }
+    }
+
+    fn mechanisms(&self, name: &str) -> Vec<Mechanism> {
+        self.threads(name).to_vec()
+    }
+
+    /// The tube and its cap, the cap screwed on.
+    fn place(&self, name: &str, root: &Pose) -> Vec<(String, Pose)> {
+        vec![
+            (format!("{name}/free"), *root),
+            (
+                format!("{name}/cap_free"),
+                root * translation([0.0, 0.0, self.cap_seat_z()]),
+            ),
+        ]
+    }
+
+    fn part_bodies(&self, name: &str) -> Vec<(&'static str, String)> {
+        vec![("cap", format!("{name}/cap"))]
+    }
+
+    fn measure(
+        &self,
+        part: &str,
+        state: &str,
+        tolerance: Option<f64>,
+        s: &LabwareState,
+    ) -> Option<Measure> {
+        if part != "cap" {
+            return None;
+        }
+        let rise = cap_rise(self, s)?;
+        let tolerance = tolerance.unwrap_or(0.002);
+        Some(match state {
+            "on" => Measure {
+                value: rise,
+                target: 0.0,
+                tolerance,
+                holds: rise.abs() <= tolerance,
+            },
+            "off" => Measure {
+                value: rise,
+                target: self.cap_off_rise,
+                tolerance,
+                holds: rise >= self.cap_off_rise,
+            },
+            _ => return None,
+        })
+    }
+
+    fn readout(&self, s: &LabwareState) -> BTreeMap<String, String> {
+        let on = cap_rise(self, s).is_none_or(|r| r < self.cap_off_rise);
+        BTreeMap::from([("cap".into(), if on { "on" } else { "off" }.into())])
+    }
+
+    /// `grasp`: the cap from above (approach straight down, fingers closing across the cap at its
+    /// mid-height); any turn about the tube's axis grasps it the same.
+    fn affordance(&self, name: &str, s: &LabwareState) -> Option<Affordance> {
+        (name == "grasp").then(|| {
+            let down = crate::frame::from_axes([1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]);
+            let at = translation([0.0, 0.0, self.cap_seat_z() - self.cap_height / 2.0 + 0.004]);
+            Affordance {
+                pose: s.pose * at * crate::frame::pose([0.0; 3], down),
+                symmetry: Symmetry::Axial,
+            }
+        })
+    }
+}
+
+/// Height of the cap above its seat along the tube's axis, from the live poses of tube and cap.
+pub fn cap_rise(p: &Params, s: &LabwareState) -> Option<f64> {
+    let rel = s.pose.inverse() * s.parts.get("cap")?;
+    Some(rel.translation.vector.z - p.cap_seat_z())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::frame::position;
+
+    #[test]
+    fn the_cap_sits_on_the_neck_and_is_grasped_from_above() {
+        let p = Params::conical_50ml();
+        let tube = translation([0.3, 0.1, 0.83]);
+        let placed = p.place("tube", &tube);
+        assert_eq!(placed.len(), 2);
+        // The cap covers the rim: its top above the tube, its skirt below the rim.
+        let top = p.cap_seat_z() + 0.004;
+        assert!(top > p.height && top - p.cap_height < p.height);
+        let s = LabwareState {
+            name: "tube".into(),
+            pose: tube,
+            joints: BTreeMap::new(),
+            parts: BTreeMap::from([("cap".into(), placed[1].1)]),
+            logic: Default::default(),
+        };
+        assert!(cap_rise(&p, &s).unwrap().abs() < 1e-12);
+        let g = p.affordance("grasp", &s).unwrap();
+        let z = g.pose.rotation * nalgebra::Vector3::z();
+        assert!((z.z + 1.0).abs() < 1e-12, "approach points down");
+        assert!(position(&g.pose)[2] > 0.83 + p.height - 0.01);
+        assert!(p.measure("cap", "on", None, &s).unwrap().holds);
+        assert!(!p.measure("cap", "off", None, &s).unwrap().holds);
+        let mut lifted = s.clone();
+        lifted
+            .parts
+            .insert("cap".into(), placed[1].1 * translation([0.0, 0.0, 0.02]));
+        assert!(p.measure("cap", "off", None, &lifted).unwrap().holds);
+        assert_eq!(p.readout(&lifted)["cap"], "off");
+    }
+}

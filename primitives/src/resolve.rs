@@ -1,0 +1,398 @@
+//! Motions to tool poses against live labware state. A lab step's motions ([`compiler::motion`])
+//! name affordances, joint goals by role and slot seats; here they become world-frame tool poses,
+//! read through each item's instrument model ([`labware::Instrument`]). Choices that must hold for
+//! a whole step (which of an affordance's symmetric grasps to use, how a carried item sits in the
+//! hand) are made once, at the step's start, in a [`StepFrame`].
+
+use compiler::motion::{Goals, Motion, Target};
+use compiler::params::{Bindings, render};
+use labware::frame::{axis_angle, interpolate, position, translated_local, translation};
+use labware::{Affordance, Instrument, LabwareState, Pose, Rot, Symmetry};
+
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum PlanError {
+    #[error("no labware named `{0}`")]
+    NoLabware(String),
+    #[error("`{0}` has no simulation model")]
+    Unmodelled(String),
+    #[error("`{labware}` offers no affordance `{name}`")]
+    NoAffordance { labware: String, name: String },
+    #[error("`{labware}` has no goal `{goal}` for its joint `{role}`")]
+    NoGoal {
+        labware: String,
+        role: String,
+        goal: String,
+    },
+    #[error("`{0}` does not name a slot of a holder in this scene")]
+    NoSlot(String),
+    #[error("a slot is targeted, but the step carries nothing to seat")]
+    NothingCarried,
+}
+
+/// The labware as the expert sees it at one moment: each item's model and live state, and the
+/// episode's drawn parameters (slot locations are templates over them).
+pub struct Lab<'a> {
+    pub items: Vec<(&'a str, &'a dyn Instrument, &'a LabwareState)>,
+    pub params: &'a Bindings,
+}
+
+impl<'a> Lab<'a> {
+    /// The scene of `task` with live `states` (in task order).
+    pub fn new(
+        task: &'a compiler::Task,
+        states: &'a [LabwareState],
+        params: &'a Bindings,
+    ) -> Lab<'a> {
+        let items = task
+            .labware
+            .iter()
+            .zip(states)
+            .filter_map(|(spec, s)| Some((spec.name.as_str(), spec.params.instrument()?, s)))
+            .collect();
+        Lab { items, params }
+    }
+
+    fn item(&self, name: &str) -> Result<(&'a dyn Instrument, &'a LabwareState), PlanError> {
+        self.items
+            .iter()
+            .find(|(n, ..)| *n == name)
+            .map(|(_, m, s)| (*m, *s))
+            .ok_or_else(|| PlanError::NoLabware(name.to_string()))
+    }
+
+    /// The live state of an item with some joints set to named goals.
+    fn at_goals(&self, labware: &str, goals: &Goals) -> Result<LabwareState, PlanError> {
+        let (model, state) = self.item(labware)?;
+        let joints = goals
+            .iter()
+            .map(|(role, goal)| {
+                let v = model
+                    .joint_goal(role, goal)
+                    .ok_or_else(|| PlanError::NoGoal {
+                        labware: labware.into(),
+                        role: role.clone(),
+                        goal: goal.clone(),
+                    })?;
+                Ok((role.clone(), v))
+            })
+            .collect::<Result<Vec<_>, PlanError>>()?;
+        Ok(state.with_joints(&joints))
+    }
+
+    fn affordance(
+        &self,
+        labware: &str,
+        name: &str,
+        s: &LabwareState,
+    ) -> Result<Affordance, PlanError> {
+        let (model, _) = self.item(labware)?;
+        model
+            .affordance(name, s)
+            .ok_or_else(|| PlanError::NoAffordance {
+                labware: labware.into(),
+                name: name.into(),
+            })
+    }
+
+    /// The seat of a slot location (`holder.slot`, a template over the drawn parameters).
+    fn seat(&self, location: &str) -> Result<Pose, PlanError> {
+        let text = render(location, self.params).unwrap_or_else(|_| location.to_string());
+        let (holder, slot) = text
+            .split_once('.')
+            .ok_or_else(|| PlanError::NoSlot(text.clone()))?;
+        let (model, state) = self.item(holder)?;
+        model
+            .slot_seat(slot, state)
+            .ok_or_else(|| PlanError::NoSlot(text.clone()))
+    }
+
+    /// The live pose of an item's root body.
+    pub fn pose_of(&self, labware: &str) -> Result<Pose, PlanError> {
+        Ok(self.item(labware)?.1.pose)
+    }
+}
+
+/// Choices a lab step makes once, at its start, so that all its motions agree.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StepFrame {
+    /// Turn about the approach axis applied to every affordance (the chosen symmetric grasp).
+    turn: Rot,
+    /// The carried item's pose in the tool frame, when the step seats it somewhere.
+    carried: Option<Pose>,
+}
+
+impl StepFrame {
+    /// Chooses, for the step's first affordance target, the symmetric grasp closest to the current
+    /// tool orientation, and measures how `carried` (if any) sits in the hand.
+    pub fn new(
+        motions: &[Motion],
+        lab: &Lab,
+        tcp_now: &Pose,
+        carried: Option<&str>,
+    ) -> Result<StepFrame, PlanError> {
+        let mut frame = StepFrame {
+            turn: Rot::identity(),
+            carried: None,
+        };
+        let first = motions.iter().find_map(|m| match m {
+            Motion::Approach { target, .. }
+            | Motion::Reach { target }
+            | Motion::Transit { target } => Some(target),
+            _ => None,
+        });
+        if let Some(Target::Affordance {
+            labware,
+            name,
+            goals,
+        }) = first
+        {
+            let a = lab.affordance(labware, name, &lab.at_goals(labware, goals)?)?;
+            frame.turn = closest_turn(&a, tcp_now);
+        }
+        let seats = motions.iter().any(|m| {
+            matches!(
+                m,
+                Motion::Reach {
+                    target: Target::Seat { .. }
+                } | Motion::Transit {
+                    target: Target::Seat { .. }
+                }
+            )
+        });
+        if seats {
+            let item = carried.ok_or(PlanError::NothingCarried)?;
+            frame.carried = Some(tcp_now.inverse() * lab.pose_of(item)?);
+        }
+        Ok(frame)
+    }
+
+    fn target(&self, target: &Target, lab: &Lab) -> Result<Pose, PlanError> {
+        match target {
+            Target::Affordance {
+                labware,
+                name,
+                goals,
+            } => {
+                let s = lab.at_goals(labware, goals)?;
+                Ok(lab.affordance(labware, name, &s)?.pose * self.turn)
+            }
+            Target::Seat { location, above } => {
+                let item_in_tool = self.carried.ok_or(PlanError::NothingCarried)?;
+                let seat = translation([0.0, 0.0, *above]) * lab.seat(location)?;
+                Ok(seat * item_in_tool.inverse())
+            }
+        }
+    }
+
+    /// Tool poses for a path motion starting at `tcp_now` (empty for gripper motions).
+    pub fn poses(
+        &self,
+        motion: &Motion,
+        lab: &Lab,
+        tcp_now: &Pose,
+    ) -> Result<Vec<Pose>, PlanError> {
+        Ok(match motion {
+            Motion::Approach { target, standoff } => {
+                let goal = translated_local(&self.target(target, lab)?, [0.0, 0.0, -standoff]);
+                arc(tcp_now, &goal, 16)
+            }
+            Motion::Reach { target } => line(tcp_now, &self.target(target, lab)?, 6),
+            Motion::Transit { target } => {
+                let mut goal = self.target(target, lab)?;
+                goal.translation.vector.z = tcp_now.translation.vector.z;
+                line(tcp_now, &goal, 10)
+            }
+            Motion::Follow {
+                labware,
+                affordance,
+                goals,
+                samples,
+            } => {
+                let (_, live) = lab.item(labware)?;
+                let end = lab.at_goals(labware, goals)?;
+                let mut out = vec![*tcp_now];
+                for i in 1..=*samples {
+                    let t = i as f64 / *samples as f64;
+                    let joints: Vec<(String, f64)> = end
+                        .joints
+                        .iter()
+                        .map(|(role, v)| {
+                            let from = live.joint(role);
+                            (role.clone(), from + (v - from) * t)
+                        })
+                        .collect();
+                    let s = live.with_joints(&joints);
+                    out.push(lab.affordance(labware, affordance, &s)?.pose * self.turn);
+                }
+                out
+            }
+            Motion::Lift { height } => {
+                line(tcp_now, &(translation([0.0, 0.0, *height]) * tcp_now), 8)
+            }
+            Motion::Retreat { distance } => line(
+                tcp_now,
+                &translated_local(tcp_now, [0.0, 0.0, -distance]),
+                6,
+            ),
+            Motion::Grasp | Motion::Release => Vec::new(),
+        })
+    }
+}
+
+/// The turn about the affordance's z axis, allowed by its symmetry, that brings it closest to
+/// `tool`'s orientation.
+fn closest_turn(a: &Affordance, tool: &Pose) -> Rot {
+    match a.symmetry {
+        Symmetry::None => Rot::identity(),
+        Symmetry::HalfTurn => {
+            let half = axis_angle([0.0, 0.0, 1.0], std::f64::consts::PI);
+            let keep = (a.pose.rotation).angle_to(&tool.rotation);
+            let flip = (a.pose.rotation * half).angle_to(&tool.rotation);
+            if flip < keep { half } else { Rot::identity() }
+        }
+        Symmetry::Axial => {
+            let rel = (a.pose.rotation.inverse() * tool.rotation).to_rotation_matrix();
+            axis_angle([0.0, 0.0, 1.0], rel[(1, 0)].atan2(rel[(0, 0)]))
+        }
+    }
+}
+
+fn line(a: &Pose, b: &Pose, n: usize) -> Vec<Pose> {
+    (0..=n)
+        .map(|i| interpolate(a, b, i as f64 / n as f64))
+        .collect()
+}
+
+/// Like [`line`] but lifted by a parabola whose apex is a quarter of the horizontal distance.
+fn arc(a: &Pose, b: &Pose, n: usize) -> Vec<Pose> {
+    let (pa, pb) = (position(a), position(b));
+    let lift = 0.25 * ((pb[0] - pa[0]).powi(2) + (pb[1] - pa[1]).powi(2)).sqrt();
+    line(a, b, n)
+        .into_iter()
+        .enumerate()
+        .map(|(i, mut p)| {
+            let t = i as f64 / n as f64;
+            p.translation.vector.z += 4.0 * lift * t * (1.0 - t);
+            p
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use compiler::motion::goals;
+    use labware::thermal_cycler::Params;
+    use nalgebra::Vector3;
+    use std::collections::BTreeMap;
+
+    fn cycler_state() -> LabwareState {
+        LabwareState {
+            name: "cycler".into(),
+            pose: Pose::identity(),
+            joints: BTreeMap::from([("lid".into(), 0.0), ("lever".into(), 0.0)]),
+            parts: BTreeMap::new(),
+            logic: BTreeMap::new(),
+        }
+    }
+
+    #[test]
+    fn the_lever_is_approached_against_it_and_either_grasp_follows_the_same_path() {
+        let p = Params::default();
+        let s = cycler_state();
+        let params = Bindings::new();
+        let lab = Lab {
+            items: vec![("cycler", &p as &dyn Instrument, &s)],
+            params: &params,
+        };
+        let grip = Target::Affordance {
+            labware: "cycler".into(),
+            name: "grip".into(),
+            goals: goals(&[("lid", "closed"), ("lever", "raised")]),
+        };
+        let reach = [Motion::Reach {
+            target: grip.clone(),
+        }];
+        let plain = StepFrame::new(&reach, &lab, &Pose::identity(), None).unwrap();
+        let closed = plain.target(&grip, &lab).unwrap();
+        // Lid closed, lever raised: the grip's outward axis is +y, so the tool approaches along -y.
+        let z = closed.rotation * Vector3::z();
+        assert!((z.y + 1.0).abs() < 1e-9, "{z:?}");
+        // A tool held the other way round picks the flipped grasp: same point, same approach,
+        // fingers turned over.
+        let flipped_tool =
+            closed * labware::frame::pose([0.0; 3], axis_angle([0.0, 0.0, 1.0], 3.0));
+        let flipped = StepFrame::new(&reach, &lab, &flipped_tool, None).unwrap();
+        let other = flipped.target(&grip, &lab).unwrap();
+        assert!((other.translation.vector - closed.translation.vector).norm() < 1e-12);
+        assert!((other.rotation * Vector3::z()).dot(&z) > 1.0 - 1e-9);
+        assert!(
+            (other.rotation * Vector3::x()).dot(&(closed.rotation * Vector3::x())) < -1.0 + 1e-9
+        );
+        // Following the lid shut ends at the closed grasp.
+        let follow = Motion::Follow {
+            labware: "cycler".into(),
+            affordance: "grip".into(),
+            goals: goals(&[("lid", "closed"), ("lever", "raised")]),
+            samples: 5,
+        };
+        let path = plain.poses(&follow, &lab, &Pose::identity()).unwrap();
+        assert_eq!(path.len(), 6);
+        assert!((path[5].translation.vector - closed.translation.vector).norm() < 1e-12);
+        let bad = Target::Affordance {
+            labware: "cycler".into(),
+            name: "grip".into(),
+            goals: goals(&[("lid", "ajar")]),
+        };
+        assert!(matches!(
+            plain.target(&bad, &lab),
+            Err(PlanError::NoGoal { .. })
+        ));
+    }
+
+    #[test]
+    fn a_carried_tube_is_seated_upright_on_the_slot() {
+        let rack = labware::rack::Params::tube_rack();
+        let tube = labware::tube::Params::conical_50ml();
+        let rack_s = LabwareState {
+            name: "rack".into(),
+            pose: labware::frame::yaw([0.3, 0.2, 0.854], std::f64::consts::FRAC_PI_2),
+            joints: BTreeMap::new(),
+            parts: BTreeMap::new(),
+            logic: BTreeMap::new(),
+        };
+        // The tube hangs slightly tilted in the hand, somewhere above the bench.
+        let tube_s = LabwareState {
+            name: "tube".into(),
+            pose: labware::frame::pose([0.4, 0.0, 1.0], axis_angle([1.0, 0.0, 0.0], 0.05)),
+            ..rack_s.clone()
+        };
+        let params = Bindings::new();
+        let lab = Lab {
+            items: vec![
+                ("rack", &rack as &dyn Instrument, &rack_s),
+                ("tube", &tube as &dyn Instrument, &tube_s),
+            ],
+            params: &params,
+        };
+        let tcp = translated_local(&tube_s.pose, [0.0, 0.0, 0.11]);
+        let seat_b3 = Target::Seat {
+            location: "rack.B3".into(),
+            above: 0.0,
+        };
+        let place = [Motion::Reach {
+            target: seat_b3.clone(),
+        }];
+        let frame = StepFrame::new(&place, &lab, &tcp, Some("tube")).unwrap();
+        let tool = frame.target(&seat_b3, &lab).unwrap();
+        // Where the tube would be with the tool there: exactly on the seat, upright.
+        let tube_then = tool * frame.carried.unwrap();
+        let seat = lab.seat("rack.B3").unwrap();
+        assert!((tube_then.translation.vector - seat.translation.vector).norm() < 1e-12);
+        assert!((tube_then.rotation * Vector3::z()).z > 1.0 - 1e-12);
+        assert!(matches!(
+            StepFrame::new(&place, &lab, &tcp, None),
+            Err(PlanError::NothingCarried)
+        ));
+    }
+}

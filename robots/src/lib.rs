@@ -1,0 +1,121 @@
+//! Robot models: one file per robot (an arm and its gripper composed), each a [`RobotModel`] of
+//! plain facts: how its MJCF is prepared from the installed packages, its joints and actuators by
+//! name, the gripper's actuator values and settle time, TCP site, wrist camera, mount facing, home
+//! pose, expert limits and IK method. [`MODELS`] is the registry: one line per robot.
+//!
+//! Observation and action layouts derive from a model ([`RobotModel::state_names`],
+//! [`RobotModel::action_names`]): arm joints in order, then the gripper. For a task with several
+//! robots the layouts are concatenated in the task's robot order.
+//!
+//! No MuJoCo API here: the runtime compiles what `prepare` writes; only file IO for the assets.
+
+mod assets;
+pub mod ur5e_2f85;
+
+pub use assets::AssetError;
+use std::path::{Path, PathBuf};
+
+/// A parallel gripper's one actuator.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Gripper {
+    /// Actuator name (relative to the robot's prefix).
+    pub actuator: &'static str,
+    /// The joint whose angle is the gripper's state element.
+    pub driver_joint: &'static str,
+    /// Actuator values for fully open and fully closed.
+    pub open: f64,
+    pub closed: f64,
+    /// How long a grasp or release takes to settle (s).
+    pub settle_s: f64,
+}
+
+impl Gripper {
+    /// Clamps a commanded value into the actuator's range.
+    pub fn clamp(&self, v: f64) -> f64 {
+        v.clamp(self.open.min(self.closed), self.open.max(self.closed))
+    }
+}
+
+/// How the expert solves inverse kinematics for this arm.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum IkMethod {
+    /// Damped least-squares QPs with joint limits (clarabel), on the simulator's Jacobian.
+    Qp,
+}
+
+/// Joint-space speed limits of the scripted expert (rad/s, rad/s²).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ExpertLimits {
+    pub vmax: f64,
+    pub amax: f64,
+}
+
+#[derive(Debug)]
+pub struct RobotModel {
+    pub name: &'static str,
+    pub description: &'static str,
+    /// Arm joints and their position actuators, in layout order (names relative to the prefix).
+    pub arm_joints: &'static [&'static str],
+    pub arm_actuators: &'static [&'static str],
+    pub gripper: Gripper,
+    /// The tool centre point site and the wrist camera (relative to the prefix).
+    pub tcp_site: &'static str,
+    pub wrist_camera: &'static str,
+    /// Yaw (rad) added to the mount so that a protocol's yaw 0 reaches along +x.
+    pub mount_yaw: f64,
+    /// The root body to attach under the mount.
+    pub root_body: &'static str,
+    pub home: &'static [f64],
+    pub expert_limits: ExpertLimits,
+    pub ik: IkMethod,
+    /// Writes the robot's MJCF from the installed packages under `deps` (idempotent) and returns
+    /// its path.
+    pub prepare: fn(deps: &Path) -> Result<PathBuf, AssetError>,
+}
+
+impl RobotModel {
+    pub fn dof(&self) -> usize {
+        self.arm_joints.len()
+    }
+
+    /// Observation state: arm joint angles (rad), then the gripper driver angle (rad).
+    pub fn state_names(&self) -> Vec<String> {
+        let mut n: Vec<String> = self.arm_joints.iter().map(|j| j.to_string()).collect();
+        n.push(format!("gripper:{}", self.gripper.driver_joint));
+        n
+    }
+
+    /// Action: arm joint targets (rad), then the gripper actuator command.
+    pub fn action_names(&self) -> Vec<String> {
+        let mut n: Vec<String> = self.arm_actuators.iter().map(|a| a.to_string()).collect();
+        n.push(format!("gripper:{}", self.gripper.actuator));
+        n
+    }
+
+    pub fn action_len(&self) -> usize {
+        self.arm_actuators.len() + 1
+    }
+}
+
+/// The registry: every robot a protocol may name.
+pub const MODELS: &[&RobotModel] = &[&ur5e_2f85::MODEL];
+
+pub fn model(name: &str) -> Option<&'static RobotModel> {
+    MODELS.iter().copied().find(|m| m.name == name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn layouts_derive_from_the_model() {
+        let m = model("ur5e_2f85").unwrap();
+        assert_eq!(m.state_names().len(), 7);
+        assert_eq!(m.action_len(), 7);
+        assert_eq!(m.home.len(), m.dof());
+        assert_eq!(m.arm_actuators.len(), m.dof());
+        assert_eq!(m.gripper.clamp(300.0), m.gripper.closed);
+        assert!(model("ur10").is_none());
+    }
+}

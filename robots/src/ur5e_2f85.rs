@@ -1,0 +1,109 @@
+//! Universal Robots UR5e with a Robotiq 2F-85 gripper, both from the MuJoCo Menagerie models that
+//! `make setup` installs (never from the repository). Preparation copies the two files with
+//! absolute mesh paths and gravity compensation on every body, attaches the gripper at the flange
+//! through a tool frame, and adds the TCP site (the 2F-85's pinch point) and a wrist camera.
+//!
+//! Layout: state = 6 arm joint angles (rad) + the gripper's right driver angle (rad, 0..0.8);
+//! action = 6 joint position targets (rad) + the fingers actuator (0 open .. 255 closed).
+
+use crate::assets::{self, AssetError};
+use crate::{ExpertLimits, Gripper, IkMethod, RobotModel};
+use std::f64::consts::{FRAC_PI_2, PI};
+use std::path::{Path, PathBuf};
+
+/// Distance from the flange to the 2F-85's pinch point along the tool axis (m).
+const TCP_OFFSET: f64 = 0.1558;
+
+pub const MODEL: RobotModel = RobotModel {
+    name: "ur5e_2f85",
+    description: "Universal Robots UR5e with a Robotiq 2F-85 gripper (MuJoCo Menagerie models)",
+    arm_joints: &[
+        "shoulder_pan_joint",
+        "shoulder_lift_joint",
+        "elbow_joint",
+        "wrist_1_joint",
+        "wrist_2_joint",
+        "wrist_3_joint",
+    ],
+    arm_actuators: &[
+        "shoulder_pan",
+        "shoulder_lift",
+        "elbow",
+        "wrist_1",
+        "wrist_2",
+        "wrist_3",
+    ],
+    gripper: Gripper {
+        actuator: "gripper/fingers_actuator",
+        driver_joint: "gripper/right_driver_joint",
+        open: 0.0,
+        closed: 255.0,
+        settle_s: 0.6,
+    },
+    tcp_site: "tcp",
+    wrist_camera: "wrist_cam",
+    // The Menagerie UR5e faces -x at zero pan; a half turn makes a mount yaw of 0 reach along +x.
+    mount_yaw: PI,
+    root_body: "base",
+    home: &[
+        0.0, -FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2,
+    ],
+    // As the upstream thermal-cycler expert.
+    expert_limits: ExpertLimits {
+        vmax: 1.5,
+        amax: 1.0,
+    },
+    ik: IkMethod::Qp,
+    prepare,
+};
+
+fn prepare(deps: &Path) -> Result<PathBuf, AssetError> {
+    let ur_dir = deps.join("robots/universal_robots_ur5e");
+    let gr_dir = deps.join("robots/robotiq_2f85");
+    let (ur_file, gr_file) = (ur_dir.join("ur5e.xml"), gr_dir.join("2f85.xml"));
+    if !ur_file.exists() || !gr_file.exists() {
+        return Err(AssetError::Missing(deps.join("robots")));
+    }
+    let gravcomp = |s: &str| s.replace("<body ", "<body gravcomp=\"1\" ");
+    let mut gripper = assets::read(&gr_file)?;
+    gripper = assets::strip_element(&gripper, "<option", "/>");
+    gripper = gravcomp(&gripper).replace(
+        "meshdir=\"assets\"",
+        &format!("meshdir=\"{}\"", assets::absolute(&gr_dir.join("assets"))?),
+    );
+    let mut arm = assets::read(&ur_file)?;
+    arm = gravcomp(&arm).replace(
+        "meshdir=\"assets\"",
+        &format!("meshdir=\"{}\"", assets::absolute(&ur_dir.join("assets"))?),
+    );
+    arm = assets::strip_element(&arm, "<keyframe>", "</keyframe>");
+    arm = assets::strip_element(&arm, "<light name=\"spotlight\"", "/>");
+    arm = assets::strip_element(&arm, "<option", "/>");
+    let dir = assets::content_dir("autobio-robot", &(arm.clone() + &gripper))?;
+    let gripper_path = dir.join("2f85.xml");
+    // The tool frame: z along the approach, fingers closing along x. The camera sits on the -y side
+    // looking at the pinch point (RealSense D405-like fov).
+    let tool = format!(
+        r#"<site name="attachment_site" pos="0 0.1 0" quat="-1 1 0 0"/>
+                  <body name="tool" pos="0 0.1 0" quat="-1 1 0 0">
+                    <attach model="gripper" body="base_mount" prefix="gripper/"/>
+                    <site name="tcp" pos="0 0 {TCP_OFFSET}" size="0.004" group="4"/>
+                    <camera name="wrist_cam" pos="0 -0.08 0.02" xyaxes="1 0 0 0 -0.868 0.496" fovy="58"/>
+                  </body>"#
+    );
+    arm = arm.replace(
+        r#"<site name="attachment_site" pos="0 0.1 0" quat="-1 1 0 0"/>"#,
+        &tool,
+    );
+    arm = arm.replace(
+        "<asset>",
+        &format!(
+            "<asset>\n    <model name=\"gripper\" file=\"{}\"/>",
+            gripper_path.display()
+        ),
+    );
+    let arm_path = dir.join("ur5e_2f85.xml");
+    assets::write_if_changed(&gripper_path, &gripper)?;
+    assets::write_if_changed(&arm_path, &arm)?;
+    Ok(arm_path)
+}

@@ -1,0 +1,88 @@
+//! The no-motion control: every simulated shipped protocol and chain scores 0 under `hold`. A task
+//! a motionless robot passes (a lid that falls shut, a tube already in place) is a broken task.
+//! Also checks the policy factory: the report's policy field comes from the policy, and an unknown
+//! name is refused with the known ones listed.
+
+use scoring::eval::{EvalOptions, evaluate};
+
+fn shipped() -> Vec<std::path::PathBuf> {
+    let mut out = Vec::new();
+    for dir in std::fs::read_dir("protocols").unwrap() {
+        for f in std::fs::read_dir(dir.unwrap().path()).unwrap() {
+            let f = f.unwrap().path();
+            if f.extension().is_some_and(|e| e == "toml") {
+                out.push(f);
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+#[test]
+fn every_simulated_task_scores_zero_without_motion() {
+    let mut simulated = Vec::new();
+    for path in shipped() {
+        let name = path.display().to_string();
+        let (task, diags) =
+            compiler::compile_source(&std::fs::read_to_string(&path).unwrap(), &name);
+        let task = task.unwrap_or_else(|| panic!("{name}: {diags:#?}"));
+        if runtime::Scene::build(&task, &task.sample(0)).is_err() {
+            continue;
+        }
+        let opts = EvalOptions {
+            policy: "hold".into(),
+            episodes: 1,
+            seed: 0,
+            out: None,
+            record: false,
+            image_every: 0,
+        };
+        let report = evaluate(&task, &opts, |_| {}).unwrap();
+        assert_eq!(report.policy, "hold");
+        let e = &report.episodes[0];
+        assert!(e.error.is_none(), "{name}: {:?}", e.error);
+        assert!(!e.success, "{name} passes with no motion: {:#?}", e.verdict);
+        assert_eq!(e.verdict.score, 0.0, "{name}: {:#?}", e.verdict);
+        // It ran to the time limit: nothing ended it early.
+        assert!(
+            (e.sim_time_s - task.stages[0].time_limit_s).abs() < 0.05,
+            "{name}"
+        );
+        simulated.push(task.id);
+    }
+    simulated.sort();
+    assert_eq!(
+        simulated,
+        [
+            "thermal_cycler.close_lid",
+            "thermal_cycler.close_then_open",
+            "thermal_cycler.open_lid",
+            "thermal_cycler.open_then_close",
+            "tube.transfer",
+            "tube.unscrew_cap",
+            "two_arm.close_lid_and_transfer",
+        ]
+    );
+}
+
+#[test]
+fn policies_are_made_by_name() {
+    let path = "protocols/thermal_cycler/open_lid.toml";
+    let (task, _) = compiler::compile_source(&std::fs::read_to_string(path).unwrap(), path);
+    let task = task.unwrap();
+    let instance = task.sample(0);
+    let scene = runtime::Scene::build(&task, &instance).unwrap();
+    for name in scoring::POLICIES {
+        let p = scoring::policy::make(name, &task, &scene, &instance).unwrap();
+        assert_eq!(p.name(), *name);
+    }
+    let err = scoring::policy::make("random", &task, &scene, &instance)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        err.contains("unknown policy `random`") && err.contains("expert, hold"),
+        "{err}"
+    );
+}
