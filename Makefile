@@ -10,15 +10,25 @@ build: setup
 	$(CARGO) build --release
 
 # The main job: check every shipped protocol, then the scripted expert on both thermal-cycler
-# protocols and the close-then-open chain, 20 seeded episodes each, a results table, results JSON
-# and one MCAP recording per episode under out/demo/.
+# protocols, the close-then-open chain and the tube transfer (20 seeded episodes each) and on the
+# two-arm task (5): a results table, results JSON and one MCAP recording per episode under
+# out/demo/. Last, the no-motion control (`--policy hold`), which must score 0 everywhere.
 demo: build
 	$(CARGO) run --release --quiet -- check protocols/*/*.toml
 	$(CARGO) run --release --quiet -- eval \
 	  --protocol protocols/thermal_cycler/close_lid.toml \
 	  --protocol protocols/thermal_cycler/open_lid.toml \
 	  --protocol protocols/thermal_cycler/close_then_open.toml \
+	  --protocol protocols/tube/transfer.toml \
 	  --episodes 20 --seed 0 --out out/demo --record
+	$(CARGO) run --release --quiet -- eval \
+	  --protocol protocols/two_arm/close_lid_and_transfer.toml \
+	  --episodes 5 --seed 0 --out out/demo --record
+	$(CARGO) run --release --quiet -- eval --policy hold \
+	  --protocol protocols/thermal_cycler/close_lid.toml \
+	  --protocol protocols/thermal_cycler/open_lid.toml \
+	  --protocol protocols/tube/transfer.toml \
+	  --episodes 3 --seed 0
 
 test: setup
 	$(CARGO) test --release --workspace

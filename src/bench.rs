@@ -1,6 +1,7 @@
 //! `autobio bench`: throughput figures, each measured in the same run as its baseline.
-//! - physics: harness steps/s (episode stepping with instrument logic) vs a bare `mj_step` loop on
-//!   the same compiled model and initial state;
+//! - physics, per task scene (by default the thermal cycler's and the tube-transfer scene): harness
+//!   steps/s (episode stepping with instrument logic) vs a bare `mj_step` loop on the same compiled
+//!   model and initial state;
 //! - rendering: frames/s of one 224x224 camera image (both task cameras, alternating);
 //! - expert: full scripted-expert episodes per minute (no recording);
 //! - lab physics: each mechanism's scene with it and without it (ratio), and one liquid solve.
@@ -10,7 +11,24 @@ use mujoco_rs::prelude::*;
 use std::sync::Arc;
 use std::time::Instant;
 
-pub fn run(task: &compiler::Task) -> Result<()> {
+/// Upstream's transfer scene on this machine kind (mesh collisions and the thread SDF), steps/s:
+/// the figure the transfer scene is compared with (not measured here; see docs/physics.md).
+const UPSTREAM_TRANSFER_STEPS_S: f64 = 810.0;
+
+/// Every figure for each task's scene, then the lab-physics figures once.
+pub fn run(tasks: &[compiler::Task]) -> Result<()> {
+    let mut first_step_s = None;
+    for task in tasks {
+        println!("scene    {}", task.id);
+        let step_s = scene_figures(task)?;
+        first_step_s.get_or_insert(step_s);
+    }
+    physics_figures(first_step_s.unwrap_or(1e-4))
+}
+
+/// Physics (harness vs a bare `mj_step` loop on the same model), rendering and expert figures of
+/// one task's scene; returns the bare loop's seconds per step.
+fn scene_figures(task: &compiler::Task) -> Result<f64> {
     let instance = task.sample(0);
     let scene = Arc::new(runtime::Scene::build(task, &instance).map_err(anyhow::Error::msg)?);
     let steps = 20_000;
@@ -46,8 +64,16 @@ pub fn run(task: &compiler::Task) -> Result<()> {
     let (bare_rate, harness_rate) = (steps as f64 / best_bare, steps as f64 / best_harness);
     println!("physics  bare mj_step   {bare_rate:>10.0} steps/s");
     println!(
-        "physics  harness        {harness_rate:>10.0} steps/s   ratio {:.3}x",
-        harness_rate / bare_rate
+        "physics  harness        {harness_rate:>10.0} steps/s   ratio {:.3}x{}",
+        harness_rate / bare_rate,
+        if task.labware.iter().any(|l| l.at.is_some()) {
+            format!(
+                "   ({:.1}x upstream's {UPSTREAM_TRANSFER_STEPS_S:.0} steps/s transfer scene)",
+                harness_rate / UPSTREAM_TRANSFER_STEPS_S
+            )
+        } else {
+            String::new()
+        }
     );
 
     let mut cams = runtime::render::Cameras::new(&scene, 224, 224).map_err(anyhow::Error::msg)?;
@@ -63,7 +89,7 @@ pub fn run(task: &compiler::Task) -> Result<()> {
     }
     let frames = rounds * names.len();
     println!(
-        "render   224x224        {:>10.1} frames/s ({} cameras, 10 physics steps between pairs)",
+        "render   224x224        {:>10.1} frames/s ({} cameras, 10 physics steps between sets)",
         frames as f64 / t.elapsed().as_secs_f64(),
         names.len()
     );
@@ -86,7 +112,7 @@ pub fn run(task: &compiler::Task) -> Result<()> {
         sim / report.summary.wall_time_s,
         report.summary.successes
     );
-    physics_figures(1.0 / bare_rate)
+    Ok(1.0 / bare_rate)
 }
 
 /// Steps/s of a model from its XML: the best of three timed runs of `steps` steps, `drive` called

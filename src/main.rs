@@ -83,8 +83,12 @@ enum Command {
     Replay { recording: PathBuf },
     /// Measure throughput: physics steps/s (harness vs bare mj_step), rendered frames/s, expert episodes/min
     Bench {
-        #[arg(long, default_value = "protocols/thermal_cycler/close_lid.toml")]
-        protocol: PathBuf,
+        /// Task scenes to measure (repeatable)
+        #[arg(
+            long,
+            default_values = ["protocols/thermal_cycler/close_lid.toml", "protocols/tube/transfer.toml"]
+        )]
+        protocol: Vec<PathBuf>,
     },
 }
 
@@ -327,8 +331,11 @@ fn run(cli: Cli) -> Result<ExitCode> {
             })
         }
         Command::Bench { protocol } => {
-            let task = load(&protocol)?;
-            bench::run(&task)?;
+            let tasks = protocol
+                .iter()
+                .map(|p| load(p))
+                .collect::<Result<Vec<_>>>()?;
+            bench::run(&tasks)?;
             Ok(ExitCode::SUCCESS)
         }
     }

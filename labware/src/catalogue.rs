@@ -118,6 +118,9 @@ pub struct LabwareKind {
     pub tolerances: &'static [(&'static str, f64)],
     /// Lab primitives this kind has affordances for (as the object `on` a step).
     pub primitives: &'static [&'static str],
+    /// A liquid-handling tool a robot carries (a pipette): what `aspirate` and `dispense` draw
+    /// into and expel from.
+    pub liquid_tool: bool,
 }
 
 impl LabwareKind {
@@ -199,6 +202,7 @@ const fn tube(name: &'static str, description: &'static str, capacity_ul: f64) -
         joints: &[],
         tolerances: TUBE_TOLERANCES,
         primitives: TUBE_PRIMITIVES,
+        liquid_tool: false,
     }
 }
 
@@ -220,6 +224,7 @@ const fn rack(
         joints: &[],
         tolerances: SLOT_TOLERANCES,
         primitives: &[],
+        liquid_tool: false,
     }
 }
 
@@ -246,6 +251,7 @@ const fn lidded(
             ("lid_unlocked", 0.01),
         ],
         primitives: LID_PRIMITIVES,
+        liquid_tool: false,
     }
 }
 
@@ -267,6 +273,7 @@ pub const KINDS: &[LabwareKind] = &[
             ("lid_unlocked", 0.003),
         ],
         primitives: &["open_lid", "close_lid"],
+        liquid_tool: false,
     },
     lidded(
         "centrifuge_5430",
@@ -369,6 +376,7 @@ pub const KINDS: &[LabwareKind] = &[
         joints: &[],
         tolerances: &[("display", 1e-6)],
         primitives: &["press", "set_parameter"],
+        liquid_tool: false,
     },
     LabwareKind {
         name: "vortex_mixer",
@@ -396,6 +404,7 @@ pub const KINDS: &[LabwareKind] = &[
         joints: &[],
         tolerances: SLOT_TOLERANCES,
         primitives: &["press"],
+        liquid_tool: false,
     },
     rack(
         "tube_rack",
@@ -429,6 +438,7 @@ pub const KINDS: &[LabwareKind] = &[
         joints: &[("plunger", "m")],
         tolerances: &[("volume", 1.0), ("position", 0.005)],
         primitives: &["pick", "place", "hand_over"],
+        liquid_tool: true,
     },
 ];
 

@@ -16,6 +16,17 @@ use std::collections::BTreeMap;
 /// Instrument logic state that is not a joint (latch flags, panel values), by name.
 pub type Logic = BTreeMap<String, f64>;
 
+/// Sets one value of a name-keyed map, allocating the key only the first time (logic runs after
+/// every physics step).
+pub fn set(map: &mut BTreeMap<String, f64>, key: &str, value: f64) {
+    match map.get_mut(key) {
+        Some(v) => *v = value,
+        None => {
+            map.insert(key.to_string(), value);
+        }
+    }
+}
+
 /// Live state of one placed labware item: everything a predicate, an affordance or a replay needs.
 /// The runtime fills it after every control step; recordings store it as `/labware/state`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -151,14 +162,15 @@ pub trait Instrument {
         Reset::default()
     }
 
-    /// Instrument logic after each physics step: updates `logic` from the joints and returns each
-    /// switch's wanted state. Also called once right after reset.
+    /// Instrument logic after each physics step: updates `logic` from the joints and pushes each
+    /// switch's wanted state onto `switches` (which the runtime empties and reuses, so a step
+    /// allocates nothing). Also called once right after reset.
     fn step(
         &self,
         _joints: &BTreeMap<String, f64>,
         _logic: &mut Logic,
-    ) -> Vec<(&'static str, bool)> {
-        Vec::new()
+        _switches: &mut Vec<(&'static str, bool)>,
+    ) {
     }
 
     /// A named joint goal, e.g. `("lid", "closed")` -> the lid's closed angle.

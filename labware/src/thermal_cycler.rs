@@ -160,8 +160,8 @@ impl Latch {
     }
 
     fn store(&self, l: &mut Logic) {
-        l.insert("jammed".into(), f64::from(u8::from(self.jammed)));
-        l.insert("locked".into(), f64::from(u8::from(self.locked)));
+        crate::model::set(l, "jammed", f64::from(u8::from(self.jammed)));
+        crate::model::set(l, "locked", f64::from(u8::from(self.locked)));
     }
 
     /// Updates from the current joint angles; returns whether the lock constraint is active.
@@ -304,13 +304,18 @@ impl Instrument for Params {
         }
     }
 
-    fn step(&self, joints: &BTreeMap<String, f64>, logic: &mut Logic) -> Vec<(&'static str, bool)> {
+    fn step(
+        &self,
+        joints: &BTreeMap<String, f64>,
+        logic: &mut Logic,
+        switches: &mut Vec<(&'static str, bool)>,
+    ) {
         let mut latch = Latch::from_logic(logic);
         let lid = joints.get("lid").copied().unwrap_or(self.lid_open);
         let lever = joints.get("lever").copied().unwrap_or(self.lever_raised);
         let locked = latch.update(self, lid, lever);
         latch.store(logic);
-        vec![("lock", locked)]
+        switches.push(("lock", locked));
     }
 
     fn joint_goal(&self, role: &str, goal: &str) -> Option<f64> {

@@ -168,10 +168,10 @@ impl ScrewCap {
 
 /// Container sizes with screw caps and their thread radius (m), from upstream's models.
 pub const CONTAINERS: [(&str, f64); 4] = [
-    ("tube_1_5ml", 0.005992),
-    ("tube_15ml", 0.00784),
-    ("tube_50ml", 0.014),
-    ("cryovial", 0.005112),
+    ("1.5 mL tube", 0.005992),
+    ("15 mL tube", 0.00784),
+    ("50 mL tube", 0.014),
+    ("1.8 mL vial", 0.005112),
 ];
 
 #[cfg(test)]

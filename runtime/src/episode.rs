@@ -31,6 +31,7 @@ pub struct Episode {
     /// Each item's logic state and its joints by role (kept between steps to avoid allocation).
     logic: Vec<Logic>,
     joints: Vec<BTreeMap<String, f64>>,
+    switches: Vec<(&'static str, bool)>,
     pub physics_steps: u64,
 }
 
@@ -59,6 +60,7 @@ impl Episode {
             data,
             logic: vec![Logic::new(); n],
             joints: vec![BTreeMap::new(); n],
+            switches: Vec::new(),
             physics_steps: 0,
         };
         ep.reset(instance);
@@ -130,12 +132,13 @@ impl Episode {
         let scene = self.scene.clone();
         for (i, ids) in scene.labware.iter().enumerate() {
             for (role, adr) in &ids.joints {
-                self.joints[i].insert(role.to_string(), self.data.qpos()[*adr]);
+                labware::model::set(&mut self.joints[i], role, self.data.qpos()[*adr]);
             }
-            let switches = instrument(&self.task, i).step(&self.joints[i], &mut self.logic[i]);
-            for (role, on) in switches {
-                if let Some((_, eq)) = ids.switches.iter().find(|(r, _)| *r == role) {
-                    self.data.eq_active_mut()[*eq] = on;
+            self.switches.clear();
+            instrument(&self.task, i).step(&self.joints[i], &mut self.logic[i], &mut self.switches);
+            for (role, on) in &self.switches {
+                if let Some((_, eq)) = ids.switches.iter().find(|(r, _)| r == role) {
+                    self.data.eq_active_mut()[*eq] = *on;
                 }
             }
         }

@@ -16,7 +16,7 @@ pub(super) fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), V
         ));
     }
     let pipette = match w.hand(robot) {
-        Hand::Item(p) if env.kinds.get(p).is_some_and(|k| k.name == "pipette") => p.clone(),
+        Hand::Item(p) if env.kinds.get(p).is_some_and(|k| k.liquid_tool) => p.clone(),
         h => {
             return Err(precondition(
                 format!("`{name}` needs `{robot}` to carry a pipette, but its hand is {h}"),
