@@ -42,6 +42,9 @@ fn the_expert_moves_the_tube_into_the_named_slot_with_its_cap_on() {
     assert!(r.success, "{:?} {:#?}", r.error, r.verdict);
     let p = &r.verdict.predicates()[0];
     assert!(p.holds && p.value < p.tolerance, "{p:?}");
+    // Same seed, same episode, thread contacts included.
+    let again = expert(&t, 7, &EpisodeOptions::default());
+    assert_eq!(again.trajectory_hash, r.trajectory_hash);
     // The recording's last labware state: the tube stands in the drawn slot, capped.
     let rec = runtime::record::read_recording(&path).unwrap();
     let i = t.labware_index("tube").unwrap();

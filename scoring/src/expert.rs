@@ -10,7 +10,7 @@ use compiler::params::{Bindings, render};
 use compiler::{SceneInstance, Task};
 use primitives::topp::{Limits, Trajectory, plan_trajectory};
 use primitives::{Kinematics, Lab, StepFrame, solve_ik};
-use robots::RobotModel;
+use robots::{IkMethod, RobotModel};
 use runtime::Scene;
 use runtime::kinematics::ArmKinematics;
 use std::collections::{BTreeMap, VecDeque};
@@ -173,8 +173,10 @@ impl ExpertPolicy {
         let mut waypoints = vec![arm.target.clone()];
         let mut seed = arm.target.clone();
         for pose in poses.iter().skip(1) {
-            let qn = solve_ik(&mut arm.kin, pose, &seed, &Default::default())
-                .map_err(|e| planning(format!("{}: {e}", q.motion.label())))?;
+            let qn = match arm.model.ik {
+                IkMethod::Qp => solve_ik(&mut arm.kin, pose, &seed, &Default::default()),
+            }
+            .map_err(|e| planning(format!("{}: {e}", q.motion.label())))?;
             waypoints.push(qn.clone());
             seed = qn;
         }
