@@ -66,7 +66,7 @@ fn scene_figures(task: &compiler::Task) -> Result<f64> {
     println!(
         "physics  harness        {harness_rate:>10.0} steps/s   ratio {:.3}x{}",
         harness_rate / bare_rate,
-        if task.labware.iter().any(|l| l.at.is_some()) {
+        if task.id == "tube.transfer" {
             format!(
                 "   ({:.1}x upstream's {UPSTREAM_TRANSFER_STEPS_S:.0} steps/s transfer scene)",
                 harness_rate / UPSTREAM_TRANSFER_STEPS_S

@@ -281,7 +281,8 @@ fn run(cli: Cli) -> Result<ExitCode> {
             let task: compiler::Task = serde_json::from_value(rec.task.clone())
                 .context("the recording's task does not match this autobio's task schema")?;
             let params: compiler::params::Bindings =
-                serde_json::from_value(rec.instance["params"].clone()).unwrap_or_default();
+                serde_json::from_value(rec.instance["params"].clone())
+                    .context("the recording's scene instance has no drawn parameters")?;
             let verdict = scoring::Judge::replay(&task, &params, &rec.labware_series);
             println!(
                 "{}: {} messages over {:.2} s",

@@ -43,6 +43,18 @@ fn every_simulated_task_scores_zero_without_motion() {
         let e = &report.episodes[0];
         assert!(e.error.is_none(), "{name}: {:?}", e.error);
         assert!(!e.success, "{name} passes with no motion: {:#?}", e.verdict);
+        // Not only because a check cannot be measured: some measured check fails.
+        let measured: Vec<_> = e
+            .verdict
+            .predicates()
+            .iter()
+            .filter(|p| !p.value.is_nan())
+            .collect();
+        assert!(
+            measured.iter().any(|p| !p.holds),
+            "{name}: every measured check holds without motion: {:#?}",
+            e.verdict
+        );
         assert_eq!(e.verdict.score, 0.0, "{name}: {:#?}", e.verdict);
         // It ran to the time limit: nothing ended it early.
         assert!(

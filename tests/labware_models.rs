@@ -89,7 +89,10 @@ fn every_tube_kind_stands_capped_in_its_rack() {
             *location = "rack.B1".into();
         }
         let mut judge = scoring::Judge::new(&at_b1, &instance.params, &start);
-        assert!(judge.update(ep.time(), &end), "{tube}: the B1 check ends the stage");
+        assert!(
+            judge.update(ep.time(), &end),
+            "{tube}: the B1 check ends the stage"
+        );
         assert!(judge.verdict().success, "{tube}: {:?}", judge.verdict());
     }
 }

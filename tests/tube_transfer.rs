@@ -50,7 +50,8 @@ fn the_expert_moves_the_tube_into_the_named_slot_with_its_cap_on() {
     let i = t.labware_index("tube").unwrap();
     let tube = &rec.final_labware[i];
     let model = t.labware[i].params.instrument().unwrap();
-    assert_eq!(model.readout(tube)["cap"], "on");
+    let cap = model.measure("cap", "on", None, tube).unwrap();
+    assert!(cap.holds, "the cap came loose in transit: {cap:?}");
     let instance = t.sample(7);
     let slot = format!("{}{}", instance.params["row"], instance.params["col"]);
     let target = t.labware_index("target").unwrap();

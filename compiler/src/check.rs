@@ -1024,6 +1024,8 @@ fn resolve_check(
                         name: "slot_xy".into(),
                         value: v,
                     },
+                    height: kind.tolerance("slot_z").unwrap_or(0.005),
+                    tilt: crate::predicates::SLOT_TILT,
                 },
                 Some(("slot_xy".into(), v, Dimension::Length)),
             ))

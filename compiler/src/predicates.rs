@@ -56,7 +56,14 @@ pub enum Check {
         item: String,
         /// Template `holder.slot`.
         location: String,
+        /// In-plane distance from the slot's seat (`slot_xy`).
         tolerance: Tolerance,
+        /// Height above or below the seat (m; the item kind's `slot_z`) and tilt from upright
+        /// (rad) within which the item still stands in the slot.
+        #[serde(default = "default_slot_height")]
+        height: f64,
+        #[serde(default = "default_slot_tilt")]
+        tilt: f64,
     },
     Volume {
         container: String,
@@ -84,6 +91,17 @@ pub enum Check {
         pos: [f64; 3],
         tolerance: Tolerance,
     },
+}
+
+fn default_slot_height() -> f64 {
+    0.005
+}
+
+/// Largest tilt (rad) of an item that still stands upright in a slot.
+pub const SLOT_TILT: f64 = 0.15;
+
+fn default_slot_tilt() -> f64 {
+    SLOT_TILT
 }
 
 /// The predicate's syntactic shape before names are resolved.

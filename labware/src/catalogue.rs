@@ -187,9 +187,22 @@ const TUBE_TOLERANCES: &[(&str, f64)] = &[
     ("volume", 1.0),
     ("position", 0.005),
 ];
+/// Small tubes stand in racks of 12.5 mm pitch: a slot tolerance under half the pitch, so no
+/// tube counts as standing in its neighbour's slot.
+const MICROTUBE_TOLERANCES: &[(&str, f64)] = &[
+    ("slot_xy", 0.005),
+    ("slot_z", 0.003),
+    ("volume", 1.0),
+    ("position", 0.005),
+];
 const TUBE_ACCEPTING_RACK: &[&str] = &["tube_50ml", "tube_15ml"];
 
-const fn tube(name: &'static str, description: &'static str, capacity_ul: f64) -> LabwareKind {
+const fn tube(
+    name: &'static str,
+    description: &'static str,
+    capacity_ul: f64,
+    tolerances: &'static [(&'static str, f64)],
+) -> LabwareKind {
     LabwareKind {
         name,
         description,
@@ -200,7 +213,7 @@ const fn tube(name: &'static str, description: &'static str, capacity_ul: f64) -
         panel: &[],
         buttons: &[],
         joints: &[],
-        tolerances: TUBE_TOLERANCES,
+        tolerances,
         primitives: TUBE_PRIMITIVES,
         liquid_tool: false,
     }
@@ -422,10 +435,26 @@ pub const KINDS: &[LabwareKind] = &[
         "tube_1_5ml",
         "1.5 mL snap-cap microcentrifuge tube, modelled with a screw cap",
         1500.0,
+        MICROTUBE_TOLERANCES,
     ),
-    tube("tube_15ml", "15 mL screw-cap conical tube", 15_000.0),
-    tube("tube_50ml", "50 mL screw-cap conical tube", 50_000.0),
-    tube("cryovial", "2 mL screw-cap cryovial", 2000.0),
+    tube(
+        "tube_15ml",
+        "15 mL screw-cap conical tube",
+        15_000.0,
+        TUBE_TOLERANCES,
+    ),
+    tube(
+        "tube_50ml",
+        "50 mL screw-cap conical tube",
+        50_000.0,
+        TUBE_TOLERANCES,
+    ),
+    tube(
+        "cryovial",
+        "2 mL screw-cap cryovial",
+        2000.0,
+        MICROTUBE_TOLERANCES,
+    ),
     LabwareKind {
         name: "pipette",
         description: "single-channel air-displacement pipette with a 1000 µL tip",

@@ -4,7 +4,8 @@
 //! per-step logic, reads out part states for the judge and offers affordances for the expert.
 //! [`registry`] is the one place a kind meets its model.
 //!
-//! No meshes are read or written: geometry is primitive geoms sized from parameters (dimensions
+//! No mesh files are read or written: geometry is primitive geoms sized from parameters, plus the
+//! SDF meshes the thread plugin generates from a model's thread parameters (dimensions
 //! from the public description of the instruments). This crate knows nothing of protocols,
 //! MuJoCo's API or robots: it produces text and plain numbers.
 

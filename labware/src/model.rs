@@ -157,6 +157,11 @@ pub trait Instrument {
         Vec::new()
     }
 
+    /// Why the model cannot start in the declared part states, if it cannot.
+    fn unsupported_start(&self, _initial: &BTreeMap<String, String>) -> Option<String> {
+        None
+    }
+
     /// Joint values and logic for the declared initial part states.
     fn reset(&self, _initial: &BTreeMap<String, String>) -> Reset {
         Reset::default()

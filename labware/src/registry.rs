@@ -19,6 +19,9 @@ macro_rules! registry {
             Unmodelled,
         }
 
+        /// Every kind with a model, in registry order.
+        pub const MODELLED: &[&str] = &[$($($kind,)+)+];
+
         impl Model {
             /// The model of a catalogue kind, with the kind's parameters; `None`: not simulated.
             pub fn for_kind(kind: &str) -> Option<Model> {
@@ -73,5 +76,51 @@ mod tests {
             assert!(m.instrument().is_some());
         }
         assert!(Model::Unmodelled.instrument().is_none());
+        // And the other way: every registry line names a catalogue kind.
+        for k in MODELLED {
+            assert!(crate::kind(k).is_some_and(|k| k.simulated()), "{k}");
+        }
+    }
+
+    /// Every slot the catalogue names has a seat in the holder's model, and no item a holder
+    /// takes may count as standing in a neighbouring slot: its `slot_xy` is under half the
+    /// distance between the two closest seats.
+    #[test]
+    fn holders_seat_every_catalogue_slot_and_slots_are_told_apart() {
+        use crate::frame::position;
+        for k in crate::KINDS.iter().filter(|k| k.simulated()) {
+            let Some(slots) = k.slots else { continue };
+            let model = Model::for_kind(k.name).unwrap();
+            let state = crate::LabwareState {
+                name: "holder".into(),
+                pose: crate::frame::Pose::identity(),
+                joints: Default::default(),
+                parts: Default::default(),
+                logic: Default::default(),
+            };
+            let seats: Vec<[f64; 3]> = slots
+                .layout
+                .names()
+                .iter()
+                .map(|s| {
+                    let seat = model.instrument().unwrap().slot_seat(s, &state);
+                    position(&seat.unwrap_or_else(|| panic!("{}: no seat for {s}", k.name)))
+                })
+                .collect();
+            let mut closest = f64::INFINITY;
+            for (i, a) in seats.iter().enumerate() {
+                for b in &seats[i + 1..] {
+                    closest = closest.min((a[0] - b[0]).hypot(a[1] - b[1]));
+                }
+            }
+            for item in slots.accepts {
+                let xy = crate::kind(item).unwrap().tolerance("slot_xy").unwrap();
+                assert!(
+                    xy < closest / 2.0,
+                    "{item} in {}: slot_xy {xy} m, seats {closest} m apart",
+                    k.name
+                );
+            }
+        }
     }
 }

@@ -248,48 +248,68 @@ impl Instrument for Params {
         if part != "cap" {
             return None;
         }
-        let rise = cap_rise(self, s)?;
+        let (away, tilt) = cap_offset(self, s)?;
         let tolerance = tolerance.unwrap_or(0.002);
         Some(match state {
             "on" => Measure {
-                value: rise,
+                value: away,
                 target: 0.0,
                 tolerance,
-                holds: rise.abs() <= tolerance,
+                holds: away <= tolerance && tilt <= CAP_TILT,
             },
             "off" => Measure {
-                value: rise,
+                value: away,
                 target: self.cap_off_rise,
                 tolerance,
-                holds: rise >= self.cap_off_rise,
+                holds: away >= self.cap_off_rise,
             },
             _ => return None,
         })
     }
 
     fn readout(&self, s: &LabwareState) -> BTreeMap<String, String> {
-        let on = cap_rise(self, s).is_none_or(|r| r < self.cap_off_rise);
+        let on = cap_offset(self, s).is_none_or(|(away, _)| away < self.cap_off_rise);
         BTreeMap::from([("cap".into(), if on { "on" } else { "off" }.into())])
     }
 
     /// `grasp`: the cap from above (approach straight down, fingers closing across the cap at its
     /// mid-height); any turn about the tube's axis grasps it the same.
     fn affordance(&self, name: &str, s: &LabwareState) -> Option<Affordance> {
-        (name == "grasp").then(|| {
-            let down = crate::frame::from_axes([1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]);
-            let at = translation([0.0, 0.0, self.cap_seat_z() - self.cap_height / 2.0 + 0.004]);
-            Affordance {
-                pose: s.pose * at * crate::frame::pose([0.0; 3], down),
-                symmetry: Symmetry::Axial,
-            }
+        if name != "grasp" {
+            return None;
+        }
+        // The cap where it is now (its frame: the seat's, moved with it), else where it sits.
+        let cap = match s.parts.get("cap") {
+            Some(c) => *c,
+            None => s.pose * translation([0.0, 0.0, self.cap_seat_z()]),
+        };
+        let down = crate::frame::from_axes([1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]);
+        let mid = translation([0.0, 0.0, -self.cap_height / 2.0 + 0.004]);
+        Some(Affordance {
+            pose: cap * mid * crate::frame::pose([0.0; 3], down),
+            symmetry: Symmetry::Axial,
+        })
+    }
+
+    fn unsupported_start(&self, initial: &BTreeMap<String, String>) -> Option<String> {
+        (initial.get("cap").map(String::as_str) == Some("off")).then(|| {
+            "a tube whose cap starts off has no place for the cap yet; declare `cap = \"on\"`"
+                .into()
         })
     }
 }
 
-/// Height of the cap above its seat along the tube's axis, from the live poses of tube and cap.
-pub fn cap_rise(p: &Params, s: &LabwareState) -> Option<f64> {
+/// Largest tilt (rad) of a cap on its tube that still counts as on.
+const CAP_TILT: f64 = 0.1;
+
+/// How far the cap is from its seat on the tube (m, in any direction) and how far it is tilted
+/// from the tube's axis (rad), from the live poses of tube and cap.
+pub fn cap_offset(p: &Params, s: &LabwareState) -> Option<(f64, f64)> {
     let rel = s.pose.inverse() * s.parts.get("cap")?;
-    Some(rel.translation.vector.z - p.cap_seat_z())
+    let mut d = rel.translation.vector;
+    d.z -= p.cap_seat_z();
+    let axis = rel.rotation * nalgebra::Vector3::z();
+    Some((d.norm(), axis.z.clamp(-1.0, 1.0).acos()))
 }
 
 #[cfg(test)]
@@ -313,7 +333,7 @@ mod tests {
             parts: BTreeMap::from([("cap".into(), placed[1].1)]),
             logic: Default::default(),
         };
-        assert!(cap_rise(&p, &s).unwrap().abs() < 1e-12);
+        assert!(cap_offset(&p, &s).unwrap().0 < 1e-12);
         let g = p.affordance("grasp", &s).unwrap();
         let z = g.pose.rotation * nalgebra::Vector3::z();
         assert!((z.z + 1.0).abs() < 1e-12, "approach points down");
@@ -326,5 +346,15 @@ mod tests {
             .insert("cap".into(), placed[1].1 * translation([0.0, 0.0, 0.02]));
         assert!(p.measure("cap", "off", None, &lifted).unwrap().holds);
         assert_eq!(p.readout(&lifted)["cap"], "off");
+        // A cap put down beside the tube, level with its seat, is off too.
+        let mut beside = s.clone();
+        beside
+            .parts
+            .insert("cap".into(), placed[1].1 * translation([0.05, 0.0, 0.0]));
+        assert!(!p.measure("cap", "on", None, &beside).unwrap().holds);
+        assert!(p.measure("cap", "off", None, &beside).unwrap().holds);
+        // Grasped where the cap is now, not where it was seated.
+        let g2 = p.affordance("grasp", &lifted).unwrap();
+        assert!((position(&g2.pose)[2] - position(&g.pose)[2] - 0.02).abs() < 1e-12);
     }
 }

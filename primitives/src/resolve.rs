@@ -117,8 +117,8 @@ impl<'a> Lab<'a> {
 pub struct StepFrame {
     /// Turn about the approach axis applied to every affordance (the chosen symmetric grasp).
     turn: Rot,
-    /// The carried item's pose in the tool frame, when the step seats it somewhere.
-    carried: Option<Pose>,
+    /// The carried item and its pose in the tool frame, when the step seats it somewhere.
+    carried: Option<(String, Pose)>,
 }
 
 impl StepFrame {
@@ -161,7 +161,7 @@ impl StepFrame {
         });
         if seats {
             let item = carried.ok_or(PlanError::NothingCarried)?;
-            frame.carried = Some(tcp_now.inverse() * lab.pose_of(item)?);
+            frame.carried = Some((item.to_string(), tcp_now.inverse() * lab.pose_of(item)?));
         }
         Ok(frame)
     }
@@ -177,8 +177,15 @@ impl StepFrame {
                 Ok(lab.affordance(labware, name, &s)?.pose * self.turn)
             }
             Target::Seat { location, above } => {
-                let item_in_tool = self.carried.ok_or(PlanError::NothingCarried)?;
-                let seat = translation([0.0, 0.0, *above]) * lab.seat(location)?;
+                let (item, item_in_tool) =
+                    self.carried.as_ref().ok_or(PlanError::NothingCarried)?;
+                // Upright on the seat, keeping the heading the item has now: a round item need
+                // not turn to the slot's yaw (and a half turn of the wrist would gain nothing).
+                let x = lab.pose_of(item)?.rotation * nalgebra::Vector3::x();
+                let heading = axis_angle([0.0, 0.0, 1.0], x.y.atan2(x.x));
+                let seat = lab.seat(location)?;
+                let p = position(&seat);
+                let seat = labware::frame::pose([p[0], p[1], p[2] + above], heading);
                 Ok(seat * item_in_tool.inverse())
             }
         }
@@ -386,7 +393,7 @@ mod tests {
         let frame = StepFrame::new(&place, &lab, &tcp, Some("tube")).unwrap();
         let tool = frame.target(&seat_b3, &lab).unwrap();
         // Where the tube would be with the tool there: exactly on the seat, upright.
-        let tube_then = tool * frame.carried.unwrap();
+        let tube_then = tool * frame.carried.clone().unwrap().1;
         let seat = lab.seat("rack.B3").unwrap();
         assert!((tube_then.translation.vector - seat.translation.vector).norm() < 1e-12);
         assert!((tube_then.rotation * Vector3::z()).z > 1.0 - 1e-12);

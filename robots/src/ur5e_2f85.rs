@@ -79,8 +79,6 @@ fn prepare(deps: &Path) -> Result<PathBuf, AssetError> {
     arm = assets::strip_element(&arm, "<keyframe>", "</keyframe>");
     arm = assets::strip_element(&arm, "<light name=\"spotlight\"", "/>");
     arm = assets::strip_element(&arm, "<option", "/>");
-    let dir = assets::content_dir("autobio-robot", &(arm.clone() + &gripper))?;
-    let gripper_path = dir.join("2f85.xml");
     // The tool frame: z along the approach, fingers closing along x. The camera sits on the -y side
     // looking at the pinch point (RealSense D405-like fov).
     let tool = format!(
@@ -91,6 +89,9 @@ fn prepare(deps: &Path) -> Result<PathBuf, AssetError> {
                     <camera name="wrist_cam" pos="0 -0.08 0.02" xyaxes="1 0 0 0 -0.868 0.496" fovy="58"/>
                   </body>"#
     );
+    // Named by everything written into it (the gripper's path aside, which names the folder).
+    let dir = assets::content_dir("autobio-robot", &format!("{arm}{gripper}{tool}"))?;
+    let gripper_path = dir.join("2f85.xml");
     arm = arm.replace(
         r#"<site name="attachment_site" pos="0 0.1 0" quat="-1 1 0 0"/>"#,
         &tool,

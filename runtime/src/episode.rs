@@ -50,6 +50,25 @@ fn instrument(task: &Task, i: usize) -> &dyn Instrument {
         .expect("Scene::build refuses labware without a model")
 }
 
+/// The seat of item `i`'s `at` slot, on the holder as placed in this instance.
+pub(crate) fn start_seat(task: &Task, instance: &SceneInstance, i: usize) -> Option<Pose> {
+    let at = task.labware[i].at.as_ref()?;
+    let at = render(at, &instance.params).ok()?;
+    let (holder, slot) = at.split_once('.')?;
+    let h = task.labware_index(holder)?;
+    let holder_state = LabwareState {
+        name: holder.to_string(),
+        pose: instance.labware_placement[h],
+        joints: BTreeMap::new(),
+        parts: BTreeMap::new(),
+        logic: Logic::new(),
+    };
+    task.labware[h]
+        .params
+        .instrument()?
+        .slot_seat(slot, &holder_state)
+}
+
 impl Episode {
     pub fn new(scene: Arc<Scene>, task: &Task, instance: &SceneInstance) -> Episode {
         let data = MjData::new(scene.model.clone());
@@ -67,27 +86,10 @@ impl Episode {
         ep
     }
 
-    /// Where a movable item starts: the seat of its `at` slot (on the holder as placed in this
-    /// instance), else its own placement.
+    /// Where a movable item starts: the seat of its `at` slot (`Scene::build` refused the scene if
+    /// there is none), else its own placement.
     fn start_pose(&self, i: usize, instance: &SceneInstance) -> Pose {
-        let spec = &self.task.labware[i];
-        let placed = instance.labware_placement[i];
-        let Some(at) = &spec.at else {
-            return placed;
-        };
-        let at = render(at, &instance.params).unwrap_or_else(|_| at.clone());
-        let seat = at.split_once('.').and_then(|(holder, slot)| {
-            let h = self.task.labware_index(holder)?;
-            let holder_state = LabwareState {
-                name: holder.to_string(),
-                pose: instance.labware_placement[h],
-                joints: BTreeMap::new(),
-                parts: BTreeMap::new(),
-                logic: Logic::new(),
-            };
-            instrument(&self.task, h).slot_seat(slot, &holder_state)
-        });
-        seat.unwrap_or(placed)
+        start_seat(&self.task, instance, i).unwrap_or(instance.labware_placement[i])
     }
 
     /// Resets physics to the instance: arm joints (and their position targets) from the sample,

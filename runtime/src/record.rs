@@ -36,6 +36,10 @@ pub enum RecordError {
     Missing(&'static str),
     #[error("bad message on `{0}`: {1}")]
     Bad(String, String),
+    #[error(
+        "the recording has schema version {found}; this autobio reads version {RECORDING_SCHEMA_VERSION}"
+    )]
+    Version { found: u64 },
 }
 
 const OBJECT: &str = r#"{"type":"object"}"#;
@@ -232,6 +236,10 @@ pub fn read_recording(path: &Path) -> Result<RecordingSummary, RecordError> {
         match m.channel.topic.as_str() {
             "/task" => {
                 let v = parse("/task")?;
+                let found = v["schema_version"].as_u64().unwrap_or(0);
+                if found != u64::from(RECORDING_SCHEMA_VERSION) {
+                    return Err(RecordError::Version { found });
+                }
                 task = Some(v["task"].clone());
                 instance = Some(v["instance"].clone());
             }

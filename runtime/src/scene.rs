@@ -29,6 +29,10 @@ pub enum SceneError {
         "labware `{0}` is a {1}, which has no simulation model yet; it can be compiled and described, not run"
     )]
     Unmodelled(String, String),
+    #[error("labware `{0}` cannot start as declared: {1}")]
+    Unsupported(String, String),
+    #[error("labware `{0}` starts at `{1}`, which is no slot of a holder in this scene")]
+    NoSlot(String, String),
 }
 
 /// Per-robot indices into the model.
@@ -327,6 +331,7 @@ impl Scene {
         if !errors.is_empty() {
             return Err(SceneError::Compile(errors.join("; ")));
         }
+        check_starts(task, instance)?;
         let m = &model;
         let robots = (0..task.robots.len())
             .map(|i| robot_ids(m, &task.robots[i].name, robot_model(task, i)?))
@@ -358,6 +363,25 @@ impl Scene {
             placements,
         })
     }
+}
+
+/// Every item can start as declared, and every `at` names a slot a holder model can seat.
+fn check_starts(task: &Task, instance: &SceneInstance) -> Result<(), SceneError> {
+    for (i, l) in task.labware.iter().enumerate() {
+        let model = l
+            .params
+            .instrument()
+            .ok_or_else(|| SceneError::Unmodelled(l.name.clone(), l.kind.clone()))?;
+        if let Some(why) = model.unsupported_start(&l.initial) {
+            return Err(SceneError::Unsupported(l.name.clone(), why));
+        }
+        if l.at.is_some() && crate::episode::start_seat(task, instance, i).is_none() {
+            let at = l.at.clone().unwrap_or_default();
+            let at = compiler::params::render(&at, &instance.params).unwrap_or(at);
+            return Err(SceneError::NoSlot(l.name.clone(), at));
+        }
+    }
+    Ok(())
 }
 
 pub fn joint_qposadr(m: &MjModel, joint: usize) -> usize {

@@ -4,7 +4,7 @@
 //! followed along a TOPP-timed trajectory. Steps run one after another; the robots not moving hold.
 //! Gripper values, settle times and speed limits come from each robot's model.
 
-use crate::policy::{Observation, Policy, PolicyError, StageEvent};
+use crate::policy::{Observation, PlanFailure, Policy, PolicyError, StageEvent};
 use compiler::motion::{Motion, MotionStep};
 use compiler::params::{Bindings, render};
 use compiler::{SceneInstance, Task};
@@ -59,8 +59,11 @@ pub struct ExpertPolicy {
     events: Vec<StageEvent>,
 }
 
-fn planning(e: impl std::fmt::Display) -> PolicyError {
-    PolicyError::Planning(e.to_string())
+fn planning(context: String, failure: impl Into<PlanFailure>) -> PolicyError {
+    PolicyError::Planning {
+        context,
+        failure: failure.into(),
+    }
 }
 
 impl ExpertPolicy {
@@ -72,16 +75,14 @@ impl ExpertPolicy {
         let mut queue = VecDeque::new();
         let mut steps = Vec::new();
         for (i, (stage, step)) in task.steps().enumerate() {
+            let context = || format!("step {i} `{}`", step.primitive);
             let robot = task
                 .robot_index(&step.robot)
-                .ok_or_else(|| PolicyError::Planning(format!("no robot named `{}`", step.robot)))?;
+                .ok_or_else(|| planning(context(), PlanFailure::NoRobot(step.robot.clone())))?;
             let expand = compiler::primitives::primitive(&step.primitive)
                 .and_then(|p| p.motions)
                 .ok_or_else(|| {
-                    PolicyError::Planning(format!(
-                        "the expert has no motions for `{}` yet",
-                        step.primitive
-                    ))
+                    planning(context(), PlanFailure::NoMotions(step.primitive.clone()))
                 })?;
             let args: BTreeMap<String, String> = step
                 .args
@@ -136,12 +137,13 @@ impl ExpertPolicy {
 
     fn start(&mut self, q: Queued, obs: &Observation) -> Result<Active, PolicyError> {
         let step = &self.steps[q.step];
+        let context = format!("{}, {}", step.label, q.motion.label());
         let lab = Lab::new(&self.task, &obs.privileged.labware, &self.params);
         let arm = &mut self.arms[step.robot];
         let tcp_now = arm.kin.tcp(&arm.target);
         if self.frame.as_ref().map(|(s, _)| *s) != Some(q.step) {
             let frame = StepFrame::new(&step.motions, &lab, &tcp_now, step.on.as_deref())
-                .map_err(planning)?;
+                .map_err(|e| planning(context.clone(), e))?;
             self.frame = Some((q.step, frame));
             self.events.push(StageEvent {
                 time: obs.time,
@@ -169,14 +171,14 @@ impl ExpertPolicy {
         let frame = &self.frame.as_ref().expect("set above").1;
         let poses = frame
             .poses(&q.motion, &lab, &tcp_now)
-            .map_err(|e| planning(format!("{}: {e}", q.motion.label())))?;
+            .map_err(|e| planning(context.clone(), e))?;
         let mut waypoints = vec![arm.target.clone()];
         let mut seed = arm.target.clone();
         for pose in poses.iter().skip(1) {
             let qn = match arm.model.ik {
                 IkMethod::Qp => solve_ik(&mut arm.kin, pose, &seed, &Default::default()),
             }
-            .map_err(|e| planning(format!("{}: {e}", q.motion.label())))?;
+            .map_err(|e| planning(context.clone(), e))?;
             waypoints.push(qn.clone());
             seed = qn;
         }

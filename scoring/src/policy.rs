@@ -38,6 +38,19 @@ impl Privileged {
     }
 }
 
+/// Why the expert cannot plan.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum PlanFailure {
+    #[error("no robot named `{0}`")]
+    NoRobot(String),
+    #[error("the expert has no motions for `{0}` yet")]
+    NoMotions(String),
+    #[error(transparent)]
+    Resolve(#[from] primitives::PlanError),
+    #[error(transparent)]
+    Ik(#[from] primitives::IkError),
+}
+
 /// A labelled moment of an episode (start of a motion, of a lab step).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct StageEvent {
@@ -47,8 +60,12 @@ pub struct StageEvent {
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum PolicyError {
-    #[error("the expert cannot plan: {0}")]
-    Planning(String),
+    /// The scripted expert cannot plan a step (`context` names the step and motion).
+    #[error("the expert cannot plan {context}: {failure}")]
+    Planning {
+        context: String,
+        failure: PlanFailure,
+    },
     #[error("unknown policy `{0}`; known policies: {known}", known = POLICIES.join(", "))]
     Unknown(String),
 }

@@ -52,9 +52,6 @@ impl Verdict {
     }
 }
 
-/// Largest tilt (rad) of an item that still stands upright in a slot.
-const UPRIGHT_TILT: f64 = 0.15;
-
 /// The measured value of one predicate, where the judge can measure it.
 fn measure(
     task: &Task,
@@ -98,6 +95,8 @@ fn measure(
             item,
             location,
             tolerance,
+            height,
+            tilt,
         } => {
             let location = render(location, params).ok()?;
             let (holder, slot) = location.split_once('.')?;
@@ -105,15 +104,12 @@ fn measure(
                 .params
                 .instrument()?
                 .slot_seat(slot, state_of(holder)?)?;
-            let height = labware::kind(&spec_of(item)?.kind)
-                .and_then(|k| k.tolerance("slot_z"))
-                .unwrap_or(0.005);
             Some(labware::model::seated(
                 &seat,
                 &state_of(item)?.pose,
                 tolerance.value,
-                height,
-                UPRIGHT_TILT,
+                *height,
+                *tilt,
             ))
         }
         // Volumes, panels, contacts and positions need instruments the runtime cannot build yet.
