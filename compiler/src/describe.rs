@@ -194,7 +194,12 @@ pub fn catalogue() -> String {
     let w = &mut out;
     let _ = writeln!(w, "lab primitives (every one also takes `with = <robot>`)");
     for p in CATALOGUE {
-        let _ = writeln!(w, "  {}", p.signature());
+        let expert = if p.motions.is_some() {
+            ""
+        } else {
+            " [no expert motions yet]"
+        };
+        let _ = writeln!(w, "  {}{expert}", p.signature());
         let _ = writeln!(w, "      {}", p.description);
         let _ = writeln!(w, "      needs:  {}", p.requires);
         let _ = writeln!(w, "      leaves: {}", p.leaves);
@@ -257,4 +262,22 @@ pub fn catalogue() -> String {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_catalogue_says_what_can_be_simulated_and_demonstrated() {
+        let text = super::catalogue();
+        let line = |start: &str| {
+            text.lines()
+                .find(|l| l.trim_start().starts_with(start))
+                .unwrap_or_else(|| panic!("no `{start}` line"))
+                .to_string()
+        };
+        assert!(!line("pick(").contains("no expert motions"));
+        assert!(line("hand_over(").contains("[no expert motions yet]"));
+        assert_eq!(line("tube_50ml").trim(), "tube_50ml");
+        assert!(line("thermal_mixer").contains("[no simulation model yet]"));
+    }
 }
