@@ -7,6 +7,10 @@
 //! [`RobotModel::action_names`]): arm joints in order, then the gripper. For a task with several
 //! robots the layouts are concatenated in the task's robot order.
 //!
+//! Joint position limits are the installed MJCF's joint ranges (the package is their source of
+//! truth; the runtime reads them from the compiled model for IK); the expert's velocity and
+//! acceleration limits are the model's own.
+//!
 //! No MuJoCo API here: the runtime compiles what `prepare` writes; only file IO for the assets.
 
 mod assets;
