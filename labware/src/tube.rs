@@ -202,7 +202,7 @@ impl Instrument for Params {
         );
         let mut contact = format!(
             r#"<exclude body1="{name}/base" body2="{name}/cap"/>
-<pair geom1="{name}/nut" geom2="{name}/bolt" friction="1 1 0.001 0.0001 0.0001" solref="0.004 1"/>
+<pair geom1="{name}/nut" geom2="{name}/bolt" friction="1 1 0.001 0.0001 0.0001" solref="0.004 1" margin="0.0005"/>
 "#
         );
         for i in 0..BEARING_BALLS {
