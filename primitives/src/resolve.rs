@@ -289,7 +289,6 @@ fn arc(a: &Pose, b: &Pose, n: usize) -> Vec<Pose> {
 mod tests {
     use super::*;
     use compiler::motion::goals;
-    use labware::thermal_cycler::Params;
     use nalgebra::Vector3;
     use std::collections::BTreeMap;
 
@@ -305,11 +304,12 @@ mod tests {
 
     #[test]
     fn the_lever_is_approached_against_it_and_either_grasp_follows_the_same_path() {
-        let p = Params::default();
+        // Models come through the registry, as the runtime and the expert get them.
+        let cycler = labware::Model::for_kind("thermal_cycler").unwrap();
         let s = cycler_state();
         let params = Bindings::new();
         let lab = Lab {
-            items: vec![("cycler", &p as &dyn Instrument, &s)],
+            items: vec![("cycler", cycler.instrument().unwrap(), &s)],
             params: &params,
         };
         let grip = Target::Affordance {
@@ -359,8 +359,8 @@ mod tests {
 
     #[test]
     fn a_carried_tube_is_seated_upright_on_the_slot() {
-        let rack = labware::rack::Params::tube_rack();
-        let tube = labware::tube::Params::conical_50ml();
+        let rack = labware::Model::for_kind("tube_rack").unwrap();
+        let tube = labware::Model::for_kind("tube_50ml").unwrap();
         let rack_s = LabwareState {
             name: "rack".into(),
             pose: labware::frame::yaw([0.3, 0.2, 0.854], std::f64::consts::FRAC_PI_2),
@@ -377,8 +377,8 @@ mod tests {
         let params = Bindings::new();
         let lab = Lab {
             items: vec![
-                ("rack", &rack as &dyn Instrument, &rack_s),
-                ("tube", &tube as &dyn Instrument, &tube_s),
+                ("rack", rack.instrument().unwrap(), &rack_s),
+                ("tube", tube.instrument().unwrap(), &tube_s),
             ],
             params: &params,
         };
