@@ -14,9 +14,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
 
 fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
     let robot = step.robot;
-    let name = step.primitive.name;
-    let (lw, _) = step.on(env)?;
-    require_empty_hand(w, robot, name)?;
+    let (lw, _) = step.on_empty_handed(w, env)?;
     w.hands.insert(robot.into(), Hand::Stabilising(lw));
     Ok(())
 }

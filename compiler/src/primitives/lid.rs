@@ -4,10 +4,8 @@ use super::prelude::*;
 use crate::motion::{Motion, MotionStep, Target, goals};
 
 pub(super) fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
-    let robot = step.robot;
     let name = step.primitive.name;
-    let (lw, kind) = step.on(env)?;
-    require_empty_hand(w, robot, name)?;
+    let (lw, kind) = step.on_empty_handed(w, env)?;
     let state = lid_state(w, &lw, kind)?.to_string();
     let latched = kind
         .part("lid")

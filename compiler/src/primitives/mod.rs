@@ -128,7 +128,7 @@ pub const CATALOGUE: &[&LabPrimitive] = &[
 mod prelude {
     pub(super) use super::{
         Arg, ArgKind, BoundStep, Env, LabPrimitive, ON, VOLUME, Violation, panel_dimension,
-        precondition, require_empty_hand, resolve_location, stabilised, violation,
+        precondition, resolve_location, stabilised, unknown_name, violation,
     };
     pub(super) use crate::world::{Hand, Location, World};
     pub(super) use dsl::{Code, Dimension};
@@ -161,6 +161,22 @@ pub(super) fn violation(code: Code, arg: Option<&'static str>, message: String) 
         arg,
         message,
         hint: None,
+    }
+}
+
+/// An argument naming something `on` does not have (E0013), with a did-you-mean over `names`.
+pub(super) fn unknown_name(
+    arg: &'static str,
+    message: String,
+    given: &str,
+    names: &[&str],
+    what: &str,
+) -> Violation {
+    Violation {
+        code: Code::E0013,
+        arg: Some(arg),
+        message,
+        hint: Some(crate::check::hint_for(given, names, what)),
     }
 }
 
@@ -224,6 +240,17 @@ impl BoundStep<'_> {
             });
         }
         Ok((lw, kind))
+    }
+
+    /// The `on` labware, as [`Self::on`], for a primitive that needs the robot's hand empty.
+    fn on_empty_handed(
+        &self,
+        w: &World,
+        env: &Env,
+    ) -> Result<(String, &'static LabwareKind), Violation> {
+        let on = self.on(env)?;
+        require_empty_hand(w, self.robot, self.primitive.name)?;
+        Ok(on)
     }
 
     fn quantity(&self, name: &'static str, dim: Dimension) -> Result<f64, Violation> {

@@ -20,19 +20,12 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
 };
 
 fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
-    let robot = step.robot;
-    let name = step.primitive.name;
-    let (lw, kind) = step.on(env)?;
-    require_empty_hand(w, robot, name)?;
+    let (lw, kind) = step.on_empty_handed(w, env)?;
     let b = step.text("button")?;
     let Some(button) = kind.button(b) else {
         let names: Vec<&str> = kind.buttons.iter().map(|b| b.name).collect();
-        return Err(Violation {
-            code: Code::E0013,
-            arg: Some("button"),
-            message: format!("`{lw}` (a {}) has no button `{b}`", kind.name),
-            hint: Some(crate::check::hint_for(b, &names, "buttons")),
-        });
+        let message = format!("`{lw}` (a {}) has no button `{b}`", kind.name);
+        return Err(unknown_name("button", message, b, &names, "buttons"));
     };
     match button.effect {
         ButtonEffect::Toggle { part, a, b } => {

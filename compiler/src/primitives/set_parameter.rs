@@ -25,19 +25,18 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
 };
 
 fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
-    let robot = step.robot;
-    let name = step.primitive.name;
-    let (lw, kind) = step.on(env)?;
-    require_empty_hand(w, robot, name)?;
+    let (lw, kind) = step.on_empty_handed(w, env)?;
     let pname = step.text("param")?;
     let Some(p) = kind.panel_param(pname) else {
         let names: Vec<&str> = kind.panel.iter().map(|p| p.name).collect();
-        return Err(Violation {
-            code: Code::E0013,
-            arg: Some("param"),
-            message: format!("`{lw}` (a {}) has no panel value `{pname}`", kind.name),
-            hint: Some(crate::check::hint_for(pname, &names, "panel values")),
-        });
+        let message = format!("`{lw}` (a {}) has no panel value `{pname}`", kind.name);
+        return Err(unknown_name(
+            "param",
+            message,
+            pname,
+            &names,
+            "panel values",
+        ));
     };
     let dim = panel_dimension(p.unit);
     let value = step.quantity("value", dim)?;
