@@ -19,7 +19,7 @@ const UPSTREAM_TRANSFER_STEPS_S: f64 = 810.0;
 pub fn run(tasks: &[compiler::Task]) -> Result<()> {
     let mut first_step_s = None;
     for task in tasks {
-        println!("scene    {}", task.id);
+        outln!("scene    {}", task.id);
         let step_s = scene_figures(task)?;
         first_step_s.get_or_insert(step_s);
     }
@@ -62,8 +62,8 @@ fn scene_figures(task: &compiler::Task) -> Result<f64> {
         .map_err(|e| anyhow::anyhow!("{e:?}"))?;
     }
     let (bare_rate, harness_rate) = (steps as f64 / best_bare, steps as f64 / best_harness);
-    println!("physics  bare mj_step   {bare_rate:>10.0} steps/s");
-    println!(
+    outln!("physics  bare mj_step   {bare_rate:>10.0} steps/s");
+    outln!(
         "physics  harness        {harness_rate:>10.0} steps/s   ratio {:.3}x{}",
         harness_rate / bare_rate,
         if task.id == "tube.transfer" {
@@ -88,7 +88,7 @@ fn scene_figures(task: &compiler::Task) -> Result<f64> {
             .map_err(anyhow::Error::msg)?;
     }
     let frames = rounds * names.len();
-    println!(
+    outln!(
         "render   224x224        {:>10.1} frames/s ({} cameras, 10 physics steps between sets)",
         frames as f64 / t.elapsed().as_secs_f64(),
         names.len()
@@ -105,7 +105,7 @@ fn scene_figures(task: &compiler::Task) -> Result<f64> {
     };
     let report = scoring::evaluate(task, &opts, |_| {}).map_err(anyhow::Error::msg)?;
     let sim: f64 = report.episodes.iter().map(|e| e.sim_time_s).sum();
-    println!(
+    outln!(
         "expert   episodes       {:>10.1} episodes/min ({n} episodes, {:.1} s simulated, {:.0}x real time, {} successful)",
         n as f64 * 60.0 / report.summary.wall_time_s,
         sim,
@@ -134,7 +134,7 @@ fn rate(xml: &str, steps: usize, mut drive: impl FnMut(&mut MjData<&MjModel>)) -
 }
 
 fn row(name: &str, with: f64, without: f64, note: &str) {
-    println!(
+    outln!(
         "plugin   {name:<14} {with:>10.0} steps/s   without {without:>10.0}   ratio {:.3}x  {note}",
         with / without
     );
@@ -263,7 +263,7 @@ pub fn physics_figures(task_step_s: f64) -> Result<()> {
         container.solve_offset([n[0] / l, 0.0, n[2] / l], target, (lo + hi) / 2.0, tol);
     }
     let cold = t.elapsed().as_secs_f64() / normals.len() as f64;
-    println!(
+    outln!(
         "liquid   height solve   {:>10.1} µs warm ({:.1} iterations)   {:.1} µs cold   ({} triangles)",
         warm * 1e6,
         iterations as f64 / normals.len() as f64,

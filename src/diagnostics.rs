@@ -1,59 +1,114 @@
-//! Renders diagnostics like rustc: `error[CODE]: message`, `--> file:line:col`, the source line
-//! with a caret underline, notes and the hint; or as JSON lines for editors and CI. A diagnostic
-//! that points into another file (a chain's stage) is rendered against that file's text.
+//! Renders diagnostics for people with `annotate-snippets` (rustc's own renderer): the code, the
+//! message, `--> file:line:col`, the source lines with the span underlined, notes and the hint;
+//! coloured on a terminal, plain otherwise. Or as JSON lines for editors and CI. The text shown
+//! is the text that was checked (a chain's stages as the compiler read them, never re-read), and a
+//! diagnostic whose file was not shown to the compiler as a protocol gets no snippet.
 
+use annotate_snippets::{AnnotationKind, Group, Level, Origin, Renderer, Snippet};
+use compiler::Checked;
 use dsl::Diagnostic;
-use dsl::render::{line_col, line_of};
-use std::fmt::Write;
+use dsl::render::line_col;
+use std::io::IsTerminal;
 
-pub fn render_all(file: &str, source: &str, diags: &[Diagnostic]) -> String {
-    let mut out = String::new();
-    for d in diags {
-        let (name, text) = source_of(file, source, d);
-        render_one(&mut out, &name, &text, d);
+/// When to colour diagnostics (`--color`), as cargo and ripgrep do.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ColorChoice {
+    /// On a terminal, unless `NO_COLOR` is set to something non-empty.
+    Auto,
+    Always,
+    Never,
+}
+
+impl ColorChoice {
+    /// Whether diagnostics written to stderr are coloured.
+    pub fn for_stderr(self) -> bool {
+        match self {
+            ColorChoice::Always => true,
+            ColorChoice::Never => false,
+            ColorChoice::Auto => {
+                std::env::var_os("NO_COLOR").is_none_or(|v| v.is_empty())
+                    && std::io::stderr().is_terminal()
+            }
+        }
     }
-    let errors = diags.iter().filter(|d| d.is_error()).count();
+}
+
+/// Every diagnostic of a checked file, then a count of errors.
+pub fn render_all(checked: &Checked, color: bool) -> String {
+    let renderer = if color {
+        Renderer::styled()
+    } else {
+        Renderer::plain()
+    };
+    let mut out = String::new();
+    for d in &checked.diagnostics {
+        out.push_str(&renderer.render(&report(checked, d)));
+        out.push_str("\n\n");
+    }
+    let errors = checked.diagnostics.iter().filter(|d| d.is_error()).count();
     if errors > 0 {
-        let _ = writeln!(
-            out,
-            "{file}: {errors} error{}",
+        out.push_str(&format!(
+            "{}: {errors} error{}\n",
+            checked.file,
             if errors == 1 { "" } else { "s" }
-        );
+        ));
     }
     out
 }
 
-/// The file a diagnostic points into and its text (read from disk for a chain's stage).
-fn source_of(file: &str, source: &str, d: &Diagnostic) -> (String, String) {
-    match &d.file {
-        Some(f) => (f.clone(), std::fs::read_to_string(f).unwrap_or_default()),
-        None => (file.to_string(), source.to_string()),
-    }
-}
-
-fn render_one(out: &mut String, file: &str, source: &str, d: &Diagnostic) {
-    let (line, col) = line_col(source, d.span.start);
-    let (text, from, width) = line_of(source, d.span);
-    let sev = if d.is_error() { "error" } else { "warning" };
-    let gutter = " ".repeat(line.to_string().len());
-    let _ = writeln!(out, "{sev}[{}]: {}", d.code, d.message);
-    let _ = writeln!(out, "{gutter}--> {file}:{line}:{col}");
-    let _ = writeln!(out, "{gutter} |");
-    let _ = writeln!(out, "{line} | {text}");
-    let _ = writeln!(out, "{gutter} | {}{}", " ".repeat(from), "^".repeat(width));
+fn report<'a>(checked: &Checked, d: &'a Diagnostic) -> Vec<Group<'a>> {
+    let level = if d.is_error() {
+        Level::ERROR
+    } else {
+        Level::WARNING
+    };
+    let title = level.primary_title(d.message.as_str()).id(d.code.as_str());
+    let mut group = match checked.text_of(d) {
+        Some((name, text)) => {
+            let span = fit(&text, d.span);
+            Group::with_title(title).element(
+                Snippet::source(text)
+                    .path(name)
+                    .fold(true)
+                    .annotation(AnnotationKind::Primary.span(span)),
+            )
+        }
+        None => Group::with_title(title).element(Origin::path(
+            d.file.clone().unwrap_or_else(|| checked.file.clone()),
+        )),
+    };
     for n in &d.notes {
-        let _ = writeln!(out, "{gutter} = note: {n}");
+        group = group.element(Level::NOTE.message(n.as_str()));
     }
     if let Some(h) = &d.hint {
-        let _ = writeln!(out, "{gutter} = hint: {h}");
+        group = group.element(Level::HELP.with_name("hint").message(h.as_str()));
     }
-    let _ = writeln!(out);
+    vec![group]
+}
+
+/// The span clipped to the text and widened to character boundaries (an E0008 span covers a
+/// raw byte that the shown text holds as U+FFFD).
+fn fit(text: &str, span: dsl::Span) -> std::ops::Range<usize> {
+    let mut start = span.start.min(text.len());
+    while !text.is_char_boundary(start) {
+        start -= 1;
+    }
+    let mut end = span.end.clamp(start, text.len());
+    while !text.is_char_boundary(end) {
+        end += 1;
+    }
+    start..end
 }
 
 /// One diagnostic as a JSON object with its resolved file, line and column.
-pub fn to_json(file: &str, source: &str, d: &Diagnostic) -> String {
-    let (name, text) = source_of(file, source, d);
-    let (line, col) = line_col(&text, d.span.start);
+pub fn to_json(checked: &Checked, d: &Diagnostic) -> String {
+    let (name, line, col) = match checked.text_of(d) {
+        Some((name, text)) => {
+            let (l, c) = line_col(&text, d.span.start);
+            (name, Some(l), Some(c))
+        }
+        None => (d.file.clone().unwrap_or_default(), None, None),
+    };
     serde_json::json!({
         "file": name,
         "line": line,

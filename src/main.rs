@@ -1,6 +1,8 @@
 //! `autobio`: the command-line front end. Thin by design: `main` parses arguments, `run` calls one
 //! library function per subcommand and renders its result; no logic lives here beyond formatting.
 
+#[macro_use]
+mod output;
 mod bench;
 mod diagnostics;
 
@@ -18,6 +20,18 @@ use std::process::ExitCode;
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// The folder a chain's stage files must stay inside (default: each chain's own folder)
+    #[arg(long, global = true, value_name = "DIR")]
+    root: Option<PathBuf>,
+    /// Colour diagnostics: `auto` (on a terminal, unless NO_COLOR is set), `always` or `never`
+    #[arg(long, global = true, value_enum, default_value = "auto")]
+    color: diagnostics::ColorChoice,
+}
+
+/// What every subcommand that reads protocols needs.
+struct Front {
+    root: Option<PathBuf>,
+    color: bool,
 }
 
 #[derive(Subcommand)]
@@ -96,44 +110,51 @@ fn main() -> ExitCode {
     match run(Cli::parse()) {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            errln!("error: {e:#}");
             ExitCode::from(2)
         }
     }
 }
 
-fn load(path: &Path) -> Result<compiler::Task> {
-    let source =
-        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-    let name = path.display().to_string();
-    let (task, diags) = compiler::compile_source(&source, &name);
-    match task {
-        Some(t) => Ok(t),
-        None => {
-            eprint!("{}", diagnostics::render_all(&name, &source, &diags));
-            bail!("{name} has errors; run `autobio check {name}`")
+impl Front {
+    /// Checks a protocol or chain file and returns its task, or shows its diagnostics and fails.
+    fn load(&self, path: &Path) -> Result<compiler::Task> {
+        let checked = compiler::check_file(path, self.root.as_deref())?;
+        match checked.task {
+            Some(ref t) if !checked.diagnostics.iter().any(|d| d.is_error()) => Ok(t.clone()),
+            _ => {
+                err!("{}", diagnostics::render_all(&checked, self.color));
+                let name = &checked.file;
+                bail!("{name} has errors; run `autobio check {name}`")
+            }
         }
     }
 }
 
 fn run(cli: Cli) -> Result<ExitCode> {
+    let front = Front {
+        root: cli.root,
+        color: cli.color.for_stderr(),
+    };
     match cli.command {
         Command::Check { files, json } => {
+            if files.is_empty() {
+                bail!(
+                    "no files to check: name protocol or chain files, e.g. `autobio check protocols/*/*.toml`"
+                );
+            }
             let mut failed = false;
             for f in &files {
-                let source = std::fs::read_to_string(f)
-                    .with_context(|| format!("cannot read {}", f.display()))?;
-                let name = f.display().to_string();
-                let (_, diags) = compiler::compile_source(&source, &name);
-                failed |= diags.iter().any(|d| d.is_error());
+                let checked = compiler::check_file(f, front.root.as_deref())?;
+                failed |= checked.diagnostics.iter().any(|d| d.is_error());
                 if json {
-                    for d in &diags {
-                        println!("{}", diagnostics::to_json(&name, &source, d));
+                    for d in &checked.diagnostics {
+                        outln!("{}", diagnostics::to_json(&checked, d));
                     }
-                } else if diags.is_empty() {
-                    println!("ok: {name}");
+                } else if checked.diagnostics.is_empty() {
+                    outln!("ok: {}", checked.file);
                 } else {
-                    eprint!("{}", diagnostics::render_all(&name, &source, &diags));
+                    err!("{}", diagnostics::render_all(&checked, front.color));
                 }
             }
             Ok(if failed {
@@ -145,14 +166,14 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Explain { code, all } => {
             if all {
                 for c in dsl::Code::ALL {
-                    println!("{c}  {}", c.summary());
+                    outln!("{c}  {}", c.summary());
                 }
                 return Ok(ExitCode::SUCCESS);
             }
             let code = code.unwrap_or_default();
             match dsl::Code::from_name(&code) {
                 Some(c) => {
-                    println!("{c}: {}\n\n{}", c.summary(), c.explanation());
+                    outln!("{c}: {}\n\n{}", c.summary(), c.explanation());
                     Ok(ExitCode::SUCCESS)
                 }
                 None => bail!(
@@ -166,20 +187,20 @@ fn run(cli: Cli) -> Result<ExitCode> {
             seed,
         } => {
             if catalogue {
-                print!("{}", compiler::describe::catalogue());
+                out!("{}", compiler::describe::catalogue());
                 return Ok(ExitCode::SUCCESS);
             }
             let file = file.context("a protocol or chain file is needed")?;
-            let task = load(&file)?;
-            print!("{}", compiler::describe(&task));
+            let task = front.load(&file)?;
+            out!("{}", compiler::describe(&task));
             if let Some(seed) = seed {
-                print!("{}", compiler::describe::example(&task, seed));
+                out!("{}", compiler::describe::example(&task, seed));
             }
             Ok(ExitCode::SUCCESS)
         }
         Command::Compile { file } => {
-            let task = load(&file)?;
-            println!("{}", serde_json::to_string_pretty(&task)?);
+            let task = front.load(&file)?;
+            outln!("{}", serde_json::to_string_pretty(&task)?);
             Ok(ExitCode::SUCCESS)
         }
         Command::Demo {
@@ -188,7 +209,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             seed,
             out,
         } => {
-            let task = load(&protocol)?;
+            let task = front.load(&protocol)?;
             let opts = scoring::eval::EvalOptions {
                 policy: "expert".into(),
                 episodes,
@@ -198,7 +219,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 image_every: 5,
             };
             let report = scoring::evaluate(&task, &opts, |e| {
-                println!(
+                outln!(
                     "seed {:>4}  {}  {:.1} s  {}",
                     e.seed,
                     if e.success { "success" } else { "FAIL   " },
@@ -207,7 +228,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 );
             })
             .map_err(anyhow::Error::msg)?;
-            println!(
+            outln!(
                 "{} demonstrations of {} in {} ({} successful)",
                 report.summary.episodes,
                 task.id,
@@ -232,7 +253,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             }
             let mut rows = Vec::new();
             for p in &protocol {
-                let task = load(p)?;
+                let task = front.load(p)?;
                 let opts = scoring::eval::EvalOptions {
                     policy: policy.clone(),
                     episodes,
@@ -241,25 +262,31 @@ fn run(cli: Cli) -> Result<ExitCode> {
                     record,
                     image_every: if record { 5 } else { 0 },
                 };
-                eprintln!(
+                errln!(
                     "evaluating {} ({} episodes from seed {seed})",
-                    task.id, episodes
+                    task.id,
+                    episodes
                 );
                 let report = scoring::evaluate(&task, &opts, |e| {
                     if let Some(err) = &e.error {
-                        eprintln!("  seed {}: failed: {err}", e.seed);
+                        errln!("  seed {}: failed: {err}", e.seed);
                     }
                 })
                 .map_err(anyhow::Error::msg)?;
                 rows.push(report);
             }
-            println!(
+            outln!(
                 "{:<32} {:>7} {:>16} {:>6} {:>9} {:>10}",
-                "task", "policy", "success (±SEM)", "score", "episodes", "wall time"
+                "task",
+                "policy",
+                "success (±SEM)",
+                "score",
+                "episodes",
+                "wall time"
             );
             for r in &rows {
                 let s = &r.summary;
-                println!(
+                outln!(
                     "{:<32} {:>7} {:>8.1}% ± {:>4.1} {:>6.3} {:>9} {:>9.1}s",
                     r.task_id,
                     r.policy,
@@ -271,29 +298,29 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 );
             }
             if let Some(o) = &out {
-                println!("results: {}/<task>.results.json", o.display());
+                outln!("results: {}/<task>.results.json", o.display());
             }
             Ok(ExitCode::SUCCESS)
         }
         Command::Replay { recording } => {
             let rec = runtime::record::read_recording(&recording)
-                .with_context(|| format!("cannot read {}", recording.display()))?;
+                .with_context(|| format!("cannot replay {}", recording.display()))?;
             let task: compiler::Task = serde_json::from_value(rec.task.clone())
                 .context("the recording's task does not match this autobio's task schema")?;
             let params: compiler::params::Bindings =
                 serde_json::from_value(rec.instance["params"].clone())
                     .context("the recording's scene instance has no drawn parameters")?;
             let verdict = scoring::Judge::replay(&task, &params, &rec.labware_series);
-            println!(
+            outln!(
                 "{}: {} messages over {:.2} s",
                 recording.display(),
                 rec.messages,
                 rec.duration_s
             );
             for (topic, n) in &rec.topics {
-                println!("  {topic:<28} {n}");
+                outln!("  {topic:<28} {n}");
             }
-            println!(
+            outln!(
                 "re-scored: {} (score {:.3})",
                 if verdict.success {
                     "success"
@@ -307,9 +334,9 @@ fn run(cli: Cli) -> Result<ExitCode> {
                     .completed_at_s
                     .map(|t| format!("done at {t:.2} s"))
                     .unwrap_or_else(|| "not done".into());
-                println!("  stage {} `{}`: {done}", i + 1, st.id);
+                outln!("  stage {} `{}`: {done}", i + 1, st.id);
                 for p in &st.predicates {
-                    println!(
+                    outln!(
                         "    [{}] {:<28} value {:+.4} target {:+.4} tol {}",
                         if p.holds { "x" } else { " " },
                         p.text,
@@ -322,7 +349,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             if let Some(v) = &rec.verdict {
                 let recorded = v["verdict"]["success"].as_bool();
                 if recorded != Some(verdict.success) {
-                    println!("note: the recorded verdict was {recorded:?}");
+                    outln!("note: the recorded verdict was {recorded:?}");
                 }
             }
             Ok(if verdict.success {
@@ -334,7 +361,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Bench { protocol } => {
             let tasks = protocol
                 .iter()
-                .map(|p| load(p))
+                .map(|p| front.load(p))
                 .collect::<Result<Vec<_>>>()?;
             bench::run(&tasks)?;
             Ok(ExitCode::SUCCESS)

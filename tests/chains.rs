@@ -5,6 +5,7 @@
 
 use scoring::episode::{EpisodeOptions, run_episode};
 use scoring::expert::ExpertPolicy;
+use std::path::Path;
 use std::process::Command;
 use std::sync::Arc;
 
@@ -68,10 +69,14 @@ fn both_chains_run_to_success_stage_by_stage() {
 #[test]
 fn a_chain_that_closes_a_closed_lid_is_rejected_at_the_step() {
     let path = "tests/corpus/faulty/chain_close_twice.toml";
-    let source = std::fs::read_to_string(path).unwrap();
-    let (task, diags) = compiler::compile_source(&source, path);
-    assert!(task.is_none());
-    let d = diags.iter().find(|d| d.code == dsl::Code::E0031).unwrap();
+    // The chain names shipped protocols, outside its own folder: the repository is its root.
+    let checked = compiler::check_file(Path::new(path), Some(Path::new("."))).unwrap();
+    assert!(checked.task.is_none());
+    let d = checked
+        .diagnostics
+        .iter()
+        .find(|d| d.code == dsl::Code::E0031)
+        .unwrap();
     let file = d.file.as_deref().unwrap();
     assert!(file.ends_with("close_lid.toml"), "{file}");
     let text = std::fs::read_to_string(file).unwrap();
@@ -80,9 +85,27 @@ fn a_chain_that_closes_a_closed_lid_is_rejected_at_the_step() {
         d.notes.iter().any(|n| n.contains("starts where stage 1")),
         "{d:?}"
     );
+    // The note names the chain line that included the stage.
+    assert!(
+        d.notes
+            .iter()
+            .any(|n| n == &format!("in stage 1, included from {path}:8:12")),
+        "{:?}",
+        d.notes
+    );
+    // Without a wider root the chain may not read them at all.
+    let confined = compiler::check_file(Path::new(path), None).unwrap();
+    assert!(
+        confined
+            .diagnostics
+            .iter()
+            .all(|d| d.code == dsl::Code::E0009 && d.file.is_none()),
+        "{:?}",
+        confined.diagnostics
+    );
     // And the CLI renders it against the stage's file.
     let out = Command::new(env!("CARGO_BIN_EXE_autobio"))
-        .args(["check", path])
+        .args(["check", "--root", ".", path])
         .output()
         .unwrap();
     assert_eq!(out.status.code(), Some(1));

@@ -1,7 +1,10 @@
 //! The faulty-protocol corpus: every file under tests/corpus/faulty declares, on its first line,
 //! the diagnostic it must produce (`# expect: CODE at [FILE:]LINE:COL on `TEXT``). Each must fail
 //! to compile with that code, at that place, covering exactly that text, with a lowercase message;
-//! none may panic. Files under tests/corpus/fuzz are fuzzer findings, kept as regressions.
+//! none may panic. Files under tests/corpus/warnings compile, with the warning they declare.
+//! Files under tests/corpus/fuzz are fuzzer findings, kept as regressions. Chains are checked
+//! with the repository as their protocol root (`--root`), so that they can name shipped
+//! protocols; tests/corpus/faulty/stages holds stage files for chains, not cases.
 
 use std::path::{Path, PathBuf};
 
@@ -48,48 +51,99 @@ fn files(dir: &str) -> Vec<PathBuf> {
     out
 }
 
+/// Checks `path` as `autobio check --root <repository>` does.
+fn check(path: &Path) -> compiler::Checked {
+    compiler::check_file(path, Some(Path::new(env!("CARGO_MANIFEST_DIR")))).unwrap()
+}
+
+/// Asserts that `checked` has the expected diagnostic at its place; returns it.
+fn assert_expected(path: &Path, checked: &compiler::Checked) -> dsl::Diagnostic {
+    let name = path.display().to_string();
+    let source = std::fs::read(path).unwrap();
+    let want = expectation(path, &String::from_utf8_lossy(&source));
+    let diags = &checked.diagnostics;
+    let d = diags
+        .iter()
+        .find(|d| d.code.as_str() == want.code)
+        .unwrap_or_else(|| panic!("{name}: no {} in {diags:#?}", want.code));
+    let (file, text) = checked
+        .text_of(d)
+        .unwrap_or_else(|| panic!("{name}: {d:?} points into a file that was not shown"));
+    if let Some(f) = &want.file {
+        let expected = path.parent().unwrap().join(f);
+        assert_eq!(
+            Path::new(&file),
+            expected,
+            "{name}: the file it points into"
+        );
+    } else {
+        assert!(d.file.is_none(), "{name}: points into {file}");
+    }
+    let (line, col) = dsl::render::line_col(&text, d.span.start);
+    assert_eq!((line, col), (want.line, want.col), "{name}: place of {d:?}");
+    // Spans are byte ranges of the file as read; a span on a byte that is not UTF-8 reads back
+    // as U+FFFD.
+    let bytes = if d.file.is_none() {
+        source.clone()
+    } else {
+        text.as_bytes().to_vec()
+    };
+    let covered = String::from_utf8_lossy(&bytes[d.span.start..d.span.end]);
+    assert_eq!(covered, want.text, "{name}: span");
+    assert!(
+        d.message.chars().next().is_some_and(|c| !c.is_uppercase()),
+        "{name}: message must be lowercase: {}",
+        d.message
+    );
+    assert!(d.hint.is_some() || !d.message.is_empty());
+    d.clone()
+}
+
 #[test]
 fn every_faulty_file_gets_its_diagnostic_at_its_place() {
     let corpus = files("tests/corpus/faulty");
-    assert!(corpus.len() >= 40, "the corpus has {} files", corpus.len());
+    assert!(corpus.len() >= 80, "the corpus has {} files", corpus.len());
     let mut codes = std::collections::BTreeSet::new();
     for path in corpus {
-        let source = std::fs::read_to_string(&path).unwrap();
-        let want = expectation(&path, &source);
-        let name = path.display().to_string();
-        let (task, diags) = compiler::compile_source(&source, &name);
-        assert!(task.is_none(), "{name} must not compile");
-        let d = diags
-            .iter()
-            .find(|d| d.code.as_str() == want.code)
-            .unwrap_or_else(|| panic!("{name}: no {} in {diags:#?}", want.code));
-        let (file, text) = match &d.file {
-            Some(f) => (f.clone(), std::fs::read_to_string(f).unwrap()),
-            None => (name.clone(), source.clone()),
-        };
-        if let Some(f) = &want.file {
-            let expected = path.parent().unwrap().join(f);
-            assert_eq!(
-                Path::new(&file),
-                expected,
-                "{name}: the file it points into"
-            );
-        } else {
-            assert!(d.file.is_none(), "{name}: points into {file}");
-        }
-        let (line, col) = dsl::render::line_col(&text, d.span.start);
-        assert_eq!((line, col), (want.line, want.col), "{name}: place of {d:?}");
-        assert_eq!(&text[d.span.start..d.span.end], want.text, "{name}: span");
+        let checked = check(&path);
         assert!(
-            d.message.chars().next().is_some_and(|c| !c.is_uppercase()),
-            "{name}: message must be lowercase: {}",
-            d.message
+            checked.task.is_none(),
+            "{} must not compile",
+            path.display()
         );
-        assert!(d.hint.is_some() || !d.message.is_empty());
-        codes.insert(want.code);
+        let d = assert_expected(&path, &checked);
+        codes.insert(d.code);
     }
-    // The corpus exercises most of the error codes.
-    assert!(codes.len() >= 20, "codes covered: {codes:?}");
+    // Every error code has a case.
+    let errors: std::collections::BTreeSet<dsl::Code> = dsl::Code::ALL
+        .into_iter()
+        .filter(|c| !c.is_warning())
+        .collect();
+    assert_eq!(codes, errors, "error codes with a case");
+}
+
+/// Files under tests/corpus/warnings compile, with the expected warning at its place.
+#[test]
+fn every_implausible_file_compiles_with_its_warning_at_its_place() {
+    let corpus = files("tests/corpus/warnings");
+    let mut codes = std::collections::BTreeSet::new();
+    for path in corpus {
+        let checked = check(&path);
+        assert!(
+            checked.task.is_some(),
+            "{} must compile: {:#?}",
+            path.display(),
+            checked.diagnostics
+        );
+        let d = assert_expected(&path, &checked);
+        assert!(!d.is_error(), "{}: {d:?}", path.display());
+        codes.insert(d.code);
+    }
+    let want: std::collections::BTreeSet<dsl::Code> = dsl::Code::ALL
+        .into_iter()
+        .filter(|c| c.is_warning() && *c != dsl::Code::W0001)
+        .collect();
+    assert_eq!(codes, want, "every warning but W0001 has a case");
 }
 
 #[test]

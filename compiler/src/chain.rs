@@ -5,45 +5,98 @@
 
 use crate::check::{self, Cx, Lowered};
 use crate::params::ParamSpec;
+use crate::physics;
 use crate::proof::{self, ProofScene, ProofStage};
+use crate::stage_files::{StageError, StageLoader};
 use crate::task::*;
-use crate::{Loader, physics};
 use dsl::ast::{Chain, Document, Protocol};
 use dsl::{Code, Diagnostic, Span};
-use std::path::Path;
 
-/// The stage file's path as the chain names it, resolved against the chain file's folder.
-fn stage_path(chain_file: &str, protocol: &str) -> String {
-    let dir = Path::new(chain_file).parent().unwrap_or(Path::new(""));
-    dir.join(protocol).to_string_lossy().into_owned()
-}
-
+/// Compiles a chain; every diagnostic that points into a stage file carries a note naming the
+/// chain line that included it.
 pub(crate) fn compile_chain(
     c: &Chain,
     file: &str,
-    load: Loader,
+    source: &str,
+    load: &dyn StageLoader,
+) -> (Option<Task>, Vec<Diagnostic>) {
+    let mut included: Vec<(String, String)> = Vec::new();
+    let (task, mut diags) = compile_stages(c, file, source, load, &mut included);
+    for d in &mut diags {
+        if let Some(f) = &d.file
+            && let Some((_, note)) = included.iter().find(|(p, _)| p == f)
+        {
+            d.notes.push(note.clone());
+        }
+    }
+    (task, diags)
+}
+
+/// A stage's diagnostics are shown only if it is a protocol file (valid TOML with a
+/// `[protocol]` or `[chain]` table): text from any other file is never echoed.
+fn looks_like_protocol(text: &str) -> Result<(), String> {
+    let (doc, errors) = toml::de::DeTable::parse_recoverable(text);
+    if let Some(e) = errors.first() {
+        let at = e.span().map(|s| s.start).unwrap_or(0);
+        let (line, col) = dsl::render::line_col(text, at);
+        return Err(format!("it is not valid TOML (line {line}, column {col})"));
+    }
+    let doc = doc.get_ref();
+    if doc
+        .iter()
+        .any(|(k, _)| k.get_ref() == "protocol" || k.get_ref() == "chain")
+    {
+        Ok(())
+    } else {
+        Err("it has no `[protocol]` table".into())
+    }
+}
+
+fn compile_stages(
+    c: &Chain,
+    file: &str,
+    source: &str,
+    load: &dyn StageLoader,
+    included: &mut Vec<(String, String)>,
 ) -> (Option<Task>, Vec<Diagnostic>) {
     let mut cx = Cx::new(None);
+    for stage in &c.stages {
+        if let Some(t) = &stage.time_limit {
+            check::time_limit_warning(&mut cx, t);
+        }
+    }
     // Parse every stage first: the lowered stages borrow their ASTs.
     let mut parsed: Vec<(usize, String, Protocol)> = Vec::new();
     for (i, stage) in c.stages.iter().enumerate() {
         let Some(proto) = &stage.protocol else {
             continue;
         };
-        let path = stage_path(file, &proto.value);
-        let source = match load(&path) {
+        let loaded = match load.load(file, &proto.value) {
             Ok(s) => s,
             Err(e) => {
-                cx.err(
-                    Code::E0006,
-                    proto.span,
-                    format!("cannot read stage `{}`: {e}", proto.value),
-                    Some("paths are relative to the chain file".into()),
-                );
+                refuse(&mut cx, proto, &e);
                 continue;
             }
         };
-        let (doc, diags) = dsl::parse(&source);
+        if let Err(why) = looks_like_protocol(&loaded.text) {
+            cx.err(
+                Code::E0006,
+                proto.span,
+                format!("stage `{}` is not a protocol file: {why}", proto.value),
+                Some(format!(
+                    "run `autobio check {}` on it to see its problems",
+                    loaded.path
+                )),
+            );
+            continue;
+        }
+        let path = loaded.path;
+        if !included.iter().any(|(p, _)| *p == path) {
+            let (line, col) = dsl::render::line_col(source, proto.span.start);
+            let note = format!("in stage {}, included from {file}:{line}:{col}", i + 1);
+            included.push((path.clone(), note));
+        }
+        let (doc, diags) = dsl::parse(&loaded.text);
         cx.file = Some(path.clone());
         for d in diags {
             cx.push(d);
@@ -75,19 +128,39 @@ pub(crate) fn compile_chain(
     }
     let first = &lowered[0].2;
     let mut params: Vec<ParamSpec> = first.params.clone();
+    let mut param_places = first_places(&lowered[0].1, parsed_protocol(&parsed, &lowered[0].1));
     for (_, path, low) in &lowered[1..] {
         cx.file = Some(path.clone());
-        same_scene(&mut cx, first, low, parsed_protocol(&parsed, path));
+        let ast = parsed_protocol(&parsed, path);
+        same_scene(&mut cx, first, low, ast);
         for p in &low.params {
+            let declared = ast
+                .params
+                .iter()
+                .find(|x| x.name.value == p.name)
+                .map(|x| x.name.span)
+                .unwrap_or_default();
             match params.iter().find(|x| x.name == p.name) {
-                Some(x) if x != p => cx.err(
-                    Code::E0034,
-                    Span::default(),
-                    format!("parameter `{}` differs from the earlier stage's", p.name),
-                    Some("a chain draws each parameter once; declare it identically".into()),
-                ),
+                Some(x) if x != p => {
+                    let earlier = param_places
+                        .get(&p.name)
+                        .and_then(|(f, _)| f.clone())
+                        .unwrap_or_default();
+                    cx.push(
+                        Diagnostic::new(
+                            Code::E0034,
+                            declared,
+                            format!("parameter `{}` differs from the earlier stage's", p.name),
+                        )
+                        .with_note(format!("it is first declared in `{earlier}`"))
+                        .with_hint("a chain draws each parameter once; declare it identically"),
+                    )
+                }
                 Some(_) => {}
-                None => params.push(p.clone()),
+                None => {
+                    params.push(p.clone());
+                    param_places.insert(p.name.clone(), (Some(path.clone()), declared));
+                }
             }
         }
     }
@@ -110,6 +183,7 @@ pub(crate) fn compile_chain(
         robots: first.robots.iter().map(|r| r.name.clone()).collect(),
         labware_spans: &first.labware_spans,
         file: Some(lowered[0].1.clone()),
+        param_places,
     };
     proof::prove(&mut cx, &scene, &stages, &params);
     if cx.has_errors() {
@@ -117,6 +191,34 @@ pub(crate) fn compile_chain(
     }
     let task = lower_chain(c, file, &lowered, params);
     (task, cx.diags)
+}
+
+/// Where the first stage declares its parameters.
+fn first_places(
+    path: &str,
+    ast: &Protocol,
+) -> std::collections::BTreeMap<String, (Option<String>, Span)> {
+    ast.params
+        .iter()
+        .map(|x| (x.name.value.clone(), (Some(path.to_string()), x.name.span)))
+        .collect()
+}
+
+/// A stage file the loader refused, reported at the chain's stage line.
+fn refuse(cx: &mut Cx, proto: &dsl::ast::Spanned<String>, e: &StageError) {
+    let (code, hint) = match e {
+        StageError::OutsideRoot { .. } => (
+            Code::E0009,
+            "stage paths stay inside the chain's folder; widen it with `--root DIR`",
+        ),
+        StageError::NotAFile { .. } | StageError::TooLarge { .. } => (
+            Code::E0009,
+            "a stage is a protocol file: a regular file of at most 1 MiB",
+        ),
+        StageError::NotUtf8 { .. } => (Code::E0008, "save the stage file as UTF-8"),
+        StageError::Unreadable { .. } => (Code::E0006, "paths are relative to the chain file"),
+    };
+    cx.push(Diagnostic::new(code, proto.span, e.to_string()).with_hint(hint));
 }
 
 fn parsed_protocol<'a>(parsed: &'a [(usize, String, Protocol)], path: &str) -> &'a Protocol {

@@ -89,6 +89,7 @@ pub(crate) struct Lowered<'a> {
 /// `None` when something needed for a task is missing; the diagnostics are complete either way.
 pub(crate) fn lower<'a>(cx: &mut Cx, p: &'a Protocol, file: &str) -> Option<Lowered<'a>> {
     duplicates(cx, p);
+    implausible(cx, p);
     let robots = lower_robots(cx, p);
     let (labware, kinds) = lower_labware(cx, p);
     let mut robots_ok: Vec<Option<RobotSpec>> = robots;
@@ -155,6 +156,102 @@ pub(crate) fn lower<'a>(cx: &mut Cx, p: &'a Protocol, file: &str) -> Option<Lowe
         predicates,
         labware_spans,
     })
+}
+
+/// How far from the bench's centre (the world origin) anything of a task can sensibly be, in
+/// metres: a lab room. Beyond it a position is almost certainly in the wrong unit.
+const ROOM: f64 = 5.0;
+/// Longest randomisation offset in the plane that still keeps an item on a bench, in metres.
+const BENCH_OFFSET: f64 = 1.0;
+/// Longest time limit that is not a unit slip, in seconds: a day.
+const LONGEST_TIME_LIMIT: f64 = 86_400.0;
+
+/// Warnings for values that parse and type-check but are almost certainly mistakes.
+fn implausible(cx: &mut Cx, p: &Protocol) {
+    let poses = p
+        .robots
+        .iter()
+        .map(|r| (&r.name, &r.base))
+        .chain(p.labware.iter().map(|l| (&l.name, &l.pose)));
+    for (name, pose) in poses {
+        let Some(pos) = &pose.pos else { continue };
+        let [x, y, z] = pos.value;
+        if x.abs() > ROOM || y.abs() > ROOM || !(-1.0..=ROOM).contains(&z) {
+            cx.push(
+                Diagnostic::new(
+                    Code::W0003,
+                    pos.span,
+                    format!(
+                        "`{}` is placed at ({x}, {y}, {z}) m, metres away from the bench",
+                        name.value
+                    ),
+                )
+                .with_hint("`pos_m` is in metres; write millimetres as `pos_mm = [..]`"),
+            );
+        }
+    }
+    for r in &p.randomise {
+        for item in &r.items {
+            if let RandomItem::Xy(q) = item
+                && q.value.abs() > BENCH_OFFSET
+            {
+                cx.push(
+                    Diagnostic::new(
+                        Code::W0003,
+                        q.span,
+                        format!(
+                            "`{}` is shifted by up to {} m, off any bench",
+                            r.target.value, q.value
+                        ),
+                    )
+                    .with_hint("`xy_m` is in metres; write millimetres as `xy_mm` or \"10 mm\""),
+                );
+            }
+        }
+    }
+    if let Some(t) = &p.meta.time_limit {
+        time_limit_warning(cx, t);
+    }
+    if let Some(w) = &p.success.weights
+        && p.success.scoring.as_ref().map(|s| s.value.as_str()) != Some("progress")
+    {
+        cx.push(
+            Diagnostic::new(
+                Code::W0005,
+                w.span,
+                "binary scoring ignores these weights".to_string(),
+            )
+            .with_hint("weights apply under `scoring = \"progress\"`; remove them or set it"),
+        );
+    }
+}
+
+/// W0004 for a time limit shorter than one control period or longer than a day.
+pub(crate) fn time_limit_warning(cx: &mut Cx, t: &Spanned<f64>) {
+    let physics = crate::physics();
+    let period = physics.timestep_s * physics.substeps as f64;
+    if t.value > 0.0 && t.value < period {
+        cx.push(
+            Diagnostic::new(
+                Code::W0004,
+                t.span,
+                format!(
+                    "a time limit of {} s ends the episode before one control step ({period} s)",
+                    t.value
+                ),
+            )
+            .with_hint("time limits are in seconds unless a unit says otherwise: \"30 s\""),
+        );
+    } else if t.value > LONGEST_TIME_LIMIT {
+        cx.push(
+            Diagnostic::new(
+                Code::W0004,
+                t.span,
+                format!("a time limit of {} s is longer than a day", t.value),
+            )
+            .with_hint("check the unit: `time_limit_ms` and \"min\" are easy to mix up"),
+        );
+    }
 }
 
 fn duplicates(cx: &mut Cx, p: &Protocol) {
@@ -1038,6 +1135,19 @@ fn resolve_check(
         } => {
             let kind = lookup(cx, lw)?;
             if field == "volume" && kind.capacity_ul.is_some() {
+                // A value with placeholders is read per parameter combination by the proof.
+                if placeholders(value).is_empty()
+                    && let Err(e) =
+                        predicates::quantity(value, &Default::default(), Dimension::Volume)
+                {
+                    cx.err(
+                        Code::E0020,
+                        text.span,
+                        e,
+                        Some("compare a volume with a quantity: \"tube.volume = 200 µL\"".into()),
+                    );
+                    return None;
+                }
                 let v = kind.tolerance("volume").unwrap_or(1.0);
                 return Some((
                     Check::Volume {

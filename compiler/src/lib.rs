@@ -17,18 +17,17 @@ pub mod params;
 pub mod predicates;
 pub mod primitives;
 mod proof;
+pub mod stage_files;
 mod task;
 pub mod world;
 
 pub use describe::describe;
+pub use stage_files::{StageError, StageFiles, StageLoader};
 pub use task::*;
 
 use check::Cx;
 use dsl::Diagnostic;
 use dsl::ast::{Document, Protocol};
-
-/// Reads a stage file named by a chain (its path as the chain resolves it).
-pub type Loader<'a> = &'a dyn Fn(&str) -> Result<String, String>;
 
 /// Checks and lowers one protocol to a one-stage task.
 pub fn compile(p: &Protocol, file: &str) -> (Option<Task>, Vec<Diagnostic>) {
@@ -49,6 +48,11 @@ pub fn compile(p: &Protocol, file: &str) -> (Option<Task>, Vec<Diagnostic>) {
             robots: low.robots.iter().map(|r| r.name.clone()).collect(),
             labware_spans: &low.labware_spans,
             file: None,
+            param_places: p
+                .params
+                .iter()
+                .map(|x| (x.name.value.clone(), (None, x.name.span)))
+                .collect(),
         };
         proof::prove(&mut cx, &scene, &stages, &low.params);
         Some(Task {
@@ -83,7 +87,7 @@ pub(crate) fn physics() -> Physics {
 pub fn compile_source_with(
     source: &str,
     file: &str,
-    load: Loader,
+    load: &dyn StageLoader,
 ) -> (Option<Task>, Vec<Diagnostic>) {
     let (doc, mut diags) = dsl::parse(source);
     if diags.iter().any(|d| d.code == dsl::Code::E0001) {
@@ -91,7 +95,7 @@ pub fn compile_source_with(
     }
     let (task, more) = match &doc {
         Document::Protocol(p) => compile(p, file),
-        Document::Chain(c) => chain::compile_chain(c, file, load),
+        Document::Chain(c) => chain::compile_chain(c, file, source, load),
     };
     diags.extend(more);
     if diags.iter().any(|d| d.is_error()) {
@@ -101,9 +105,89 @@ pub fn compile_source_with(
     }
 }
 
-/// [`compile_source_with`] reading chain stages from the file system.
+/// [`compile_source_with`] reading chain stages from the file system, confined to the chain's
+/// folder.
 pub fn compile_source(source: &str, file: &str) -> (Option<Task>, Vec<Diagnostic>) {
-    compile_source_with(source, file, &|path| {
-        std::fs::read_to_string(path).map_err(|e| e.to_string())
+    compile_source_with(source, file, &StageFiles::new())
+}
+
+/// Largest protocol or chain file [`check_file`] reads.
+pub const MAX_FILE_BYTES: u64 = 64 << 20;
+
+/// A protocol or chain file, checked: the task when there are no errors, every diagnostic, and
+/// the texts the diagnostics point into (the file's own and its stages').
+#[derive(Debug)]
+pub struct Checked {
+    pub file: String,
+    pub task: Option<Task>,
+    pub diagnostics: Vec<Diagnostic>,
+    /// The file's text (with U+FFFD for bytes that are not UTF-8, which an E0008 points at).
+    pub source: String,
+    pub stages: StageFiles,
+}
+
+impl Checked {
+    /// The text a diagnostic points into: the file's own, or a stage file's as it was read.
+    pub fn text_of(&self, d: &Diagnostic) -> Option<(String, String)> {
+        match &d.file {
+            None => Some((self.file.clone(), self.source.clone())),
+            Some(f) => self.stages.text(f).map(|t| (f.clone(), t)),
+        }
+    }
+}
+
+/// Why a protocol file could not be checked at all.
+#[derive(Debug, thiserror::Error)]
+pub enum FileError {
+    // The OS error is in the message, not a `source`: a chain of causes shows it once.
+    #[error("cannot read protocol {path}: {error}")]
+    Read { path: String, error: std::io::Error },
+    #[error("cannot read protocol {path}: it is not a regular file")]
+    NotAFile { path: String },
+    #[error("cannot read protocol {path}: it is larger than {MAX_FILE_BYTES} bytes")]
+    TooLarge { path: String },
+}
+
+/// Reads and compiles a protocol or chain file; chain stages are confined to `root` (the chain's
+/// folder when `None`) under the rules of [`stage_files`]. A file that is not UTF-8 gives an
+/// E0008 diagnostic at its first bad byte, not an error.
+pub fn check_file(
+    path: &std::path::Path,
+    root: Option<&std::path::Path>,
+) -> Result<Checked, FileError> {
+    use std::io::Read;
+    let file = path.display().to_string();
+    let read = |error| FileError::Read {
+        path: file.clone(),
+        error,
+    };
+    let meta = std::fs::metadata(path).map_err(read)?;
+    if meta.is_dir() {
+        return Err(FileError::NotAFile { path: file });
+    }
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .and_then(|f| f.take(MAX_FILE_BYTES + 1).read_to_end(&mut bytes))
+        .map_err(read)?;
+    if bytes.len() as u64 > MAX_FILE_BYTES {
+        return Err(FileError::TooLarge { path: file });
+    }
+    let stages = match root {
+        Some(r) => StageFiles::with_root(r),
+        None => StageFiles::new(),
+    };
+    let (source, task, diagnostics) = match dsl::decode(&bytes) {
+        Ok(text) => {
+            let (task, diags) = compile_source_with(text, &file, &stages);
+            (text.to_string(), task, diags)
+        }
+        Err(d) => (dsl::source::lossy(&bytes), None, vec![d]),
+    };
+    Ok(Checked {
+        file,
+        task,
+        diagnostics,
+        source,
+        stages,
     })
 }

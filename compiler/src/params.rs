@@ -7,7 +7,7 @@
 use rand_chacha::ChaCha8Rng;
 use rand_core::{RngCore, SeedableRng};
 use serde::{Deserialize, Serialize};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashSet};
 
 /// Drawn values by parameter name.
 pub type Bindings = BTreeMap<String, String>;
@@ -55,7 +55,7 @@ const ENUMERABLE: i128 = 10_000;
 
 impl ParamSpec {
     /// How many values the proof considers for this parameter, before exclusions.
-    fn size(&self) -> u128 {
+    pub(crate) fn size(&self) -> u128 {
         match &self.domain {
             Domain::Choice { values } => values.len() as u128,
             Domain::Int { low, high, step } => {
@@ -90,14 +90,19 @@ impl ParamSpec {
                 .into_iter()
                 .collect(),
         };
-        let excluded: Vec<String> = self
-            .exclude
-            .iter()
-            .filter_map(|e| render(e, bound).ok())
-            .collect();
+        let excluded = self.excluded(bound);
         values
             .into_iter()
             .filter(|v| !excluded.contains(v))
+            .collect()
+    }
+
+    /// The exclusions rendered for these earlier values, as a set: a domain and its exclusions
+    /// are filtered in time linear in their sizes, not their product.
+    fn excluded(&self, bound: &Bindings) -> HashSet<String> {
+        self.exclude
+            .iter()
+            .filter_map(|e| render(e, bound).ok())
             .collect()
     }
 
@@ -110,11 +115,7 @@ impl ParamSpec {
             && self.size() > ENUMERABLE as u128
         {
             // Too many values to list: draw, rejecting exclusions, a bounded number of times.
-            let excluded: Vec<String> = self
-                .exclude
-                .iter()
-                .filter_map(|e| render(e, bound).ok())
-                .collect();
+            let excluded = self.excluded(bound);
             for _ in 0..64 {
                 let k = (rng.next_u64() as u128 % self.size()) as i128;
                 let v = (*low as i128 + k * (*step).max(1) as i128).to_string();

@@ -279,6 +279,18 @@ pub fn quantity(template: &str, bound: &Bindings, dim: Dimension) -> Result<f64,
 }
 
 impl Check {
+    /// Why this check's target value cannot be read under these parameter values (a volume or
+    /// panel value template that renders to a bare number or the wrong unit); `None` when it can.
+    pub fn target_error(&self, bound: &Bindings) -> Option<String> {
+        match self {
+            Check::Volume { value, .. } => quantity(value, bound, Dimension::Volume).err(),
+            Check::Panel { value, unit, .. } => {
+                quantity(value, bound, crate::primitives::panel_dimension(unit)).err()
+            }
+            _ => None,
+        }
+    }
+
     /// The value of this check in the abstract world, when the abstract world decides it (part
     /// states, slots, volumes, panel values, carrying); `None` for what only physics can tell.
     pub fn eval_abstract(&self, w: &World, bound: &Bindings) -> Option<bool> {

@@ -29,6 +29,8 @@ pub(crate) struct ProofScene<'a> {
     /// Where to point for a labware's initial placement (first stage's file).
     pub labware_spans: &'a BTreeMap<String, Span>,
     pub file: Option<String>,
+    /// Where each parameter is declared: its file (`None`: the file being checked) and span.
+    pub param_places: BTreeMap<String, (Option<String>, Span)>,
 }
 
 fn describe(bound: &Bindings) -> Option<String> {
@@ -141,16 +143,26 @@ fn initial_world(cx: &mut Cx, scene: &ProofScene, bound: &Bindings) -> Option<Wo
 pub(crate) fn prove(cx: &mut Cx, scene: &ProofScene, stages: &[ProofStage], params: &[ParamSpec]) {
     let (assignments, complete) = proof_assignments(params);
     if !complete {
-        cx.file = scene.file.clone();
+        // Point at the parameter with the most values: narrowing it helps most.
+        let widest = params.iter().max_by_key(|p| p.size());
+        let (file, span) = widest
+            .and_then(|p| scene.param_places.get(&p.name).cloned())
+            .unwrap_or((scene.file.clone(), Span::default()));
+        let sizes: Vec<String> = params
+            .iter()
+            .map(|p| format!("`{}` has {}", p.name, p.size()))
+            .collect();
+        cx.file = file;
         cx.push(
             Diagnostic::new(
                 Code::W0002,
-                Span::default(),
+                span,
                 format!(
                     "the state proof traced {} sampled parameter combinations, not all",
                     assignments.len()
                 ),
             )
+            .with_note(format!("values per parameter: {}", sizes.join(", ")))
             .with_hint("narrow the parameter domains for an exhaustive proof"),
         );
     }
@@ -174,6 +186,15 @@ pub(crate) fn prove(cx: &mut Cx, scene: &ProofScene, stages: &[ProofStage], para
                     stages[si - 1].id
                 )
             });
+            for p in stage.predicates {
+                if let Some(e) = p.predicate.check.target_error(bound) {
+                    let mut d = Diagnostic::new(Code::E0020, p.span, e)
+                        .with_hint("a parameter used as a quantity must render with its unit");
+                    d.notes.extend(describe(bound));
+                    cx.push(d);
+                    continue 'combination;
+                }
+            }
             let holds: Vec<Option<bool>> = stage
                 .predicates
                 .iter()

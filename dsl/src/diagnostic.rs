@@ -44,6 +44,12 @@ pub enum Code {
     E0005,
     /// A chain stage cannot be loaded.
     E0006,
+    /// The same setting given twice, under two spellings.
+    E0007,
+    /// The file is not UTF-8 text.
+    E0008,
+    /// A chain stage path the chain may not read.
+    E0009,
     /// Unknown labware kind.
     E0010,
     /// Unknown robot model.
@@ -84,6 +90,14 @@ pub enum Code {
     W0001,
     /// The state proof sampled parameter combinations.
     W0002,
+    /// A position far outside any bench.
+    W0003,
+    /// A time limit no episode can mean.
+    W0004,
+    /// Weights under binary scoring, which ignores them.
+    W0005,
+    /// A Greek mu where the micro sign is meant.
+    W0006,
 }
 
 impl Code {
@@ -95,6 +109,9 @@ impl Code {
             Code::E0004 => "E0004",
             Code::E0005 => "E0005",
             Code::E0006 => "E0006",
+            Code::E0007 => "E0007",
+            Code::E0008 => "E0008",
+            Code::E0009 => "E0009",
             Code::E0010 => "E0010",
             Code::E0011 => "E0011",
             Code::E0012 => "E0012",
@@ -115,16 +132,23 @@ impl Code {
             Code::E0035 => "E0035",
             Code::W0001 => "W0001",
             Code::W0002 => "W0002",
+            Code::W0003 => "W0003",
+            Code::W0004 => "W0004",
+            Code::W0005 => "W0005",
+            Code::W0006 => "W0006",
         }
     }
 
-    pub const ALL: [Code; 26] = [
+    pub const ALL: [Code; 33] = [
         Code::E0001,
         Code::E0002,
         Code::E0003,
         Code::E0004,
         Code::E0005,
         Code::E0006,
+        Code::E0007,
+        Code::E0008,
+        Code::E0009,
         Code::E0010,
         Code::E0011,
         Code::E0012,
@@ -145,6 +169,10 @@ impl Code {
         Code::E0035,
         Code::W0001,
         Code::W0002,
+        Code::W0003,
+        Code::W0004,
+        Code::W0005,
+        Code::W0006,
     ];
 
     pub fn from_name(name: &str) -> Option<Code> {
@@ -162,6 +190,9 @@ impl Code {
             Code::E0004 => "a value of the wrong type",
             Code::E0005 => "unsupported format version",
             Code::E0006 => "a chain stage cannot be loaded",
+            Code::E0007 => "the same setting given twice, under two spellings",
+            Code::E0008 => "the file is not UTF-8 text",
+            Code::E0009 => "a chain stage path the chain may not read",
             Code::E0010 => "unknown labware kind",
             Code::E0011 => "unknown robot model",
             Code::E0012 => "unknown lab primitive",
@@ -182,6 +213,10 @@ impl Code {
             Code::E0035 => "an unknown or ill-typed tolerance",
             Code::W0001 => "the success condition already holds at the start",
             Code::W0002 => "the state proof sampled parameter combinations",
+            Code::W0003 => "a position far outside any bench",
+            Code::W0004 => "a time limit no episode can mean",
+            Code::W0005 => "weights under binary scoring, which ignores them",
+            Code::W0006 => "a Greek mu where the micro sign is meant",
         }
     }
 
@@ -205,6 +240,15 @@ impl Code {
             }
             Code::E0006 => {
                 "A chain's `[[stages]]` entry names a protocol file that cannot be read, is itself a chain, or\nhas errors of its own (reported with their own file and line). Paths are relative to the chain file."
+            }
+            Code::E0007 => {
+                "A setting is given twice in one table under two spellings, e.g. `time_limit = \"30 s\"` and\n`time_limit_s = 30`, or `pos_m` and `pos_mm`. Neither wins silently: keep one."
+            }
+            Code::E0008 => {
+                "Protocol files are UTF-8 text. The marked place is the first byte that is not valid UTF-8;\nre-save the file as UTF-8 (most editors offer it under \"encoding\")."
+            }
+            Code::E0009 => {
+                "A chain reads its stage files only from inside its protocol root (the chain's folder, or the\nfolder given with `--root`), and only regular files of at most 1 MiB. A stage path that leaves\nthe root (`../..`, an absolute path, a symbolic link pointing out), names a device, a folder or\na larger file is refused, and nothing of that file is shown."
             }
             Code::E0010 => {
                 "`kind` names no labware in the catalogue. `autobio describe --catalogue` lists the kinds with\ntheir parts, slots and primitives."
@@ -263,6 +307,18 @@ impl Code {
             }
             Code::W0002 => {
                 "The parameters have too many combinations to trace them all; the proof traced a deterministic\nsample of them. Narrow the domains for an exhaustive proof."
+            }
+            Code::W0003 => {
+                "A pose lies metres away from the bench (the world origin is the bench's centre). Usually\nmillimetres written under a metre key: `pos_m = [300, 0, 824]` means 300 m. Write `pos_mm`, or\nthe value in metres."
+            }
+            Code::W0004 => {
+                "A time limit shorter than one control period (20 ms) ends every episode before the robot\nacts; one longer than a day is almost always a unit slip (`ms` for `s`, `min` for `s`)."
+            }
+            Code::W0005 => {
+                "`[success] weights` apply only under `scoring = \"progress\"`; binary scoring (the default)\nscores 1 when every predicate holds and 0 otherwise, and ignores them."
+            }
+            Code::W0006 => {
+                "`μ` (U+03BC, GREEK SMALL LETTER MU) looks like the micro sign `µ` (U+00B5) that `µL` is\nwritten with. The unit is read as microlitres; write `µL` or `uL` to silence this."
             }
         }
     }

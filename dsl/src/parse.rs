@@ -15,8 +15,24 @@ pub fn parse(source: &str) -> (Document, Vec<Diagnostic>) {
     let mut p = Parser { diags: Vec::new() };
     let (doc, errors) = DeTable::parse_recoverable(source);
     if !errors.is_empty() {
+        let unclosed = crate::source::unclosed_string(source);
         for e in errors {
             let mut span = e.span().map(Span::from).unwrap_or(Span::new(0, 0));
+            // toml reports an unclosed string where it gave up looking for its end (the end of
+            // the line, or of the file for a multi-line one); the mistake is where it opens.
+            if let Some(u) = &unclosed
+                && e.message().contains("string")
+                && u.span.start <= span.start
+            {
+                p.diags.push(
+                    Diagnostic::error(Code::E0001, u.span, format!("unclosed {}", u.what))
+                        .with_hint(format!(
+                            "the string that opens here never closes: end it with `{}`",
+                            u.delimiter
+                        )),
+                );
+                continue;
+            }
             // An error reported at the start of a line belongs to the end of the line before.
             if span.start == span.end
                 && span.start > 0
@@ -35,6 +51,7 @@ pub fn parse(source: &str) -> (Document, Vec<Diagnostic>) {
         return (Document::Protocol(Box::default()), p.diags);
     }
     let doc = doc.get_ref();
+    p.greek_mu(source, doc);
     let document = if doc.iter().any(|(k, _)| k.get_ref() == "chain") {
         Document::Chain(Box::new(p.chain(doc)))
     } else {
@@ -87,6 +104,7 @@ const RANDOM_KEYS: &[&str] = &["joints", "xy", "yaw"];
 const SUCCESS_KEYS: &[&str] = &["all", "scoring", "weights"];
 const SCORINGS: &[&str] = &["binary", "progress"];
 const LEVELS: &[&str] = &["easy", "medium", "hard"];
+const MAX_ID_LEN: usize = 128;
 
 fn span_of<T>(v: &toml::Spanned<T>) -> Span {
     Span::from(v.span())
@@ -115,6 +133,75 @@ fn split_unit(key: &str) -> (&str, Option<(&str, Dimension, f64)>) {
 }
 
 impl Parser {
+    /// A settings table's entries in document order, without a setting given a second time under
+    /// another spelling (`time_limit` and `time_limit_s`, `pos_m` and `pos_mm`): that is an error,
+    /// and neither spelling silently wins over the other; the first is kept for further checks.
+    fn settings<'a, 'i>(&mut self, t: &'a DeTable<'i>) -> Vec<(&'a Key<'i>, &'a Value<'i>)> {
+        let mut seen: Vec<(&str, &Key<'i>)> = Vec::new();
+        let mut out = Vec::new();
+        for (key, value) in ordered(t) {
+            let base = split_unit(key.get_ref()).0;
+            if let Some((_, first)) = seen.iter().find(|(b, _)| *b == base) {
+                let msg = format!(
+                    "`{}` sets `{base}` again: it is already given as `{}`",
+                    key.get_ref(),
+                    first.get_ref()
+                );
+                let hint = format!(
+                    "keep one of `{}` and `{}`; a setting is given once",
+                    first.get_ref(),
+                    key.get_ref()
+                );
+                self.err(Code::E0007, span_of(key), msg, Some(hint));
+                continue;
+            }
+            seen.push((base, key));
+            out.push((key, value));
+        }
+        out
+    }
+
+    /// W0006 for every `μ` (Greek mu) directly before `L` or `l` in a string value: it looks like
+    /// the micro sign `µL` is written with, and is read as one.
+    fn greek_mu(&mut self, source: &str, t: &DeTable<'_>) {
+        fn walk(p: &mut Parser, source: &str, v: &Value<'_>) {
+            match v.get_ref() {
+                DeValue::String(_) => {
+                    let span = span_of(v);
+                    let Some(raw) = source.get(span.start..span.end) else {
+                        return;
+                    };
+                    for (i, _) in raw.match_indices('\u{3bc}') {
+                        if raw[i + 2..].starts_with(['L', 'l']) {
+                            let at = span.start + i;
+                            p.diags.push(
+                                Diagnostic::new(
+                                    Code::W0006,
+                                    Span::new(at, at + 2),
+                                    "`μ` here is the Greek letter mu (U+03BC), not the micro sign"
+                                        .to_string(),
+                                )
+                                .with_hint(
+                                    "it is read as microlitres; write `µL` (U+00B5) or `uL`",
+                                ),
+                            );
+                        }
+                    }
+                }
+                DeValue::Array(items) => {
+                    for item in items.iter() {
+                        walk(p, source, item);
+                    }
+                }
+                DeValue::Table(t) => p.greek_mu(source, t),
+                _ => {}
+            }
+        }
+        for (_, v) in ordered(t) {
+            walk(self, source, v);
+        }
+    }
+
     fn err(&mut self, code: Code, span: Span, msg: String, hint: Option<String>) {
         let mut d = Diagnostic::error(code, span, msg);
         d.hint = hint;
@@ -374,10 +461,10 @@ impl Parser {
         let Some(t) = self.table(v, "`[protocol]`") else {
             return m;
         };
-        for (key, value) in ordered(t) {
+        for (key, value) in self.settings(t) {
             let k = key.get_ref().as_ref();
             match split_unit(k).0 {
-                "id" => m.id = self.string(value, "protocol.id"),
+                "id" => m.id = self.id(value, "protocol.id"),
                 "version" => m.version = self.integer(value, "protocol.version"),
                 "level" => m.level = self.level(value),
                 "instruction" => m.instruction = self.string(value, "protocol.instruction"),
@@ -424,7 +511,7 @@ impl Parser {
             model: None,
             base: Pose::default(),
         };
-        for (key, value) in ordered(t) {
+        for (key, value) in self.settings(t) {
             match key.get_ref().as_ref() {
                 "model" => r.model = self.string(value, "model"),
                 "base" => r.base = self.pose(value),
@@ -450,7 +537,7 @@ impl Parser {
             at: None,
             state: Vec::new(),
         };
-        for (key, value) in ordered(t) {
+        for (key, value) in self.settings(t) {
             match key.get_ref().as_ref() {
                 "kind" => l.kind = self.string(value, "kind"),
                 "pose" => l.pose = self.pose(value),
@@ -486,7 +573,7 @@ impl Parser {
         let Some(t) = self.table(v, "a pose") else {
             return p;
         };
-        for (key, value) in ordered(t) {
+        for (key, value) in self.settings(t) {
             let k = key.get_ref().as_ref();
             match split_unit(k).0 {
                 "pos" => {
@@ -506,7 +593,7 @@ impl Parser {
             target,
             items: Vec::new(),
         };
-        for (key, value) in ordered(t) {
+        for (key, value) in self.settings(t) {
             let k = key.get_ref().as_ref();
             match split_unit(k).0 {
                 "joints" => {
@@ -610,7 +697,7 @@ impl Parser {
                 args: Vec::new(),
                 span,
             };
-            for (key, value) in ordered(t) {
+            for (key, value) in self.settings(t) {
                 let k = key.get_ref().as_ref();
                 match k {
                     "do" => s.primitive = self.string(value, "do"),
@@ -683,7 +770,7 @@ impl Parser {
         let mut exclude = Vec::new();
         let (mut step, mut free, mut opposite) = (None, None, None);
         let mut extras: Vec<(&str, Span)> = Vec::new();
-        for (key, value) in ordered(t) {
+        for (key, value) in self.settings(t) {
             let k = key.get_ref().as_ref();
             match k {
                 "choice" => {
@@ -906,9 +993,9 @@ impl Parser {
         let Some(t) = self.table(v, "`[chain]`") else {
             return m;
         };
-        for (key, value) in ordered(t) {
+        for (key, value) in self.settings(t) {
             match key.get_ref().as_ref() {
-                "id" => m.id = self.string(value, "chain.id"),
+                "id" => m.id = self.id(value, "chain.id"),
                 "version" => m.version = self.integer(value, "chain.version"),
                 "level" => m.level = self.level(value),
                 "instruction" => m.instruction = self.string(value, "chain.instruction"),
@@ -930,7 +1017,7 @@ impl Parser {
                 time_limit: None,
                 span,
             };
-            for (key, value) in ordered(t) {
+            for (key, value) in self.settings(t) {
                 let k = key.get_ref().as_ref();
                 match split_unit(k).0 {
                     "protocol" => s.protocol = self.string(value, "protocol"),
@@ -950,6 +1037,39 @@ impl Parser {
             out.push(s);
         }
         out
+    }
+
+    /// A task id: it names the task in results, recordings and file names, so it is a non-empty
+    /// word of letters, digits, `.`, `_` and `-` that starts with a letter or digit.
+    fn id(&mut self, value: &Value<'_>, what: &str) -> Option<Spanned<String>> {
+        let id = self.string(value, what)?;
+        let hint =
+            "an id names the task in results and file names, e.g. \"thermal_cycler.close_lid\"";
+        let bad = id
+            .value
+            .chars()
+            .find(|c| !(c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-')));
+        let problem = if id.value.is_empty() {
+            Some(format!("`{what}` is empty"))
+        } else if let Some(c) = bad {
+            Some(format!(
+                "`{what}` may hold only letters, digits, `.`, `_` and `-`, found `{}`",
+                c.escape_default()
+            ))
+        } else if !id.value.starts_with(|c: char| c.is_ascii_alphanumeric()) {
+            Some(format!("`{what}` must start with a letter or a digit"))
+        } else if id.value.len() > MAX_ID_LEN {
+            Some(format!("`{what}` is longer than {MAX_ID_LEN} characters"))
+        } else {
+            None
+        };
+        match problem {
+            Some(msg) => {
+                self.err(Code::E0021, id.span, msg, Some(hint.into()));
+                None
+            }
+            None => Some(id),
+        }
     }
 
     fn level(&mut self, value: &Value<'_>) -> Option<Spanned<String>> {
@@ -1005,7 +1125,7 @@ impl Parser {
         let Some(t) = self.table(v, "`[success]`") else {
             return out;
         };
-        for (key, value) in ordered(t) {
+        for (key, value) in self.settings(t) {
             match key.get_ref().as_ref() {
                 "all" => match value.get_ref() {
                     DeValue::Array(items) => {

@@ -71,6 +71,8 @@ const UNITS: &[(&str, Dimension, f64)] = &[
     ("ms", Dimension::Time, 0.001),
     ("min", Dimension::Time, 60.0),
     ("µL", Dimension::Volume, 1.0),
+    // The Greek mu, which looks the same; the parser warns about it (W0006).
+    ("\u{3bc}L", Dimension::Volume, 1.0),
     ("uL", Dimension::Volume, 1.0),
     ("ul", Dimension::Volume, 1.0),
     ("mL", Dimension::Volume, 1000.0),

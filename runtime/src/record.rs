@@ -28,10 +28,13 @@ pub const RECORDING_SCHEMA_VERSION: u32 = 2;
 
 #[derive(Debug, thiserror::Error)]
 pub enum RecordError {
+    // The OS error is part of the message and not a `source`: a chain of causes prints it once.
     #[error("cannot write the recording: {0}")]
-    Io(#[from] std::io::Error),
-    #[error("mcap: {0}")]
-    Mcap(#[from] mcap::McapError),
+    Write(std::io::Error),
+    #[error("cannot read the recording: {0}")]
+    Read(std::io::Error),
+    #[error("not a readable MCAP recording: {0}")]
+    Mcap(mcap::McapError),
     #[error("the recording has no `{0}` message")]
     Missing(&'static str),
     #[error("bad message on `{0}`: {1}")]
@@ -40,6 +43,12 @@ pub enum RecordError {
         "the recording has schema version {found}; this autobio reads version {RECORDING_SCHEMA_VERSION}"
     )]
     Version { found: u64 },
+}
+
+impl From<mcap::McapError> for RecordError {
+    fn from(e: mcap::McapError) -> Self {
+        RecordError::Mcap(e)
+    }
 }
 
 const OBJECT: &str = r#"{"type":"object"}"#;
@@ -58,7 +67,7 @@ fn ns(t: f64) -> u64 {
 
 impl Recorder {
     pub fn create(path: &Path) -> Result<Recorder, RecordError> {
-        let file = BufWriter::new(File::create(path)?);
+        let file = BufWriter::new(File::create(path).map_err(RecordError::Write)?);
         let w = mcap::WriteOptions::new()
             .compression(Some(mcap::Compression::Zstd))
             .profile("autobio")
@@ -218,7 +227,7 @@ pub struct LiquidFrame {
 }
 
 pub fn read_recording(path: &Path) -> Result<RecordingSummary, RecordError> {
-    let buf = std::fs::read(path)?;
+    let buf = std::fs::read(path).map_err(RecordError::Read)?;
     let (mut task, mut instance, mut verdict) = (None, None, None);
     let mut series: Vec<(f64, Vec<LabwareState>)> = Vec::new();
     let mut topics = BTreeMap::new();
