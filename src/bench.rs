@@ -4,7 +4,9 @@
 //!   model and initial state;
 //! - rendering: frames/s of one 224x224 camera image (both task cameras, alternating);
 //! - expert: full scripted-expert episodes per minute (no recording);
-//! - lab physics: each mechanism's scene with it and without it (ratio), and one liquid solve.
+//! - lab physics: each mechanism's scene with it and without it (ratio), and one liquid solve;
+//! - front end: checking a protocol whose parameter has 50,000 values and 50,000 exclusions,
+//!   against the same domain with none (the proof must stay near-linear in the domain).
 
 use anyhow::Result;
 use mujoco_rs::prelude::*;
@@ -17,6 +19,7 @@ const UPSTREAM_TRANSFER_STEPS_S: f64 = 810.0;
 
 /// Every figure for each task's scene, then the lab-physics figures once.
 pub fn run(tasks: &[compiler::Task]) -> Result<()> {
+    front_end_figures();
     let mut first_step_s = None;
     for task in tasks {
         outln!("scene    {}", task.id);
@@ -271,4 +274,49 @@ pub fn physics_figures(task_step_s: f64) -> Result<()> {
         container.triangles.len()
     );
     Ok(())
+}
+
+/// A shipped protocol with a `choice` of `values` values, the first `excluded` of them excluded
+/// (and one value never in the domain, so that something is left to draw).
+fn big_domain(values: usize, excluded: usize) -> String {
+    let base = include_str!("../protocols/thermal_cycler/close_lid.toml");
+    let list = |n: usize| {
+        (0..n)
+            .map(|i| format!("\"v{i}\""))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let param = format!(
+        "[params.colour]\nchoice = [{}]\nexclude = [{}, \"none\"]\n\n[[steps]]",
+        list(values),
+        list(excluded.min(values - 1))
+    );
+    base.replacen("[[steps]]", &param, 1)
+}
+
+/// Seconds to check (parse, resolve, prove, lower) a protocol, best of three.
+fn check_seconds(source: &str) -> f64 {
+    (0..3)
+        .map(|_| {
+            let t = Instant::now();
+            let (task, _) = compiler::compile_source(source, "bench.toml");
+            assert!(task.is_some(), "the bench protocol compiles");
+            t.elapsed().as_secs_f64()
+        })
+        .fold(f64::MAX, f64::min)
+}
+
+fn front_end_figures() {
+    let n = 50_000;
+    let baseline = check_seconds(&big_domain(n, 0));
+    let excluded = check_seconds(&big_domain(n, n));
+    outln!(
+        "check    {n}-value choice, no exclusions      {:>8.1} ms",
+        baseline * 1e3
+    );
+    outln!(
+        "check    {n}-value choice, {n} exclusions {:>8.1} ms   ratio {:.2}x",
+        excluded * 1e3,
+        excluded / baseline
+    );
 }

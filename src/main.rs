@@ -132,6 +132,11 @@ impl Front {
 }
 
 fn run(cli: Cli) -> Result<ExitCode> {
+    if let Some(r) = &cli.root
+        && !r.is_dir()
+    {
+        bail!("--root {}: not a folder", r.display());
+    }
     let front = Front {
         root: cli.root,
         color: cli.color.for_stderr(),

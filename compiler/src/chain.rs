@@ -32,11 +32,18 @@ pub(crate) fn compile_chain(
     (task, diags)
 }
 
-/// A stage's diagnostics are shown only if it is a protocol file (valid TOML with a
-/// `[protocol]` or `[chain]` table): text from any other file is never echoed.
+/// A stage's diagnostics are shown only if it is a protocol file: text from any other file is
+/// never echoed. A protocol file is valid TOML with a `[protocol]` or `[chain]` table, or, when its
+/// TOML is broken (a protocol with a typo), has a `[protocol]` or `[chain]` header line.
 fn looks_like_protocol(text: &str) -> Result<(), String> {
+    let header = text
+        .lines()
+        .any(|l| matches!(l.trim(), "[protocol]" | "[chain]"));
     let (doc, errors) = toml::de::DeTable::parse_recoverable(text);
     if let Some(e) = errors.first() {
+        if header {
+            return Ok(());
+        }
         let at = e.span().map(|s| s.start).unwrap_or(0);
         let (line, col) = dsl::render::line_col(text, at);
         return Err(format!("it is not valid TOML (line {line}, column {col})"));

@@ -6,8 +6,9 @@
 //!
 //! Checking never fails: the entry points return every diagnostic, and a task only when there are
 //! no errors. [`Task::sample`] turns a task and a seed into a [`SceneInstance`], deterministically.
-//! This crate runs no physics and plans no motion; its only IO is reading a chain's stage files
-//! through the loader its caller passes.
+//! This crate runs no physics and plans no motion; its only IO is reading the file
+//! [`check_file`] is given and a chain's stage files, through [`stage_files`] (whose rules confine
+//! a chain to its protocol root) or a loader the caller passes.
 
 mod chain;
 mod check;

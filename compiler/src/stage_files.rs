@@ -36,11 +36,10 @@ pub enum StageError {
         bytes: u64,
         limit: u64,
     },
-    /// The first byte that is not UTF-8, as a diagnostic into the stage file.
+    /// Where the first byte that is not UTF-8 is.
     #[error("stage `{path}` is not UTF-8 text (first bad byte at line {line}, column {column})")]
     NotUtf8 {
         path: String,
-        at: dsl::Diagnostic,
         line: usize,
         column: usize,
     },
@@ -161,7 +160,6 @@ impl StageLoader for StageFiles {
                     dsl::render::line_col(&dsl::source::lossy(&bytes), at.span.start);
                 return Err(StageError::NotUtf8 {
                     path: stage.to_string(),
-                    at,
                     line,
                     column,
                 });

@@ -239,7 +239,7 @@ impl Code {
                 "The file declares a `format` this autobio does not read. Format 1 is the current one. A new\nformat number is issued only when a file valid in the old format would be read differently."
             }
             Code::E0006 => {
-                "A chain's `[[stages]]` entry names a protocol file that cannot be read, is itself a chain, or\nhas errors of its own (reported with their own file and line). Paths are relative to the chain file."
+                "A chain's `[[stages]]` entry names a file that cannot be read, that is not a protocol (none of\nits text is shown), or that is itself a chain. Errors inside a stage file are reported with their\nown file and line and a note naming the chain line. Paths are relative to the chain file."
             }
             Code::E0007 => {
                 "A setting is given twice in one table under two spellings, e.g. `time_limit = \"30 s\"` and\n`time_limit_s = 30`, or `pos_m` and `pos_mm`. Neither wins silently: keep one."

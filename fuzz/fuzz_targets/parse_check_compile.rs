@@ -8,10 +8,15 @@ use libfuzzer_sys::fuzz_target;
 const STAGE: &str = include_str!("../../protocols/thermal_cycler/close_lid.toml");
 
 fuzz_target!(|data: &[u8]| {
-    let Ok(source) = std::str::from_utf8(data) else {
-        return;
+    let source = match dsl::decode(data) {
+        Ok(s) => s,
+        Err(d) => {
+            // Not UTF-8: located at the first bad byte, inside the input.
+            assert!(d.span.start < data.len() && d.span.end <= data.len(), "{d:?}");
+            return;
+        }
     };
-    let load = |path: &str| {
+    let load = |path: &str| -> Result<String, compiler::StageError> {
         if path.ends_with("self.toml") {
             Ok(source.to_string())
         } else {
