@@ -4,7 +4,9 @@
 //! is the text that was checked (a chain's stages as the compiler read them, never re-read), and a
 //! diagnostic whose file was not shown to the compiler as a protocol gets no snippet.
 
-use annotate_snippets::{AnnotationKind, Group, Level, Origin, Renderer, Snippet};
+use annotate_snippets::{
+    AnnotationKind, Group, Level, Origin, Renderer, Snippet, normalize_untrusted_str as untrusted,
+};
 use compiler::Checked;
 use dsl::Diagnostic;
 use dsl::render::line_col;
@@ -68,20 +70,22 @@ fn report<'a>(checked: &Checked, d: &'a Diagnostic) -> Vec<Group<'a>> {
             let span = fit(&text, d.span);
             Group::with_title(title).element(
                 Snippet::source(text)
-                    .path(name)
+                    .path(untrusted(&name))
                     .fold(true)
                     .annotation(AnnotationKind::Primary.span(span)),
             )
         }
-        None => Group::with_title(title).element(Origin::path(
-            d.file.clone().unwrap_or_else(|| checked.file.clone()),
-        )),
+        None => Group::with_title(title).element(Origin::path(untrusted(
+            d.file.as_deref().unwrap_or(&checked.file),
+        ))),
     };
+    // Notes and hints quote the input (names, parameter values, paths): annotate-snippets trusts
+    // them, so control characters are neutralised here.
     for n in &d.notes {
-        group = group.element(Level::NOTE.message(n.as_str()));
+        group = group.element(Level::NOTE.message(untrusted(n)));
     }
     if let Some(h) = &d.hint {
-        group = group.element(Level::HELP.with_name("hint").message(h.as_str()));
+        group = group.element(Level::HELP.with_name("hint").message(untrusted(h)));
     }
     vec![group]
 }

@@ -308,13 +308,15 @@ fn run(cli: Cli) -> Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
         Command::Replay { recording } => {
-            let rec = runtime::record::read_recording(&recording)
-                .with_context(|| format!("cannot replay {}", recording.display()))?;
+            let doing = || format!("cannot replay {}", recording.display());
+            let rec = runtime::record::read_recording(&recording).with_context(doing)?;
             let task: compiler::Task = serde_json::from_value(rec.task.clone())
-                .context("the recording's task does not match this autobio's task schema")?;
+                .context("the recording's task does not match this autobio's task schema")
+                .with_context(doing)?;
             let params: compiler::params::Bindings =
                 serde_json::from_value(rec.instance["params"].clone())
-                    .context("the recording's scene instance has no drawn parameters")?;
+                    .context("the recording's scene instance has no drawn parameters")
+                    .with_context(doing)?;
             let verdict = scoring::Judge::replay(&task, &params, &rec.labware_series);
             outln!(
                 "{}: {} messages over {:.2} s",

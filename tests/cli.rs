@@ -143,13 +143,32 @@ fn colour_only_on_request_or_on_a_terminal() {
     assert!(stderr(&auto).starts_with("error[E0021]: unknown level"));
     let never = autobio(&["check", "--color", "never", file]);
     assert_eq!(stderr(&never), stderr(&auto));
-    // NO_COLOR turns `auto` off even where it would colour; `always` still wins, as in cargo.
-    let no_color = Command::new(env!("CARGO_BIN_EXE_autobio"))
-        .args(["check", file])
-        .env("NO_COLOR", "1")
-        .output()
-        .unwrap();
-    assert_eq!(stderr(&no_color), stderr(&auto));
+    // On a terminal (a pseudo-terminal from util-linux's `script`), `auto` colours unless
+    // NO_COLOR is set; `always` colours either way, as in cargo.
+    let on_terminal = |color: &str, no_color: bool| {
+        let mut cmd = Command::new("script");
+        cmd.args(["-qec"])
+            .arg(format!(
+                "{} check --color {color} {file}",
+                env!("CARGO_BIN_EXE_autobio")
+            ))
+            .arg("/dev/null")
+            .env_remove("NO_COLOR");
+        if no_color {
+            cmd.env("NO_COLOR", "1");
+        }
+        let out = cmd.output().unwrap();
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let tty = on_terminal("auto", false);
+    assert!(tty.contains("unknown level"), "{tty}");
+    assert!(tty.contains(escape), "auto on a terminal: {tty}");
+    let tty = on_terminal("auto", true);
+    assert!(
+        tty.contains("unknown level") && !tty.contains(escape),
+        "{tty}"
+    );
+    assert!(on_terminal("always", true).contains(escape));
 }
 
 #[test]

@@ -36,9 +36,13 @@ pub(crate) fn compile_chain(
 /// never echoed. A protocol file is valid TOML with a `[protocol]` or `[chain]` table, or, when its
 /// TOML is broken (a protocol with a typo), has a `[protocol]` or `[chain]` header line.
 fn looks_like_protocol(text: &str) -> Result<(), String> {
-    let header = text
-        .lines()
-        .any(|l| matches!(l.trim(), "[protocol]" | "[chain]"));
+    let header = text.lines().any(|l| {
+        ["[protocol]", "[chain]"].iter().any(|h| {
+            l.trim()
+                .strip_prefix(h)
+                .is_some_and(|rest| rest.trim().is_empty() || rest.trim().starts_with('#'))
+        })
+    });
     let (doc, errors) = toml::de::DeTable::parse_recoverable(text);
     if let Some(e) = errors.first() {
         if header {
@@ -49,10 +53,11 @@ fn looks_like_protocol(text: &str) -> Result<(), String> {
         return Err(format!("it is not valid TOML (line {line}, column {col})"));
     }
     let doc = doc.get_ref();
-    if doc
-        .iter()
-        .any(|(k, _)| k.get_ref() == "protocol" || k.get_ref() == "chain")
-    {
+    let table = |name: &str| {
+        doc.iter()
+            .any(|(k, v)| k.get_ref() == name && matches!(v.get_ref(), toml::de::DeValue::Table(_)))
+    };
+    if table("protocol") || table("chain") {
         Ok(())
     } else {
         Err("it has no `[protocol]` table".into())
@@ -74,6 +79,7 @@ fn compile_stages(
     }
     // Parse every stage first: the lowered stages borrow their ASTs.
     let mut parsed: Vec<(usize, String, Protocol)> = Vec::new();
+    let mut texts: std::collections::BTreeMap<String, String> = Default::default();
     for (i, stage) in c.stages.iter().enumerate() {
         let Some(proto) = &stage.protocol else {
             continue;
@@ -104,6 +110,7 @@ fn compile_stages(
             included.push((path.clone(), note));
         }
         let (doc, diags) = dsl::parse(&loaded.text);
+        texts.insert(path.clone(), loaded.text);
         cx.file = Some(path.clone());
         for d in diags {
             cx.push(d);
@@ -149,17 +156,21 @@ fn compile_stages(
                 .unwrap_or_default();
             match params.iter().find(|x| x.name == p.name) {
                 Some(x) if x != p => {
-                    let earlier = param_places
-                        .get(&p.name)
-                        .and_then(|(f, _)| f.clone())
-                        .unwrap_or_default();
+                    let earlier = match param_places.get(&p.name) {
+                        Some((Some(f), span)) => {
+                            let text = texts.get(f).map(String::as_str).unwrap_or_default();
+                            let (line, col) = dsl::render::line_col(text, span.start);
+                            format!("{f}:{line}:{col}")
+                        }
+                        _ => String::new(),
+                    };
                     cx.push(
                         Diagnostic::new(
                             Code::E0034,
                             declared,
                             format!("parameter `{}` differs from the earlier stage's", p.name),
                         )
-                        .with_note(format!("it is first declared in `{earlier}`"))
+                        .with_note(format!("it is first declared at {earlier}"))
                         .with_hint("a chain draws each parameter once; declare it identically"),
                     )
                 }

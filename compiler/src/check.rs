@@ -23,6 +23,8 @@ pub(crate) fn hint_for(input: &str, candidates: &[&str], what: &str) -> String {
 pub(crate) struct Cx {
     pub diags: Vec<Diagnostic>,
     pub file: Option<String>,
+    /// Places already reported (code, span, file), for constant-time deduplication.
+    reported: std::collections::HashSet<(Code, Span, Option<String>)>,
 }
 
 impl Cx {
@@ -30,17 +32,14 @@ impl Cx {
         Cx {
             diags: Vec::new(),
             file,
+            reported: Default::default(),
         }
     }
 
     pub fn push(&mut self, mut d: Diagnostic) {
         d.file = self.file.clone();
         // One report per place: the proof may hit the same failure under many parameter values.
-        let dup = self
-            .diags
-            .iter()
-            .any(|x| x.code == d.code && x.span == d.span && x.file == d.file);
-        if !dup {
+        if self.reported.insert((d.code, d.span, d.file.clone())) {
             self.diags.push(d);
         }
     }

@@ -163,7 +163,8 @@ pub fn check_file(
         error,
     };
     let meta = std::fs::metadata(path).map_err(read)?;
-    if meta.is_dir() {
+    // A folder, a device or a pipe is refused before it is opened (a pipe would block).
+    if !meta.is_file() {
         return Err(FileError::NotAFile { path: file });
     }
     let mut bytes = Vec::new();

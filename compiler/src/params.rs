@@ -68,7 +68,7 @@ impl ParamSpec {
     }
 
     /// The values the proof considers: all of a finite domain, or low, middle and high of a real one.
-    fn proof_values(&self, bound: &Bindings) -> Vec<String> {
+    fn proof_values(&self, bound: &Bindings, excluded: &Exclusions) -> Vec<String> {
         let values = match &self.domain {
             Domain::Choice { values } => values.clone(),
             Domain::Int { low, high, step } => {
@@ -90,19 +90,10 @@ impl ParamSpec {
                 .into_iter()
                 .collect(),
         };
-        let excluded = self.excluded(bound);
+        let rendered = excluded.rendered(bound);
         values
             .into_iter()
-            .filter(|v| !excluded.contains(v))
-            .collect()
-    }
-
-    /// The exclusions rendered for these earlier values, as a set: a domain and its exclusions
-    /// are filtered in time linear in their sizes, not their product.
-    fn excluded(&self, bound: &Bindings) -> HashSet<String> {
-        self.exclude
-            .iter()
-            .filter_map(|e| render(e, bound).ok())
+            .filter(|v| !excluded.fixed.contains(v) && !rendered.contains(v))
             .collect()
     }
 
@@ -115,17 +106,18 @@ impl ParamSpec {
             && self.size() > ENUMERABLE as u128
         {
             // Too many values to list: draw, rejecting exclusions, a bounded number of times.
-            let excluded = self.excluded(bound);
+            let excluded = Exclusions::of(self);
+            let rendered = excluded.rendered(bound);
             for _ in 0..64 {
                 let k = (rng.next_u64() as u128 % self.size()) as i128;
                 let v = (*low as i128 + k * (*step).max(1) as i128).to_string();
-                if !excluded.contains(&v) {
+                if !excluded.fixed.contains(&v) && !rendered.contains(&v) {
                     return Some(v);
                 }
             }
             return None;
         }
-        let candidates = self.proof_values(bound);
+        let candidates = self.proof_values(bound, &Exclusions::of(self));
         if let Domain::Opposite { .. } = self.domain {
             return candidates.into_iter().next();
         }
@@ -181,7 +173,14 @@ pub fn proof_assignments(params: &[ParamSpec]) -> (Vec<Bindings>, bool) {
     if size <= PROOF_LIMIT as u128 {
         let mut out = Vec::new();
         let mut complete = true;
-        enumerate(params, &mut Bindings::new(), &mut out, &mut complete);
+        let exclusions: Vec<Exclusions> = params.iter().map(Exclusions::of).collect();
+        enumerate(
+            params,
+            &exclusions,
+            &mut Bindings::new(),
+            &mut out,
+            &mut complete,
+        );
         return (out, complete);
     }
     let mut rng = ChaCha8Rng::seed_from_u64(0);
@@ -191,7 +190,42 @@ pub fn proof_assignments(params: &[ParamSpec]) -> (Vec<Bindings>, bool) {
     (sample, false)
 }
 
-fn enumerate(params: &[ParamSpec], bound: &mut Bindings, out: &mut Vec<Bindings>, ok: &mut bool) {
+/// A parameter's exclusions, split once into values (a set) and templates over earlier
+/// parameters (rendered per combination): filtering stays linear in a domain and its exclusions
+/// however many combinations of earlier values the proof walks.
+struct Exclusions<'a> {
+    fixed: HashSet<String>,
+    templated: Vec<&'a str>,
+}
+
+impl<'a> Exclusions<'a> {
+    fn of(p: &'a ParamSpec) -> Self {
+        let (templated, fixed): (Vec<&String>, Vec<&String>) =
+            p.exclude.iter().partition(|e| !placeholders(e).is_empty());
+        Exclusions {
+            fixed: fixed
+                .into_iter()
+                .filter_map(|e| render(e, &Bindings::new()).ok())
+                .collect(),
+            templated: templated.into_iter().map(String::as_str).collect(),
+        }
+    }
+
+    fn rendered(&self, bound: &Bindings) -> HashSet<String> {
+        self.templated
+            .iter()
+            .filter_map(|e| render(e, bound).ok())
+            .collect()
+    }
+}
+
+fn enumerate(
+    params: &[ParamSpec],
+    exclusions: &[Exclusions],
+    bound: &mut Bindings,
+    out: &mut Vec<Bindings>,
+    ok: &mut bool,
+) {
     if !*ok {
         return;
     }
@@ -202,9 +236,9 @@ fn enumerate(params: &[ParamSpec], bound: &mut Bindings, out: &mut Vec<Bindings>
         }
         return;
     };
-    for v in first.proof_values(bound) {
+    for v in first.proof_values(bound, &exclusions[0]) {
         bound.insert(first.name.clone(), v);
-        enumerate(rest, bound, out, ok);
+        enumerate(rest, &exclusions[1..], bound, out, ok);
         bound.remove(&first.name);
     }
 }

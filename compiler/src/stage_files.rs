@@ -128,23 +128,38 @@ impl StageLoader for StageFiles {
         if !real.starts_with(&real_root) {
             return Err(outside());
         }
-        let meta = std::fs::metadata(&real).map_err(unreadable)?;
-        if !meta.is_file() {
-            return Err(StageError::NotAFile {
-                path: stage.to_string(),
-            });
-        }
-        if meta.len() > MAX_STAGE_BYTES {
-            return Err(StageError::TooLarge {
-                path: stage.to_string(),
-                bytes: meta.len(),
-                limit: MAX_STAGE_BYTES,
-            });
-        }
+        let regular = |meta: &std::fs::Metadata| {
+            if !meta.is_file() {
+                return Err(StageError::NotAFile {
+                    path: stage.to_string(),
+                });
+            }
+            if meta.len() > MAX_STAGE_BYTES {
+                return Err(StageError::TooLarge {
+                    path: stage.to_string(),
+                    bytes: meta.len(),
+                    limit: MAX_STAGE_BYTES,
+                });
+            }
+            Ok(())
+        };
+        // Decided from the path before opening (a device or a pipe is never opened)...
+        regular(&std::fs::metadata(&real).map_err(unreadable)?)?;
+        // ...and again on the open handle, in case the file was swapped in between: opened
+        // without following a link and without blocking on a pipe.
+        let file = {
+            use std::os::unix::fs::OpenOptionsExt;
+            std::fs::OpenOptions::new()
+                .read(true)
+                .custom_flags(libc::O_NOFOLLOW | libc::O_NONBLOCK)
+                .open(&real)
+                .map_err(unreadable)?
+        };
+        regular(&file.metadata().map_err(unreadable)?)?;
         // Bounded even if the file grows after the check.
         let mut bytes = Vec::new();
-        std::fs::File::open(&real)
-            .and_then(|f| f.take(MAX_STAGE_BYTES + 1).read_to_end(&mut bytes))
+        file.take(MAX_STAGE_BYTES + 1)
+            .read_to_end(&mut bytes)
             .map_err(unreadable)?;
         if bytes.len() as u64 > MAX_STAGE_BYTES {
             return Err(StageError::TooLarge {

@@ -3,7 +3,7 @@
 use serde::Serialize;
 
 /// A half-open byte range into the protocol source.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Default)]
 pub struct Span {
     pub start: usize,
     pub end: usize,
@@ -30,7 +30,7 @@ pub enum Severity {
 
 /// Stable diagnostic codes. The number never changes meaning once released; `autobio explain`
 /// prints [`Code::explanation`]. `E` codes are errors, `W` codes warnings.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
 pub enum Code {
     /// The file is not valid TOML.
     E0001,

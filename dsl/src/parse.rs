@@ -15,14 +15,14 @@ pub fn parse(source: &str) -> (Document, Vec<Diagnostic>) {
     let mut p = Parser { diags: Vec::new() };
     let (doc, errors) = DeTable::parse_recoverable(source);
     if !errors.is_empty() {
-        let unclosed = crate::source::unclosed_string(source);
+        let mut unclosed = crate::source::unclosed_string(source);
         for e in errors {
             let mut span = e.span().map(Span::from).unwrap_or(Span::new(0, 0));
             // toml reports an unclosed string where it gave up looking for its end (the end of
             // the line, or of the file for a multi-line one); the mistake is where it opens.
-            if let Some(u) = &unclosed
-                && e.message().contains("string")
-                && u.span.start <= span.start
+            // Only the first such error is the unclosed string's; later ones are their own.
+            if let Some(u) =
+                unclosed.take_if(|u| e.message().contains("string") && u.span.start <= span.start)
             {
                 p.diags.push(
                     Diagnostic::error(Code::E0001, u.span, format!("unclosed {}", u.what))
@@ -137,11 +137,11 @@ impl Parser {
     /// another spelling (`time_limit` and `time_limit_s`, `pos_m` and `pos_mm`): that is an error,
     /// and neither spelling silently wins over the other; the first is kept for further checks.
     fn settings<'a, 'i>(&mut self, t: &'a DeTable<'i>) -> Vec<(&'a Key<'i>, &'a Value<'i>)> {
-        let mut seen: Vec<(&str, &Key<'i>)> = Vec::new();
+        let mut seen: std::collections::HashMap<&str, &Key<'i>> = Default::default();
         let mut out = Vec::new();
         for (key, value) in ordered(t) {
             let base = split_unit(key.get_ref()).0;
-            if let Some((_, first)) = seen.iter().find(|(b, _)| *b == base) {
+            if let Some(first) = seen.get(base) {
                 let msg = format!(
                     "`{}` sets `{base}` again: it is already given as `{}`",
                     key.get_ref(),
@@ -155,39 +155,34 @@ impl Parser {
                 self.err(Code::E0007, span_of(key), msg, Some(hint));
                 continue;
             }
-            seen.push((base, key));
+            seen.insert(base, key);
             out.push((key, value));
         }
         out
     }
 
-    /// W0006 for every `μ` (Greek mu) directly before `L` or `l` in a string value: it looks like
+    /// W0006 for every `μL` written with the Greek mu in a string value or a key: it looks like
     /// the micro sign `µL` is written with, and is read as one.
     fn greek_mu(&mut self, source: &str, t: &DeTable<'_>) {
+        fn look(p: &mut Parser, source: &str, span: Span) {
+            let Some(raw) = source.get(span.start..span.end) else {
+                return;
+            };
+            for (i, _) in raw.match_indices("\u{3bc}L") {
+                let at = span.start + i;
+                p.diags.push(
+                    Diagnostic::new(
+                        Code::W0006,
+                        Span::new(at, at + 2),
+                        "`μ` here is the Greek letter mu (U+03BC), not the micro sign".to_string(),
+                    )
+                    .with_hint("it is read as microlitres; write `µL` (U+00B5) or `uL`"),
+                );
+            }
+        }
         fn walk(p: &mut Parser, source: &str, v: &Value<'_>) {
             match v.get_ref() {
-                DeValue::String(_) => {
-                    let span = span_of(v);
-                    let Some(raw) = source.get(span.start..span.end) else {
-                        return;
-                    };
-                    for (i, _) in raw.match_indices('\u{3bc}') {
-                        if raw[i + 2..].starts_with(['L', 'l']) {
-                            let at = span.start + i;
-                            p.diags.push(
-                                Diagnostic::new(
-                                    Code::W0006,
-                                    Span::new(at, at + 2),
-                                    "`μ` here is the Greek letter mu (U+03BC), not the micro sign"
-                                        .to_string(),
-                                )
-                                .with_hint(
-                                    "it is read as microlitres; write `µL` (U+00B5) or `uL`",
-                                ),
-                            );
-                        }
-                    }
-                }
+                DeValue::String(_) => look(p, source, span_of(v)),
                 DeValue::Array(items) => {
                     for item in items.iter() {
                         walk(p, source, item);
@@ -197,7 +192,8 @@ impl Parser {
                 _ => {}
             }
         }
-        for (_, v) in ordered(t) {
+        for (k, v) in ordered(t) {
+            look(self, source, span_of(k));
             walk(self, source, v);
         }
     }
@@ -467,7 +463,7 @@ impl Parser {
                 "id" => m.id = self.id(value, "protocol.id"),
                 "version" => m.version = self.integer(value, "protocol.version"),
                 "level" => m.level = self.level(value),
-                "instruction" => m.instruction = self.string(value, "protocol.instruction"),
+                "instruction" => m.instruction = self.prompt(value, "protocol.instruction"),
                 "time_limit" => m.time_limit = self.time_limit(k, value),
                 _ => self.unknown_key(key, PROTOCOL_KEYS, "`[protocol]`"),
             }
@@ -498,6 +494,7 @@ impl Parser {
         };
         for (key, value) in ordered(t) {
             let name = Spanned::new(key.get_ref().to_string(), span_of(key));
+            self.name(&name);
             if let Some(inner) = self.table(value, &format!("`{}` in {what}", name.value)) {
                 out.push(each(self, name, inner));
             }
@@ -998,7 +995,7 @@ impl Parser {
                 "id" => m.id = self.id(value, "chain.id"),
                 "version" => m.version = self.integer(value, "chain.version"),
                 "level" => m.level = self.level(value),
-                "instruction" => m.instruction = self.string(value, "chain.instruction"),
+                "instruction" => m.instruction = self.prompt(value, "chain.instruction"),
                 _ => self.unknown_key(key, CHAIN_KEYS, "`[chain]`"),
             }
         }
@@ -1021,7 +1018,7 @@ impl Parser {
                 let k = key.get_ref().as_ref();
                 match split_unit(k).0 {
                     "protocol" => s.protocol = self.string(value, "protocol"),
-                    "instruction" => s.instruction = self.string(value, "instruction"),
+                    "instruction" => s.instruction = self.prompt(value, "instruction"),
                     "time_limit" => s.time_limit = self.time_limit(k, value),
                     _ => self.unknown_key(key, STAGE_KEYS, "a stage"),
                 }
@@ -1037,6 +1034,41 @@ impl Parser {
             out.push(s);
         }
         out
+    }
+
+    /// A robot, labware or parameter name: an identifier, because names are read back out of
+    /// predicates (`<name>.<part>`), templates (`{name}`), locations and recording topics.
+    fn name(&mut self, name: &Spanned<String>) {
+        let n = &name.value;
+        let ok = n.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_')
+            && n.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+            && n.len() <= MAX_ID_LEN;
+        if !ok {
+            self.err(
+                Code::E0021,
+                name.span,
+                format!(
+                    "name `{}` is not an identifier (letters, digits and `_`, not starting with a digit)",
+                    n.escape_default()
+                ),
+                Some("names are read back from predicates (`<name>.<part>`) and templates (`{name}`)".into()),
+            );
+        }
+    }
+
+    /// Text a policy is shown (an instruction): not empty or blank.
+    fn prompt(&mut self, value: &Value<'_>, what: &str) -> Option<Spanned<String>> {
+        let s = self.string(value, what)?;
+        if s.value.trim().is_empty() {
+            self.err(
+                Code::E0021,
+                s.span,
+                format!("`{what}` is empty"),
+                Some("the instruction is the prompt the policy is given; say what to do".into()),
+            );
+            return None;
+        }
+        Some(s)
     }
 
     /// A task id: it names the task in results, recordings and file names, so it is a non-empty

@@ -66,7 +66,13 @@ pub fn unclosed_string(source: &str) -> Option<Unclosed> {
                     match b.get(i) {
                         None => return Some(found),
                         Some(b'\n') if !multi => return Some(found),
-                        Some(b'\\') if q == b'"' => i += 2,
+                        // An escape; in a one-line string, a backslash cannot escape its end.
+                        Some(b'\\') if q == b'"' => {
+                            if !multi && b.get(i + 1) == Some(&b'\n') {
+                                return Some(found);
+                            }
+                            i += 2;
+                        }
                         Some(&c) if c == q => {
                             if !multi {
                                 i += 1;

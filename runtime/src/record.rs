@@ -33,8 +33,10 @@ pub enum RecordError {
     Write(std::io::Error),
     #[error("cannot read the recording: {0}")]
     Read(std::io::Error),
-    #[error("not a readable MCAP recording: {0}")]
+    #[error("mcap: {0}")]
     Mcap(mcap::McapError),
+    #[error("not a readable MCAP recording: {0}")]
+    NotMcap(mcap::McapError),
     #[error("the recording has no `{0}` message")]
     Missing(&'static str),
     #[error("bad message on `{0}`: {1}")]
@@ -233,8 +235,8 @@ pub fn read_recording(path: &Path) -> Result<RecordingSummary, RecordError> {
     let mut topics = BTreeMap::new();
     let mut messages = 0;
     let mut last_t = 0u64;
-    for m in mcap::MessageStream::new(&buf)? {
-        let m = m?;
+    for m in mcap::MessageStream::new(&buf).map_err(RecordError::NotMcap)? {
+        let m = m.map_err(RecordError::NotMcap)?;
         messages += 1;
         last_t = last_t.max(m.log_time);
         *topics.entry(m.channel.topic.clone()).or_insert(0) += 1;
