@@ -41,6 +41,10 @@ pub struct LabwareState {
     #[serde(default, with = "crate::frame::serde_pose_map")]
     pub parts: BTreeMap<String, Pose>,
     pub logic: Logic,
+    /// The robots whose bodies touch this item's bodies (a MuJoCo contact at zero or negative
+    /// distance), in task order; what a `<robot> touches <item>` predicate measures.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub touched_by: Vec<String>,
 }
 
 impl LabwareState {

@@ -97,6 +97,7 @@ mod tests {
                 joints: Default::default(),
                 parts: Default::default(),
                 logic: Default::default(),
+                touched_by: Vec::new(),
             };
             let seats: Vec<[f64; 3]> = slots
                 .layout

@@ -299,6 +299,7 @@ mod tests {
             joints: BTreeMap::from([("lid".into(), 0.0), ("lever".into(), 0.0)]),
             parts: BTreeMap::new(),
             logic: BTreeMap::new(),
+            touched_by: Vec::new(),
         }
     }
 
@@ -367,6 +368,7 @@ mod tests {
             joints: BTreeMap::new(),
             parts: BTreeMap::new(),
             logic: BTreeMap::new(),
+            touched_by: Vec::new(),
         };
         // The tube hangs slightly tilted in the hand, somewhere above the bench.
         let tube_s = LabwareState {

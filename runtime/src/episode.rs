@@ -22,6 +22,8 @@ pub enum StepError {
     Unstable { time: f64, what: String },
     #[error("action has {got} values, the robots take {want}")]
     BadAction { got: usize, want: usize },
+    #[error("action value {index} is not a finite number ({value})")]
+    NonFinite { index: usize, value: f64 },
 }
 
 pub struct Episode {
@@ -62,6 +64,7 @@ pub(crate) fn start_seat(task: &Task, instance: &SceneInstance, i: usize) -> Opt
         joints: BTreeMap::new(),
         parts: BTreeMap::new(),
         logic: Logic::new(),
+        touched_by: Vec::new(),
     };
     task.labware[h]
         .params
@@ -159,10 +162,10 @@ impl Episode {
                 want,
             });
         }
-        if let Some(bad) = action.iter().position(|v| !v.is_finite()) {
-            return Err(StepError::Unstable {
-                time: self.time(),
-                what: format!("action element {bad} is not finite"),
+        if let Some(index) = action.iter().position(|v| !v.is_finite()) {
+            return Err(StepError::NonFinite {
+                index,
+                value: action[index],
             });
         }
         let scene = self.scene.clone();
@@ -268,7 +271,40 @@ impl Episode {
                 .map(|(role, body)| (role.to_string(), self.body_pose(*body)))
                 .collect(),
             logic: self.logic[i].clone(),
+            touched_by: self.touching(i),
         }
+    }
+
+    /// The robots in contact with labware item `i` now, in task order.
+    fn touching(&self, item: usize) -> Vec<String> {
+        use crate::scene::Owner;
+        let geom_body = self.scene.model.geom_bodyid();
+        let owner = |g: i32| {
+            let body = *geom_body.get(usize::try_from(g).ok()?)? as usize;
+            self.scene.body_owner.get(body).copied().flatten()
+        };
+        let mut robots = vec![false; self.scene.robots.len()];
+        for c in self.data.contact() {
+            if c.exclude != 0 || c.dist > 0.0 {
+                continue;
+            }
+            match (owner(c.geom[0]), owner(c.geom[1])) {
+                (Some(Owner::Robot(r)), Some(Owner::Labware(l)))
+                | (Some(Owner::Labware(l)), Some(Owner::Robot(r)))
+                    if l == item =>
+                {
+                    robots[r] = true;
+                }
+                _ => {}
+            }
+        }
+        self.scene
+            .robots
+            .iter()
+            .zip(robots)
+            .filter(|(_, t)| *t)
+            .map(|(r, _)| r.name.clone())
+            .collect()
     }
 
     /// Every labware item's live state, in task order.

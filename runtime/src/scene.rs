@@ -70,6 +70,13 @@ pub struct LabwareIds {
     pub parts: Vec<(&'static str, usize)>,
 }
 
+/// What a body belongs to: a robot or a labware item (task indices).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Owner {
+    Robot(usize),
+    Labware(usize),
+}
+
 /// A compiled MuJoCo model for a task with its indices. Cheap to share (`Arc`).
 pub struct Scene {
     pub model: Arc<MjModel>,
@@ -79,6 +86,8 @@ pub struct Scene {
     pub xml: String,
     /// Labware placements the model was built with.
     pub placements: Vec<Pose>,
+    /// Each body's owner (`None`: the world, the bench, the room), for contact predicates.
+    pub body_owner: Vec<Option<Owner>>,
 }
 
 impl Scene {
@@ -354,6 +363,7 @@ impl Scene {
             };
             cameras.push(id_of(m, MjtObjBase::mjOBJ_CAMERA, "camera", &name)?);
         }
+        let body_owner = body_owners(m, &robots, &labware)?;
         Ok(Scene {
             model: Arc::new(model),
             robots,
@@ -361,8 +371,44 @@ impl Scene {
             cameras,
             xml,
             placements,
+            body_owner,
         })
     }
+}
+
+/// Each body's owner: the robot or item whose root body (or loose part) it hangs from.
+fn body_owners(
+    m: &MjModel,
+    robots: &[RobotIds],
+    labware: &[LabwareIds],
+) -> Result<Vec<Option<Owner>>, SceneError> {
+    let mut roots: Vec<(usize, Owner)> = Vec::new();
+    for (r, ids) in robots.iter().enumerate() {
+        let root = format!("{}/{}", ids.name, ids.model.root_body);
+        roots.push((
+            id_of(m, MjtObjBase::mjOBJ_BODY, "body", &root)?,
+            Owner::Robot(r),
+        ));
+    }
+    for (i, ids) in labware.iter().enumerate() {
+        roots.push((ids.root_body, Owner::Labware(i)));
+        roots.extend(ids.parts.iter().map(|(_, b)| (*b, Owner::Labware(i))));
+    }
+    let parent = m.body_parentid();
+    Ok((0..parent.len())
+        .map(|b| {
+            let mut at = b;
+            loop {
+                if let Some((_, owner)) = roots.iter().find(|(root, _)| *root == at) {
+                    return Some(*owner);
+                }
+                if at == 0 {
+                    return None;
+                }
+                at = parent[at] as usize;
+            }
+        })
+        .collect())
 }
 
 /// Every item can start as declared, and every `at` names a slot a holder model can seat.

@@ -126,8 +126,10 @@ pub fn evaluate(
         let r = run_episode(task, sc, &instance, policy.as_mut(), &eo)?;
         if let Some(j) = journal.as_mut() {
             let line = serde_json::to_string(&r).map_err(|e| e.to_string())?;
+            // On disk before the next episode starts: a crash loses no finished episode.
             writeln!(j, "{line}")
                 .and_then(|_| j.flush())
+                .and_then(|_| j.sync_data())
                 .map_err(|e| format!("journal: {e}"))?;
         }
         progress(&r);

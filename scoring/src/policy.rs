@@ -68,6 +68,9 @@ pub enum PolicyError {
     },
     #[error("unknown policy `{0}`; known policies: {known}", known = POLICIES.join(", "))]
     Unknown(String),
+    /// The policy could not produce actions (a model's own error, reported by it).
+    #[error("the policy failed: {0}")]
+    Failed(String),
 }
 
 pub trait Policy {

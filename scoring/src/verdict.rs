@@ -112,7 +112,32 @@ fn measure(
                 *tilt,
             ))
         }
-        // Volumes, panels, contacts and positions need instruments the runtime cannot build yet.
+        // A contact holds while the robot touches the item (value 1) and not otherwise (0).
+        Check::Contact { robot, item } => {
+            let touching = state_of(item)?.touched_by.iter().any(|r| r == robot);
+            Some(Measure {
+                value: f64::from(u8::from(touching)),
+                target: 1.0,
+                tolerance: 0.0,
+                holds: touching,
+            })
+        }
+        // The item's distance from the point (m).
+        Check::Position {
+            item,
+            pos,
+            tolerance,
+        } => {
+            let at = state_of(item)?.pose.translation.vector;
+            let distance = (at - nalgebra::Vector3::from(*pos)).norm();
+            Some(Measure {
+                value: distance,
+                target: 0.0,
+                tolerance: tolerance.value,
+                holds: distance <= tolerance.value,
+            })
+        }
+        // Volumes and panels need instruments the runtime cannot build yet.
         _ => None,
     }
 }

@@ -1,0 +1,155 @@
+//! The episode's failure paths on real MuJoCo: a policy error, an empty action chunk, an action of
+//! the wrong length, a non-finite action and an unstable simulation each end the episode as a
+//! failure with its reason, at the step where it happened. And `scoring::evaluate` writes each
+//! finished episode to the journal before the next one starts, with results JSON that carries its
+//! schema version.
+
+use scoring::episode::{EpisodeOptions, run_episode};
+use scoring::{Observation, Policy, PolicyError};
+use std::sync::Arc;
+
+fn task() -> compiler::Task {
+    let path = "protocols/thermal_cycler/close_lid.toml";
+    let (task, diags) = compiler::compile_source(&std::fs::read_to_string(path).unwrap(), path);
+    task.unwrap_or_else(|| panic!("{diags:#?}"))
+}
+
+/// Holds still for `good` calls, then answers with `then`.
+struct Faulty<F: FnMut(&Observation) -> Result<Vec<Vec<f64>>, PolicyError>> {
+    good: usize,
+    then: F,
+}
+
+impl<F: FnMut(&Observation) -> Result<Vec<Vec<f64>>, PolicyError>> Policy for Faulty<F> {
+    fn name(&self) -> String {
+        "faulty".into()
+    }
+
+    fn act(&mut self, obs: &Observation) -> Result<Vec<Vec<f64>>, PolicyError> {
+        if self.good > 0 {
+            self.good -= 1;
+            return Ok(vec![obs.privileged.ctrl()]);
+        }
+        (self.then)(obs)
+    }
+}
+
+fn run(policy: &mut dyn Policy) -> scoring::EpisodeResult {
+    let t = task();
+    let instance = t.sample(0);
+    let scene = Arc::new(runtime::Scene::build(&t, &instance).unwrap());
+    run_episode(&t, &scene, &instance, policy, &EpisodeOptions::default()).unwrap()
+}
+
+fn assert_failed_at(r: &scoring::EpisodeResult, steps: u64, reason: &str) {
+    assert!(!r.success && !r.verdict.success, "{r:?}");
+    assert_eq!(r.control_steps, steps, "ended at the failing step");
+    let error = r.error.as_deref().expect("a reason");
+    assert!(error.contains(reason), "{error}");
+}
+
+#[test]
+fn a_policy_error_ends_the_episode_with_its_reason() {
+    let r = run(&mut Faulty {
+        good: 3,
+        then: |_: &Observation| Err(PolicyError::Failed("the model server crashed".into())),
+    });
+    assert_failed_at(&r, 3, "the policy failed: the model server crashed");
+}
+
+#[test]
+fn an_empty_chunk_ends_the_episode() {
+    let r = run(&mut Faulty {
+        good: 2,
+        then: |_: &Observation| Ok(vec![]),
+    });
+    assert_failed_at(&r, 2, "empty action chunk");
+}
+
+#[test]
+fn an_action_of_the_wrong_length_ends_the_episode() {
+    let r = run(&mut Faulty {
+        good: 4,
+        then: |obs: &Observation| Ok(vec![obs.privileged.ctrl()[..6].to_vec()]),
+    });
+    assert_failed_at(&r, 4, "action has 6 values, the robots take 7");
+}
+
+#[test]
+fn a_non_finite_action_ends_the_episode() {
+    for bad in [f64::NAN, f64::INFINITY] {
+        let r = run(&mut Faulty {
+            good: 1,
+            then: move |obs: &Observation| {
+                let mut a = obs.privileged.ctrl();
+                a[2] = bad;
+                Ok(vec![a])
+            },
+        });
+        assert_failed_at(
+            &r,
+            1,
+            &format!("action value 2 is not a finite number ({bad})"),
+        );
+    }
+}
+
+#[test]
+fn an_unstable_simulation_ends_the_step_with_its_reason() {
+    let t = task();
+    let instance = t.sample(0);
+    let scene = Arc::new(runtime::Scene::build(&t, &instance).unwrap());
+    let mut ep = runtime::Episode::new(scene, &t, &instance);
+    ep.control_step().unwrap();
+    // A blown-up velocity, as a diverging integration produces.
+    ep.data.qvel_mut()[0] = f64::NAN;
+    let err = ep.control_step().unwrap_err();
+    assert!(
+        matches!(err, runtime::episode::StepError::Unstable { .. }),
+        "{err:?}"
+    );
+    assert!(
+        err.to_string().contains("simulation became unstable"),
+        "{err}"
+    );
+}
+
+#[test]
+fn the_journal_has_each_episode_before_the_next_starts() {
+    let t = task();
+    let dir = std::env::temp_dir().join(format!("autobio-journal-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let opts = scoring::eval::EvalOptions {
+        policy: "hold".into(),
+        episodes: 3,
+        seed: 40,
+        out: Some(dir.clone()),
+        record: false,
+        image_every: 0,
+    };
+    let journal = dir.join(format!("{}.journal.jsonl", t.id));
+    let mut seen = Vec::new();
+    let report = scoring::evaluate(&t, &opts, |e| {
+        // Called after the journal write and before the next episode.
+        let text = std::fs::read_to_string(&journal).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines.len(), seen.len() + 1);
+        let last: scoring::EpisodeResult = serde_json::from_str(lines[lines.len() - 1]).unwrap();
+        assert_eq!(&last, e);
+        seen.push(e.seed);
+    })
+    .unwrap();
+    assert_eq!(seen, [40, 41, 42]);
+    assert_eq!(report.summary.successes, 0, "hold scores 0");
+    let results: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join(format!("{}.results.json", t.id))).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(
+        results["schema_version"].as_u64(),
+        Some(u64::from(scoring::RESULTS_SCHEMA_VERSION))
+    );
+    assert_eq!(results["policy"], "hold");
+    assert_eq!(results["episodes"].as_array().unwrap().len(), 3);
+    let _ = std::fs::remove_dir_all(&dir);
+}
