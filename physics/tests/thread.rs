@@ -94,8 +94,10 @@ fn screws_on(name: &str, cap: &ScrewCap) {
     let advance = (z1 - z0) / turns.abs();
     let pitch = cap.bolt.pitch;
     eprintln!("thread {name}: {advance:.6} m per turn over {turns:.2} turns (pitch {pitch})");
+    // docs/physics.md measures 3.007 to 3.020 mm on a 3 mm pitch (at most 0.7% off); the bound
+    // is 2%, room for solver differences across machines, and fails a pitch mis-set by 5%.
     assert!(
-        (advance + pitch).abs() < 0.1 * pitch,
+        (advance + pitch).abs() < 0.02 * pitch,
         "{name}: advance {advance} m per turn, pitch {pitch}"
     );
 }
