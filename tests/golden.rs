@@ -1,5 +1,5 @@
 //! Golden tests for every shipped protocol and chain: the parsed AST, the check result, the
-//! compiled task and its task sheet must match the files under tests/golden byte for byte, and
+//! compiled task, its task sheet and the scene instances seeds 0-4 draw must match the files under tests/golden byte for byte, and
 //! compiling twice gives byte-identical tasks. After an intended change, regenerate with
 //! `UPDATE_GOLDEN=1 cargo test --release --test golden` and review the diff.
 
@@ -49,6 +49,13 @@ fn outputs(path: &Path) -> Vec<(&'static str, String)> {
             serde_json::to_string_pretty(&task).unwrap() + "\n",
         ),
         ("sheet.txt", compiler::describe(&task)),
+        // What the first seeds draw: changing the draw order or the generator fails here.
+        (
+            "draws.jsonl",
+            (0..5)
+                .map(|seed| serde_json::to_string(&task.sample(seed)).unwrap() + "\n")
+                .collect(),
+        ),
     ]
 }
 

@@ -1,0 +1,168 @@
+//! Recordings replay to the verdict the live episode had, for a long-horizon chain (stage by
+//! stage), under progress scoring (a partial score) and for a timed-out episode; a recording of
+//! another schema version is refused by name; and the camera images a recording carries show the
+//! scene (not a blank frame) and change as the robot moves.
+
+use base64::Engine;
+use runtime::record::{RecordError, Recorder, read_recording};
+use scoring::episode::{EpisodeOptions, run_episode};
+use scoring::expert::ExpertPolicy;
+use scoring::{HoldPolicy, Judge, Policy};
+use std::path::PathBuf;
+use std::sync::Arc;
+
+fn compile(path: &str, edit: impl Fn(String) -> String) -> compiler::Task {
+    let source = edit(std::fs::read_to_string(path).unwrap());
+    let (task, diags) = compiler::compile_source(&source, path);
+    task.unwrap_or_else(|| panic!("{diags:#?}"))
+}
+
+fn temp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("autobio-replay-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+/// Runs and records an episode; returns the live result and the replayed verdict.
+fn record_and_replay(
+    task: &compiler::Task,
+    seed: u64,
+    expert: bool,
+    image_every: u32,
+    name: &str,
+) -> (scoring::EpisodeResult, scoring::Verdict, PathBuf) {
+    let instance = task.sample(seed);
+    let scene = Arc::new(runtime::Scene::build(task, &instance).unwrap());
+    let mut policy: Box<dyn Policy> = if expert {
+        Box::new(ExpertPolicy::new(task, &scene, &instance).unwrap())
+    } else {
+        Box::new(HoldPolicy)
+    };
+    let path = temp(name);
+    let opts = EpisodeOptions {
+        record: Some(path.clone()),
+        image_every,
+    };
+    let live = run_episode(task, &scene, &instance, policy.as_mut(), &opts).unwrap();
+    let rec = read_recording(&path).unwrap();
+    let replayed: compiler::Task = serde_json::from_value(rec.task).unwrap();
+    let params: compiler::params::Bindings =
+        serde_json::from_value(rec.instance["params"].clone()).unwrap();
+    let verdict = Judge::replay(&replayed, &params, &rec.labware_series);
+    (live, verdict, path)
+}
+
+/// RGB frames of one camera channel, in time order.
+fn frames(path: &PathBuf, topic: &str) -> Vec<Vec<u8>> {
+    let bytes = std::fs::read(path).unwrap();
+    mcap::MessageStream::new(&bytes)
+        .unwrap()
+        .map(|m| m.unwrap())
+        .filter(|m| m.channel.topic == topic)
+        .map(|m| {
+            let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
+            assert_eq!(
+                (v["width"].as_u64(), v["height"].as_u64()),
+                (Some(224), Some(224))
+            );
+            base64::engine::general_purpose::STANDARD
+                .decode(v["data"].as_str().unwrap())
+                .unwrap()
+        })
+        .collect()
+}
+
+/// Standard deviation of the pixel values: a blank (one-colour) frame has none.
+fn spread(rgb: &[u8]) -> f64 {
+    let n = rgb.len() as f64;
+    let mean = rgb.iter().map(|&v| f64::from(v)).sum::<f64>() / n;
+    (rgb.iter()
+        .map(|&v| (f64::from(v) - mean).powi(2))
+        .sum::<f64>()
+        / n)
+        .sqrt()
+}
+
+fn mean_abs_diff(a: &[u8], b: &[u8]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| f64::from(x.abs_diff(*y)))
+        .sum::<f64>()
+        / a.len() as f64
+}
+
+#[test]
+fn a_chain_replays_stage_by_stage_and_its_images_show_the_motion() {
+    let task = compile("protocols/thermal_cycler/close_then_open.toml", |s| s);
+    let (live, replayed, path) = record_and_replay(&task, 2, true, 10, "chain.mcap");
+    assert!(live.success, "{:?}", live.error);
+    assert_eq!(replayed, live.verdict);
+    assert_eq!(replayed.stages.len(), 2);
+    assert!(replayed.stages.iter().all(|s| s.completed_at_s.is_some()));
+
+    for topic in ["/camera/table_front", "/camera/arm/wrist"] {
+        let f = frames(&path, topic);
+        assert!(f.len() >= 10, "{topic}: {} frames", f.len());
+        for (i, frame) in f.iter().enumerate() {
+            assert_eq!(frame.len(), 224 * 224 * 3);
+            assert!(
+                spread(frame) > 10.0,
+                "{topic} frame {i} is blank: {}",
+                spread(frame)
+            );
+        }
+        // The arm closes the lid and opens it again: the first and the middle frames differ.
+        let change = mean_abs_diff(&f[0], &f[f.len() / 2]);
+        assert!(change > 2.0, "{topic}: frames barely change ({change})");
+    }
+}
+
+#[test]
+fn a_progress_scored_episode_replays_to_its_partial_score() {
+    let task = compile("protocols/thermal_cycler/close_lid.toml", |s| {
+        s.replace("time_limit = \"31.5 s\"", "time_limit = \"7 s\"")
+            .replace(
+                "all = [\"cycler.lid is closed\", \"cycler.lid is locked\"]",
+                "all = [\"cycler.lid is closed\", \"cycler.lid is locked\"]\nscoring = \"progress\"",
+            )
+    });
+    let (live, replayed, _) = record_and_replay(&task, 5, true, 0, "progress.mcap");
+    assert!(!live.success);
+    assert!(
+        live.verdict.score > 0.0 && live.verdict.score < 1.0,
+        "{:?}",
+        live.verdict
+    );
+    assert_eq!(replayed, live.verdict);
+}
+
+#[test]
+fn a_timed_out_episode_replays_to_its_failure() {
+    let mut task = compile("protocols/tube/transfer.toml", |s| s);
+    task.time_limit_s = 1.0;
+    task.stages[0].time_limit_s = 1.0;
+    let (live, replayed, _) = record_and_replay(&task, 8, false, 0, "timeout.mcap");
+    assert!(!live.success && live.error.is_none());
+    assert!((live.sim_time_s - 1.0).abs() < 0.05);
+    assert_eq!(replayed, live.verdict);
+    assert!(!replayed.success);
+}
+
+#[test]
+fn a_recording_of_another_schema_version_is_refused() {
+    let path = temp("old.mcap");
+    let mut r = Recorder::create(&path).unwrap();
+    r.write(
+        "/task",
+        "autobio.Task",
+        0.0,
+        &serde_json::json!({"schema_version": 1, "task": {}, "instance": {}}),
+    )
+    .unwrap();
+    r.finish().unwrap();
+    let Err(err) = read_recording(&path) else {
+        panic!("a version-1 recording was read")
+    };
+    assert!(matches!(err, RecordError::Version { found: 1 }), "{err:?}");
+    assert!(err.to_string().contains("schema version 1"), "{err}");
+}
