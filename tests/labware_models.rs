@@ -96,3 +96,22 @@ fn every_tube_kind_stands_capped_in_its_rack() {
         assert!(judge.verdict().success, "{tube}: {:?}", judge.verdict());
     }
 }
+
+#[test]
+fn a_scene_whose_plugin_instances_report_errors_is_refused() {
+    // The task carries each item's parameters: a negative detent stiffness reaches the plugin,
+    // which marks its instance invalid, and `Scene::build` refuses the scene with the reason.
+    let path = "protocols/thermal_cycler/close_lid.toml";
+    let (task, diags) = compiler::compile_source(&std::fs::read_to_string(path).unwrap(), path);
+    let task = task.unwrap_or_else(|| panic!("{diags:#?}"));
+    let mut json = serde_json::to_value(&task).unwrap();
+    json["labware"][0]["params"]["detent_stiffness"] = serde_json::json!(-1.0);
+    let broken: compiler::Task = serde_json::from_value(json).unwrap();
+    let err = match runtime::Scene::build(&broken, &broken.sample(0)) {
+        Ok(_) => panic!("a scene with an invalid detent was built"),
+        Err(e) => e.to_string(),
+    };
+    assert!(err.contains("detent instance") && err.contains("non-negative"), "{err}");
+    // The unbroken task builds.
+    assert!(runtime::Scene::build(&task, &task.sample(0)).is_ok());
+}

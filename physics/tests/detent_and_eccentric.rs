@@ -56,6 +56,56 @@ fn a_detent_on_a_missing_joint_reports_instead_of_crashing() {
     assert!(errors[0].contains("no joint named `nope`"), "{errors:?}");
 }
 
+#[test]
+fn every_detent_misconfiguration_is_reported_with_its_reason() {
+    physics::register().unwrap();
+    let hinge = r#"<joint name="j" type="hinge" range="0 1"/>"#;
+    let cases = [
+        (hinge, r#"<config key="n" value="3"/>"#, "no `joint` in the config"),
+        (
+            r#"<joint name="j" type="ball"/>"#,
+            r#"<config key="joint" value="j"/><config key="n" value="3"/>"#,
+            "joint `j` is not a hinge or slide",
+        ),
+        (
+            r#"<joint name="j" type="hinge"/>"#,
+            r#"<config key="joint" value="j"/><config key="n" value="3"/>"#,
+            "joint `j` has no range",
+        ),
+        (hinge, r#"<config key="joint" value="j"/><config key="n" value="1"/>"#, "`n` must be an integer >= 2"),
+        (hinge, r#"<config key="joint" value="j"/>"#, "`n` must be an integer >= 2"),
+        (
+            hinge,
+            r#"<config key="joint" value="j"/><config key="n" value="3"/><config key="stiffness" value="-1"/>"#,
+            "non-negative",
+        ),
+    ];
+    for (joint, config, why) in cases {
+        let xml = format!(
+            r#"<mujoco>
+  <compiler angle="radian"/>
+  <extension><plugin plugin="autobio.detent"><instance name="d">{config}</instance></plugin></extension>
+  <worldbody><body>{joint}<geom size="0.1"/></body></worldbody>
+</mujoco>"#
+        );
+        let model = MjModel::from_xml_string(&xml).unwrap();
+        let data = MjData::new(&model);
+        let errors = physics::instance_errors(model.ffi(), data.ffi());
+        assert_eq!(errors.len(), 1, "{config}: {errors:?}");
+        assert!(errors[0].contains(why), "{config}: {errors:?}");
+    }
+    // And a well-formed one reports nothing.
+    let xml = format!(
+        r#"<mujoco>
+  <extension><plugin plugin="autobio.detent"><instance name="d"><config key="joint" value="j"/><config key="n" value="3"/></instance></plugin></extension>
+  <worldbody><body>{hinge}<geom size="0.1"/></body></worldbody>
+</mujoco>"#
+    );
+    let model = MjModel::from_xml_string(&xml).unwrap();
+    let data = MjData::new(&model);
+    assert!(physics::instance_errors(model.ffi(), data.ffi()).is_empty());
+}
+
 /// What the vortex scene's cup does over 8 s at 2,500 rpm after 2 s of spin-up.
 struct Orbit {
     /// Drive speed at the end (rad/s) and pivot turns.
