@@ -111,7 +111,10 @@ fn a_scene_whose_plugin_instances_report_errors_is_refused() {
         Ok(_) => panic!("a scene with an invalid detent was built"),
         Err(e) => e.to_string(),
     };
-    assert!(err.contains("detent instance") && err.contains("non-negative"), "{err}");
+    assert!(
+        err.contains("detent instance") && err.contains("non-negative"),
+        "{err}"
+    );
     // The unbroken task builds.
     assert!(runtime::Scene::build(&task, &task.sample(0)).is_ok());
 }

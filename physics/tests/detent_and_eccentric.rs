@@ -61,7 +61,11 @@ fn every_detent_misconfiguration_is_reported_with_its_reason() {
     physics::register().unwrap();
     let hinge = r#"<joint name="j" type="hinge" range="0 1"/>"#;
     let cases = [
-        (hinge, r#"<config key="n" value="3"/>"#, "no `joint` in the config"),
+        (
+            hinge,
+            r#"<config key="n" value="3"/>"#,
+            "no `joint` in the config",
+        ),
         (
             r#"<joint name="j" type="ball"/>"#,
             r#"<config key="joint" value="j"/><config key="n" value="3"/>"#,
@@ -72,8 +76,16 @@ fn every_detent_misconfiguration_is_reported_with_its_reason() {
             r#"<config key="joint" value="j"/><config key="n" value="3"/>"#,
             "joint `j` has no range",
         ),
-        (hinge, r#"<config key="joint" value="j"/><config key="n" value="1"/>"#, "`n` must be an integer >= 2"),
-        (hinge, r#"<config key="joint" value="j"/>"#, "`n` must be an integer >= 2"),
+        (
+            hinge,
+            r#"<config key="joint" value="j"/><config key="n" value="1"/>"#,
+            "`n` must be an integer >= 2",
+        ),
+        (
+            hinge,
+            r#"<config key="joint" value="j"/>"#,
+            "`n` must be an integer >= 2",
+        ),
         (
             hinge,
             r#"<config key="joint" value="j"/><config key="n" value="3"/><config key="stiffness" value="-1"/>"#,

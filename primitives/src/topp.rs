@@ -189,8 +189,33 @@ mod tests {
             prev = q;
             t += dt;
         }
+        // Accelerations, by second differences over 10 ms (the finest the grid resolves).
+        let h = 1e-2;
+        let mut worst = 0.0f64;
+        let mut t = h;
+        while t + h <= d {
+            let (a, b, c) = (traj.sample(t - h), traj.sample(t), traj.sample(t + h));
+            for j in 0..2 {
+                worst = worst.max(((a[j] - 2.0 * b[j] + c[j]) / (h * h)).abs());
+            }
+            t += h / 2.0;
+        }
+        assert!(
+            worst <= lim.amax * 1.05,
+            "acceleration up to {worst} rad/s^2"
+        );
+        assert!(
+            worst >= lim.amax * 0.5,
+            "the limit is used, not avoided: {worst}"
+        );
         let end = traj.sample(d + 1.0);
         assert!((end[0] - 2.0).abs() < 1e-9 && (end[1] - 0.3).abs() < 1e-9);
+        // At rest at both ends.
+        let (q0, q1) = (traj.sample(0.0), traj.sample(dt));
+        let (qe, qf) = (traj.sample(d - dt), traj.sample(d));
+        for j in 0..2 {
+            assert!((q1[j] - q0[j]).abs() / dt < 0.01 && (qf[j] - qe[j]).abs() / dt < 0.01);
+        }
     }
 
     #[test]
