@@ -90,3 +90,25 @@ fn near_measures_the_distance_from_the_live_pose() {
     assert!(!p.holds && (p.value - 0.1).abs() < 2e-3, "{p:?}");
     assert_eq!(p.tolerance, 0.005, "the position tolerance's default");
 }
+
+#[test]
+fn a_check_the_judge_cannot_measure_is_refused_before_running() {
+    // A volume on a simulated tube compiles (the proof traces volumes), but the task scenes do not
+    // simulate liquid: running it could never succeed, so the runtime refuses it with the reason.
+    let source = std::fs::read_to_string("protocols/tube/transfer.toml")
+        .unwrap()
+        .replace(
+            "all = [\"tube in target.{row}{col}\"]",
+            "all = [\"tube in target.{row}{col}\", \"tube.volume = 0 µL\"]",
+        );
+    let (task, diags) = compiler::compile_source(&source, "inline.toml");
+    let task = task.unwrap_or_else(|| panic!("{diags:#?}"));
+    let err = match runtime::Scene::build(&task, &task.sample(0)) {
+        Ok(_) => panic!("a task with an unmeasurable check was built"),
+        Err(e) => e.to_string(),
+    };
+    assert!(
+        err.contains("`tube.volume = 0 µL` cannot be measured"),
+        "{err}"
+    );
+}

@@ -99,6 +99,7 @@ fn a_chain_replays_stage_by_stage_and_its_images_show_the_motion() {
     assert_eq!(replayed, live.verdict);
     assert_eq!(replayed.stages.len(), 2);
     assert!(replayed.stages.iter().all(|s| s.completed_at_s.is_some()));
+    assert_eq!(replayed.score, 1.0, "both stages done");
 
     for topic in ["/camera/table_front", "/camera/arm/wrist"] {
         let f = frames(&path, topic);

@@ -33,6 +33,10 @@ pub enum SceneError {
     Unsupported(String, String),
     #[error("labware `{0}` starts at `{1}`, which is no slot of a holder in this scene")]
     NoSlot(String, String),
+    #[error(
+        "the success check `{0}` cannot be measured in simulation yet ({1}); the task can be compiled and described, not run"
+    )]
+    Unmeasurable(String, &'static str),
 }
 
 /// Per-robot indices into the model.
@@ -341,6 +345,7 @@ impl Scene {
             return Err(SceneError::Compile(errors.join("; ")));
         }
         check_starts(task, instance)?;
+        check_measurable(task)?;
         let m = &model;
         let robots = (0..task.robots.len())
             .map(|i| robot_ids(m, &task.robots[i].name, robot_model(task, i)?))
@@ -409,6 +414,21 @@ fn body_owners(
             }
         })
         .collect())
+}
+
+/// Every success check can be measured: a task whose check the judge cannot measure could never
+/// be won, so it is refused instead of run.
+fn check_measurable(task: &Task) -> Result<(), SceneError> {
+    use compiler::predicates::Check;
+    for p in task.stages.iter().flat_map(|s| &s.success) {
+        let why = match p.check {
+            Check::Volume { .. } => "liquid volumes are not simulated in task scenes",
+            Check::Panel { .. } => "instrument panels are not simulated",
+            _ => continue,
+        };
+        return Err(SceneError::Unmeasurable(p.text.clone(), why));
+    }
+    Ok(())
 }
 
 /// Every item can start as declared, and every `at` names a slot a holder model can seat.
