@@ -332,6 +332,7 @@ mod tests {
             joints: BTreeMap::new(),
             parts: BTreeMap::from([("cap".into(), placed[1].1)]),
             logic: Default::default(),
+            touched_by: Vec::new(),
         };
         assert!(cap_offset(&p, &s).unwrap().0 < 1e-12);
         let g = p.affordance("grasp", &s).unwrap();
