@@ -1,7 +1,9 @@
 //! Wrong outcomes on real MuJoCo fail their checks, for every simulated thermal-cycler task and
 //! the chain (the tube transfer's wrong slot is in tests/tube_transfer.rs): the lid left locked
 //! fails open_lid; a lid shut without pressing the lever fails close_lid on the latch rule; a chain
-//! that finishes only its first stage gets partial credit and fails.
+//! that finishes only its first stage gets partial credit and fails; the two-arm task fails when
+//! only the lid is done. (The tube-unscrewing task has no expert motions yet: its control is the
+//! no-motion run in tests/hold_control.rs.)
 
 use scoring::episode::{EpisodeOptions, run_episode};
 use scoring::expert::ExpertPolicy;
@@ -113,4 +115,68 @@ fn a_chain_that_finishes_only_its_first_stage_fails_with_partial_credit() {
         "{} vs {end}",
         r.sim_time_s
     );
+}
+
+/// The expert until the cycler's `lid is locked` check holds, then no motion.
+struct UntilLocked {
+    expert: ExpertPolicy,
+    cycler: usize,
+    model: labware::Model,
+    locked_for: usize,
+}
+
+impl Policy for UntilLocked {
+    fn name(&self) -> String {
+        "until-locked".into()
+    }
+
+    fn act(&mut self, obs: &Observation) -> Result<Vec<Vec<f64>>, PolicyError> {
+        let state = &obs.privileged.labware[self.cycler];
+        let model = self.model.instrument().unwrap();
+        if model
+            .measure("lid", "locked", None, state)
+            .is_some_and(|m| m.holds)
+        {
+            self.locked_for += 1;
+        }
+        // A few control steps after it holds, so that the lever has settled in its notch.
+        if self.locked_for > 5 {
+            Ok(vec![obs.privileged.ctrl()])
+        } else {
+            self.expert.act(obs)
+        }
+    }
+}
+
+#[test]
+fn the_two_arm_task_fails_when_only_the_lid_is_done() {
+    let path = "protocols/two_arm/close_lid_and_transfer.toml";
+    let (t, diags) = compiler::compile_source(&std::fs::read_to_string(path).unwrap(), path);
+    let t = t.unwrap_or_else(|| panic!("{diags:#?}"));
+    let instance = t.sample(6);
+    let scene = Arc::new(runtime::Scene::build(&t, &instance).unwrap());
+    let cycler = t.labware_index("cycler").unwrap();
+    let mut policy = UntilLocked {
+        expert: ExpertPolicy::new(&t, &scene, &instance).unwrap(),
+        cycler,
+        model: t.labware[cycler].params.clone(),
+        locked_for: 0,
+    };
+    let r = run_episode(
+        &t,
+        &scene,
+        &instance,
+        &mut policy,
+        &EpisodeOptions::default(),
+    )
+    .unwrap();
+    assert!(!r.success && r.error.is_none(), "{r:?}");
+    assert!(predicate(&r, "cycler.lid is locked").holds);
+    let moved = r
+        .verdict
+        .predicates()
+        .iter()
+        .find(|p| p.text.starts_with("tube in target."))
+        .unwrap();
+    assert!(!moved.holds, "{moved:?}");
 }
