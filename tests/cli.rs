@@ -4,29 +4,16 @@
 //! tests/golden/diagnostics (regenerate with `UPDATE_GOLDEN=1` and review the diff); and chains
 //! that cannot make the tool read, or show, files outside their protocol root.
 
+mod common;
+
+use common::{autobio, scratch};
 use std::io::{BufRead, BufReader};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-fn autobio(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_autobio"))
-        .args(args)
-        .env_remove("NO_COLOR")
-        .output()
-        .unwrap()
-}
-
 fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// A fresh folder under the system's temporary folder.
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("autobio-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::text(&o.stderr)
 }
 
 #[test]

@@ -1,59 +1,44 @@
 //! The judge measures `<robot> touches <item>` from MuJoCo's contacts and `<item> near [x, y, z]`
 //! from the item's live pose, on real episodes of the tube-transfer scene: the expert's grasp makes
-//! the contact hold and a motionless robot never does; a tube left where it stands is near its own
-//! position and not near a point 10 cm above it. Before, both predicates compiled but could never
-//! hold, so a task using them could not be won.
+//! the contact hold and a motionless robot never does; a tube carried by the expert is near where
+//! it ends up only at the end, not at the start, and a point 10 cm off is never near. Before, both
+//! predicates compiled but could never hold, so a task using them could not be won. A check the
+//! judge cannot measure in a task scene (a volume) is refused before anything runs.
 
-use scoring::episode::{EpisodeOptions, run_episode};
-use scoring::expert::ExpertPolicy;
-use std::sync::Arc;
+mod common;
 
-fn compile(success: &str, keep_place: bool) -> compiler::Task {
-    let mut source = std::fs::read_to_string("protocols/tube/transfer.toml").unwrap();
-    if !keep_place {
-        // End holding the tube: the proof then agrees that the arm touches it.
-        let place = source.find("[[steps]]\ndo = \"place\"").unwrap();
-        let success_at = source.find("[success]").unwrap();
-        source.replace_range(place..success_at, "");
-    }
-    let source = source.replace(
-        "all = [\"tube in target.{row}{col}\"]",
-        &format!("all = [{success:?}]"),
-    );
-    let (task, diags) = compiler::compile_source(&source, "inline.toml");
-    task.unwrap_or_else(|| panic!("{diags:#?}"))
-}
+use common::{compile_edited, run, run_with, scratch};
 
-fn run(task: &compiler::Task, seed: u64, expert: bool) -> scoring::EpisodeResult {
-    let instance = task.sample(seed);
-    let scene = Arc::new(runtime::Scene::build(task, &instance).unwrap());
-    let mut policy: Box<dyn scoring::Policy> = if expert {
-        Box::new(ExpertPolicy::new(task, &scene, &instance).unwrap())
-    } else {
-        scoring::policy::make("hold", task, &scene, &instance).unwrap()
-    };
-    run_episode(
-        task,
-        &scene,
-        &instance,
-        policy.as_mut(),
-        &EpisodeOptions::default(),
-    )
-    .unwrap()
+const TRANSFER: &str = "protocols/tube/transfer.toml";
+
+/// The transfer protocol with other success checks; without its `place` step when `pick_only`
+/// (ending with the tube in hand, so that the proof agrees the arm touches it).
+fn transfer(success: &str, pick_only: bool) -> compiler::Task {
+    compile_edited(TRANSFER, |mut source| {
+        if pick_only {
+            let place = source.find("[[steps]]\ndo = \"place\"").unwrap();
+            let success_at = source.find("[success]").unwrap();
+            source.replace_range(place..success_at, "");
+        }
+        source.replace(
+            "all = [\"tube in target.{row}{col}\"]",
+            &format!("all = [{success:?}]"),
+        )
+    })
 }
 
 #[test]
 fn a_grasp_is_a_contact_and_no_motion_is_none() {
-    let task = compile("arm touches tube", false);
+    let task = transfer("arm touches tube", true);
     for seed in [3, 4] {
-        let expert = run(&task, seed, true);
+        let expert = run(&task, seed, "expert");
         assert!(expert.success, "{:?} {:#?}", expert.error, expert.verdict);
         let p = &expert.verdict.predicates()[0];
         assert!(p.holds && p.value == 1.0, "{p:?}");
         // The contact comes with the grasp, not at the start.
         assert!(expert.sim_time_s > 1.0, "{}", expert.sim_time_s);
 
-        let hold = run(&task, seed, false);
+        let hold = run(&task, seed, "hold");
         assert!(!hold.success, "a motionless arm touched the tube");
         let p = &hold.verdict.predicates()[0];
         assert!(!p.holds && p.value == 0.0, "{p:?}");
@@ -63,30 +48,52 @@ fn a_grasp_is_a_contact_and_no_motion_is_none() {
 
 #[test]
 fn near_measures_the_distance_from_the_live_pose() {
-    // Where the tube stands in episode 5 (its slot is drawn).
-    let probe = compile("tube near [0, 0, 0] m", true);
-    let instance = probe.sample(5);
-    let scene = Arc::new(runtime::Scene::build(&probe, &instance).unwrap());
-    let ep = runtime::Episode::new(scene, &probe, &instance);
-    let tube = probe.labware_index("tube").unwrap();
-    let at = ep.labware_state()[tube].pose.translation.vector;
-
-    let here = compile(
-        &format!("tube near [{:.4}, {:.4}, {:.4}] m", at.x, at.y, at.z),
-        true,
+    // The expert carries the tube to the target slot; the recording has its pose at every step.
+    let recorded = transfer("tube in target.{row}{col}", false);
+    let path = scratch("near").join("carry.mcap");
+    let opts = scoring::EpisodeOptions {
+        record: Some(path.clone()),
+        image_every: 0,
+    };
+    let r = run_with(&recorded, 5, &opts, |t, s, i| {
+        scoring::policy::make("expert", t, s, i).unwrap()
+    });
+    assert!(r.success, "{:?}", r.error);
+    let rec = runtime::record::read_recording(&path).unwrap();
+    let tube = recorded.labware_index("tube").unwrap();
+    let start = rec.labware_series[0].1[tube].pose.translation.vector;
+    let end = rec.final_labware[tube].pose.translation.vector;
+    assert!(
+        (end - start).norm() > 0.2,
+        "the tube was carried {} m",
+        (end - start).norm()
     );
-    let r = run(&here, 5, false);
-    assert!(r.success, "{:#?}", r.verdict);
-    let p = &r.verdict.predicates()[0];
-    assert!(p.value < 1e-3, "{p:?}");
-
-    let above = compile(
-        &format!("tube near [{:.4}, {:.4}, {:.4}] m", at.x, at.y, at.z + 0.1),
-        true,
+    let params = recorded.sample(5).params;
+    let judge = |point: nalgebra::Vector3<f64>| {
+        let task = transfer(
+            &format!(
+                "tube near [{:.5}, {:.5}, {:.5}] m",
+                point.x, point.y, point.z
+            ),
+            false,
+        );
+        scoring::Judge::replay(&task, &params, &rec.labware_series)
+    };
+    // Near where it ends: not at the start, only once carried there.
+    let v = judge(end);
+    assert!(v.success, "{v:#?}");
+    let done = v.stages[0].completed_at_s.unwrap();
+    assert!(done > 2.0, "near its final place already at {done} s");
+    // Near where it started: at once.
+    let v = judge(start);
+    assert!(
+        v.success && v.stages[0].completed_at_s.unwrap() < 0.05,
+        "{v:#?}"
     );
-    let r = run(&above, 5, false);
-    assert!(!r.success);
-    let p = &r.verdict.predicates()[0];
+    // 10 cm above where it ends: never, and the measured distance says by how much.
+    let v = judge(end + nalgebra::Vector3::new(0.0, 0.0, 0.1));
+    assert!(!v.success);
+    let p = &v.predicates()[0];
     assert!(!p.holds && (p.value - 0.1).abs() < 2e-3, "{p:?}");
     assert_eq!(p.tolerance, 0.005, "the position tolerance's default");
 }
@@ -95,14 +102,7 @@ fn near_measures_the_distance_from_the_live_pose() {
 fn a_check_the_judge_cannot_measure_is_refused_before_running() {
     // A volume on a simulated tube compiles (the proof traces volumes), but the task scenes do not
     // simulate liquid: running it could never succeed, so the runtime refuses it with the reason.
-    let source = std::fs::read_to_string("protocols/tube/transfer.toml")
-        .unwrap()
-        .replace(
-            "all = [\"tube in target.{row}{col}\"]",
-            "all = [\"tube in target.{row}{col}\", \"tube.volume = 0 µL\"]",
-        );
-    let (task, diags) = compiler::compile_source(&source, "inline.toml");
-    let task = task.unwrap_or_else(|| panic!("{diags:#?}"));
+    let task = transfer("tube.volume = 0 µL", false);
     let err = match runtime::Scene::build(&task, &task.sample(0)) {
         Ok(_) => panic!("a task with an unmeasurable check was built"),
         Err(e) => e.to_string(),

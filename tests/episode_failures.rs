@@ -1,17 +1,16 @@
 //! The episode's failure paths on real MuJoCo: a policy error, an empty action chunk, an action of
-//! the wrong length, a non-finite action and an unstable simulation each end the episode as a
-//! failure with its reason, at the step where it happened. And `scoring::evaluate` writes each
+//! the wrong length and a non-finite action each end the episode as a failure with its reason, at
+//! the step where it happened; an unstable simulation ends the control step with its reason (the
+//! same error path in the episode loop as the non-finite action). And `scoring::evaluate` writes each
 //! finished episode to the journal before the next one starts, with results JSON that carries its
 //! schema version.
 
-use scoring::episode::{EpisodeOptions, run_episode};
-use scoring::{Observation, Policy, PolicyError};
-use std::sync::Arc;
+mod common;
+
+use scoring::{HoldPolicy, Observation, Policy, PolicyError};
 
 fn task() -> compiler::Task {
-    let path = "protocols/thermal_cycler/close_lid.toml";
-    let (task, diags) = compiler::compile_source(&std::fs::read_to_string(path).unwrap(), path);
-    task.unwrap_or_else(|| panic!("{diags:#?}"))
+    common::compile("protocols/thermal_cycler/close_lid.toml")
 }
 
 /// Holds still for `good` calls, then answers with `then`.
@@ -28,17 +27,14 @@ impl<F: FnMut(&Observation) -> Result<Vec<Vec<f64>>, PolicyError>> Policy for Fa
     fn act(&mut self, obs: &Observation) -> Result<Vec<Vec<f64>>, PolicyError> {
         if self.good > 0 {
             self.good -= 1;
-            return Ok(vec![obs.privileged.ctrl()]);
+            return HoldPolicy.act(obs);
         }
         (self.then)(obs)
     }
 }
 
-fn run(policy: &mut dyn Policy) -> scoring::EpisodeResult {
-    let t = task();
-    let instance = t.sample(0);
-    let scene = Arc::new(runtime::Scene::build(&t, &instance).unwrap());
-    run_episode(&t, &scene, &instance, policy, &EpisodeOptions::default()).unwrap()
+fn run(policy: impl Policy + 'static) -> scoring::EpisodeResult {
+    common::run_with(&task(), 0, &Default::default(), |_, _, _| Box::new(policy))
 }
 
 fn assert_failed_at(r: &scoring::EpisodeResult, steps: u64, reason: &str) {
@@ -50,7 +46,7 @@ fn assert_failed_at(r: &scoring::EpisodeResult, steps: u64, reason: &str) {
 
 #[test]
 fn a_policy_error_ends_the_episode_with_its_reason() {
-    let r = run(&mut Faulty {
+    let r = run(Faulty {
         good: 3,
         then: |_: &Observation| Err(PolicyError::Failed("the model server crashed".into())),
     });
@@ -59,7 +55,7 @@ fn a_policy_error_ends_the_episode_with_its_reason() {
 
 #[test]
 fn an_empty_chunk_ends_the_episode() {
-    let r = run(&mut Faulty {
+    let r = run(Faulty {
         good: 2,
         then: |_: &Observation| Ok(vec![]),
     });
@@ -68,7 +64,7 @@ fn an_empty_chunk_ends_the_episode() {
 
 #[test]
 fn an_action_of_the_wrong_length_ends_the_episode() {
-    let r = run(&mut Faulty {
+    let r = run(Faulty {
         good: 4,
         then: |obs: &Observation| Ok(vec![obs.privileged.ctrl()[..6].to_vec()]),
     });
@@ -78,7 +74,7 @@ fn an_action_of_the_wrong_length_ends_the_episode() {
 #[test]
 fn a_non_finite_action_ends_the_episode() {
     for bad in [f64::NAN, f64::INFINITY] {
-        let r = run(&mut Faulty {
+        let r = run(Faulty {
             good: 1,
             then: move |obs: &Observation| {
                 let mut a = obs.privileged.ctrl();
@@ -97,8 +93,7 @@ fn a_non_finite_action_ends_the_episode() {
 #[test]
 fn an_unstable_simulation_ends_the_step_with_its_reason() {
     let t = task();
-    let instance = t.sample(0);
-    let scene = Arc::new(runtime::Scene::build(&t, &instance).unwrap());
+    let (instance, scene) = common::scene(&t, 0);
     let mut ep = runtime::Episode::new(scene, &t, &instance);
     ep.control_step().unwrap();
     // A blown-up velocity, as a diverging integration produces.
@@ -117,8 +112,7 @@ fn an_unstable_simulation_ends_the_step_with_its_reason() {
 #[test]
 fn the_journal_has_each_episode_before_the_next_starts() {
     let t = task();
-    let dir = std::env::temp_dir().join(format!("autobio-journal-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let dir = common::scratch("journal").join("out");
     let opts = scoring::eval::EvalOptions {
         policy: "hold".into(),
         episodes: 3,

@@ -112,7 +112,7 @@ fn a_scene_whose_plugin_instances_report_errors_is_refused() {
         Err(e) => e.to_string(),
     };
     assert!(
-        err.contains("detent instance") && err.contains("non-negative"),
+        err.contains("detent instance") && err.contains("`stiffness` must be a non-negative"),
         "{err}"
     );
     // The unbroken task builds.

@@ -177,29 +177,16 @@ fn volume_holds_while_the_tube_tilts_and_shakes() {
         }
         let first = data.mocap_pos()[sim.mocap];
         moved = moved.max((first[1]).abs());
-        if k % 50 == 0 {
-            let v = sliced_volume(liquid.surface.normal(), liquid.offset()) * 1e9;
-            worst = worst.max((v - target_ul).abs() / target_ul);
-        }
     }
     rec.finish().unwrap();
-    eprintln!(
-        "liquid: tilt {:.1} deg, carriage shaken at up to {shake_in:.2} m/s² ({shake_before:.3} \
-         before), worst volume error {:.4}%, disk centre off axis {:.2e} m, radius off {:.3}% \
-         over {disk_checked} steps",
-        max_tilt.to_degrees(),
-        100.0 * worst,
-        worst_centre,
-        100.0 * worst_radius
-    );
     assert!(max_tilt > 59f64.to_radians(), "tilted to {max_tilt} rad");
-    // ±3 cm at 2 Hz: peak acceleration 0.03 (4π)² = 4.74 m/s² (the position servo lags a little).
-    assert!((3.5..6.0).contains(&shake_in), "shaken at {shake_in} m/s²");
+    // ±3 cm at 2 Hz: a commanded peak of 0.03 (4π)² = 4.74 m/s²; the position servo overshoots
+    // it (measured 5.77 m/s²). The bound excludes no shake and a shake of twice the amplitude.
+    assert!((3.5..8.0).contains(&shake_in), "shaken at {shake_in} m/s²");
     assert!(
         shake_before < 0.5,
         "the carriage moved before the shake: {shake_before} m/s²"
     );
-    assert!(worst < 0.005, "volume error up to {:.3}%", 100.0 * worst);
     assert!(moved > 0.01, "the surface disk follows the tube: {moved} m");
     assert!(
         disk_checked > 100,
@@ -224,14 +211,21 @@ fn volume_holds_while_the_tube_tilts_and_shakes() {
         if m.channel.topic == "/liquid/tube" {
             let f: LiquidFrame = serde_json::from_slice(&m.data).unwrap();
             let v = sliced_volume(f.normal, f.offset_m) * 1e9;
-            assert!(
-                (v - target_ul).abs() / target_ul < 0.005,
-                "frame {liquid_messages}: {v} µL"
-            );
+            worst = worst.max((v - target_ul).abs() / target_ul);
             liquid_messages += 1;
         }
     }
     assert_eq!(liquid_messages, steps / 10);
+    eprintln!(
+        "liquid: tilt {:.1} deg, carriage shaken at up to {shake_in:.2} m/s² ({shake_before:.3} \
+         before), worst volume error {:.4}%, disk centre off axis {:.2e} m, radius off {:.3}% \
+         over {disk_checked} steps",
+        max_tilt.to_degrees(),
+        100.0 * worst,
+        worst_centre,
+        100.0 * worst_radius
+    );
+    assert!(worst < 0.005, "volume error up to {:.3}%", 100.0 * worst);
     assert!(
         read_recording(&path).is_err(),
         "no labware channel to re-score"

@@ -2,25 +2,10 @@
 //! 1 what was checked failed, 2 could not run), and determinism across processes: the same seed
 //! gives the same draws and the same trajectory hash in two separate runs of the binary.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn autobio(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_autobio"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("autobio-proc-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
-}
+use common::{autobio, scratch, text};
+use std::path::Path;
 
 const CLOSE: &str = "protocols/thermal_cycler/close_lid.toml";
 
@@ -139,8 +124,16 @@ fn exit_codes_are_as_documented() {
     assert_eq!(task["id"], "thermal_cycler.close_lid");
     assert!(task["schema_version"].as_u64().is_some());
     let bad = "tests/corpus/faulty/unknown_level.toml";
-    for sub in ["compile", "describe"] {
-        let out = autobio(&[sub, bad]);
+    let never = dir.join("never");
+    let never = never.to_str().unwrap();
+    for args in [
+        vec!["compile", bad],
+        vec!["describe", bad],
+        vec!["eval", "--protocol", bad, "--out", never],
+        vec!["demo", "--protocol", bad, "--out", never],
+    ] {
+        let sub = args[0];
+        let out = autobio(&args);
         assert_eq!(out.status.code(), Some(2), "{sub}");
         let err = text(&out.stderr);
         assert!(
@@ -148,6 +141,10 @@ fn exit_codes_are_as_documented() {
             "{err}"
         );
         assert!(out.stdout.is_empty());
+        assert!(
+            !Path::new(never).exists(),
+            "{sub} wrote output for a faulty protocol"
+        );
     }
     let out = autobio(&["describe", CLOSE, "--seed", "3"]);
     assert_eq!(out.status.code(), Some(0));

@@ -221,16 +221,18 @@ unsafe fn detent_instance(m: *const mjModel, instance: c_int) -> DetentInstance 
         if !*(*m).jnt_limited.add(id) {
             return DetentInstance::Invalid(format!("joint `{joint}` has no range"));
         }
-        let n = config(m, instance, c"n").and_then(|s| s.trim().parse::<u32>().ok());
-        let (Some(n), Some(stiffness), Some(damping)) = (
-            n.filter(|n| *n >= 2),
-            config_f64(m, instance, c"stiffness", 0.0).filter(|k| *k >= 0.0),
-            config_f64(m, instance, c"damping", 0.0).filter(|b| *b >= 0.0),
-        ) else {
-            return DetentInstance::Invalid(
-                "`n` must be an integer >= 2, `stiffness` and `damping` non-negative numbers"
-                    .into(),
-            );
+        let Some(n) = config(m, instance, c"n")
+            .and_then(|s| s.trim().parse::<u32>().ok())
+            .filter(|n| *n >= 2)
+        else {
+            return DetentInstance::Invalid("`n` must be an integer >= 2".into());
+        };
+        let Some(stiffness) = config_f64(m, instance, c"stiffness", 0.0).filter(|k| *k >= 0.0)
+        else {
+            return DetentInstance::Invalid("`stiffness` must be a non-negative number".into());
+        };
+        let Some(damping) = config_f64(m, instance, c"damping", 0.0).filter(|b| *b >= 0.0) else {
+            return DetentInstance::Invalid("`damping` must be a non-negative number".into());
         };
         DetentInstance::Ready {
             qpos: *(*m).jnt_qposadr.add(id) as usize,

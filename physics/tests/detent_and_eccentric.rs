@@ -89,7 +89,12 @@ fn every_detent_misconfiguration_is_reported_with_its_reason() {
         (
             hinge,
             r#"<config key="joint" value="j"/><config key="n" value="3"/><config key="stiffness" value="-1"/>"#,
-            "non-negative",
+            "`stiffness` must be a non-negative number",
+        ),
+        (
+            hinge,
+            r#"<config key="joint" value="j"/><config key="n" value="3"/><config key="damping" value="-0.1"/>"#,
+            "`damping` must be a non-negative number",
         ),
     ];
     for (joint, config, why) in cases {

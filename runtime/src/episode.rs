@@ -285,7 +285,8 @@ impl Episode {
         };
         let mut robots = vec![false; self.scene.robots.len()];
         for c in self.data.contact() {
-            if c.exclude != 0 || c.dist > 0.0 {
+            // Active contacts only: inside the margin a contact already pushes.
+            if c.exclude != 0 || c.dist > c.includemargin {
                 continue;
             }
             match (owner(c.geom[0]), owner(c.geom[1])) {

@@ -7,7 +7,7 @@
 //! | `/task` | `autobio.Task` | once | compiled task, scene instance, seed |
 //! | `/robot/<name>/joint_state` | `autobio.JointState` | control (50 Hz) | one robot's `position` (its state layout: arm joints + gripper driver, rad) and `ctrl` |
 //! | `/robot/<name>/action` | `autobio.Action` | control | that robot's part of the action applied for the next period |
-//! | `/labware/state` | `autobio.LabwareState` | control | per labware: root pose, joints by role, loose parts' poses, logic state (latch flags) |
+//! | `/labware/state` | `autobio.LabwareState` | control | per labware: root pose, joints by role, loose parts' poses, logic state (latch flags), the robots touching it (`touched_by`, omitted when none) |
 //! | `/camera/<name>` | `foxglove.RawImage` | `image_every` control steps (default 10 Hz) | 224x224 `rgb8`, base64 |
 //! | `/stage` | `autobio.StageEvent` | on event | expert motion / lab-step starts |
 //! | `/verdict` | `autobio.Verdict` | once, at the end | success and every predicate's value |

@@ -335,6 +335,10 @@ fn labware_ids(m: &MjModel, l: &compiler::LabwareSpec) -> Result<LabwareIds, Sce
 impl Scene {
     /// Builds the model for one scene instance of a task.
     pub fn build(task: &Task, instance: &SceneInstance) -> Result<Scene, SceneError> {
+        // Refused before anything is compiled: a task with an item that has no model, that
+        // cannot start as declared, or that could never be won is not built.
+        check_starts(task, instance)?;
+        check_measurable(task)?;
         let placements = instance.labware_placement.clone();
         physics::register().map_err(|e| SceneError::Compile(e.to_string()))?;
         let xml = scene_xml(task, &placements)?;
@@ -344,8 +348,6 @@ impl Scene {
         if !errors.is_empty() {
             return Err(SceneError::Compile(errors.join("; ")));
         }
-        check_starts(task, instance)?;
-        check_measurable(task)?;
         let m = &model;
         let robots = (0..task.robots.len())
             .map(|i| robot_ids(m, &task.robots[i].name, robot_model(task, i)?))

@@ -87,15 +87,20 @@ pub fn evaluate(
         .out
         .as_ref()
         .map(|d| d.join(format!("{}.journal.jsonl", task.id)));
-    let mut journal = match &journal_path {
-        Some(p) => Some(
-            std::fs::OpenOptions::new()
+    let mut journal = match (&journal_path, &opts.out) {
+        (Some(p), Some(dir)) => {
+            let file = std::fs::OpenOptions::new()
                 .create(true)
                 .append(true)
                 .open(p)
-                .map_err(|e| format!("{}: {e}", p.display()))?,
-        ),
-        None => None,
+                .map_err(|e| format!("{}: {e}", p.display()))?;
+            // The folder's entry for a new journal is on disk too, not only its lines.
+            std::fs::File::open(dir)
+                .and_then(|d| d.sync_all())
+                .map_err(|e| format!("{}: {e}", dir.display()))?;
+            Some(file)
+        }
+        _ => None,
     };
     let mut scene: Option<Arc<runtime::Scene>> = None;
     let mut results = Vec::new();
