@@ -148,9 +148,17 @@ fn run(cli: Cli) -> Result<ExitCode> {
                     "no files to check: name protocol or chain files, e.g. `autobio check protocols/*/*.toml`"
                 );
             }
-            let mut failed = false;
+            let (mut failed, mut unreadable) = (false, false);
             for f in &files {
-                let checked = compiler::check_file(f, front.root.as_deref())?;
+                // A file that cannot be read is reported, and the others are still checked.
+                let checked = match compiler::check_file(f, front.root.as_deref()) {
+                    Ok(c) => c,
+                    Err(e) => {
+                        errln!("error: {e}");
+                        unreadable = true;
+                        continue;
+                    }
+                };
                 failed |= checked.diagnostics.iter().any(|d| d.is_error());
                 if json {
                     for d in &checked.diagnostics {
@@ -162,7 +170,9 @@ fn run(cli: Cli) -> Result<ExitCode> {
                     err!("{}", diagnostics::render_all(&checked, front.color));
                 }
             }
-            Ok(if failed {
+            Ok(if unreadable {
+                ExitCode::from(2)
+            } else if failed {
                 ExitCode::FAILURE
             } else {
                 ExitCode::SUCCESS

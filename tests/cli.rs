@@ -57,6 +57,17 @@ fn every_subcommand_says_what_it_was_doing_once_on_a_missing_file() {
         assert!(out.stdout.is_empty(), "{args:?}");
     }
     assert!(!Path::new("out/never").exists());
+    // `check` reports an unreadable file and still checks the others.
+    let out = autobio(&["check", missing, "protocols/thermal_cycler/close_lid.toml"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(
+        stderr(&out),
+        format!("error: cannot read protocol {missing}: {os}\n")
+    );
+    assert_eq!(
+        common::text(&out.stdout),
+        "ok: protocols/thermal_cycler/close_lid.toml\n"
+    );
 }
 
 #[test]
