@@ -78,8 +78,9 @@ enum Command {
     Eval {
         #[arg(long, required = true)]
         protocol: Vec<PathBuf>,
-        /// The policy: `expert` (the scripted expert) or `hold` (no motion: the control every task
-        /// must fail)
+        /// The policy: `expert` (the scripted expert), `hold` (no motion: the control every task
+        /// must fail) or `replay:PATH` (the actions of a recording, or of `<task>_seed<seed>.mcap`
+        /// in a folder, for the same seed)
         #[arg(long, default_value = "expert")]
         policy: String,
         #[arg(long, default_value_t = 20)]
@@ -260,7 +261,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             out,
             record,
         } => {
-            if !scoring::POLICIES.contains(&policy.as_str()) {
+            if !scoring::policy::known(&policy) {
                 bail!(
                     "unknown policy `{policy}`: this build evaluates {} (model servers over websocket come with `--model`)",
                     scoring::POLICIES.join(", ")

@@ -116,6 +116,27 @@ fn exit_codes_are_as_documented() {
     let out = autobio(&["replay", rec.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(0), "{}", text(&out.stdout));
     assert!(text(&out.stdout).contains("re-scored: success"));
+    // Its actions, replayed in another process, give the same episode.
+    let replayed = dir.join("replayed");
+    let policy = format!("replay:{}", demo.display());
+    let out = autobio(&[
+        "eval",
+        "--protocol",
+        CLOSE,
+        "--policy",
+        &policy,
+        "--episodes",
+        "1",
+        "--seed",
+        "4",
+        "--out",
+        replayed.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert_eq!(
+        journal(&replayed, "thermal_cycler.close_lid"),
+        journal(&demo, "thermal_cycler.close_lid")
+    );
 
     // 0: compile and describe; 2: the same given a protocol with errors.
     let out = autobio(&["compile", CLOSE]);

@@ -155,3 +155,31 @@ fn a_recording_of_another_schema_version_is_refused() {
     assert!(matches!(err, RecordError::Version { found: 1 }), "{err:?}");
     assert!(err.to_string().contains("schema version 1"), "{err}");
 }
+
+#[test]
+fn replaying_recorded_actions_reproduces_the_episode_byte_for_byte() {
+    let task = compile("protocols/thermal_cycler/close_lid.toml");
+    let (live, _, path) = record_and_replay(&task, 7, true, 0, "actions.mcap");
+    assert!(live.success);
+    let policy = format!("replay:{}", path.display());
+    let again = common::run(&task, 7, &policy);
+    assert!(again.success, "{:?}", again.error);
+    assert_eq!(again.trajectory_hash, live.trajectory_hash);
+    assert_eq!(again.control_steps, live.control_steps);
+    assert_eq!(again.verdict, live.verdict);
+    // Another seed's episode is not this recording's.
+    let (instance, scene) = common::scene(&task, 8);
+    let err = match scoring::policy::make(&policy, &task, &scene, &instance) {
+        Ok(_) => panic!("a seed-7 recording replayed for seed 8"),
+        Err(e) => e.to_string(),
+    };
+    assert!(
+        err.contains("it records seed 7, not the episode's seed 8"),
+        "{err}"
+    );
+    // A folder of recordings: the one named for the task and seed is used.
+    let dir = path.parent().unwrap();
+    std::fs::copy(&path, dir.join("thermal_cycler.close_lid_seed7.mcap")).unwrap();
+    let from_folder = common::run(&task, 7, &format!("replay:{}", dir.display()));
+    assert_eq!(from_folder.trajectory_hash, live.trajectory_hash);
+}

@@ -210,6 +210,8 @@ pub struct RecordingSummary {
     /// Every recorded labware state with its time (s), in order; the first is the initial state.
     pub labware_series: Vec<(f64, Vec<LabwareState>)>,
     pub verdict: Option<serde_json::Value>,
+    /// Each robot's recorded actions, in time order (one per control step).
+    pub actions: BTreeMap<String, Vec<Vec<f64>>>,
     pub messages: u64,
     pub topics: BTreeMap<String, u64>,
     pub duration_s: f64,
@@ -232,6 +234,7 @@ pub fn read_recording(path: &Path) -> Result<RecordingSummary, RecordError> {
     let buf = std::fs::read(path).map_err(RecordError::Read)?;
     let (mut task, mut instance, mut verdict) = (None, None, None);
     let mut series: Vec<(f64, Vec<LabwareState>)> = Vec::new();
+    let mut actions: BTreeMap<String, Vec<Vec<f64>>> = BTreeMap::new();
     let mut topics = BTreeMap::new();
     let mut messages = 0;
     let mut last_t = 0u64;
@@ -261,7 +264,17 @@ pub fn read_recording(path: &Path) -> Result<RecordingSummary, RecordError> {
                 series.push((m.log_time as f64 * 1e-9, states));
             }
             "/verdict" => verdict = Some(parse("/verdict")?),
-            _ => {}
+            topic => {
+                if let Some(robot) = topic
+                    .strip_prefix("/robot/")
+                    .and_then(|t| t.strip_suffix("/action"))
+                {
+                    let v = parse(topic)?;
+                    let action: Vec<f64> = serde_json::from_value(v["action"].clone())
+                        .map_err(|e| RecordError::Bad(topic.into(), e.to_string()))?;
+                    actions.entry(robot.to_string()).or_default().push(action);
+                }
+            }
         }
     }
     let final_labware = series
@@ -274,6 +287,7 @@ pub fn read_recording(path: &Path) -> Result<RecordingSummary, RecordError> {
         final_labware,
         labware_series: series,
         verdict,
+        actions,
         messages,
         topics,
         duration_s: last_t as f64 * 1e-9,

@@ -1,6 +1,7 @@
 //! The policy interface (an observation in, a chunk of absolute actions out, openpi style) and the
 //! policy factory: evaluation asks "make the policy named X for this episode", so the scripted
-//! expert, the no-motion control and (later) replays and network models take the same path.
+//! expert, the no-motion control, replays of recorded actions and (later) network models take the
+//! same path.
 
 use compiler::{SceneInstance, Task};
 use runtime::{LabwareState, Scene};
@@ -97,8 +98,91 @@ impl Policy for HoldPolicy {
     }
 }
 
-/// The policies `make` knows by name.
-pub const POLICIES: &[&str] = &["expert", "hold"];
+/// Replays the actions a recording of this task and seed carries, control step by control step:
+/// the same seed and the same actions give the same episode, byte for byte.
+pub struct ReplayPolicy {
+    /// Every robot's action per control step, concatenated in task order.
+    actions: Vec<Vec<f64>>,
+    next: usize,
+}
+
+impl ReplayPolicy {
+    /// Reads the recording at `path` (a file, or a folder holding `<task id>_seed<seed>.mcap`)
+    /// and checks that it is of this task and this episode's seed.
+    pub fn new(
+        path: &std::path::Path,
+        task: &Task,
+        instance: &SceneInstance,
+    ) -> Result<Self, PolicyError> {
+        let file = if path.is_dir() {
+            crate::eval::recording_path(path, task, instance.seed)
+        } else {
+            path.to_path_buf()
+        };
+        let failed =
+            |why: String| PolicyError::Failed(format!("replay of {}: {why}", file.display()));
+        let rec = runtime::record::read_recording(&file).map_err(|e| failed(e.to_string()))?;
+        let id = rec.task["id"].as_str().unwrap_or_default();
+        if id != task.id {
+            return Err(failed(format!("it records task `{id}`, not `{}`", task.id)));
+        }
+        let seed = rec.instance["seed"].as_u64();
+        if seed != Some(instance.seed) {
+            return Err(failed(format!(
+                "it records seed {}, not the episode's seed {}",
+                seed.map(|s| s.to_string()).unwrap_or_else(|| "none".into()),
+                instance.seed
+            )));
+        }
+        let per_robot: Vec<&Vec<Vec<f64>>> = task
+            .robots
+            .iter()
+            .map(|r| {
+                rec.actions
+                    .get(&r.name)
+                    .ok_or_else(|| failed(format!("it has no actions of robot `{}`", r.name)))
+            })
+            .collect::<Result<_, _>>()?;
+        let steps = per_robot.iter().map(|a| a.len()).min().unwrap_or(0);
+        let actions = (0..steps)
+            .map(|k| {
+                per_robot
+                    .iter()
+                    .flat_map(|a| a[k].iter().copied())
+                    .collect()
+            })
+            .collect();
+        Ok(ReplayPolicy { actions, next: 0 })
+    }
+}
+
+impl Policy for ReplayPolicy {
+    fn name(&self) -> String {
+        "replay".into()
+    }
+
+    fn act(&mut self, _obs: &Observation) -> Result<Vec<Vec<f64>>, PolicyError> {
+        if self.next >= self.actions.len() {
+            return Err(PolicyError::Failed(format!(
+                "the recording's {} actions are used up and the episode goes on",
+                self.actions.len()
+            )));
+        }
+        // The rest at once: the episode loop stops after any action that ends the episode.
+        let chunk = self.actions[self.next..].to_vec();
+        self.next = self.actions.len();
+        Ok(chunk)
+    }
+}
+
+/// The policies `make` knows by name (`replay:` takes a recording or a folder of them).
+pub const POLICIES: &[&str] = &["expert", "hold", "replay:<recording or folder>"];
+
+/// Whether `make` knows the policy `name` (it may still fail for one episode, e.g. a replay
+/// without a recording of that seed).
+pub fn known(name: &str) -> bool {
+    matches!(name, "expert" | "hold") || name.strip_prefix("replay:").is_some_and(|p| !p.is_empty())
+}
 
 /// Makes the policy named `name` for one episode.
 pub fn make(
@@ -112,6 +196,13 @@ pub fn make(
             task, scene, instance,
         )?)),
         "hold" => Ok(Box::new(HoldPolicy)),
-        other => Err(PolicyError::Unknown(other.to_string())),
+        other => match other.strip_prefix("replay:") {
+            Some(path) if !path.is_empty() => Ok(Box::new(ReplayPolicy::new(
+                std::path::Path::new(path),
+                task,
+                instance,
+            )?)),
+            _ => Err(PolicyError::Unknown(other.to_string())),
+        },
     }
 }
