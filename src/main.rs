@@ -292,10 +292,11 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 rows.push(report);
             }
             outln!(
-                "{:<32} {:>7} {:>16} {:>6} {:>9} {:>10}",
+                "{:<32} {:>7} {:>16} {:>14} {:>6} {:>9} {:>10}",
                 "task",
                 "policy",
                 "success (±SEM)",
+                "Wilson 95%",
                 "score",
                 "episodes",
                 "wall time"
@@ -303,11 +304,13 @@ fn run(cli: Cli) -> Result<ExitCode> {
             for r in &rows {
                 let s = &r.summary;
                 outln!(
-                    "{:<32} {:>7} {:>8.1}% ± {:>4.1} {:>6.3} {:>9} {:>9.1}s",
+                    "{:<32} {:>7} {:>8.1}% ± {:>4.1} [{:>5.1}, {:>5.1}] {:>6.3} {:>9} {:>9.1}s",
                     r.task_id,
                     r.policy,
                     100.0 * s.success_rate,
                     100.0 * s.sem,
+                    100.0 * s.wilson_95[0],
+                    100.0 * s.wilson_95[1],
                     s.mean_score,
                     s.episodes,
                     s.wall_time_s

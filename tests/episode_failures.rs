@@ -39,6 +39,7 @@ fn run(policy: impl Policy + 'static) -> scoring::EpisodeResult {
 
 fn assert_failed_at(r: &scoring::EpisodeResult, steps: u64, reason: &str) {
     assert!(!r.success && !r.verdict.success, "{r:?}");
+    assert_eq!(r.outcome, scoring::Outcome::PolicyError, "{r:?}");
     assert_eq!(r.control_steps, steps, "ended at the failing step");
     let error = r.error.as_deref().expect("a reason");
     assert!(error.contains(reason), "{error}");
@@ -145,5 +146,13 @@ fn the_journal_has_each_episode_before_the_next_starts() {
     );
     assert_eq!(results["policy"], "hold");
     assert_eq!(results["episodes"].as_array().unwrap().len(), 3);
+    // Every episode is classed, and all are in the denominator.
+    assert_eq!(
+        results["summary"]["outcomes"],
+        serde_json::json!({"time_limit": 3})
+    );
+    let ci = &results["summary"]["wilson_95"];
+    assert_eq!(ci[0], 0.0);
+    assert!((ci[1].as_f64().unwrap() - 0.5615).abs() < 1e-3, "{ci}");
     let _ = std::fs::remove_dir_all(&dir);
 }

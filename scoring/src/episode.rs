@@ -22,10 +22,25 @@ pub struct EpisodeOptions {
     pub image_every: u32,
 }
 
+/// How an episode ended. Every class counts in a run's denominator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Outcome {
+    /// Every stage's checks held.
+    Success,
+    /// The time limit passed first.
+    TimeLimit,
+    /// The policy failed, sent no actions, or sent actions of the wrong length or not finite.
+    PolicyError,
+    /// The simulation became unstable.
+    Unstable,
+}
+
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EpisodeResult {
     pub seed: u64,
     pub success: bool,
+    pub outcome: Outcome,
     pub verdict: Verdict,
     /// Why the episode ended early as a failure (policy error, unstable physics), if it did.
     pub error: Option<String>,
@@ -66,6 +81,7 @@ pub fn run_episode(
     let mut hasher = Sha256::new();
     let mut steps = 0u64;
     let mut error = None;
+    let mut outcome = None;
     let initial = ep.labware_state();
     let mut judge = Judge::new(task, &instance.params, &initial);
     let robots = ep.scene.robots.clone();
@@ -95,10 +111,12 @@ pub fn run_episode(
             Ok(c) if !c.is_empty() => c,
             Ok(_) => {
                 error = Some("policy returned an empty action chunk".into());
+                outcome = Some(Outcome::PolicyError);
                 break;
             }
             Err(e) => {
                 error = Some(e.to_string());
+                outcome = Some(Outcome::PolicyError);
                 break;
             }
         };
@@ -129,6 +147,12 @@ pub fn run_episode(
                 }
             }
             if let Err(e) = ep.apply(&action).and_then(|_| ep.control_step()) {
+                outcome = Some(match e {
+                    runtime::StepError::Unstable { .. } => Outcome::Unstable,
+                    runtime::StepError::BadAction { .. } | runtime::StepError::NonFinite { .. } => {
+                        Outcome::PolicyError
+                    }
+                });
                 error = Some(e.to_string());
                 break 'episode;
             }
@@ -159,9 +183,15 @@ pub fn run_episode(
         .map_err(|e| e.to_string())?;
         r.finish().map_err(|e| e.to_string())?;
     }
+    let outcome = outcome.unwrap_or(if verdict.success {
+        Outcome::Success
+    } else {
+        Outcome::TimeLimit
+    });
     Ok(EpisodeResult {
         seed: instance.seed,
         success: verdict.success,
+        outcome,
         verdict,
         error,
         sim_time_s: ep.time(),

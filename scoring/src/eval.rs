@@ -12,8 +12,9 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
-/// 2: verdicts per stage with scores; `mean_score` in the summary.
-pub const RESULTS_SCHEMA_VERSION: u32 = 2;
+/// 2: verdicts per stage with scores; `mean_score` in the summary. 3: each episode's `outcome`;
+/// the summary's Wilson 95% interval and counts per outcome.
+pub const RESULTS_SCHEMA_VERSION: u32 = 3;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EvalSummary {
@@ -22,9 +23,26 @@ pub struct EvalSummary {
     pub success_rate: f64,
     /// Standard error of the mean success rate.
     pub sem: f64,
+    /// Wilson score interval of the success rate at 95% (z = 1.96): honest at 0 and 100%,
+    /// where the SEM is 0.
+    pub wilson_95: [f64; 2],
     /// Mean episode score (binary or progress, averaged over stages).
     pub mean_score: f64,
+    /// Episodes per outcome; all of them are in the denominator.
+    pub outcomes: std::collections::BTreeMap<crate::episode::Outcome, usize>,
     pub wall_time_s: f64,
+}
+
+/// The Wilson score interval for `k` successes in `n` trials at normal quantile `z`.
+pub fn wilson(k: usize, n: usize, z: f64) -> [f64; 2] {
+    if n == 0 {
+        return [0.0, 1.0];
+    }
+    let (n, p) = (n as f64, k as f64 / n as f64);
+    let z2 = z * z;
+    let centre = (p + z2 / (2.0 * n)) / (1.0 + z2 / n);
+    let half = z * (p * (1.0 - p) / n + z2 / (4.0 * n * n)).sqrt() / (1.0 + z2 / n);
+    [(centre - half).max(0.0), (centre + half).min(1.0)]
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -64,11 +82,16 @@ pub fn summarise(episodes: &[EpisodeResult], wall: f64) -> EvalSummary {
         successes: k,
         success_rate: p,
         sem,
+        wilson_95: wilson(k, n, 1.96),
         mean_score: if n > 0 {
             episodes.iter().map(|e| e.verdict.score).sum::<f64>() / n as f64
         } else {
             0.0
         },
+        outcomes: episodes.iter().fold(Default::default(), |mut m, e| {
+            *m.entry(e.outcome).or_insert(0) += 1;
+            m
+        }),
         wall_time_s: wall,
     }
 }
@@ -159,4 +182,37 @@ pub fn evaluate(
 
 pub fn recording_path(dir: &Path, task: &Task, seed: u64) -> PathBuf {
     dir.join(format!("{}_seed{seed}.mcap", task.id))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::wilson;
+
+    #[test]
+    fn wilson_intervals_match_the_formula_at_the_edges_and_the_middle() {
+        // Reference values at z = 1.96 (e.g. Newcombe 1998, method 3).
+        let close =
+            |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).abs() < 5e-4 && (a[1] - b[1]).abs() < 5e-4;
+        assert!(
+            close(wilson(0, 20, 1.96), [0.0, 0.1611]),
+            "{:?}",
+            wilson(0, 20, 1.96)
+        );
+        assert!(
+            close(wilson(20, 20, 1.96), [0.8389, 1.0]),
+            "{:?}",
+            wilson(20, 20, 1.96)
+        );
+        assert!(
+            close(wilson(10, 20, 1.96), [0.2993, 0.7007]),
+            "{:?}",
+            wilson(10, 20, 1.96)
+        );
+        assert!(
+            close(wilson(81, 263, 1.96), [0.2553, 0.3662]),
+            "{:?}",
+            wilson(81, 263, 1.96)
+        );
+        assert_eq!(wilson(0, 0, 1.96), [0.0, 1.0]);
+    }
 }

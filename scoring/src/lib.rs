@@ -12,7 +12,7 @@ pub mod expert;
 pub mod policy;
 pub mod verdict;
 
-pub use episode::{EpisodeOptions, EpisodeResult, run_episode};
+pub use episode::{EpisodeOptions, EpisodeResult, Outcome, run_episode};
 pub use eval::{EvalReport, EvalSummary, RESULTS_SCHEMA_VERSION, evaluate};
 pub use policy::{HoldPolicy, Observation, POLICIES, Policy, PolicyError, StageEvent};
 pub use verdict::{Judge, PredicateValue, StageVerdict, Verdict};
