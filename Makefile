@@ -14,6 +14,7 @@ build: setup
 # two-arm task (5): a results table, results JSON and one MCAP recording per episode under
 # out/demo/. Last, the no-motion control (`--policy hold`), which must score 0 everywhere.
 demo: build
+	rm -rf out/demo
 	$(CARGO) run --release --quiet -- check protocols/*/*.toml
 	$(CARGO) run --release --quiet -- eval \
 	  --protocol protocols/thermal_cycler/close_lid.toml \

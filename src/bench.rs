@@ -105,6 +105,7 @@ fn scene_figures(task: &compiler::Task) -> Result<f64> {
         out: None,
         record: false,
         image_every: 0,
+        resume: false,
     };
     let report = scoring::evaluate(task, &opts, |_| {}).map_err(anyhow::Error::msg)?;
     let sim: f64 = report.episodes.iter().map(|e| e.sim_time_s).sum();

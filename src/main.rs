@@ -93,6 +93,10 @@ enum Command {
         /// Write one MCAP recording per episode (with camera images)
         #[arg(long)]
         record: bool,
+        /// Continue the run in --out: only if its manifest matches (task, protocol, policy, seed,
+        /// version), never rerunning a finished episode
+        #[arg(long, requires = "out")]
+        resume: bool,
     },
     /// Re-score a recording offline from its recorded state (no simulation)
     Replay { recording: PathBuf },
@@ -233,6 +237,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 out: Some(out.clone()),
                 record: true,
                 image_every: 5,
+                resume: false,
             };
             let report = scoring::evaluate(&task, &opts, |e| {
                 outln!(
@@ -260,6 +265,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             seed,
             out,
             record,
+            resume,
         } => {
             if !scoring::policy::known(&policy) {
                 bail!(
@@ -277,6 +283,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
                     out: out.clone(),
                     record,
                     image_every: if record { 5 } else { 0 },
+                    resume,
                 };
                 errln!(
                     "evaluating {} ({} episodes from seed {seed})",

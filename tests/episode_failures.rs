@@ -121,6 +121,7 @@ fn the_journal_has_each_episode_before_the_next_starts() {
         out: Some(dir.clone()),
         record: false,
         image_every: 0,
+        resume: false,
     };
     let journal = dir.join(format!("{}.journal.jsonl", t.id));
     let mut seen = Vec::new();

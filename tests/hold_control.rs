@@ -37,6 +37,7 @@ fn every_simulated_task_scores_zero_without_motion() {
             out: None,
             record: false,
             image_every: 0,
+            resume: false,
         };
         let report = evaluate(&task, &opts, |_| {}).unwrap();
         assert_eq!(report.policy, "hold");

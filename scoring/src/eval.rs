@@ -66,6 +66,103 @@ pub struct EvalOptions {
     pub out: Option<PathBuf>,
     pub record: bool,
     pub image_every: u32,
+    /// Continue the run whose journal is in `out`: only when its manifest's fingerprints match,
+    /// and never rerunning a finished episode.
+    pub resume: bool,
+}
+
+/// What a run was measured under, written before its first episode (`<task>.manifest.json`);
+/// `--resume` continues a run only when these match.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Manifest {
+    pub results_schema_version: u32,
+    pub autobio_version: String,
+    pub task_id: String,
+    /// SHA-256 of the compiled task (every stage, parameter and tolerance) as JSON.
+    pub task_sha256: String,
+    /// SHA-256 of the protocol file as read, when it could be read.
+    pub protocol_sha256: Option<String>,
+    pub policy: String,
+    /// Episode i uses seed `seed + i`.
+    pub seed: u64,
+}
+
+impl Manifest {
+    pub fn of(task: &Task, policy: &str, seed: u64) -> Manifest {
+        use sha2::{Digest, Sha256};
+        let hex = |bytes: &[u8]| -> String {
+            Sha256::digest(bytes)
+                .iter()
+                .map(|b| format!("{b:02x}"))
+                .collect()
+        };
+        Manifest {
+            results_schema_version: RESULTS_SCHEMA_VERSION,
+            autobio_version: env!("CARGO_PKG_VERSION").to_string(),
+            task_id: task.id.clone(),
+            task_sha256: hex(&serde_json::to_vec(task).unwrap_or_default()),
+            protocol_sha256: std::fs::read(&task.source).ok().map(|b| hex(&b)),
+            policy: policy.to_string(),
+            seed,
+        }
+    }
+
+    /// The fields in which `other` differs from this manifest.
+    fn differences(&self, other: &Manifest) -> Vec<&'static str> {
+        let mut out = Vec::new();
+        let fields: [(&str, bool); 7] = [
+            (
+                "results schema version",
+                self.results_schema_version == other.results_schema_version,
+            ),
+            (
+                "autobio version",
+                self.autobio_version == other.autobio_version,
+            ),
+            ("task id", self.task_id == other.task_id),
+            ("compiled task", self.task_sha256 == other.task_sha256),
+            (
+                "protocol file",
+                self.protocol_sha256 == other.protocol_sha256,
+            ),
+            ("policy", self.policy == other.policy),
+            ("seed", self.seed == other.seed),
+        ];
+        for (name, same) in fields {
+            if !same {
+                out.push(name);
+            }
+        }
+        out
+    }
+}
+
+/// The finished episodes of a journal; a last line cut short by a crash is dropped from the file.
+fn read_journal(path: &Path) -> Result<Vec<EpisodeResult>, String> {
+    let text = match std::fs::read_to_string(path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
+        Err(e) => return Err(format!("{}: {e}", path.display())),
+    };
+    let mut done = Vec::new();
+    let mut kept = 0;
+    for line in text.split_inclusive('\n') {
+        match serde_json::from_str::<EpisodeResult>(line.trim_end()) {
+            Ok(r) if line.ends_with('\n') => {
+                done.push(r);
+                kept += line.len();
+            }
+            _ => break,
+        }
+    }
+    if kept < text.len() {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open(path)
+            .and_then(|f| f.set_len(kept as u64))
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    Ok(done)
 }
 
 pub fn summarise(episodes: &[EpisodeResult], wall: f64) -> EvalSummary {
@@ -110,6 +207,43 @@ pub fn evaluate(
         .out
         .as_ref()
         .map(|d| d.join(format!("{}.journal.jsonl", task.id)));
+    // The run record: a new run writes its manifest; a resumed one must match it.
+    let mut finished: Vec<EpisodeResult> = Vec::new();
+    if let (Some(dir), Some(jp)) = (&opts.out, &journal_path) {
+        let manifest_path = dir.join(format!("{}.manifest.json", task.id));
+        let here = Manifest::of(task, &opts.policy, opts.seed);
+        let started = jp.exists() && std::fs::metadata(jp).is_ok_and(|m| m.len() > 0);
+        if opts.resume {
+            let text = std::fs::read_to_string(&manifest_path).map_err(|e| {
+                format!(
+                    "cannot resume: no manifest {}: {e}",
+                    manifest_path.display()
+                )
+            })?;
+            let there: Manifest = serde_json::from_str(&text)
+                .map_err(|e| format!("cannot resume: {}: {e}", manifest_path.display()))?;
+            let differs = here.differences(&there);
+            if !differs.is_empty() {
+                return Err(format!(
+                    "cannot resume the run in {}: it was measured under another {}; start a new run in another --out",
+                    dir.display(),
+                    differs.join(", ")
+                ));
+            }
+            finished = read_journal(jp)?;
+        } else if started {
+            return Err(format!(
+                "{} already has a run of {} (its journal {}); continue it with --resume, or use another --out",
+                dir.display(),
+                task.id,
+                jp.display()
+            ));
+        } else {
+            let text = serde_json::to_string_pretty(&here).map_err(|e| e.to_string())?;
+            std::fs::write(&manifest_path, text)
+                .map_err(|e| format!("{}: {e}", manifest_path.display()))?;
+        }
+    }
     let mut journal = match (&journal_path, &opts.out) {
         (Some(p), Some(dir)) => {
             let file = std::fs::OpenOptions::new()
@@ -130,6 +264,11 @@ pub fn evaluate(
     let mut policy_name = opts.policy.clone();
     for i in 0..opts.episodes {
         let seed = opts.seed.wrapping_add(i as u64);
+        // A finished episode is never run again: its journal line stands.
+        if let Some(done) = finished.iter().find(|r| r.seed == seed) {
+            results.push(done.clone());
+            continue;
+        }
         let instance = task.sample(seed);
         if scene
             .as_ref()

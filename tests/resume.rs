@@ -1,0 +1,135 @@
+//! The run record: a run writes its manifest before its first episode; a second run into the same
+//! folder is refused unless it resumes; `--resume` continues only when the manifest's fingerprints
+//! match, never reruns a finished episode, and survives the evaluating process being killed
+//! (SIGKILL) mid-run with no finished episode lost or repeated.
+
+mod common;
+
+use common::{autobio, scratch, text};
+use scoring::eval::EvalOptions;
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+const CLOSE: &str = "protocols/thermal_cycler/close_lid.toml";
+
+fn opts(out: &Path, policy: &str, episodes: usize, resume: bool) -> EvalOptions {
+    EvalOptions {
+        policy: policy.into(),
+        episodes,
+        seed: 30,
+        out: Some(out.to_path_buf()),
+        record: false,
+        image_every: 0,
+        resume,
+    }
+}
+
+/// Seeds in the journal, in order.
+fn journal_seeds(dir: &Path) -> Vec<u64> {
+    std::fs::read_to_string(dir.join("thermal_cycler.close_lid.journal.jsonl"))
+        .unwrap_or_default()
+        .lines()
+        .map(|l| {
+            serde_json::from_str::<serde_json::Value>(l).unwrap()["seed"]
+                .as_u64()
+                .unwrap()
+        })
+        .collect()
+}
+
+#[test]
+fn a_run_resumes_only_with_matching_fingerprints_and_never_reruns_an_episode() {
+    let task = common::compile(CLOSE);
+    let dir = scratch("resume");
+    scoring::evaluate(&task, &opts(&dir, "hold", 2, false), |_| {}).unwrap();
+    let manifest: scoring::eval::Manifest = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("thermal_cycler.close_lid.manifest.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(manifest, scoring::eval::Manifest::of(&task, "hold", 30));
+    assert_eq!(manifest.task_sha256.len(), 64);
+    assert!(manifest.protocol_sha256.is_some());
+
+    // Into the same folder without --resume: refused, nothing run.
+    let err = scoring::evaluate(&task, &opts(&dir, "hold", 2, false), |_| {}).unwrap_err();
+    assert!(err.contains("continue it with --resume"), "{err}");
+    // With another policy: the fingerprints differ.
+    let err = scoring::evaluate(&task, &opts(&dir, "expert", 4, true), |_| {}).unwrap_err();
+    assert!(err.contains("measured under another policy;"), "{err}");
+    // With an edited protocol: the compiled task differs.
+    let mut edited = task.clone();
+    edited.time_limit_s += 1.0;
+    let err = scoring::evaluate(&edited, &opts(&dir, "hold", 4, true), |_| {}).unwrap_err();
+    assert!(
+        err.contains("measured under another compiled task;"),
+        "{err}"
+    );
+    assert_eq!(journal_seeds(&dir), [30, 31]);
+
+    // Matching: only the episodes not yet run are run, and the report has them all.
+    let mut ran = Vec::new();
+    let report =
+        scoring::evaluate(&task, &opts(&dir, "hold", 4, true), |e| ran.push(e.seed)).unwrap();
+    assert_eq!(ran, [32, 33]);
+    assert_eq!(report.episodes.len(), 4);
+    assert_eq!(journal_seeds(&dir), [30, 31, 32, 33]);
+}
+
+#[test]
+fn a_killed_run_resumes_with_nothing_lost_or_repeated() {
+    let dir = scratch("killed");
+    let d = dir.to_str().unwrap();
+    let args = [
+        "eval",
+        "--protocol",
+        CLOSE,
+        "--policy",
+        "hold",
+        "--episodes",
+        "12",
+        "--seed",
+        "30",
+        "--out",
+        d,
+    ];
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_autobio"))
+        .args(args)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    // Killed as soon as the first episode is in the journal.
+    let deadline = Instant::now() + Duration::from_secs(120);
+    while journal_seeds(&dir).is_empty() {
+        assert!(Instant::now() < deadline, "no episode finished in 120 s");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let before = journal_seeds(&dir);
+    assert!(
+        !before.is_empty() && before.len() < 12,
+        "killed after {before:?}"
+    );
+
+    let mut resumed: Vec<&str> = args.to_vec();
+    resumed.push("--resume");
+    let out = autobio(&resumed);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let after = journal_seeds(&dir);
+    assert_eq!(
+        after,
+        (30..42).collect::<Vec<u64>>(),
+        "each seed once, in order"
+    );
+    assert_eq!(
+        &after[..before.len()],
+        &before[..],
+        "finished lines kept as they were"
+    );
+    let results: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("thermal_cycler.close_lid.results.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(results["summary"]["episodes"], 12);
+}
