@@ -133,3 +133,29 @@ fn a_killed_run_resumes_with_nothing_lost_or_repeated() {
     .unwrap();
     assert_eq!(results["summary"]["episodes"], 12);
 }
+
+#[test]
+fn an_episode_whose_policy_cannot_be_made_fails_alone() {
+    // Replays of a folder that has a recording of seed 30 only: seed 31's episode fails with the
+    // reason, the run goes on, and both stay in the denominator.
+    let task = common::compile(CLOSE);
+    let recorded = scratch("recorded");
+    let mut o = opts(&recorded, "expert", 1, false);
+    o.record = true;
+    scoring::evaluate(&task, &o, |_| {}).unwrap();
+    let policy = format!("replay:{}", recorded.display());
+    let report =
+        scoring::evaluate(&task, &opts(&scratch("partial"), &policy, 2, false), |_| {}).unwrap();
+    let [first, second] = &report.episodes[..] else {
+        panic!("{report:#?}")
+    };
+    assert!(first.success);
+    assert_eq!(second.outcome, scoring::Outcome::PolicyError);
+    let why = second.error.as_deref().unwrap();
+    assert!(
+        why.contains("seed31.mcap: cannot read the recording"),
+        "{why}"
+    );
+    assert_eq!(report.summary.episodes, 2);
+    assert_eq!(report.summary.success_rate, 0.5);
+}

@@ -52,6 +52,38 @@ pub struct EpisodeResult {
     pub recording: Option<String>,
 }
 
+/// The result of an episode whose policy could not be made (the expert cannot plan it, a replay
+/// has no recording of its seed): a policy error, judged on the initial state, with its reason.
+pub fn policy_failed(
+    task: &Task,
+    scene: &Arc<runtime::Scene>,
+    instance: &SceneInstance,
+    reason: String,
+) -> EpisodeResult {
+    let ep = Episode::new(scene.clone(), task, instance);
+    let initial = ep.labware_state();
+    let mut judge = Judge::new(task, &instance.params, &initial);
+    judge.update(ep.time(), &initial);
+    let mut verdict = judge.verdict();
+    verdict.success = false;
+    EpisodeResult {
+        seed: instance.seed,
+        success: false,
+        outcome: Outcome::PolicyError,
+        verdict,
+        error: Some(reason),
+        sim_time_s: 0.0,
+        control_steps: 0,
+        wall_time_s: 0.0,
+        trajectory_hash: Sha256::new()
+            .finalize()
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect(),
+        recording: None,
+    }
+}
+
 /// Runs one episode of `task` with the scene instance for `seed`.
 pub fn run_episode(
     task: &Task,

@@ -279,9 +279,6 @@ pub fn evaluate(
             ));
         }
         let sc = scene.as_ref().expect("built above");
-        let mut policy =
-            policy::make(&opts.policy, task, sc, &instance).map_err(|e| e.to_string())?;
-        policy_name = policy.name();
         let record = match (&opts.out, opts.record) {
             (Some(d), true) => Some(recording_path(d, task, seed)),
             _ => None,
@@ -290,7 +287,17 @@ pub fn evaluate(
             record,
             image_every: opts.image_every,
         };
-        let r = run_episode(task, sc, &instance, policy.as_mut(), &eo)?;
+        // A policy that cannot be made for this episode fails this episode, not the run.
+        let r = match policy::make(&opts.policy, task, sc, &instance) {
+            Ok(mut policy) => {
+                policy_name = policy.name();
+                run_episode(task, sc, &instance, policy.as_mut(), &eo)?
+            }
+            Err(policy::PolicyError::Unknown(name)) => {
+                return Err(policy::PolicyError::Unknown(name).to_string());
+            }
+            Err(e) => crate::episode::policy_failed(task, sc, &instance, e.to_string()),
+        };
         if let Some(j) = journal.as_mut() {
             let line = serde_json::to_string(&r).map_err(|e| e.to_string())?;
             // On disk before the next episode starts: a crash loses no finished episode.
