@@ -193,6 +193,60 @@ pub fn summarise(episodes: &[EpisodeResult], wall: f64) -> EvalSummary {
     }
 }
 
+/// Opens the run record in `dir`: checks or writes the manifest, reads what a resumed run has
+/// finished, and opens the journal for appending.
+fn open_run(
+    task: &Task,
+    opts: &EvalOptions,
+    dir: &Path,
+) -> Result<(Vec<EpisodeResult>, std::fs::File), String> {
+    let jp = dir.join(format!("{}.journal.jsonl", task.id));
+    let manifest_path = dir.join(format!("{}.manifest.json", task.id));
+    let here = Manifest::of(task, &opts.policy, opts.seed);
+    let started = std::fs::metadata(&jp).is_ok_and(|m| m.len() > 0);
+    let mut finished = Vec::new();
+    if opts.resume {
+        let text = std::fs::read_to_string(&manifest_path).map_err(|e| {
+            format!(
+                "cannot resume: no manifest {}: {e}",
+                manifest_path.display()
+            )
+        })?;
+        let there: Manifest = serde_json::from_str(&text)
+            .map_err(|e| format!("cannot resume: {}: {e}", manifest_path.display()))?;
+        let differs = here.differences(&there);
+        if !differs.is_empty() {
+            return Err(format!(
+                "cannot resume the run in {}: it was measured under another {}; start a new run in another --out",
+                dir.display(),
+                differs.join(", ")
+            ));
+        }
+        finished = read_journal(&jp)?;
+    } else if started {
+        return Err(format!(
+            "{} already has a run of {} (its journal {}); continue it with --resume, or use another --out",
+            dir.display(),
+            task.id,
+            jp.display()
+        ));
+    } else {
+        let text = serde_json::to_string_pretty(&here).map_err(|e| e.to_string())?;
+        std::fs::write(&manifest_path, text)
+            .map_err(|e| format!("{}: {e}", manifest_path.display()))?;
+    }
+    let journal = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(&jp)
+        .map_err(|e| format!("{}: {e}", jp.display()))?;
+    // The folder's entry for a new journal is on disk too, not only its lines.
+    std::fs::File::open(dir)
+        .and_then(|d| d.sync_all())
+        .map_err(|e| format!("{}: {e}", dir.display()))?;
+    Ok((finished, journal))
+}
+
 /// Runs the named policy on `task`. `progress` is called after each episode.
 pub fn evaluate(
     task: &Task,
@@ -203,61 +257,12 @@ pub fn evaluate(
     if let Some(dir) = &opts.out {
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     }
-    let journal_path = opts
-        .out
-        .as_ref()
-        .map(|d| d.join(format!("{}.journal.jsonl", task.id)));
-    // The run record: a new run writes its manifest; a resumed one must match it.
-    let mut finished: Vec<EpisodeResult> = Vec::new();
-    if let (Some(dir), Some(jp)) = (&opts.out, &journal_path) {
-        let manifest_path = dir.join(format!("{}.manifest.json", task.id));
-        let here = Manifest::of(task, &opts.policy, opts.seed);
-        let started = jp.exists() && std::fs::metadata(jp).is_ok_and(|m| m.len() > 0);
-        if opts.resume {
-            let text = std::fs::read_to_string(&manifest_path).map_err(|e| {
-                format!(
-                    "cannot resume: no manifest {}: {e}",
-                    manifest_path.display()
-                )
-            })?;
-            let there: Manifest = serde_json::from_str(&text)
-                .map_err(|e| format!("cannot resume: {}: {e}", manifest_path.display()))?;
-            let differs = here.differences(&there);
-            if !differs.is_empty() {
-                return Err(format!(
-                    "cannot resume the run in {}: it was measured under another {}; start a new run in another --out",
-                    dir.display(),
-                    differs.join(", ")
-                ));
-            }
-            finished = read_journal(jp)?;
-        } else if started {
-            return Err(format!(
-                "{} already has a run of {} (its journal {}); continue it with --resume, or use another --out",
-                dir.display(),
-                task.id,
-                jp.display()
-            ));
-        } else {
-            let text = serde_json::to_string_pretty(&here).map_err(|e| e.to_string())?;
-            std::fs::write(&manifest_path, text)
-                .map_err(|e| format!("{}: {e}", manifest_path.display()))?;
+    let (finished, mut journal) = match &opts.out {
+        Some(dir) => {
+            let (finished, journal) = open_run(task, opts, dir)?;
+            (finished, Some(journal))
         }
-    }
-    let mut journal = match (&journal_path, &opts.out) {
-        (Some(p), Some(dir)) => {
-            let file = std::fs::OpenOptions::new()
-                .create(true)
-                .append(true)
-                .open(p)
-                .map_err(|e| format!("{}: {e}", p.display()))?;
-            // The folder's entry for a new journal is on disk too, not only its lines.
-            std::fs::File::open(dir)
-                .and_then(|d| d.sync_all())
-                .map_err(|e| format!("{}: {e}", dir.display()))?;
-            Some(file)
-        }
-        _ => None,
+        None => (Vec::new(), None),
     };
     let mut scene: Option<Arc<runtime::Scene>> = None;
     let mut results = Vec::new();
