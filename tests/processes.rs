@@ -11,11 +11,9 @@ const CLOSE: &str = "protocols/thermal_cycler/close_lid.toml";
 
 /// (seed, trajectory hash, success) per journal line.
 fn journal(dir: &Path, task: &str) -> Vec<(u64, String, bool)> {
-    std::fs::read_to_string(dir.join(format!("{task}.journal.jsonl")))
-        .unwrap()
-        .lines()
-        .map(|l| {
-            let v: serde_json::Value = serde_json::from_str(l).unwrap();
+    common::journal(dir, task)
+        .iter()
+        .map(|v| {
             (
                 v["seed"].as_u64().unwrap(),
                 v["trajectory_hash"].as_str().unwrap().to_string(),

@@ -26,14 +26,9 @@ fn opts(out: &Path, policy: &str, episodes: usize, resume: bool) -> EvalOptions 
 
 /// Seeds in the journal, in order.
 fn journal_seeds(dir: &Path) -> Vec<u64> {
-    std::fs::read_to_string(dir.join("thermal_cycler.close_lid.journal.jsonl"))
-        .unwrap_or_default()
-        .lines()
-        .map(|l| {
-            serde_json::from_str::<serde_json::Value>(l).unwrap()["seed"]
-                .as_u64()
-                .unwrap()
-        })
+    common::journal(dir, "thermal_cycler.close_lid")
+        .iter()
+        .map(|v| v["seed"].as_u64().unwrap())
         .collect()
 }
 

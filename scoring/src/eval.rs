@@ -109,7 +109,6 @@ impl Manifest {
 
     /// The fields in which `other` differs from this manifest.
     fn differences(&self, other: &Manifest) -> Vec<&'static str> {
-        let mut out = Vec::new();
         let fields: [(&str, bool); 7] = [
             (
                 "results schema version",
@@ -128,12 +127,11 @@ impl Manifest {
             ("policy", self.policy == other.policy),
             ("seed", self.seed == other.seed),
         ];
-        for (name, same) in fields {
-            if !same {
-                out.push(name);
-            }
-        }
-        out
+        fields
+            .into_iter()
+            .filter(|(_, same)| !same)
+            .map(|(name, _)| name)
+            .collect()
     }
 }
 
@@ -342,28 +340,18 @@ mod tests {
     #[test]
     fn wilson_intervals_match_the_formula_at_the_edges_and_the_middle() {
         // Reference values at z = 1.96 (e.g. Newcombe 1998, method 3).
-        let close =
-            |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).abs() < 5e-4 && (a[1] - b[1]).abs() < 5e-4;
-        assert!(
-            close(wilson(0, 20, 1.96), [0.0, 0.1611]),
-            "{:?}",
-            wilson(0, 20, 1.96)
-        );
-        assert!(
-            close(wilson(20, 20, 1.96), [0.8389, 1.0]),
-            "{:?}",
-            wilson(20, 20, 1.96)
-        );
-        assert!(
-            close(wilson(10, 20, 1.96), [0.2993, 0.7007]),
-            "{:?}",
-            wilson(10, 20, 1.96)
-        );
-        assert!(
-            close(wilson(81, 263, 1.96), [0.2553, 0.3662]),
-            "{:?}",
-            wilson(81, 263, 1.96)
-        );
+        for (k, n, want) in [
+            (0, 20, [0.0, 0.1611]),
+            (20, 20, [0.8389, 1.0]),
+            (10, 20, [0.2993, 0.7007]),
+            (81, 263, [0.2553, 0.3662]),
+        ] {
+            let got = wilson(k, n, 1.96);
+            assert!(
+                (got[0] - want[0]).abs() < 5e-4 && (got[1] - want[1]).abs() < 5e-4,
+                "{k}/{n}: {got:?}"
+            );
+        }
         assert_eq!(wilson(0, 0, 1.96), [0.0, 1.0]);
     }
 }

@@ -72,3 +72,12 @@ pub fn scratch(name: &str) -> PathBuf {
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
+
+/// The lines of a run's journal (`<out>/<task id>.journal.jsonl`), parsed; none if it is absent.
+pub fn journal(dir: &std::path::Path, task_id: &str) -> Vec<serde_json::Value> {
+    std::fs::read_to_string(dir.join(format!("{task_id}.journal.jsonl")))
+        .unwrap_or_default()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect()
+}
