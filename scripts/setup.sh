@@ -68,4 +68,16 @@ if [ ! -e "$DEPS/python/mcap/reader.py" ]; then
   python3 -m pip install -q --disable-pip-version-check --target "$DEPS/python.tmp" "$MCAP_PY"
   rm -rf "$DEPS/python" && mv "$DEPS/python.tmp" "$DEPS/python"
 fi
-echo "setup: ok (mujoco $MUJOCO_VERSION, robot models and the mcap reader under $DEPS/)"
+# The reference model servers (tests/servers): openpi-client's msgpack-numpy and allenai's
+# vla-eval, in their own virtual environment; remade when the requirements change.
+REQS=tests/servers/requirements.txt
+STAMP="$DEPS/servers/.requirements-$(sha256sum "$REQS" | cut -c1-16)"
+if [ ! -e "$STAMP" ]; then
+  echo "setup: making the reference model servers' environment ($DEPS/servers)"
+  rm -rf "$DEPS/servers.tmp"
+  python3 -m venv "$DEPS/servers.tmp"
+  "$DEPS/servers.tmp/bin/pip" install -q --disable-pip-version-check -r "$REQS"
+  rm -rf "$DEPS/servers" && mv "$DEPS/servers.tmp" "$DEPS/servers"
+  touch "$STAMP"
+fi
+echo "setup: ok (mujoco $MUJOCO_VERSION, robot models, the mcap reader and the model servers' environment under $DEPS/)"

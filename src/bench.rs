@@ -106,6 +106,7 @@ fn scene_figures(task: &compiler::Task) -> Result<f64> {
         record: false,
         image_every: 0,
         resume: false,
+        model: None,
     };
     let report = scoring::evaluate(task, &opts, |_| {}).map_err(anyhow::Error::msg)?;
     let sim: f64 = report.episodes.iter().map(|e| e.sim_time_s).sum();

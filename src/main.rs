@@ -93,10 +93,26 @@ enum Command {
         /// Write one MCAP recording per episode (with camera images)
         #[arg(long)]
         record: bool,
+        /// With --record: camera images every this many control steps (0: none)
+        #[arg(long, default_value_t = 5, requires = "record")]
+        image_every: u32,
         /// Continue the run in --out: only if its manifest matches (task, protocol, policy, seed,
         /// version), never rerunning a finished episode
         #[arg(long, requires = "out")]
         resume: bool,
+        /// Evaluate the model server at this address (`ws://HOST:PORT`) instead of --policy
+        #[arg(long, value_name = "URL", conflicts_with = "policy")]
+        model: Option<String>,
+        /// The protocol the model server speaks: `openpi` or `vla-eval`
+        #[arg(long, default_value = "openpi", requires = "model")]
+        wire: scoring::remote::Wire,
+        /// How observations and actions map onto the model: `pi0`, `rdt` or a profile file
+        #[arg(long, default_value = "pi0", requires = "model")]
+        profile: String,
+        /// Connection attempts per episode before it fails as a server fault (backoff from
+        /// 0.25 s, doubling)
+        #[arg(long, default_value_t = 4, requires = "model")]
+        connect_attempts: u32,
     },
     /// Re-score a recording offline from its recorded state (no simulation)
     Replay { recording: PathBuf },
@@ -238,6 +254,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 record: true,
                 image_every: 5,
                 resume: false,
+                model: None,
             };
             let report = scoring::evaluate(&task, &opts, |e| {
                 outln!(
@@ -265,14 +282,29 @@ fn run(cli: Cli) -> Result<ExitCode> {
             seed,
             out,
             record,
+            image_every,
             resume,
+            model,
+            wire,
+            profile,
+            connect_attempts,
         } => {
             if !scoring::policy::known(&policy) {
                 bail!(
-                    "unknown policy `{policy}`: this build evaluates {} (model servers over websocket come with `--model`)",
+                    "unknown policy `{policy}`: this build evaluates {} (a model server with `--model ws://HOST:PORT`)",
                     scoring::POLICIES.join(", ")
                 );
             }
+            let model = match model {
+                Some(url) => Some(scoring::eval::ModelSpec {
+                    url,
+                    wire,
+                    profile: scoring::profile::LoadedProfile::load(&profile)?,
+                    attempts: connect_attempts.max(1),
+                    backoff_s: 0.25,
+                }),
+                None => None,
+            };
             let mut rows = Vec::new();
             for p in &protocol {
                 let task = front.load(p)?;
@@ -282,14 +314,24 @@ fn run(cli: Cli) -> Result<ExitCode> {
                     seed,
                     out: out.clone(),
                     record,
-                    image_every: if record { 5 } else { 0 },
+                    image_every: if record { image_every } else { 0 },
                     resume,
+                    model: model.clone(),
                 };
                 errln!(
                     "evaluating {} ({} episodes from seed {seed})",
                     task.id,
                     episodes
                 );
+                if let Some(m) = &model {
+                    errln!(
+                        "  model {} over {} with profile {} ({})",
+                        m.url,
+                        m.wire,
+                        m.profile.profile.name,
+                        m.profile.origin
+                    );
+                }
                 let report = scoring::evaluate(&task, &opts, |e| {
                     if let Some(err) = &e.error {
                         errln!("  seed {}: failed: {err}", e.seed);
@@ -313,7 +355,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 outln!(
                     "{:<32} {:>7} {:>8.1}% ± {:>4.1} [{:>5.1}, {:>5.1}] {:>6.3} {:>9} {:>9.1}s",
                     r.task_id,
-                    r.policy,
+                    r.policy.split(' ').next().unwrap_or_default(),
                     100.0 * s.success_rate,
                     100.0 * s.sem,
                     100.0 * s.wilson_95[0],

@@ -122,6 +122,7 @@ fn the_journal_has_each_episode_before_the_next_starts() {
         record: false,
         image_every: 0,
         resume: false,
+        model: None,
     };
     let journal = dir.join(format!("{}.journal.jsonl", t.id));
     let mut seen = Vec::new();

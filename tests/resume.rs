@@ -21,6 +21,7 @@ fn opts(out: &Path, policy: &str, episodes: usize, resume: bool) -> EvalOptions 
         record: false,
         image_every: 0,
         resume,
+        model: None,
     }
 }
 
@@ -41,7 +42,10 @@ fn a_run_resumes_only_with_matching_fingerprints_and_never_reruns_an_episode() {
         &std::fs::read_to_string(dir.join("thermal_cycler.close_lid.manifest.json")).unwrap(),
     )
     .unwrap();
-    assert_eq!(manifest, scoring::eval::Manifest::of(&task, "hold", 30));
+    assert_eq!(
+        manifest,
+        scoring::eval::Manifest::of(&task, "hold", 30, None)
+    );
     assert_eq!(manifest.task_sha256.len(), 64);
     assert!(manifest.protocol_sha256.is_some());
 
@@ -56,7 +60,7 @@ fn a_run_resumes_only_with_matching_fingerprints_and_never_reruns_an_episode() {
     edited.time_limit_s += 1.0;
     let err = scoring::evaluate(&edited, &opts(&dir, "hold", 4, true), |_| {}).unwrap_err();
     assert!(
-        err.contains("measured under another compiled task;"),
+        err.contains("measured under another compiled task"),
         "{err}"
     );
     assert_eq!(journal_seeds(&dir), [30, 31]);

@@ -24,6 +24,14 @@ pub enum StepError {
     BadAction { got: usize, want: usize },
     #[error("action value {index} is not a finite number ({value})")]
     NonFinite { index: usize, value: f64 },
+    /// A target outside its actuator's range (MuJoCo's `ctrlrange`; the gripper's command range).
+    #[error("action value {index} ({value}) is outside its actuator's range [{low}, {high}]")]
+    OutOfRange {
+        index: usize,
+        value: f64,
+        low: f64,
+        high: f64,
+    },
 }
 
 pub struct Episode {
@@ -169,6 +177,36 @@ impl Episode {
             });
         }
         let scene = self.scene.clone();
+        let model = self.data.model();
+        let (limited, range) = (model.actuator_ctrllimited(), model.actuator_ctrlrange());
+        // Each action component's range: the arm actuators' `ctrlrange`, the gripper's command.
+        let bounds: Vec<(f64, f64)> = scene
+            .robots
+            .iter()
+            .flat_map(|ids| {
+                let g = &ids.model.gripper;
+                ids.actuators
+                    .iter()
+                    .map(|&a| match limited[a] {
+                        true => (range[a][0], range[a][1]),
+                        false => (f64::NEG_INFINITY, f64::INFINITY),
+                    })
+                    .chain([(g.open.min(g.closed), g.open.max(g.closed))])
+                    .collect::<Vec<_>>()
+            })
+            .collect();
+        for (index, (&value, &(low, high))) in action.iter().zip(&bounds).enumerate() {
+            // A hair of slack for values a model computed in f32.
+            let slack = 1e-6 * (1.0 + high.abs().max(low.abs()).min(1e6));
+            if value < low - slack || value > high + slack {
+                return Err(StepError::OutOfRange {
+                    index,
+                    value,
+                    low,
+                    high,
+                });
+            }
+        }
         let mut rest = action;
         for ids in &scene.robots {
             let (mine, others) = rest.split_at(ids.model.action_len());

@@ -30,8 +30,12 @@ pub enum Outcome {
     Success,
     /// The time limit passed first.
     TimeLimit,
-    /// The policy failed, sent no actions, or sent actions of the wrong length or not finite.
+    /// The policy failed, sent no actions, or sent actions of the wrong shape, not finite or
+    /// outside their actuators' ranges.
     PolicyError,
+    /// The model server failed: refused or lost the connection, stayed silent past the
+    /// timeout, reported an error, or sent frames that do not decode.
+    ServerFault,
     /// The simulation became unstable.
     Unstable,
 }
@@ -47,18 +51,31 @@ pub struct EpisodeResult {
     pub sim_time_s: f64,
     pub control_steps: u64,
     pub wall_time_s: f64,
+    /// Wall time spent inside the policy (a model's round trips included): the harness's own
+    /// time is `wall_time_s` minus this.
+    #[serde(default)]
+    pub policy_time_s: f64,
     /// SHA-256 of every control step's qpos (little-endian f64): equal hashes, equal trajectories.
     pub trajectory_hash: String,
     pub recording: Option<String>,
 }
 
+/// The outcome class of a policy's failure.
+pub fn outcome_of(e: &crate::PolicyError) -> Outcome {
+    match e {
+        crate::PolicyError::Server(_) => Outcome::ServerFault,
+        _ => Outcome::PolicyError,
+    }
+}
+
 /// The result of an episode whose policy could not be made (the expert cannot plan it, a replay
-/// has no recording of its seed): a policy error, judged on the initial state, with its reason.
+/// has no recording of its seed, the model server cannot be reached): judged on the initial
+/// state, with its reason.
 pub fn policy_failed(
     task: &Task,
     scene: &Arc<runtime::Scene>,
     instance: &SceneInstance,
-    reason: String,
+    failure: &crate::PolicyError,
 ) -> EpisodeResult {
     let ep = Episode::new(scene.clone(), task, instance);
     let initial = ep.labware_state();
@@ -69,12 +86,13 @@ pub fn policy_failed(
     EpisodeResult {
         seed: instance.seed,
         success: false,
-        outcome: Outcome::PolicyError,
+        outcome: outcome_of(failure),
         verdict,
-        error: Some(reason),
+        error: Some(failure.to_string()),
         sim_time_s: 0.0,
         control_steps: 0,
         wall_time_s: 0.0,
+        policy_time_s: 0.0,
         trajectory_hash: Sha256::new()
             .finalize()
             .iter()
@@ -110,6 +128,13 @@ pub fn run_episode(
         None
     };
     let cam_names: Vec<String> = task.cameras.iter().map(|c| c.name.clone()).collect();
+    let needs = policy.needs();
+    let mut eyes = match needs.image_size {
+        Some([w, h]) => Some(Cameras::new(scene, w, h)?),
+        None => None,
+    };
+    let mut previous: Option<Vec<runtime::render::Image>> = None;
+    let mut policy_time = 0.0;
     let mut hasher = Sha256::new();
     let mut steps = 0u64;
     let mut error = None;
@@ -120,7 +145,14 @@ pub fn run_episode(
     let mut over = judge.update(ep.time(), &initial);
     'episode: while !over && ep.time() < task.time_limit_s {
         let stage = judge.stage();
+        let images = match eyes.as_mut() {
+            Some(c) => c.render(&mut ep.data, &cam_names)?,
+            None => Vec::new(),
+        };
+        let before = previous.take().unwrap_or_else(|| images.clone());
         let obs = Observation {
+            images: &images,
+            previous: &before,
             time: ep.time(),
             state: ep.state(),
             stage,
@@ -139,7 +171,10 @@ pub fn run_episode(
                 labware: ep.labware_state(),
             },
         };
-        let chunk = match policy.act(&obs) {
+        let asked = Instant::now();
+        let answer = policy.act(&obs);
+        policy_time += asked.elapsed().as_secs_f64();
+        let chunk = match answer {
             Ok(c) if !c.is_empty() => c,
             Ok(_) => {
                 error = Some("policy returned an empty action chunk".into());
@@ -148,16 +183,28 @@ pub fn run_episode(
             }
             Err(e) => {
                 error = Some(e.to_string());
-                outcome = Some(Outcome::PolicyError);
+                outcome = Some(outcome_of(&e));
                 break;
             }
         };
+        // The frames `history_steps` control steps before the next query.
+        let history_at = (needs.history_steps > 0)
+            .then(|| chunk.len().checked_sub(needs.history_steps as usize))
+            .flatten();
+        if history_at.is_none() && needs.history_steps > 0 {
+            previous = Some(images.clone());
+        }
         if let Some(r) = rec.as_mut() {
             for ev in policy.drain_events() {
                 r.stage(ev.time, &ev.label).map_err(|e| e.to_string())?;
             }
         }
-        for action in chunk {
+        for (k, action) in chunk.into_iter().enumerate() {
+            if history_at == Some(k)
+                && let Some(c) = eyes.as_mut()
+            {
+                previous = Some(c.render(&mut ep.data, &cam_names)?);
+            }
             let t = ep.time();
             if let Some(r) = rec.as_mut() {
                 let mut rest = action.as_slice();
@@ -181,9 +228,9 @@ pub fn run_episode(
             if let Err(e) = ep.apply(&action).and_then(|_| ep.control_step()) {
                 outcome = Some(match e {
                     runtime::StepError::Unstable { .. } => Outcome::Unstable,
-                    runtime::StepError::BadAction { .. } | runtime::StepError::NonFinite { .. } => {
-                        Outcome::PolicyError
-                    }
+                    runtime::StepError::BadAction { .. }
+                    | runtime::StepError::NonFinite { .. }
+                    | runtime::StepError::OutOfRange { .. } => Outcome::PolicyError,
                 });
                 error = Some(e.to_string());
                 break 'episode;
@@ -202,6 +249,7 @@ pub fn run_episode(
     if error.is_some() {
         verdict.success = false;
     }
+    policy.end_episode(verdict.success, steps);
     if let Some(mut r) = rec {
         let t = ep.time();
         r.labware(t, &ep.labware_state())
@@ -229,6 +277,7 @@ pub fn run_episode(
         sim_time_s: ep.time(),
         control_steps: steps,
         wall_time_s: start.elapsed().as_secs_f64(),
+        policy_time_s: policy_time,
         trajectory_hash: hasher
             .finalize()
             .iter()

@@ -13,8 +13,108 @@ use std::sync::Arc;
 use std::time::Instant;
 
 /// 2: verdicts per stage with scores; `mean_score` in the summary. 3: each episode's `outcome`;
-/// the summary's Wilson 95% interval and counts per outcome.
-pub const RESULTS_SCHEMA_VERSION: u32 = 3;
+/// the summary's Wilson 95% interval and counts per outcome. 4: the `server_fault` outcome,
+/// each episode's `policy_time_s`, the run's `conditions` and (for models) `model`.
+pub const RESULTS_SCHEMA_VERSION: u32 = 4;
+
+/// The git commit autobio was built from (`-dirty` with uncommitted changes).
+pub const GIT_COMMIT: &str = env!("AUTOBIO_GIT_COMMIT");
+
+/// Lower-case hex SHA-256.
+pub fn sha256_hex(bytes: &[u8]) -> String {
+    use sha2::{Digest, Sha256};
+    Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+/// Every condition that changes a score, written into results and manifests.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Conditions {
+    pub control_hz: f64,
+    /// Physics steps each action is held for.
+    pub physics_steps_per_action: u32,
+    pub physics_timestep_s: f64,
+    pub time_limit_s: f64,
+    pub termination: String,
+    /// The state's components (robots in task order), with units.
+    pub state: Vec<String>,
+    /// The action's components: absolute targets, with units.
+    pub action: Vec<String>,
+    /// Gripper polarity: the command for open and for closed, per robot.
+    pub gripper: Vec<String>,
+}
+
+impl Conditions {
+    pub fn of(task: &Task) -> Conditions {
+        let mut state = Vec::new();
+        let mut action = Vec::new();
+        let mut gripper = Vec::new();
+        for r in &task.robots {
+            if let Some(m) = robots::model(&r.model) {
+                state.extend(
+                    m.state_names()
+                        .iter()
+                        .map(|n| format!("{}/{n} (rad)", r.name)),
+                );
+                let names = m.action_names();
+                let (arm, grip) = names.split_at(m.dof());
+                action.extend(
+                    arm.iter()
+                        .map(|n| format!("{}/{n} (absolute joint target, rad)", r.name)),
+                );
+                action.extend(grip.iter().map(|n| {
+                    format!(
+                        "{}/{n} (absolute command, open {} to closed {})",
+                        r.name, m.gripper.open, m.gripper.closed
+                    )
+                }));
+                gripper.push(format!(
+                    "{}: open {}, closed {}",
+                    r.name, m.gripper.open, m.gripper.closed
+                ));
+            }
+        }
+        Conditions {
+            control_hz: task.physics.control_hz(),
+            physics_steps_per_action: task.physics.substeps,
+            physics_timestep_s: task.physics.timestep_s,
+            time_limit_s: task.time_limit_s,
+            termination: "success ends the episode at the first control step where every stage's \
+                          checks hold; otherwise it ends at the time limit"
+                .into(),
+            state,
+            action,
+            gripper,
+        }
+    }
+}
+
+/// A model server to evaluate: where, what it speaks, and its profile.
+#[derive(Clone, Debug)]
+pub struct ModelSpec {
+    pub url: String,
+    pub wire: crate::remote::Wire,
+    pub profile: crate::profile::LoadedProfile,
+    /// Connection attempts per episode and the first retry's wait (doubled per retry).
+    pub attempts: u32,
+    pub backoff_s: f64,
+}
+
+/// The model part of a manifest and of results.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ModelRecord {
+    pub url: String,
+    pub wire: crate::remote::Wire,
+    /// `built-in pi0` or the profile file's path.
+    pub profile_origin: String,
+    pub profile_sha256: String,
+    pub profile: crate::profile::Profile,
+    /// What the server said about itself on connecting (openpi metadata, vla-eval `hello`);
+    /// null when it said nothing or could not be reached.
+    pub metadata: Option<serde_json::Value>,
+}
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EvalSummary {
@@ -54,6 +154,10 @@ pub struct EvalReport {
     /// Episode i uses seed `seed + i`.
     pub seed: u64,
     pub summary: EvalSummary,
+    pub conditions: Conditions,
+    pub model: Option<ModelRecord>,
+    pub autobio_version: String,
+    pub git_commit: String,
     pub episodes: Vec<EpisodeResult>,
 }
 
@@ -69,6 +173,8 @@ pub struct EvalOptions {
     /// Continue the run whose journal is in `out`: only when its manifest's fingerprints match,
     /// and never rerunning a finished episode.
     pub resume: bool,
+    /// A model server; `policy` is ignored when given.
+    pub model: Option<ModelSpec>,
 }
 
 /// What a run was measured under, written before its first episode (`<task>.manifest.json`);
@@ -77,6 +183,7 @@ pub struct EvalOptions {
 pub struct Manifest {
     pub results_schema_version: u32,
     pub autobio_version: String,
+    pub git_commit: String,
     pub task_id: String,
     /// SHA-256 of the compiled task (every stage, parameter and tolerance) as JSON.
     pub task_sha256: String,
@@ -85,31 +192,41 @@ pub struct Manifest {
     pub policy: String,
     /// Episode i uses seed `seed + i`.
     pub seed: u64,
+    pub conditions: Conditions,
+    /// The model server, when the policy is one: its wire and profile are fingerprints (its
+    /// address and metadata are not: a resumed run may find it elsewhere).
+    pub model: Option<ModelRecord>,
 }
 
 impl Manifest {
-    pub fn of(task: &Task, policy: &str, seed: u64) -> Manifest {
-        use sha2::{Digest, Sha256};
-        let hex = |bytes: &[u8]| -> String {
-            Sha256::digest(bytes)
-                .iter()
-                .map(|b| format!("{b:02x}"))
-                .collect()
-        };
+    pub fn of(task: &Task, policy: &str, seed: u64, model: Option<ModelRecord>) -> Manifest {
         Manifest {
             results_schema_version: RESULTS_SCHEMA_VERSION,
             autobio_version: env!("CARGO_PKG_VERSION").to_string(),
+            git_commit: GIT_COMMIT.to_string(),
             task_id: task.id.clone(),
-            task_sha256: hex(&serde_json::to_vec(task).unwrap_or_default()),
-            protocol_sha256: std::fs::read(&task.source).ok().map(|b| hex(&b)),
+            task_sha256: sha256_hex(&serde_json::to_vec(task).unwrap_or_default()),
+            protocol_sha256: std::fs::read(&task.source).ok().map(|b| sha256_hex(&b)),
             policy: policy.to_string(),
             seed,
+            conditions: Conditions::of(task),
+            model,
         }
     }
 
     /// The fields in which `other` differs from this manifest.
     fn differences(&self, other: &Manifest) -> Vec<&'static str> {
-        let fields: [(&str, bool); 7] = [
+        let model =
+            |m: &Option<ModelRecord>| m.as_ref().map(|m| (m.wire, m.profile_sha256.clone()));
+        // Metadata counts only when both runs heard it (a server may be down at either time).
+        let metadata_same = match (&self.model, &other.model) {
+            (Some(a), Some(b)) => match (&a.metadata, &b.metadata) {
+                (Some(x), Some(y)) => x == y,
+                _ => true,
+            },
+            _ => true,
+        };
+        let fields: [(&str, bool); 11] = [
             (
                 "results schema version",
                 self.results_schema_version == other.results_schema_version,
@@ -126,6 +243,13 @@ impl Manifest {
             ),
             ("policy", self.policy == other.policy),
             ("seed", self.seed == other.seed),
+            ("conditions", self.conditions == other.conditions),
+            (
+                "model wire or profile",
+                model(&self.model) == model(&other.model),
+            ),
+            ("model metadata", metadata_same),
+            ("git commit", self.git_commit == other.git_commit),
         ];
         fields
             .into_iter()
@@ -196,11 +320,11 @@ pub fn summarise(episodes: &[EpisodeResult], wall: f64) -> EvalSummary {
 fn open_run(
     task: &Task,
     opts: &EvalOptions,
+    here: &Manifest,
     dir: &Path,
 ) -> Result<(Vec<EpisodeResult>, std::fs::File), String> {
     let jp = dir.join(format!("{}.journal.jsonl", task.id));
     let manifest_path = dir.join(format!("{}.manifest.json", task.id));
-    let here = Manifest::of(task, &opts.policy, opts.seed);
     let started = std::fs::metadata(&jp).is_ok_and(|m| m.len() > 0);
     let mut finished = Vec::new();
     if opts.resume {
@@ -229,7 +353,7 @@ fn open_run(
             jp.display()
         ));
     } else {
-        let text = serde_json::to_string_pretty(&here).map_err(|e| e.to_string())?;
+        let text = serde_json::to_string_pretty(here).map_err(|e| e.to_string())?;
         std::fs::write(&manifest_path, text)
             .map_err(|e| format!("{}: {e}", manifest_path.display()))?;
     }
@@ -255,16 +379,50 @@ pub fn evaluate(
     if let Some(dir) = &opts.out {
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     }
+    // A model: one connection for the run, greeted before the manifest is written so that the
+    // manifest holds what the server said about itself.
+    let (mut model, layout) = match &opts.model {
+        Some(spec) => {
+            let layout = spec
+                .profile
+                .profile
+                .resolve(task)
+                .map_err(|e| e.to_string())?;
+            let mut m = crate::remote::Model::new(&spec.url, spec.wire, spec.profile.clone())
+                .map_err(|e| e.to_string())?;
+            m.set_retries(
+                spec.attempts,
+                std::time::Duration::from_secs_f64(spec.backoff_s),
+            );
+            // An unreachable server is not fatal: each episode then fails as a server fault.
+            m.open().ok();
+            (Some(m), Some(layout))
+        }
+        None => (None, None),
+    };
+    let model_record = model.as_ref().map(|m| ModelRecord {
+        url: m.url().to_string(),
+        wire: m.wire,
+        profile_origin: m.profile.origin.clone(),
+        profile_sha256: m.profile.sha256(),
+        profile: m.profile.profile.clone(),
+        metadata: m.metadata.clone(),
+    });
+    let policy_label = match &model {
+        Some(_) => "model".to_string(),
+        None => opts.policy.clone(),
+    };
+    let here = Manifest::of(task, &policy_label, opts.seed, model_record.clone());
     let (finished, mut journal) = match &opts.out {
         Some(dir) => {
-            let (finished, journal) = open_run(task, opts, dir)?;
+            let (finished, journal) = open_run(task, opts, &here, dir)?;
             (finished, Some(journal))
         }
         None => (Vec::new(), None),
     };
     let mut scene: Option<Arc<runtime::Scene>> = None;
     let mut results = Vec::new();
-    let mut policy_name = opts.policy.clone();
+    let mut policy_name = policy_label.clone();
     for i in 0..opts.episodes {
         let seed = opts.seed.wrapping_add(i as u64);
         // A finished episode is never run again: its journal line stands.
@@ -291,7 +449,19 @@ pub fn evaluate(
             image_every: opts.image_every,
         };
         // A policy that cannot be made for this episode fails this episode, not the run.
-        let r = match policy::make(&opts.policy, task, sc, &instance) {
+        let made = match (model.as_mut(), &layout) {
+            (Some(m), Some(layout)) => {
+                let info = crate::remote::EpisodeInfo {
+                    task_id: &task.id,
+                    seed,
+                    instruction: &instance.instruction,
+                };
+                crate::remote::ModelPolicy::start(m, layout.clone(), &info)
+                    .map(|p| Box::new(p) as Box<dyn policy::Policy>)
+            }
+            _ => policy::make(&opts.policy, task, sc, &instance),
+        };
+        let r = match made {
             Ok(mut policy) => {
                 policy_name = policy.name();
                 run_episode(task, sc, &instance, policy.as_mut(), &eo)?
@@ -299,7 +469,7 @@ pub fn evaluate(
             Err(policy::PolicyError::Unknown(name)) => {
                 return Err(policy::PolicyError::Unknown(name).to_string());
             }
-            Err(e) => crate::episode::policy_failed(task, sc, &instance, e.to_string()),
+            Err(e) => crate::episode::policy_failed(task, sc, &instance, &e),
         };
         if let Some(j) = journal.as_mut() {
             let line = serde_json::to_string(&r).map_err(|e| e.to_string())?;
@@ -319,6 +489,10 @@ pub fn evaluate(
         policy: policy_name,
         seed: opts.seed,
         summary: summarise(&results, start.elapsed().as_secs_f64()),
+        conditions: here.conditions.clone(),
+        model: model_record,
+        autobio_version: here.autobio_version.clone(),
+        git_commit: here.git_commit.clone(),
         episodes: results,
     };
     if let Some(dir) = &opts.out {

@@ -1,7 +1,7 @@
-//! Scoring: policies made by name (the scripted expert and the no-motion control now; replays and
-//! websocket models later), the episode
-//! loop that couples a policy to the runtime, verdicts from success predicates, and evaluation runs
-//! that write versioned results.
+//! Scoring: policies (the scripted expert, the no-motion control, replays of recordings, and
+//! models over the network under a profile), the episode loop that couples a policy to the
+//! runtime, verdicts from success predicates, and evaluation runs that write versioned results
+//! and run records.
 //!
 //! It does not simulate (the runtime does) and does not aggregate across submissions (the
 //! leaderboard does).
@@ -10,6 +10,8 @@ pub mod episode;
 pub mod eval;
 pub mod expert;
 pub mod policy;
+pub mod profile;
+pub mod remote;
 pub mod verdict;
 
 pub use episode::{EpisodeOptions, EpisodeResult, Outcome, run_episode};

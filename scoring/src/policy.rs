@@ -16,6 +16,12 @@ pub struct Observation<'a> {
     /// The stage now running (0 for single-stage tasks) and its instruction.
     pub stage: usize,
     pub prompt: &'a str,
+    /// Every task camera's current frame, in task order, at the size [`Policy::needs`] asks for
+    /// (empty when it asks for none).
+    pub images: &'a [runtime::render::Image],
+    /// The same cameras `history_steps` control steps before this observation (the current
+    /// frames at an episode's first query).
+    pub previous: &'a [runtime::render::Image],
     /// Privileged simulator state, used only by the scripted expert and the controls; never sent
     /// to models.
     pub privileged: Privileged,
@@ -72,12 +78,33 @@ pub enum PolicyError {
     /// The policy could not produce actions (a model's own error, reported by it).
     #[error("the policy failed: {0}")]
     Failed(String),
+    /// The model server failed: no connection, closed, silent, an error frame, garbage.
+    #[error("model server fault: {0}")]
+    Server(crate::remote::WireError),
+    /// The model answered, but not with actions this task can run.
+    #[error("the model's actions are unusable: {0}")]
+    BadActions(String),
+}
+
+/// What a policy needs the episode loop to render for it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Needs {
+    /// Render every task camera at this size (width, height) before each query.
+    pub image_size: Option<[usize; 2]>,
+    /// Also keep the frames from this many control steps before each query.
+    pub history_steps: u32,
 }
 
 pub trait Policy {
     fn name(&self) -> String;
     /// A chunk of actions (each: every robot's action, concatenated), executed in order.
     fn act(&mut self, obs: &Observation) -> Result<Vec<Vec<f64>>, PolicyError>;
+    /// What the episode loop must render for this policy.
+    fn needs(&self) -> Needs {
+        Needs::default()
+    }
+    /// The episode ended (after the verdict): `success` and the control steps run.
+    fn end_episode(&mut self, _success: bool, _steps: u64) {}
     /// Stage events produced since the last call.
     fn drain_events(&mut self) -> Vec<StageEvent> {
         Vec::new()

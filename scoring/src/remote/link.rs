@@ -1,0 +1,226 @@
+//! One websocket connection to a model server (`ws://HOST:PORT[/PATH]`, plain TCP): connecting
+//! with retries and exponential backoff, binary frames out, frames in under a timeout, and every
+//! way that goes wrong as a [`WireError`]. A failed connection is dropped, so the next episode
+//! connects afresh.
+//!
+//! It does not know any message format (see `openpi` and `vla_eval`).
+
+use std::io::ErrorKind;
+use std::net::{SocketAddr, TcpStream, ToSocketAddrs};
+use std::time::{Duration, Instant};
+use tungstenite::{Message, WebSocket};
+
+/// How a model server failed us. Each ends the episode it happens in with its reason.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum WireError {
+    #[error("bad model address `{url}`: {why}")]
+    Address { url: String, why: String },
+    #[error("cannot connect to {url} after {attempts} attempts over {waited_s:.1} s: {last}")]
+    Connect {
+        url: String,
+        attempts: u32,
+        waited_s: f64,
+        last: String,
+    },
+    #[error("the server closed the connection{0}")]
+    Closed(String),
+    #[error("no reply within {0} s")]
+    Timeout(f64),
+    #[error("the server reported an error: {0}")]
+    ErrorFrame(String),
+    #[error("the reply is malformed: {0}")]
+    Malformed(String),
+}
+
+/// A received frame.
+pub enum Frame {
+    Binary(Vec<u8>),
+    Text(String),
+}
+
+pub struct Link {
+    pub url: String,
+    addr: String,
+    /// Reply timeout.
+    pub timeout: Duration,
+    /// Connection attempts before giving up (at least 1).
+    pub attempts: u32,
+    /// The first retry's wait; doubled for each further retry.
+    pub backoff: Duration,
+    socket: Option<WebSocket<TcpStream>>,
+}
+
+impl Link {
+    pub fn new(url: &str, timeout: Duration) -> Result<Link, WireError> {
+        let bad = |why: &str| WireError::Address {
+            url: url.to_string(),
+            why: why.to_string(),
+        };
+        let rest = match url.split_once("://") {
+            Some(("ws", rest)) => rest,
+            Some(("wss", _)) => return Err(bad("wss:// (TLS) is not supported; use ws://")),
+            _ => return Err(bad("expected ws://HOST:PORT")),
+        };
+        let host_port = rest.split('/').next().unwrap_or_default();
+        if host_port.is_empty() {
+            return Err(bad("no host"));
+        }
+        let addr = if host_port
+            .rsplit_once(':')
+            .is_some_and(|(_, p)| p.parse::<u16>().is_ok())
+        {
+            host_port.to_string()
+        } else {
+            format!("{host_port}:80")
+        };
+        Ok(Link {
+            url: url.to_string(),
+            addr,
+            timeout,
+            attempts: 4,
+            backoff: Duration::from_millis(250),
+            socket: None,
+        })
+    }
+
+    pub fn is_open(&self) -> bool {
+        self.socket.is_some()
+    }
+
+    /// Connects if not connected, retrying with exponential backoff. Returns whether a new
+    /// connection was made.
+    pub fn ensure_open(&mut self) -> Result<bool, WireError> {
+        if self.socket.is_some() {
+            return Ok(false);
+        }
+        let start = Instant::now();
+        let mut wait = self.backoff;
+        let mut last = String::new();
+        for attempt in 1..=self.attempts.max(1) {
+            match self.open_once() {
+                Ok(ws) => {
+                    self.socket = Some(ws);
+                    return Ok(true);
+                }
+                Err(e) => last = e,
+            }
+            if attempt < self.attempts {
+                std::thread::sleep(wait);
+                wait *= 2;
+            }
+        }
+        Err(WireError::Connect {
+            url: self.url.clone(),
+            attempts: self.attempts.max(1),
+            waited_s: start.elapsed().as_secs_f64(),
+            last,
+        })
+    }
+
+    fn open_once(&self) -> Result<WebSocket<TcpStream>, String> {
+        let addrs: Vec<SocketAddr> = self
+            .addr
+            .to_socket_addrs()
+            .map_err(|e| format!("cannot resolve {}: {e}", self.addr))?
+            .collect();
+        let mut last = format!("{} resolves to no address", self.addr);
+        for a in addrs {
+            match TcpStream::connect_timeout(&a, self.timeout) {
+                Ok(stream) => {
+                    stream.set_nodelay(true).ok();
+                    stream
+                        .set_read_timeout(Some(self.timeout))
+                        .and_then(|_| stream.set_write_timeout(Some(self.timeout)))
+                        .map_err(|e| e.to_string())?;
+                    return tungstenite::client(self.url.as_str(), stream)
+                        .map(|(ws, _)| ws)
+                        .map_err(|e| format!("websocket handshake failed: {e}"));
+                }
+                Err(e) => last = e.to_string(),
+            }
+        }
+        Err(last)
+    }
+
+    /// Drops the connection (after a failure: its state is unknown).
+    pub fn drop_connection(&mut self) {
+        if let Some(mut ws) = self.socket.take() {
+            ws.close(None).ok();
+            ws.flush().ok();
+        }
+    }
+
+    fn fail<T>(&mut self, e: WireError) -> Result<T, WireError> {
+        self.drop_connection();
+        Err(e)
+    }
+
+    pub fn send(&mut self, bytes: Vec<u8>) -> Result<(), WireError> {
+        let Some(ws) = self.socket.as_mut() else {
+            return Err(WireError::Closed(" before the request".into()));
+        };
+        match ws.send(Message::binary(bytes)) {
+            Ok(()) => Ok(()),
+            Err(e) => {
+                let e = classify(e, self.timeout.as_secs_f64());
+                self.fail(e)
+            }
+        }
+    }
+
+    /// The next data frame if one comes within `wait`; `None` (the connection kept) if none does.
+    pub fn try_recv(&mut self, wait: Duration) -> Result<Option<Frame>, WireError> {
+        match self.recv_inner(wait) {
+            Ok(f) => Ok(Some(f)),
+            Err(WireError::Timeout(_)) => Ok(None),
+            Err(e) => self.fail(e),
+        }
+    }
+
+    /// The next data frame, waiting at most `wait` (the reply timeout when `None`). Pings are
+    /// answered; a close frame is [`WireError::Closed`].
+    pub fn recv(&mut self, wait: Option<Duration>) -> Result<Frame, WireError> {
+        let wait = wait.unwrap_or(self.timeout);
+        match self.recv_inner(wait) {
+            Ok(f) => Ok(f),
+            Err(e) => self.fail(e),
+        }
+    }
+
+    fn recv_inner(&mut self, wait: Duration) -> Result<Frame, WireError> {
+        let Some(ws) = self.socket.as_mut() else {
+            return Err(WireError::Closed(" before the reply".into()));
+        };
+        ws.get_mut().set_read_timeout(Some(wait)).ok();
+        loop {
+            match ws.read() {
+                Ok(Message::Binary(b)) => return Ok(Frame::Binary(b.to_vec())),
+                Ok(Message::Text(t)) => return Ok(Frame::Text(t.to_string())),
+                Ok(Message::Close(c)) => {
+                    return Err(WireError::Closed(match c {
+                        Some(c) if !c.reason.is_empty() => {
+                            format!(" (code {}: {})", u16::from(c.code), c.reason)
+                        }
+                        Some(c) => format!(" (code {})", u16::from(c.code)),
+                        None => String::new(),
+                    }));
+                }
+                Ok(_) => continue,
+                Err(e) => return Err(classify(e, wait.as_secs_f64())),
+            }
+        }
+    }
+}
+
+fn classify(e: tungstenite::Error, timeout_s: f64) -> WireError {
+    use tungstenite::Error as E;
+    match e {
+        E::Io(io) if matches!(io.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) => {
+            WireError::Timeout(timeout_s)
+        }
+        E::ConnectionClosed | E::AlreadyClosed => WireError::Closed(String::new()),
+        E::Io(io) => WireError::Closed(format!(": {io}")),
+        E::Protocol(p) => WireError::Closed(format!(" ({p})")),
+        other => WireError::Malformed(other.to_string()),
+    }
+}

@@ -1,0 +1,218 @@
+//! A misbehaving model server on loopback (tests/servers/openpi_server.py `--fault`, and the
+//! vla-eval package's own error frames): each fault ends only the episode it happens in, with its
+//! outcome class and reason; the episodes before and after it finish normally and every one is
+//! in the journal.
+
+mod common;
+
+use common::{Server, autobio, journal, scratch, text};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+const CLOSE: &str = "protocols/thermal_cycler/close_lid.toml";
+const TASK: &str = "thermal_cycler.close_lid";
+
+fn recordings() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let dir = scratch("fault-recordings");
+        let out = autobio(&[
+            "eval",
+            "--protocol",
+            CLOSE,
+            "--episodes",
+            "3",
+            "--seed",
+            "0",
+            "--out",
+            dir.to_str().unwrap(),
+            "--record",
+            "--image-every",
+            "0",
+        ]);
+        assert!(out.status.success(), "{}", text(&out.stderr));
+        dir
+    })
+}
+
+/// pi0's layout with reset frames and a 2 s reply timeout.
+fn profile(dir: &Path) -> PathBuf {
+    let text = std::fs::read_to_string("profiles/pi0.toml")
+        .unwrap()
+        .replace("reset_frame = false", "reset_frame = true")
+        .replace("timeout_s = 30.0", "timeout_s = 2.0");
+    let path = dir.join("profile.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// Three episodes against `url`; the journal and stderr.
+fn run(url: &str, wire: &str, profile: &Path, dir: &Path) -> (Vec<Value>, String) {
+    let out = autobio(&[
+        "eval",
+        "--model",
+        url,
+        "--wire",
+        wire,
+        "--profile",
+        profile.to_str().unwrap(),
+        "--protocol",
+        CLOSE,
+        "--episodes",
+        "3",
+        "--seed",
+        "0",
+        "--connect-attempts",
+        "2",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    let stderr = text(&out.stderr);
+    assert!(
+        out.status.success(),
+        "a fault must not end the run: {stderr}"
+    );
+    (journal(dir, TASK), stderr)
+}
+
+/// The server misbehaves in episode 1 only: episodes 0 and 2 succeed.
+fn fault(mode: &str, outcome: &str, reason: &str) {
+    let dir = scratch(&format!("fault-{mode}"));
+    let rec = recordings().to_str().unwrap().to_string();
+    let server = Server::start(
+        "openpi_server.py",
+        &[
+            "--recordings",
+            &rec,
+            "--fault",
+            mode,
+            "--fault-episode",
+            "1",
+            "--fault-at",
+            "2",
+        ],
+    );
+    let (eps, stderr) = run(&server.url, "openpi", &profile(&dir), &dir);
+    let got: Vec<(&str, u64)> = eps
+        .iter()
+        .map(|e| (e["outcome"].as_str().unwrap(), e["seed"].as_u64().unwrap()))
+        .collect();
+    assert_eq!(
+        got,
+        [("success", 0), (outcome, 1), ("success", 2)],
+        "{mode}: {eps:#?}"
+    );
+    let error = eps[1]["error"].as_str().unwrap();
+    assert!(error.contains(reason), "{mode}: {error}");
+    assert_eq!(eps[1]["success"], false);
+    assert!(stderr.contains("seed 1: failed"), "{mode}: {stderr}");
+}
+
+#[test]
+fn a_server_that_closes_mid_episode() {
+    fault("close", "server_fault", "closed the connection");
+}
+
+#[test]
+fn a_server_that_stalls_past_the_timeout() {
+    fault("stall", "server_fault", "no reply within 2 s");
+}
+
+#[test]
+fn a_server_that_answers_the_wrong_shape() {
+    fault(
+        "shape",
+        "policy_error",
+        "actions of 8 values; this task's actions have 7",
+    );
+}
+
+#[test]
+fn a_server_that_answers_nan() {
+    fault("nan", "policy_error", "not a finite number");
+}
+
+#[test]
+fn a_server_that_answers_out_of_range_targets() {
+    fault(
+        "range",
+        "policy_error",
+        "(100) is outside its actuator's range",
+    );
+}
+
+#[test]
+fn a_server_that_reports_an_error_frame() {
+    fault(
+        "error",
+        "server_fault",
+        "the model ran out of memory (a fault on request)",
+    );
+}
+
+#[test]
+fn a_server_that_sends_garbage() {
+    fault("garbage", "server_fault", "not msgpack");
+}
+
+#[test]
+fn a_server_that_refuses_connections() {
+    let dir = scratch("fault-refused");
+    // A port that was just free: bound, then let go.
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let (eps, _) = run(
+        &format!("ws://127.0.0.1:{port}"),
+        "openpi",
+        &profile(&dir),
+        &dir,
+    );
+    assert_eq!(eps.len(), 3);
+    for e in &eps {
+        assert_eq!(e["outcome"], "server_fault", "{e}");
+        let error = e["error"].as_str().unwrap();
+        assert!(
+            error.contains("cannot connect") && error.contains("after 2 attempts"),
+            "{error}"
+        );
+    }
+    let results: Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join(format!("{TASK}.results.json"))).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(
+        results["summary"]["episodes"], 3,
+        "faults stay in the denominator"
+    );
+    assert_eq!(results["summary"]["outcomes"]["server_fault"], 3);
+    assert_eq!(results["summary"]["success_rate"], 0.0);
+}
+
+#[test]
+fn a_vla_eval_server_error_frame_keeps_the_connection() {
+    // One camera where vla-eval's server wants two: its `predict` raises, the package answers an
+    // `error` frame, and every episode fails with the server's own words.
+    let dir = scratch("fault-vla-eval");
+    let rec = recordings().to_str().unwrap().to_string();
+    let server = Server::start("vla_eval_server.py", &["--recordings", &rec]);
+    let text = std::fs::read_to_string("profiles/pi0.toml").unwrap();
+    let one_camera = &text[..text
+        .find("[[image]]\nkey = \"observation/wrist_image\"")
+        .unwrap()];
+    let path = dir.join("one-camera.toml");
+    std::fs::write(&path, one_camera).unwrap();
+    let (eps, _) = run(&server.url, "vla-eval", &path, &dir);
+    assert_eq!(eps.len(), 3);
+    for e in &eps {
+        assert_eq!(e["outcome"], "server_fault", "{e}");
+        let error = e["error"].as_str().unwrap();
+        assert!(
+            error.contains("observation_failed") && error.contains("1 images"),
+            "{error}"
+        );
+    }
+}

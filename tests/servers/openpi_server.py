@@ -1,0 +1,134 @@
+"""A model server speaking openpi's websocket protocol, built on the `openpi-client` package's own
+msgpack-numpy, that answers with the scripted expert's recorded actions (see expert_actions.py).
+
+It behaves like openpi's `WebsocketPolicyServer`: a metadata frame on connect (unless
+`--no-metadata`, AutoBio's variant), strictly alternating request and reply, errors as a text
+frame with the traceback followed by close code 1011. It checks the observation it gets against
+the pi0 layout and the recorded instruction, so a client that sends the wrong thing fails.
+
+`--fault MODE` misbehaves on query `--fault-at` of episode `--fault-episode` (counted by the
+`{"reset": true}` frames the client sends), for the fault tests:
+  close    closes the connection instead of answering
+  stall    never answers
+  shape    answers actions one component too long
+  nan      answers a NaN action
+  range    answers an arm target of 100 rad
+  error    raises, so the client gets a text frame and close 1011
+  garbage  answers bytes that are not msgpack
+
+`--log FILE` appends each query's task, seed and prompt, so a test can see the instruction switch
+between a chain's stages.
+
+Prints `listening on ws://HOST:PORT` once ready (port 0 picks a free one)."""
+
+import argparse
+import asyncio
+import json
+import math
+import sys
+import traceback
+
+import numpy as np
+import websockets
+from websockets.asyncio.server import serve
+from openpi_client import msgpack_numpy
+
+from expert_actions import Library
+
+
+def check_observation(obs, episode, args):
+    state = obs["observation/state"]
+    assert isinstance(state, np.ndarray) and state.dtype == np.float32, f"state {type(state)}"
+    assert state.shape == (len(episode.actions[0]),), f"state shape {state.shape}"
+    for key in ("observation/image", "observation/wrist_image"):
+        img = obs[key]
+        assert isinstance(img, np.ndarray), f"{key} is {type(img)}"
+        assert img.dtype == np.uint8 and img.shape == (224, 224, 3), f"{key} {img.dtype} {img.shape}"
+        assert img.std() > 1.0, f"{key} is blank"
+    assert "observation/wrist_image_2" in obs, "no observation/wrist_image_2 key"
+    prompt = obs["prompt"]
+    allowed = [episode.instruction, *episode.stage_instructions]
+    assert prompt in allowed, f"prompt {prompt!r} is not the episode's instruction"
+
+
+async def handler(ws, library, args, counters):
+    packer = msgpack_numpy.Packer()
+    if not args.no_metadata:
+        await ws.send(packer.pack({"server": "autobio reference openpi expert", "action_horizon": args.chunk}))
+    episode = None
+    query = 0
+    try:
+        async for message in ws:
+            try:
+                obs = msgpack_numpy.unpackb(message)
+                if obs.get("reset"):
+                    task = obs["task"]
+                    episode = library.episode(task["id"], task["seed"])
+                    counters["episodes"] += 1
+                    query = 0
+                    continue
+                if episode is None:
+                    raise RuntimeError("an observation before any reset frame: which episode is this?")
+                check_observation(obs, episode, args)
+                if args.log:
+                    with open(args.log, "a") as log:
+                        line = {"task": task["id"], "seed": task["seed"], "query": query, "prompt": obs["prompt"]}
+                        log.write(json.dumps(line) + "\n")
+                chunk = np.asarray(episode.chunk(query * args.execute, args.chunk), dtype=np.float64)
+                faulty = args.fault and counters["episodes"] - 1 == args.fault_episode and query == args.fault_at
+                query += 1
+                if faulty:
+                    if args.fault == "close":
+                        await ws.close()
+                        return
+                    if args.fault == "stall":
+                        await asyncio.sleep(3600)
+                    if args.fault == "shape":
+                        chunk = np.concatenate([chunk, np.zeros((chunk.shape[0], 1))], axis=1)
+                    if args.fault == "nan":
+                        chunk[0, 0] = math.nan
+                    if args.fault == "range":
+                        chunk[0, 1] = 100.0
+                    if args.fault == "error":
+                        raise RuntimeError("the model ran out of memory (a fault on request)")
+                    if args.fault == "garbage":
+                        await ws.send(b"\xc1 this is not msgpack")
+                        continue
+                await ws.send(packer.pack({"actions": chunk, "server_timing": {"infer_ms": 0.0}}))
+            except Exception:
+                await ws.send(traceback.format_exc())
+                await ws.close(code=1011, reason="internal error")
+                return
+    except websockets.exceptions.ConnectionClosed:
+        pass
+
+
+async def main():
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--recordings", required=True)
+    p.add_argument("--host", default="127.0.0.1")
+    p.add_argument("--port", type=int, default=0)
+    p.add_argument("--chunk", type=int, default=50)
+    p.add_argument("--execute", type=int, default=50, help="actions the client runs of each chunk")
+    p.add_argument("--no-metadata", action="store_true")
+    p.add_argument("--fault", choices=["close", "stall", "shape", "nan", "range", "error", "garbage"])
+    p.add_argument("--fault-episode", type=int, default=1)
+    p.add_argument("--fault-at", type=int, default=1)
+    p.add_argument("--log", help="append each query's task, seed and prompt here (JSON lines)")
+    args = p.parse_args()
+    library = Library(args.recordings)
+    counters = {"episodes": 0}
+    async with serve(
+        lambda ws: handler(ws, library, args, counters),
+        args.host,
+        args.port,
+        compression=None,
+        max_size=None,
+    ) as server:
+        port = server.sockets[0].getsockname()[1]
+        print(f"listening on ws://{args.host}:{port}", flush=True)
+        await asyncio.Future()
+
+
+if __name__ == "__main__":
+    sys.exit(asyncio.run(main()))

@@ -1,0 +1,65 @@
+"""A model server built on the `vla-eval` package (allenai's evaluation harness, 0.8.0): its
+`PredictModelServer` and `serve_async`, unchanged, answering each observation with the scripted
+expert's recorded action for that step (see expert_actions.py). The episode is named by the
+`task` the client sends in `episode_start`. It checks each observation's images, state and task
+description, so a client that sends the wrong thing gets an `error` frame.
+
+Prints `listening on ws://HOST:PORT` once ready (port 0 picks a free one)."""
+
+import argparse
+
+import anyio
+import numpy as np
+from vla_eval.model_servers.predict import PredictModelServer
+from vla_eval.model_servers.serve import serve_async
+from vla_eval.specs import GRIPPER_RAW, DimSpec
+
+from expert_actions import Library
+
+
+class ExpertServer(PredictModelServer):
+    def __init__(self, library):
+        super().__init__(chunk_size=None)
+        self.library = library
+        self.episodes = {}
+
+    def get_action_spec(self):
+        return {"joints": DimSpec("joints", 6, "absolute_joint_positions"), "gripper": GRIPPER_RAW}
+
+    def get_observation_spec(self):
+        return {"state": DimSpec("state", 7, "joint_positions")}
+
+    async def on_episode_start(self, config, ctx):
+        task = config["task"]
+        self.episodes[ctx.session_id] = self.library.episode(task["id"], task["seed"])
+        await super().on_episode_start(config, ctx)
+
+    def predict(self, obs, ctx):
+        episode = self.episodes[ctx.session_id]
+        images = obs["images"]
+        assert len(images) >= 2, f"{len(images)} images"
+        for name, img in images.items():
+            if img is None:
+                continue
+            assert isinstance(img, np.ndarray) and img.dtype == np.uint8, f"{name}: {type(img)}"
+            assert img.shape == (224, 224, 3), f"{name}: {img.shape}"
+        state = obs["states"]
+        assert state.shape == (len(episode.actions[0]),), f"state {state.shape}"
+        allowed = [episode.instruction, *episode.stage_instructions]
+        assert obs["task_description"] in allowed, obs["task_description"]
+        return {"actions": np.asarray(episode.chunk(ctx.step, 1)[0], dtype=np.float64)}
+
+
+async def main(args):
+    server = ExpertServer(Library(args.recordings))
+    async with anyio.create_task_group() as tg:
+        port = await tg.start(serve_async, server, args.host, args.port)
+        print(f"listening on ws://{args.host}:{port}", flush=True)
+
+
+if __name__ == "__main__":
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--recordings", required=True)
+    p.add_argument("--host", default="127.0.0.1")
+    p.add_argument("--port", type=int, default=0)
+    anyio.run(main, p.parse_args())
