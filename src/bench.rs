@@ -6,7 +6,12 @@
 //! - expert: full scripted-expert episodes per minute (no recording);
 //! - lab physics: each mechanism's scene with it and without it (ratio), and one liquid solve;
 //! - front end: checking a protocol whose parameter has 50,000 values and 50,000 exclusions,
-//!   against the same domain with none (the proof must stay near-linear in the domain).
+//!   against the same domain with none (the proof must stay near-linear in the domain);
+//! - harness, on the first scene: expert episodes/s with two workers against one; and with a
+//!   model in the loop (the reference openpi server on loopback answering the expert's recorded
+//!   actions), the harness's time per control step beyond the same episodes run in-process:
+//!   rendering, encoding and the round trip, for a query every 50 steps (pi0's chunks) and every
+//!   step (as vla-eval servers are driven).
 
 use anyhow::Result;
 use mujoco_rs::prelude::*;
@@ -20,6 +25,9 @@ const UPSTREAM_TRANSFER_STEPS_S: f64 = 810.0;
 /// Every figure for each task's scene, then the lab-physics figures once.
 pub fn run(tasks: &[compiler::Task]) -> Result<()> {
     front_end_figures()?;
+    if let Some(first) = tasks.first() {
+        harness_figures(first)?;
+    }
     let mut first_step_s = None;
     for task in tasks {
         outln!("scene    {}", task.id);
@@ -33,7 +41,7 @@ pub fn run(tasks: &[compiler::Task]) -> Result<()> {
 /// one task's scene; returns the bare loop's seconds per step.
 fn scene_figures(task: &compiler::Task) -> Result<f64> {
     let instance = task.sample(0);
-    let scene = Arc::new(runtime::Scene::build(task, &instance).map_err(anyhow::Error::msg)?);
+    let scene = Arc::new(runtime::Scene::build(task, &instance)?);
     let steps = 20_000;
 
     // Same model, same initial state: the bare loop starts from the episode's reset data.
@@ -54,7 +62,7 @@ fn scene_figures(task: &compiler::Task) -> Result<f64> {
         best_bare = best_bare.min(t.elapsed().as_secs_f64());
         let t = Instant::now();
         for _ in 0..steps {
-            ep.physics_step().map_err(anyhow::Error::msg)?;
+            ep.physics_step()?;
         }
         best_harness = best_harness.min(t.elapsed().as_secs_f64());
         ep.reset(&instance);
@@ -86,7 +94,7 @@ fn scene_figures(task: &compiler::Task) -> Result<f64> {
     let rounds = 50;
     let t = Instant::now();
     for _ in 0..rounds {
-        ep.control_step().map_err(anyhow::Error::msg)?;
+        ep.control_step()?;
         cams.render(&mut ep.data, &names)
             .map_err(anyhow::Error::msg)?;
     }
@@ -106,9 +114,9 @@ fn scene_figures(task: &compiler::Task) -> Result<f64> {
         record: false,
         image_every: 0,
         resume: false,
-        model: None,
+        ..Default::default()
     };
-    let report = scoring::evaluate(task, &opts, |_| {}).map_err(anyhow::Error::msg)?;
+    let report = scoring::evaluate(task, &opts, |_| {})?;
     let sim: f64 = report.episodes.iter().map(|e| e.sim_time_s).sum();
     outln!(
         "expert   episodes       {:>10.1} episodes/min ({n} episodes, {:.1} s simulated, {:.0}x real time, {} successful)",
@@ -320,5 +328,113 @@ fn front_end_figures() -> Result<()> {
         excluded * 1e3,
         excluded / baseline
     );
+    Ok(())
+}
+
+/// Expert episodes/s with one worker and with two; then a model in the loop.
+fn harness_figures(task: &compiler::Task) -> Result<()> {
+    let n = 8;
+    let rate = |workers: usize| -> Result<(f64, scoring::EvalReport)> {
+        let opts = scoring::eval::EvalOptions {
+            episodes: n,
+            workers,
+            ..Default::default()
+        };
+        let t = Instant::now();
+        let report = scoring::evaluate(task, &opts, |_| {})?;
+        Ok((n as f64 / t.elapsed().as_secs_f64(), report))
+    };
+    let (one, _) = rate(1)?;
+    let (two, _) = rate(2)?;
+    outln!(
+        "harness  workers        {two:>10.2} episodes/s with 2 workers, {one:.2} with 1: {:.2}x ({n} expert episodes of {}; target 1.8x on two cores)",
+        two / one,
+        task.id
+    );
+    model_in_the_loop(task)
+}
+
+/// The harness's cost per control step with a model server in the loop, against the same
+/// episodes with the expert in-process (identical trajectories: the server sends the expert's
+/// float64 actions), so physics cancels and what is left is rendering, encoding, the socket and
+/// the server's lookup.
+fn model_in_the_loop(task: &compiler::Task) -> Result<()> {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let python = root.join(".deps/servers/bin/python");
+    if !python.exists() {
+        outln!(
+            "harness  model          skipped: no {} (run `make setup`)",
+            python.display()
+        );
+        return Ok(());
+    }
+    let n = 3;
+    let dir = std::env::temp_dir().join(format!("autobio-bench-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let expert = scoring::eval::EvalOptions {
+        episodes: n,
+        out: Some(dir.join("expert")),
+        record: true,
+        ..Default::default()
+    };
+    let baseline = scoring::evaluate(task, &expert, |_| {})?;
+    let pi0 = scoring::profile::BUILT_IN[0].1;
+    for execute in [50usize, 1] {
+        let mut server = std::process::Command::new(&python)
+            .arg(root.join("tests/servers/openpi_server.py"))
+            .args(["--recordings", &dir.join("expert").display().to_string()])
+            .args(["--execute", &execute.to_string()])
+            .stdout(std::process::Stdio::piped())
+            .spawn()?;
+        let mut line = String::new();
+        std::io::BufRead::read_line(
+            &mut std::io::BufReader::new(server.stdout.take().expect("piped")),
+            &mut line,
+        )?;
+        let url = line
+            .trim()
+            .strip_prefix("listening on ")
+            .unwrap_or_default()
+            .to_string();
+        let text = pi0
+            .replace("reset_frame = false", "reset_frame = true")
+            .replace("execute = 50", &format!("execute = {execute}"));
+        let profile = scoring::profile::LoadedProfile::from_text(text, "bench".into())?;
+        let opts = scoring::eval::EvalOptions {
+            episodes: n,
+            model: Some(scoring::eval::ModelSpec {
+                url,
+                wire: scoring::remote::Wire::Openpi,
+                profile,
+                attempts: 4,
+                backoff_s: 0.25,
+            }),
+            ..Default::default()
+        };
+        let report = scoring::evaluate(task, &opts, |_| {});
+        let _ = server.kill();
+        let _ = server.wait();
+        let report = report?;
+        let steps: u64 = report.episodes.iter().map(|e| e.control_steps).sum();
+        let same = report
+            .episodes
+            .iter()
+            .zip(&baseline.episodes)
+            .all(|(a, b)| a.trajectory_hash == b.trajectory_hash);
+        let wall: f64 = report.episodes.iter().map(|e| e.wall_time_s).sum();
+        let base: f64 = baseline.episodes.iter().map(|e| e.wall_time_s).sum();
+        let waiting: f64 = report.episodes.iter().map(|e| e.policy_time_s).sum();
+        outln!(
+            "harness  model          {:>10.2} ms/control step overhead, a query every {execute:>2} steps (2 cameras at 224x224 rendered per query; {:.2} ms of it waiting on the socket and server; {steps} steps{})",
+            1e3 * (wall - base) / steps as f64,
+            1e3 * waiting / steps as f64,
+            if same {
+                ", trajectories identical to the in-process expert"
+            } else {
+                ", TRAJECTORIES DIFFER"
+            }
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
     Ok(())
 }

@@ -5,6 +5,7 @@
 mod output;
 mod bench;
 mod diagnostics;
+mod progress;
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
@@ -113,6 +114,22 @@ enum Command {
         /// 0.25 s, doubling)
         #[arg(long, default_value_t = 4, requires = "model")]
         connect_attempts: u32,
+        /// Repeat the evaluation K times on fresh seeds (run r starts at seed + r*2^20): per-run
+        /// figures and their mean ± SEM
+        #[arg(long, default_value_t = 1, value_name = "K", value_parser = clap::value_parser!(u32).range(1..))]
+        runs: u32,
+        /// Episodes run at once, each thread with its own scene, renderer and model connection
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=256))]
+        workers: u32,
+        /// Run only share I of N of the episodes (0-based), into its own --out; join the shards
+        /// with `autobio results merge`
+        #[arg(long, value_name = "I/N", requires = "out")]
+        shard: Option<scoring::eval::Shard>,
+    },
+    /// Work with finished run records
+    Results {
+        #[command(subcommand)]
+        command: ResultsCommand,
     },
     /// Re-score a recording offline from its recorded state (no simulation)
     Replay { recording: PathBuf },
@@ -124,6 +141,19 @@ enum Command {
             default_values = ["protocols/thermal_cycler/close_lid.toml", "protocols/tube/transfer.toml"]
         )]
         protocol: Vec<PathBuf>,
+    },
+}
+
+#[derive(Subcommand)]
+enum ResultsCommand {
+    /// Join the run records of a run's shards (`eval --shard I/N`, one folder each) into one
+    Merge {
+        /// The shards' --out folders
+        #[arg(required = true)]
+        shards: Vec<PathBuf>,
+        /// The folder for the merged record (its journal, manifest and results)
+        #[arg(long)]
+        out: PathBuf,
     },
 }
 
@@ -253,10 +283,10 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 out: Some(out.clone()),
                 record: true,
                 image_every: 5,
-                resume: false,
-                model: None,
+                ..Default::default()
             };
-            let report = scoring::evaluate(&task, &opts, |e| {
+            let report = scoring::evaluate(&task, &opts, |p| {
+                let e = p.result;
                 outln!(
                     "seed {:>4}  {}  {:.1} s  {}",
                     e.seed,
@@ -288,6 +318,9 @@ fn run(cli: Cli) -> Result<ExitCode> {
             wire,
             profile,
             connect_attempts,
+            runs,
+            workers,
+            shard,
         } => {
             if !scoring::policy::known(&policy) {
                 bail!(
@@ -317,11 +350,24 @@ fn run(cli: Cli) -> Result<ExitCode> {
                     image_every: if record { image_every } else { 0 },
                     resume,
                     model: model.clone(),
+                    runs,
+                    workers: workers as usize,
+                    shard,
                 };
                 errln!(
-                    "evaluating {} ({} episodes from seed {seed})",
+                    "evaluating {} ({episodes} episodes{}{} from seed {seed}{})",
                     task.id,
-                    episodes
+                    if runs > 1 {
+                        format!(" x {runs} runs")
+                    } else {
+                        String::new()
+                    },
+                    shard.map(|s| format!(", shard {s}")).unwrap_or_default(),
+                    if workers > 1 {
+                        format!(", {workers} workers")
+                    } else {
+                        String::new()
+                    },
                 );
                 if let Some(m) = &model {
                     errln!(
@@ -332,42 +378,26 @@ fn run(cli: Cli) -> Result<ExitCode> {
                         m.profile.origin
                     );
                 }
-                let report = scoring::evaluate(&task, &opts, |e| {
-                    if let Some(err) = &e.error {
-                        errln!("  seed {}: failed: {err}", e.seed);
-                    }
-                })
-                .map_err(anyhow::Error::msg)?;
+                let mut view = progress::ProgressView::new(&task.id);
+                let report = scoring::evaluate(&task, &opts, |p| view.update(p));
+                view.finish();
+                let report = report?;
                 rows.push(report);
             }
-            outln!(
-                "{:<32} {:>7} {:>16} {:>14} {:>6} {:>9} {:>10}",
-                "task",
-                "policy",
-                "success (±SEM)",
-                "Wilson 95%",
-                "score",
-                "episodes",
-                "wall time"
-            );
-            for r in &rows {
-                let s = &r.summary;
-                outln!(
-                    "{:<32} {:>7} {:>8.1}% ± {:>4.1} [{:>5.1}, {:>5.1}] {:>6.3} {:>9} {:>9.1}s",
-                    r.task_id,
-                    r.policy.split(' ').next().unwrap_or_default(),
-                    100.0 * s.success_rate,
-                    100.0 * s.sem,
-                    100.0 * s.wilson_95[0],
-                    100.0 * s.wilson_95[1],
-                    s.mean_score,
-                    s.episodes,
-                    s.wall_time_s
-                );
-            }
+            print_table(&rows);
+            print_runs(&rows);
             if let Some(o) = &out {
                 outln!("results: {}/<task>.results.json", o.display());
             }
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Results {
+            command: ResultsCommand::Merge { shards, out },
+        } => {
+            let rows = scoring::eval::merge(&shards, &out)?;
+            print_table(&rows);
+            print_runs(&rows);
+            outln!("merged: {}/<task>.results.json", out.display());
             Ok(ExitCode::SUCCESS)
         }
         Command::Replay { recording } => {
@@ -435,6 +465,73 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 .collect::<Result<Vec<_>>>()?;
             bench::run(&tasks)?;
             Ok(ExitCode::SUCCESS)
+        }
+    }
+}
+
+/// The results table: one row per task.
+fn print_table(rows: &[scoring::EvalReport]) {
+    outln!(
+        "{:<32} {:>7} {:>16} {:>14} {:>6} {:>9} {:>10}",
+        "task",
+        "policy",
+        "success (±SEM)",
+        "Wilson 95%",
+        "score",
+        "episodes",
+        "wall time"
+    );
+    for r in rows {
+        let s = &r.summary;
+        outln!(
+            "{:<32} {:>7} {:>8.1}% ± {:>4.1} [{:>5.1}, {:>5.1}] {:>6.3} {:>9} {:>9.1}s",
+            r.task_id,
+            r.policy.split(' ').next().unwrap_or_default(),
+            100.0 * s.success_rate,
+            100.0 * s.sem,
+            100.0 * s.wilson_95[0],
+            100.0 * s.wilson_95[1],
+            s.mean_score,
+            s.episodes,
+            s.wall_time_s
+        );
+    }
+}
+
+/// Over several runs: each task's per-run success rates and their mean ± SEM; over several
+/// tasks: the mean per level and overall.
+fn print_runs(rows: &[scoring::EvalReport]) {
+    if rows.len() > 1 {
+        for g in scoring::eval::aggregate(rows.iter().map(|r| (r.level.as_str(), &r.summary))) {
+            outln!(
+                "{:<32} {:>7} {:>8.1}% (mean over {} tasks, {} episodes), score {:.3}",
+                g.group,
+                "",
+                100.0 * g.success_rate,
+                g.tasks,
+                g.episodes,
+                g.mean_score
+            );
+        }
+    }
+    for r in rows {
+        if let Some(a) = &r.summary.across_runs {
+            let each: Vec<String> = r
+                .summary
+                .runs
+                .iter()
+                .map(|x| format!("{:.1}%", 100.0 * x.success_rate))
+                .collect();
+            outln!(
+                "{}: {} runs ({}): success {:.1}% ± {:.1} (mean ± SEM over runs), score {:.3} ± {:.3}",
+                r.task_id,
+                a.runs,
+                each.join(", "),
+                100.0 * a.success_rate_mean,
+                100.0 * a.success_rate_sem,
+                a.mean_score_mean,
+                a.mean_score_sem
+            );
         }
     }
 }

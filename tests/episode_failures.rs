@@ -122,11 +122,12 @@ fn the_journal_has_each_episode_before_the_next_starts() {
         record: false,
         image_every: 0,
         resume: false,
-        model: None,
+        ..Default::default()
     };
     let journal = dir.join(format!("{}.journal.jsonl", t.id));
     let mut seen = Vec::new();
-    let report = scoring::evaluate(&t, &opts, |e| {
+    let report = scoring::evaluate(&t, &opts, |p| {
+        let e = p.result;
         // Called after the journal write and before the next episode.
         let text = std::fs::read_to_string(&journal).unwrap();
         let lines: Vec<&str> = text.lines().collect();

@@ -38,7 +38,7 @@ fn every_simulated_task_scores_zero_without_motion() {
             record: false,
             image_every: 0,
             resume: false,
-            model: None,
+            ..Default::default()
         };
         let report = evaluate(&task, &opts, |_| {}).unwrap();
         assert_eq!(report.policy, "hold");

@@ -106,7 +106,10 @@ fn fault(mode: &str, outcome: &str, reason: &str) {
     let error = eps[1]["error"].as_str().unwrap();
     assert!(error.contains(reason), "{mode}: {error}");
     assert_eq!(eps[1]["success"], false);
-    assert!(stderr.contains("seed 1: failed"), "{mode}: {stderr}");
+    assert!(
+        stderr.contains(&format!("seed 1 (run 0): {outcome}: ")),
+        "{mode}: {stderr}"
+    );
 }
 
 #[test]

@@ -21,7 +21,7 @@ fn opts(out: &Path, policy: &str, episodes: usize, resume: bool) -> EvalOptions 
         record: false,
         image_every: 0,
         resume,
-        model: None,
+        ..Default::default()
     }
 }
 
@@ -43,22 +43,38 @@ fn a_run_resumes_only_with_matching_fingerprints_and_never_reruns_an_episode() {
     )
     .unwrap();
     assert_eq!(
-        manifest,
-        scoring::eval::Manifest::of(&task, "hold", 30, None)
+        (
+            manifest.task_id.as_str(),
+            manifest.policy.as_str(),
+            manifest.seed
+        ),
+        ("thermal_cycler.close_lid", "hold", 30)
     );
+    assert_eq!(
+        (manifest.episodes, manifest.runs, manifest.shard),
+        (2, 1, None)
+    );
+    assert_eq!(manifest.git_commit, scoring::eval::GIT_COMMIT);
+    assert_eq!(manifest.conditions, scoring::eval::Conditions::of(&task));
     assert_eq!(manifest.task_sha256.len(), 64);
     assert!(manifest.protocol_sha256.is_some());
 
     // Into the same folder without --resume: refused, nothing run.
-    let err = scoring::evaluate(&task, &opts(&dir, "hold", 2, false), |_| {}).unwrap_err();
+    let err = scoring::evaluate(&task, &opts(&dir, "hold", 2, false), |_| {})
+        .unwrap_err()
+        .to_string();
     assert!(err.contains("continue it with --resume"), "{err}");
     // With another policy: the fingerprints differ.
-    let err = scoring::evaluate(&task, &opts(&dir, "expert", 4, true), |_| {}).unwrap_err();
+    let err = scoring::evaluate(&task, &opts(&dir, "expert", 4, true), |_| {})
+        .unwrap_err()
+        .to_string();
     assert!(err.contains("measured under another policy;"), "{err}");
     // With an edited protocol: the compiled task differs.
     let mut edited = task.clone();
     edited.time_limit_s += 1.0;
-    let err = scoring::evaluate(&edited, &opts(&dir, "hold", 4, true), |_| {}).unwrap_err();
+    let err = scoring::evaluate(&edited, &opts(&dir, "hold", 4, true), |_| {})
+        .unwrap_err()
+        .to_string();
     assert!(
         err.contains("measured under another compiled task"),
         "{err}"
@@ -67,8 +83,10 @@ fn a_run_resumes_only_with_matching_fingerprints_and_never_reruns_an_episode() {
 
     // Matching: only the episodes not yet run are run, and the report has them all.
     let mut ran = Vec::new();
-    let report =
-        scoring::evaluate(&task, &opts(&dir, "hold", 4, true), |e| ran.push(e.seed)).unwrap();
+    let report = scoring::evaluate(&task, &opts(&dir, "hold", 4, true), |p| {
+        ran.push(p.result.seed)
+    })
+    .unwrap();
     assert_eq!(ran, [32, 33]);
     assert_eq!(report.episodes.len(), 4);
     assert_eq!(journal_seeds(&dir), [30, 31, 32, 33]);

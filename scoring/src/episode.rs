@@ -43,6 +43,9 @@ pub enum Outcome {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EpisodeResult {
     pub seed: u64,
+    /// The run it belongs to (`--runs`; 0 otherwise).
+    #[serde(default)]
+    pub run: u32,
     pub success: bool,
     pub outcome: Outcome,
     pub verdict: Verdict,
@@ -85,6 +88,7 @@ pub fn policy_failed(
     verdict.success = false;
     EpisodeResult {
         seed: instance.seed,
+        run: 0,
         success: false,
         outcome: outcome_of(failure),
         verdict,
@@ -270,6 +274,7 @@ pub fn run_episode(
     });
     Ok(EpisodeResult {
         seed: instance.seed,
+        run: 0,
         success: verdict.success,
         outcome,
         verdict,

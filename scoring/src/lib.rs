@@ -15,6 +15,6 @@ pub mod remote;
 pub mod verdict;
 
 pub use episode::{EpisodeOptions, EpisodeResult, Outcome, run_episode};
-pub use eval::{EvalReport, EvalSummary, RESULTS_SCHEMA_VERSION, evaluate};
+pub use eval::{EvalError, EvalReport, EvalSummary, RESULTS_SCHEMA_VERSION, evaluate};
 pub use policy::{HoldPolicy, Observation, POLICIES, Policy, PolicyError, StageEvent};
 pub use verdict::{Judge, PredicateValue, StageVerdict, Verdict};

@@ -116,6 +116,11 @@ impl LoadedProfile {
                 (path.display().to_string(), text)
             }
         };
+        LoadedProfile::from_text(text, origin)
+    }
+
+    /// A profile from its text; `origin` says where the text came from.
+    pub fn from_text(text: String, origin: String) -> Result<LoadedProfile, ProfileError> {
         let profile = Profile::parse(&text, &origin)?;
         Ok(LoadedProfile {
             profile,

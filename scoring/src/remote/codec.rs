@@ -296,6 +296,8 @@ mod tests {
         assert!(actions(&odd).unwrap_err().contains("dtype `<c8`"));
         let big = ndarray(Keys::Binary, 1.5f64.to_be_bytes().to_vec(), ">f8", &[1, 1]);
         assert_eq!(actions(&big).unwrap(), vec![vec![1.5]]);
-        assert!(decode(&[0xc1]).is_err());
+        // Cut short (an array of two holding one value), and a value with bytes after it.
+        assert!(decode(&[0x92, 0x01]).unwrap_err().starts_with("not msgpack"));
+        assert!(decode(&[0x01, 0x02]).unwrap_err().contains("follow the first value"));
     }
 }

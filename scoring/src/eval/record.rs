@@ -1,0 +1,316 @@
+//! The run record in an `--out` folder, per task: `<task>.manifest.json` (what the run was
+//! measured under, written before its first episode), `<task>.journal.jsonl` (one line per
+//! finished episode, fsynced before the next starts) and `<task>.results.json` (at the end).
+//! Opening a record decides whether a run may start or resume there.
+//!
+//! It does not run episodes or compute statistics.
+
+use super::{EvalError, Shard};
+use crate::episode::EpisodeResult;
+use compiler::Task;
+use serde::{Deserialize, Serialize};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// The git commit autobio was built from (`-dirty` with uncommitted changes).
+pub const GIT_COMMIT: &str = env!("AUTOBIO_GIT_COMMIT");
+
+/// Lower-case hex SHA-256.
+pub fn sha256_hex(bytes: &[u8]) -> String {
+    use sha2::{Digest, Sha256};
+    Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+pub fn journal_path(dir: &Path, task_id: &str) -> PathBuf {
+    dir.join(format!("{task_id}.journal.jsonl"))
+}
+
+pub fn manifest_path(dir: &Path, task_id: &str) -> PathBuf {
+    dir.join(format!("{task_id}.manifest.json"))
+}
+
+pub fn results_path(dir: &Path, task_id: &str) -> PathBuf {
+    dir.join(format!("{task_id}.results.json"))
+}
+
+/// Every condition that changes a score, written into results and manifests.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Conditions {
+    pub control_hz: f64,
+    /// Physics steps each action is held for.
+    pub physics_steps_per_action: u32,
+    pub physics_timestep_s: f64,
+    pub time_limit_s: f64,
+    pub termination: String,
+    /// The state's components (robots in task order), with units.
+    pub state: Vec<String>,
+    /// The action's components: absolute targets, with units.
+    pub action: Vec<String>,
+    /// Gripper polarity: the command for open and for closed, per robot.
+    pub gripper: Vec<String>,
+}
+
+impl Conditions {
+    pub fn of(task: &Task) -> Conditions {
+        let mut state = Vec::new();
+        let mut action = Vec::new();
+        let mut gripper = Vec::new();
+        for r in &task.robots {
+            if let Some(m) = robots::model(&r.model) {
+                state.extend(
+                    m.state_names()
+                        .iter()
+                        .map(|n| format!("{}/{n} (rad)", r.name)),
+                );
+                let names = m.action_names();
+                let (arm, grip) = names.split_at(m.dof());
+                action.extend(
+                    arm.iter()
+                        .map(|n| format!("{}/{n} (absolute joint target, rad)", r.name)),
+                );
+                action.extend(grip.iter().map(|n| {
+                    format!(
+                        "{}/{n} (absolute command, open {} to closed {})",
+                        r.name, m.gripper.open, m.gripper.closed
+                    )
+                }));
+                gripper.push(format!(
+                    "{}: open {}, closed {}",
+                    r.name, m.gripper.open, m.gripper.closed
+                ));
+            }
+        }
+        Conditions {
+            control_hz: task.physics.control_hz(),
+            physics_steps_per_action: task.physics.substeps,
+            physics_timestep_s: task.physics.timestep_s,
+            time_limit_s: task.time_limit_s,
+            termination: "success ends the episode at the first control step where every stage's \
+                          checks hold; otherwise it ends at the time limit"
+                .into(),
+            state,
+            action,
+            gripper,
+        }
+    }
+}
+
+/// The model part of a manifest and of results.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ModelRecord {
+    pub url: String,
+    pub wire: crate::remote::Wire,
+    /// `built-in pi0` or the profile file's path.
+    pub profile_origin: String,
+    pub profile_sha256: String,
+    pub profile: crate::profile::Profile,
+    /// What the server said about itself on connecting (openpi metadata, vla-eval `hello`);
+    /// null when it said nothing or could not be reached.
+    pub metadata: Option<serde_json::Value>,
+}
+
+/// What a run was measured under, written before its first episode; `--resume` continues a run
+/// only when these match, and `results merge` joins only shards whose manifests match.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Manifest {
+    pub results_schema_version: u32,
+    pub autobio_version: String,
+    pub git_commit: String,
+    pub task_id: String,
+    pub level: String,
+    /// The protocol file as given.
+    pub protocol: String,
+    /// SHA-256 of the compiled task (every stage, parameter and tolerance) as JSON.
+    pub task_sha256: String,
+    /// SHA-256 of the protocol file as read, when it could be read.
+    pub protocol_sha256: Option<String>,
+    pub policy: String,
+    /// Run r's episode i uses seed `seed + r * 2^20 + i`.
+    pub seed: u64,
+    /// Episodes per run and runs (a resumed run may ask for more episodes).
+    pub episodes: usize,
+    pub runs: u32,
+    /// This folder's share of the episodes (`--shard I/N`), if it is a shard.
+    pub shard: Option<Shard>,
+    pub conditions: Conditions,
+    /// The model server, when the policy is one: its wire and profile are fingerprints (its
+    /// address is not: a resumed run may find it elsewhere; its metadata only when both runs
+    /// heard it).
+    pub model: Option<ModelRecord>,
+}
+
+impl Manifest {
+    /// The fields in which `other` differs from this manifest, by name (episodes aside: a run
+    /// may be extended).
+    pub fn differences(&self, other: &Manifest) -> Vec<&'static str> {
+        let model =
+            |m: &Option<ModelRecord>| m.as_ref().map(|m| (m.wire, m.profile_sha256.clone()));
+        let metadata_same = match (&self.model, &other.model) {
+            (Some(a), Some(b)) => match (&a.metadata, &b.metadata) {
+                (Some(x), Some(y)) => x == y,
+                _ => true,
+            },
+            _ => true,
+        };
+        let fields: [(&str, bool); 13] = [
+            (
+                "results schema version",
+                self.results_schema_version == other.results_schema_version,
+            ),
+            (
+                "autobio version",
+                self.autobio_version == other.autobio_version,
+            ),
+            ("git commit", self.git_commit == other.git_commit),
+            ("task id", self.task_id == other.task_id),
+            ("compiled task", self.task_sha256 == other.task_sha256),
+            (
+                "protocol file",
+                self.protocol_sha256 == other.protocol_sha256,
+            ),
+            ("policy", self.policy == other.policy),
+            ("seed", self.seed == other.seed),
+            ("runs", self.runs == other.runs),
+            ("shard", self.shard == other.shard),
+            ("conditions", self.conditions == other.conditions),
+            (
+                "model wire or profile",
+                model(&self.model) == model(&other.model),
+            ),
+            ("model metadata", metadata_same),
+        ];
+        fields
+            .into_iter()
+            .filter(|(_, same)| !same)
+            .map(|(name, _)| name)
+            .collect()
+    }
+
+    pub fn read(path: &Path) -> Result<Manifest, EvalError> {
+        let text = std::fs::read_to_string(path).map_err(|e| EvalError::io("read", path, e))?;
+        serde_json::from_str(&text).map_err(|e| EvalError::Format {
+            path: path.to_path_buf(),
+            why: e.to_string(),
+        })
+    }
+
+    pub fn write(&self, path: &Path) -> Result<(), EvalError> {
+        write_json(path, self)
+    }
+}
+
+/// Writes JSON to `path` through a temporary file and a rename, so that a crash leaves the old
+/// file or the new one, never half of one.
+pub fn write_json(path: &Path, value: &impl Serialize) -> Result<(), EvalError> {
+    let text = serde_json::to_string_pretty(value).expect("results serialise");
+    let tmp = path.with_extension("json.tmp");
+    std::fs::File::create(&tmp)
+        .and_then(|mut f| {
+            f.write_all(text.as_bytes())?;
+            f.write_all(b"\n")?;
+            f.sync_all()
+        })
+        .and_then(|_| std::fs::rename(&tmp, path))
+        .map_err(|e| EvalError::io("write", path, e))
+}
+
+/// The finished episodes of a journal; a last line cut short by a crash is dropped from the file.
+pub fn read_journal(path: &Path) -> Result<Vec<EpisodeResult>, EvalError> {
+    let text = match std::fs::read_to_string(path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
+        Err(e) => return Err(EvalError::io("read", path, e)),
+    };
+    let mut done = Vec::new();
+    let mut kept = 0;
+    for line in text.split_inclusive('\n') {
+        match serde_json::from_str::<EpisodeResult>(line.trim_end()) {
+            Ok(r) if line.ends_with('\n') => {
+                done.push(r);
+                kept += line.len();
+            }
+            _ => break,
+        }
+    }
+    if kept < text.len() {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open(path)
+            .and_then(|f| f.set_len(kept as u64))
+            .map_err(|e| EvalError::io("truncate", path, e))?;
+    }
+    Ok(done)
+}
+
+/// An open run record: appends finished episodes to the journal.
+pub struct RunRecord {
+    journal: std::fs::File,
+    path: PathBuf,
+}
+
+impl RunRecord {
+    /// Opens the record of `here.task_id` in `dir`: checks (`resume`) or writes the manifest,
+    /// and returns what a resumed run has finished. Resuming where the task has no record yet
+    /// starts a new one.
+    pub fn open(
+        dir: &Path,
+        here: &Manifest,
+        resume: bool,
+    ) -> Result<(RunRecord, Vec<EpisodeResult>), EvalError> {
+        std::fs::create_dir_all(dir).map_err(|e| EvalError::io("create", dir, e))?;
+        let jp = journal_path(dir, &here.task_id);
+        let mp = manifest_path(dir, &here.task_id);
+        let started = std::fs::metadata(&jp).is_ok_and(|m| m.len() > 0);
+        let mut finished = Vec::new();
+        // `--resume` where this task has no record yet starts it: a retried job array shard
+        // resumes the tasks it finished and starts the ones it never reached.
+        let recorded = started || mp.exists();
+        if resume && recorded {
+            let resume_err = |why: String| EvalError::Resume {
+                dir: dir.to_path_buf(),
+                why,
+            };
+            let there = match Manifest::read(&mp) {
+                Ok(m) => m,
+                Err(e) => return Err(resume_err(format!("no readable manifest: {e}"))),
+            };
+            let differs = here.differences(&there);
+            if !differs.is_empty() {
+                return Err(resume_err(format!(
+                    "it was measured under another {}; start a new run in another --out",
+                    differs.join(", ")
+                )));
+            }
+            finished = read_journal(&jp)?;
+        } else if started {
+            return Err(EvalError::Exists {
+                dir: dir.to_path_buf(),
+                task: here.task_id.clone(),
+                journal: jp,
+            });
+        }
+        here.write(&mp)?;
+        let journal = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(&jp)
+            .map_err(|e| EvalError::io("open", &jp, e))?;
+        // The folder's entries for a new journal and manifest are on disk too.
+        std::fs::File::open(dir)
+            .and_then(|d| d.sync_all())
+            .map_err(|e| EvalError::io("sync", dir, e))?;
+        Ok((RunRecord { journal, path: jp }, finished))
+    }
+
+    /// Appends one finished episode, on disk before this returns.
+    pub fn append(&mut self, r: &EpisodeResult) -> Result<(), EvalError> {
+        let line = serde_json::to_string(r).expect("episode results serialise");
+        writeln!(self.journal, "{line}")
+            .and_then(|_| self.journal.flush())
+            .and_then(|_| self.journal.sync_data())
+            .map_err(|e| EvalError::io("append to", &self.path, e))
+    }
+}
