@@ -12,7 +12,9 @@ build: setup
 # The main job: check every shipped protocol, then the scripted expert on both thermal-cycler
 # protocols, the close-then-open chain and the tube transfer (20 seeded episodes each) and on the
 # two-arm task (5): a results table, results JSON and one MCAP recording per episode under
-# out/demo/. Last, the no-motion control (`--policy hold`), which must score 0 everywhere.
+# out/demo/. Then a model server in the loop: the reference openpi server answering with those
+# recordings, through `eval --model` (scripts/demo-model.sh). Last, the no-motion control
+# (`--policy hold`), which must score 0 everywhere.
 demo: build
 	rm -rf out/demo
 	$(CARGO) run --release --quiet -- check protocols/*/*.toml
@@ -25,6 +27,7 @@ demo: build
 	$(CARGO) run --release --quiet -- eval \
 	  --protocol protocols/two_arm/close_lid_and_transfer.toml \
 	  --episodes 5 --seed 0 --out out/demo --record
+	CARGO="$(CARGO)" ./scripts/demo-model.sh
 	$(CARGO) run --release --quiet -- eval --policy hold \
 	  --protocol protocols/thermal_cycler/close_lid.toml \
 	  --protocol protocols/thermal_cycler/open_lid.toml \

@@ -226,3 +226,51 @@ fn vla_eval_server_reaches_the_experts_success() {
         assert_eq!(m["model"]["metadata"]["protocol_version"], 1);
     }
 }
+
+#[test]
+fn rdt_profile_sends_the_unified_state_and_a_real_earlier_frame() {
+    let rec = recordings().to_str().unwrap().to_string();
+    let dir = scratch("rdt");
+    let log = dir.join("queries.jsonl");
+    let server = Server::start(
+        "openpi_server.py",
+        &[
+            "--recordings",
+            &rec,
+            "--layout",
+            "rdt",
+            "--chunk",
+            "64",
+            "--execute",
+            "64",
+            "--log",
+            log.to_str().unwrap(),
+        ],
+    );
+    let rdt = std::fs::read_to_string("profiles/rdt.toml")
+        .unwrap()
+        .replace("reset_frame = false", "reset_frame = true");
+    let path = dir.join("rdt-reset.toml");
+    std::fs::write(&path, rdt).unwrap();
+    let out = eval_model(&server, "openpi", path.to_str().unwrap(), &[CLOSE], 2, &dir);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    for e in journal(&dir, "thermal_cycler.close_lid") {
+        let x = expert("thermal_cycler.close_lid", e["seed"].as_u64().unwrap());
+        assert_eq!(e["outcome"], "success", "{e}");
+        assert_eq!(e["trajectory_hash"], x["trajectory_hash"]);
+    }
+    let queries: Vec<Value> = std::fs::read_to_string(&log)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let first: Vec<&Value> = queries.iter().filter(|q| q["query"] == 0).collect();
+    assert!(
+        first.iter().all(|q| q["history_differs"] == false),
+        "an episode's first query repeats its current frame"
+    );
+    assert!(
+        queries.iter().any(|q| q["history_differs"] == true),
+        "the earlier frame must be a real earlier frame while the arm moves: {queries:?}"
+    );
+}

@@ -16,6 +16,9 @@ the pi0 layout and the recorded instruction, so a client that sends the wrong th
   error    raises, so the client gets a text frame and close 1011
   garbage  answers bytes that are not msgpack
 
+`--layout rdt` expects RDT's layout (a 128-d state, each camera's frame and an earlier one) and
+answers 128-d actions.
+
 `--log FILE` appends each query's task, seed and prompt, so a test can see the instruction switch
 between a chain's stages.
 
@@ -36,19 +39,41 @@ from openpi_client import msgpack_numpy
 from expert_actions import Library
 
 
+# RDT's 128-d unified vector: where a single arm's 6 joints and gripper sit.
+RDT_INDICES = [0, 1, 2, 3, 4, 5, 10]
+
+
+def check_image(obs, key):
+    img = obs[key]
+    assert isinstance(img, np.ndarray), f"{key} is {type(img)}"
+    assert img.dtype == np.uint8 and img.shape == (224, 224, 3), f"{key} {img.dtype} {img.shape}"
+    assert img.std() > 1.0, f"{key} is blank"
+    return img
+
+
 def check_observation(obs, episode, args):
+    """Checks the observation's layout; returns whether the earlier frames (RDT) differ from the
+    current ones."""
     state = obs["observation/state"]
     assert isinstance(state, np.ndarray) and state.dtype == np.float32, f"state {type(state)}"
-    assert state.shape == (len(episode.actions[0]),), f"state shape {state.shape}"
+    width = len(episode.actions[0])
+    if args.layout == "rdt":
+        assert state.shape == (128,), f"state shape {state.shape}"
+        others = np.delete(state, RDT_INDICES[:width])
+        assert not others.any(), "state components outside the arm's slots"
+    else:
+        assert state.shape == (width,), f"state shape {state.shape}"
+    moved = False
     for key in ("observation/image", "observation/wrist_image"):
-        img = obs[key]
-        assert isinstance(img, np.ndarray), f"{key} is {type(img)}"
-        assert img.dtype == np.uint8 and img.shape == (224, 224, 3), f"{key} {img.dtype} {img.shape}"
-        assert img.std() > 1.0, f"{key} is blank"
+        now = check_image(obs, key)
+        if args.layout == "rdt":
+            before = check_image(obs, key.replace("observation/", "observation/-1/"))
+            moved |= bool((before != now).any())
     assert "observation/wrist_image_2" in obs, "no observation/wrist_image_2 key"
     prompt = obs["prompt"]
     allowed = [episode.instruction, *episode.stage_instructions]
     assert prompt in allowed, f"prompt {prompt!r} is not the episode's instruction"
+    return moved
 
 
 async def handler(ws, library, args, counters):
@@ -69,12 +94,16 @@ async def handler(ws, library, args, counters):
                     continue
                 if episode is None:
                     raise RuntimeError("an observation before any reset frame: which episode is this?")
-                check_observation(obs, episode, args)
+                moved = check_observation(obs, episode, args)
                 if args.log:
                     with open(args.log, "a") as log:
-                        line = {"task": task["id"], "seed": task["seed"], "query": query, "prompt": obs["prompt"]}
+                        line = {"task": task["id"], "seed": task["seed"], "query": query, "prompt": obs["prompt"], "history_differs": moved}
                         log.write(json.dumps(line) + "\n")
                 chunk = np.asarray(episode.chunk(query * args.execute, args.chunk), dtype=np.float64)
+                if args.layout == "rdt":
+                    wide = np.zeros((chunk.shape[0], 128))
+                    wide[:, RDT_INDICES[: chunk.shape[1]]] = chunk
+                    chunk = wide
                 faulty = args.fault and counters["episodes"] - 1 == args.fault_episode and query == args.fault_at
                 query += 1
                 if faulty:
@@ -111,6 +140,8 @@ async def main():
     p.add_argument("--chunk", type=int, default=50)
     p.add_argument("--execute", type=int, default=50, help="actions the client runs of each chunk")
     p.add_argument("--no-metadata", action="store_true")
+    p.add_argument("--layout", choices=["pi0", "rdt"], default="pi0",
+                   help="the observation and action layout to expect and answer in")
     p.add_argument("--fault", choices=["close", "stall", "shape", "nan", "range", "error", "garbage"])
     p.add_argument("--fault-episode", type=int, default=1)
     p.add_argument("--fault-at", type=int, default=1)

@@ -15,6 +15,14 @@ use std::path::{Path, PathBuf};
 /// The git commit autobio was built from (`-dirty` with uncommitted changes).
 pub const GIT_COMMIT: &str = env!("AUTOBIO_GIT_COMMIT");
 
+/// SHA-256 of every protocol file a task was compiled from: its own and each stage's.
+pub fn protocol_files(task: &Task) -> std::collections::BTreeMap<String, Option<String>> {
+    std::iter::once(&task.source)
+        .chain(task.stages.iter().map(|s| &s.source))
+        .map(|p| (p.clone(), std::fs::read(p).ok().map(|b| sha256_hex(&b))))
+        .collect()
+}
+
 /// Lower-case hex SHA-256.
 pub fn sha256_hex(bytes: &[u8]) -> String {
     use sha2::{Digest, Sha256};
@@ -127,6 +135,10 @@ pub struct Manifest {
     pub task_sha256: String,
     /// SHA-256 of the protocol file as read, when it could be read.
     pub protocol_sha256: Option<String>,
+    /// SHA-256 of every protocol file the task was compiled from (a chain's stages too), by
+    /// path; null for one that could not be read.
+    #[serde(default)]
+    pub protocol_files: std::collections::BTreeMap<String, Option<String>>,
     pub policy: String,
     /// Run r's episode i uses seed `seed + r * 2^20 + i`.
     pub seed: u64,

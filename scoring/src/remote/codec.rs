@@ -297,7 +297,15 @@ mod tests {
         let big = ndarray(Keys::Binary, 1.5f64.to_be_bytes().to_vec(), ">f8", &[1, 1]);
         assert_eq!(actions(&big).unwrap(), vec![vec![1.5]]);
         // Cut short (an array of two holding one value), and a value with bytes after it.
-        assert!(decode(&[0x92, 0x01]).unwrap_err().starts_with("not msgpack"));
-        assert!(decode(&[0x01, 0x02]).unwrap_err().contains("follow the first value"));
+        assert!(
+            decode(&[0x92, 0x01])
+                .unwrap_err()
+                .starts_with("not msgpack")
+        );
+        assert!(
+            decode(&[0x01, 0x02])
+                .unwrap_err()
+                .contains("follow the first value")
+        );
     }
 }
