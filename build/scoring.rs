@@ -28,6 +28,25 @@ fn main() {
         _ => "unknown".to_string(),
     };
     println!("cargo:rustc-env=AUTOBIO_GIT_COMMIT={commit}");
+    // Sources edited since the last build make the commit `-dirty`: rerun when they change.
+    for dir in [
+        "src",
+        "dsl",
+        "compiler",
+        "primitives",
+        "labware",
+        "robots",
+        "physics",
+        "runtime",
+        "scoring",
+        "leaderboard",
+        "profiles",
+        "build",
+        "Cargo.toml",
+        "Cargo.lock",
+    ] {
+        println!("cargo:rerun-if-changed={}", root.join(dir).display());
+    }
     if let Some(dir) = git(&["rev-parse", "--absolute-git-dir"]) {
         println!("cargo:rerun-if-changed={dir}/HEAD");
         println!("cargo:rerun-if-changed={dir}/index");

@@ -49,6 +49,17 @@ fn profile(dir: &Path) -> PathBuf {
 
 /// Three episodes against `url`; the journal and stderr.
 fn run(url: &str, wire: &str, profile: &Path, dir: &Path) -> (Vec<Value>, String) {
+    run_n(url, wire, profile, dir, "3")
+}
+
+/// `episodes` episodes against `url`; the journal and stderr.
+fn run_n(
+    url: &str,
+    wire: &str,
+    profile: &Path,
+    dir: &Path,
+    episodes: &str,
+) -> (Vec<Value>, String) {
     let out = autobio(&[
         "eval",
         "--model",
@@ -60,7 +71,7 @@ fn run(url: &str, wire: &str, profile: &Path, dir: &Path) -> (Vec<Value>, String
         "--protocol",
         CLOSE,
         "--episodes",
-        "3",
+        episodes,
         "--seed",
         "0",
         "--connect-attempts",
@@ -198,10 +209,14 @@ fn a_server_that_refuses_connections() {
 #[test]
 fn a_vla_eval_server_error_frame_keeps_the_connection() {
     // One camera where vla-eval's server wants two: its `predict` raises, the package answers an
-    // `error` frame, and every episode fails with the server's own words.
+    // `error` frame, and every episode fails with the server's own words, on one connection.
     let dir = scratch("fault-vla-eval");
     let rec = recordings().to_str().unwrap().to_string();
-    let server = Server::start("vla_eval_server.py", &["--recordings", &rec]);
+    let log = dir.join("starts.jsonl");
+    let server = Server::start(
+        "vla_eval_server.py",
+        &["--recordings", &rec, "--log", log.to_str().unwrap()],
+    );
     let text = std::fs::read_to_string("profiles/pi0.toml").unwrap();
     let one_camera = &text[..text
         .find("[[image]]\nkey = \"observation/wrist_image\"")
@@ -218,4 +233,51 @@ fn a_vla_eval_server_error_frame_keeps_the_connection() {
             "{error}"
         );
     }
+    let sessions: std::collections::BTreeSet<String> = std::fs::read_to_string(&log)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str::<Value>(l).unwrap()["session"].to_string())
+        .collect();
+    assert_eq!(
+        sessions.len(),
+        1,
+        "an error frame must not cost the connection"
+    );
+}
+
+#[test]
+fn a_vla_eval_server_that_cannot_start_an_episode() {
+    // vla-eval answers a failed `on_episode_start` with an `error` frame for that frame's seq:
+    // the episode fails with it, and the next one is not handed the failed one's stale reply.
+    let dir = scratch("fault-vla-eval-start");
+    let rec = recordings().to_str().unwrap().to_string();
+    let server = Server::start(
+        "vla_eval_server.py",
+        &["--recordings", &rec, "--fail-start-seed", "0"],
+    );
+    let text = std::fs::read_to_string("profiles/pi0.toml").unwrap();
+    let path = dir.join("pi0.toml");
+    std::fs::write(&path, text.replace("timeout_s = 30.0", "timeout_s = 10.0")).unwrap();
+    let (eps, _) = run_n(&server.url, "vla-eval", &path, &dir, "2");
+    let got: Vec<&str> = eps.iter().map(|e| e["outcome"].as_str().unwrap()).collect();
+    assert_eq!(got, ["server_fault", "success"], "{eps:#?}");
+    let error = eps[0]["error"].as_str().unwrap();
+    assert!(
+        error.contains("episode_start_failed") && error.contains("no checkpoint for seed 0"),
+        "{error}"
+    );
+}
+
+#[test]
+fn a_server_whose_metadata_frame_comes_late() {
+    // The metadata frame arrives after the client stopped waiting for it: it is recognised as
+    // metadata (no `actions`), not taken for the first reply.
+    let dir = scratch("fault-late-metadata");
+    let rec = recordings().to_str().unwrap().to_string();
+    let server = Server::start(
+        "openpi_server.py",
+        &["--recordings", &rec, "--metadata-delay", "1.0"],
+    );
+    let (eps, _) = run(&server.url, "openpi", &profile(&dir), &dir);
+    assert!(eps.iter().all(|e| e["outcome"] == "success"), "{eps:#?}");
 }

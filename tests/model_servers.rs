@@ -87,8 +87,15 @@ fn eval_model(
         "--out".into(),
         out.to_str().unwrap().into(),
     ];
+    // Protocols, and any `--flag value` pairs among them passed through as they are.
+    let mut raw = false;
     for p in protocols {
-        args.extend(["--protocol".to_string(), p.to_string()]);
+        if raw || p.starts_with("--") {
+            args.push(p.to_string());
+            raw = p.starts_with("--");
+        } else {
+            args.extend(["--protocol".to_string(), p.to_string()]);
+        }
     }
     let args: Vec<&str> = args.iter().map(String::as_str).collect();
     autobio(&args)
@@ -182,10 +189,23 @@ fn openpi_server_without_a_metadata_frame_autobios_variant() {
     let rec = recordings().to_str().unwrap().to_string();
     let dir = scratch("openpi-no-metadata");
     let server = Server::start("openpi_server.py", &["--recordings", &rec, "--no-metadata"]);
-    let out = eval_model(&server, "openpi", &profile(&dir, 30.0), &[CLOSE], 2, &dir);
+    // Two workers, two connections to the server at once: the same episodes as the expert's.
+    let out = eval_model(
+        &server,
+        "openpi",
+        &profile(&dir, 30.0),
+        &[CLOSE, "--workers", "2"],
+        2,
+        &dir,
+    );
     assert!(out.status.success(), "{}", text(&out.stderr));
     let eps = journal(&dir, "thermal_cycler.close_lid");
-    assert!(eps.iter().all(|e| e["outcome"] == "success"), "{eps:?}");
+    assert_eq!(eps.len(), 2);
+    for e in &eps {
+        let x = expert("thermal_cycler.close_lid", e["seed"].as_u64().unwrap());
+        assert_eq!(e["outcome"], "success", "{e}");
+        assert_eq!(e["trajectory_hash"], x["trajectory_hash"]);
+    }
     assert_eq!(
         manifest(&dir, "thermal_cycler.close_lid")["model"]["metadata"],
         Value::Null

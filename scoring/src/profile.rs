@@ -153,9 +153,9 @@ impl Profile {
                 p.image_size
             )));
         }
-        if !(p.timeout_s > 0.0 && p.timeout_s.is_finite()) {
+        if !(0.001..=86_400.0).contains(&p.timeout_s) {
             return Err(invalid(format!(
-                "`timeout_s` must be positive, not {}",
+                "`timeout_s` must be positive, between 0.001 and 86400 s, not {}",
                 p.timeout_s
             )));
         }

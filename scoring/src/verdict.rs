@@ -15,12 +15,33 @@ use serde::{Deserialize, Serialize};
 pub struct PredicateValue {
     pub text: String,
     pub holds: bool,
-    /// The measured quantity the predicate looks at (rad or m), its target and the tolerance.
+    /// The measured quantity the predicate looks at (rad or m), its target and the tolerance;
+    /// NaN (JSON null) when it cannot be measured.
+    #[serde(with = "maybe_measured")]
     pub value: f64,
+    #[serde(with = "maybe_measured")]
     pub target: f64,
+    #[serde(with = "maybe_measured")]
     pub tolerance: f64,
     /// 0..1: how far the value has come from where the stage started toward the target.
     pub progress: f64,
+}
+
+/// A measurement in JSON: a number, or null for NaN (which JSON cannot hold), read back as NaN.
+mod maybe_measured {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
+        if v.is_finite() {
+            s.serialize_f64(*v)
+        } else {
+            s.serialize_none()
+        }
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+        Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+    }
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -78,6 +78,8 @@ def check_observation(obs, episode, args):
 
 async def handler(ws, library, args, counters):
     packer = msgpack_numpy.Packer()
+    if args.metadata_delay:
+        await asyncio.sleep(args.metadata_delay)
     if not args.no_metadata:
         await ws.send(packer.pack({"server": "autobio reference openpi expert", "action_horizon": args.chunk}))
     episode = None
@@ -140,6 +142,10 @@ async def main():
     p.add_argument("--chunk", type=int, default=50)
     p.add_argument("--execute", type=int, default=50, help="actions the client runs of each chunk")
     p.add_argument("--no-metadata", action="store_true")
+    p.add_argument("--metadata-delay", type=float, default=0.0,
+                   help="seconds to wait before the metadata frame (a slow server)")
+    p.add_argument("--ping-interval", type=float, default=20.0,
+                   help="websocket keepalive pings (the websockets default: 20 s)")
     p.add_argument("--layout", choices=["pi0", "rdt"], default="pi0",
                    help="the observation and action layout to expect and answer in")
     p.add_argument("--fault", choices=["close", "stall", "shape", "nan", "range", "error", "garbage"])
@@ -155,6 +161,7 @@ async def main():
         args.port,
         compression=None,
         max_size=None,
+        ping_interval=args.ping_interval,
     ) as server:
         port = server.sockets[0].getsockname()[1]
         print(f"listening on ws://{args.host}:{port}", flush=True)

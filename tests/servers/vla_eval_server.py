@@ -4,9 +4,13 @@ expert's recorded action for that step (see expert_actions.py). The episode is n
 `task` the client sends in `episode_start`. It checks each observation's images, state and task
 description, so a client that sends the wrong thing gets an `error` frame.
 
+`--log FILE` records each `episode_start`'s session, so a test can see connections kept;
+`--fail-start-seed S` raises in `on_episode_start` for seed S (vla-eval answers an `error` frame).
+
 Prints `listening on ws://HOST:PORT` once ready (port 0 picks a free one)."""
 
 import argparse
+import json
 
 import anyio
 import numpy as np
@@ -18,10 +22,12 @@ from expert_actions import Library
 
 
 class ExpertServer(PredictModelServer):
-    def __init__(self, library):
+    def __init__(self, library, log=None, fail_start_seed=None):
         super().__init__(chunk_size=None)
         self.library = library
         self.episodes = {}
+        self.log = log
+        self.fail_start_seed = fail_start_seed
 
     def get_action_spec(self):
         return {"joints": DimSpec("joints", 6, "absolute_joint_positions"), "gripper": GRIPPER_RAW}
@@ -31,6 +37,11 @@ class ExpertServer(PredictModelServer):
 
     async def on_episode_start(self, config, ctx):
         task = config["task"]
+        if self.log:
+            with open(self.log, "a") as log:
+                log.write(json.dumps({"session": ctx.session_id, "seed": task["seed"]}) + "\n")
+        if task["seed"] == self.fail_start_seed:
+            raise RuntimeError(f"no checkpoint for seed {task['seed']} (a fault on request)")
         self.episodes[ctx.session_id] = self.library.episode(task["id"], task["seed"])
         await super().on_episode_start(config, ctx)
 
@@ -51,7 +62,7 @@ class ExpertServer(PredictModelServer):
 
 
 async def main(args):
-    server = ExpertServer(Library(args.recordings))
+    server = ExpertServer(Library(args.recordings), args.log, args.fail_start_seed)
     async with anyio.create_task_group() as tg:
         port = await tg.start(serve_async, server, args.host, args.port)
         print(f"listening on ws://{args.host}:{port}", flush=True)
@@ -62,4 +73,6 @@ if __name__ == "__main__":
     p.add_argument("--recordings", required=True)
     p.add_argument("--host", default="127.0.0.1")
     p.add_argument("--port", type=int, default=0)
+    p.add_argument("--log", help="append each episode_start's session id and seed here (JSON lines)")
+    p.add_argument("--fail-start-seed", type=int, help="raise in on_episode_start for this seed")
     anyio.run(main, p.parse_args())

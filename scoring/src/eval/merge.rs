@@ -5,7 +5,7 @@
 //!
 //! It reads and writes run records only; it runs nothing.
 
-use super::record::{Manifest, RunRecord, read_journal, write_json};
+use super::record::{Manifest, RunRecord, read_journal_only, write_json};
 use super::{EvalError, EvalReport, RESULTS_SCHEMA_VERSION, plan, results_path, summarise};
 use crate::episode::EpisodeResult;
 use std::collections::{BTreeMap, HashMap};
@@ -40,17 +40,40 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Vec<EvalReport>, EvalError>
                 .join(", ")
         )));
     }
-    by_task
+    // Every task is checked before anything is written: a refused merge leaves `out` as it was,
+    // so it can be run again once the shards are finished.
+    let merged: Vec<(Manifest, EvalReport)> = by_task
+        .iter()
+        .map(|(task, shards)| merge_task(task, shards))
+        .collect::<Result<_, _>>()?;
+    for (manifest, _) in &merged {
+        let journal = super::journal_path(out, &manifest.task_id);
+        if std::fs::metadata(&journal).is_ok_and(|m| m.len() > 0) {
+            return Err(EvalError::Exists {
+                dir: out.to_path_buf(),
+                task: manifest.task_id.clone(),
+                journal,
+            });
+        }
+    }
+    merged
         .into_iter()
-        .map(|(task, shards)| merge_task(&task, &shards, out))
+        .map(|(manifest, report)| {
+            let (mut record, _) = RunRecord::open(out, &manifest, false)?;
+            for e in &report.episodes {
+                record.append(e)?;
+            }
+            write_json(&results_path(out, &report.task_id), &report)?;
+            Ok(report)
+        })
         .collect()
 }
 
+/// One task's merged manifest and report, checked, not yet written.
 fn merge_task(
     task: &str,
     shards: &[(PathBuf, Manifest)],
-    out: &Path,
-) -> Result<EvalReport, EvalError> {
+) -> Result<(Manifest, EvalReport), EvalError> {
     let fail = |why: String| Err(EvalError::Merge(format!("{task}: {why}")));
     let (first_dir, first) = &shards[0];
     let Some(count) = first.shard.map(|s| s.count) else {
@@ -60,10 +83,7 @@ fn merge_task(
     for (dir, m) in shards {
         let mut unsharded = m.clone();
         unsharded.shard = first.shard;
-        let mut differs = first.differences(&unsharded);
-        if m.episodes != first.episodes {
-            differs.push("episodes");
-        }
+        let differs = first.differences(&unsharded);
         if !differs.is_empty() {
             return fail(format!(
                 "{} and {} were measured under another {}",
@@ -72,7 +92,7 @@ fn merge_task(
                 differs.join(", ")
             ));
         }
-        let Some(s) = m.shard.filter(|s| s.count == count) else {
+        let Some(s) = m.shard.filter(|s| s.count == count && s.index < count) else {
             return fail(format!("{} is not a shard of {count}", dir.display()));
         };
         if let Some(other) = seen[s.index as usize].replace(dir.clone()) {
@@ -100,7 +120,7 @@ fn merge_task(
         .collect();
     let mut episodes: Vec<Option<EpisodeResult>> = vec![None; planned.len()];
     for (dir, _) in shards {
-        for e in read_journal(&super::journal_path(dir, task))? {
+        for e in read_journal_only(&super::journal_path(dir, task))? {
             let Some(&k) = position.get(&e.seed) else {
                 return fail(format!(
                     "{} has seed {}, which no shard plans",
@@ -131,11 +151,6 @@ fn merge_task(
     let episodes: Vec<EpisodeResult> = episodes.into_iter().flatten().collect();
     let mut merged = first.clone();
     merged.shard = None;
-    let (mut record, already) = RunRecord::open(out, &merged, false)?;
-    debug_assert!(already.is_empty());
-    for e in &episodes {
-        record.append(e)?;
-    }
     let wall = episodes.iter().map(|e| e.wall_time_s).sum();
     let report = EvalReport {
         schema_version: RESULTS_SCHEMA_VERSION,
@@ -155,6 +170,5 @@ fn merge_task(
         shard: None,
         episodes,
     };
-    write_json(&results_path(out, task), &report)?;
-    Ok(report)
+    Ok((merged, report))
 }

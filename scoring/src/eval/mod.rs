@@ -86,6 +86,8 @@ pub enum EvalError {
     Merge(String),
     #[error("bad shard `{0}`: expected I/N with 0 <= I < N, e.g. 0/4")]
     Shard(String),
+    #[error("{0} episodes per run is more than a run's {RUN_SEED_STRIDE} seeds; use --runs")]
+    TooManyEpisodes(usize),
 }
 
 impl EvalError {
@@ -290,6 +292,9 @@ pub fn evaluate(
         conditions: Conditions::of(task),
         model: model_record.clone(),
     };
+    if opts.episodes as u64 > RUN_SEED_STRIDE {
+        return Err(EvalError::TooManyEpisodes(opts.episodes));
+    }
     if opts.model.is_none() && !policy::known(&opts.policy) {
         return Err(PolicyError::Unknown(opts.policy.clone()).into());
     }

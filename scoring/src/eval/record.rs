@@ -1,6 +1,6 @@
 //! The run record in an `--out` folder, per task: `<task>.manifest.json` (what the run was
 //! measured under, written before its first episode), `<task>.journal.jsonl` (one line per
-//! finished episode, fsynced before the next starts) and `<task>.results.json` (at the end).
+//! finished episode, fsynced as soon as it finishes) and `<task>.results.json` (at the end).
 //! Opening a record decides whether a run may start or resume there.
 //!
 //! It does not run episodes or compute statistics.
@@ -167,7 +167,7 @@ impl Manifest {
             },
             _ => true,
         };
-        let fields: [(&str, bool); 13] = [
+        let fields: [(&str, bool); 14] = [
             (
                 "results schema version",
                 self.results_schema_version == other.results_schema_version,
@@ -187,6 +187,11 @@ impl Manifest {
             ("seed", self.seed == other.seed),
             ("runs", self.runs == other.runs),
             ("shard", self.shard == other.shard),
+            // A shard's share depends on the episodes per run: it cannot change under a shard.
+            (
+                "episodes per run of a shard",
+                self.shard.is_none() || self.episodes == other.episodes,
+            ),
             ("conditions", self.conditions == other.conditions),
             (
                 "model wire or profile",
@@ -230,24 +235,11 @@ pub fn write_json(path: &Path, value: &impl Serialize) -> Result<(), EvalError> 
 }
 
 /// The finished episodes of a journal; a last line cut short by a crash is dropped from the file.
+/// A complete line that does not parse is an error: it is not a crash's trace, and nothing after
+/// it may be thrown away.
 pub fn read_journal(path: &Path) -> Result<Vec<EpisodeResult>, EvalError> {
-    let text = match std::fs::read_to_string(path) {
-        Ok(t) => t,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
-        Err(e) => return Err(EvalError::io("read", path, e)),
-    };
-    let mut done = Vec::new();
-    let mut kept = 0;
-    for line in text.split_inclusive('\n') {
-        match serde_json::from_str::<EpisodeResult>(line.trim_end()) {
-            Ok(r) if line.ends_with('\n') => {
-                done.push(r);
-                kept += line.len();
-            }
-            _ => break,
-        }
-    }
-    if kept < text.len() {
+    let (done, kept, len) = parse_journal(path)?;
+    if kept < len {
         std::fs::OpenOptions::new()
             .write(true)
             .open(path)
@@ -255,6 +247,37 @@ pub fn read_journal(path: &Path) -> Result<Vec<EpisodeResult>, EvalError> {
             .map_err(|e| EvalError::io("truncate", path, e))?;
     }
     Ok(done)
+}
+
+/// The finished episodes of a journal, read only (a last line cut short is skipped, the file
+/// left as it is): for merging shards that may still be written.
+pub fn read_journal_only(path: &Path) -> Result<Vec<EpisodeResult>, EvalError> {
+    parse_journal(path).map(|(done, _, _)| done)
+}
+
+/// The complete lines' episodes, the bytes they take, and the file's length.
+fn parse_journal(path: &Path) -> Result<(Vec<EpisodeResult>, usize, usize), EvalError> {
+    let text = match std::fs::read_to_string(path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok((Vec::new(), 0, 0)),
+        Err(e) => return Err(EvalError::io("read", path, e)),
+    };
+    let mut done = Vec::new();
+    let mut kept = 0;
+    for (number, line) in text.split_inclusive('\n').enumerate() {
+        if !line.ends_with('\n') {
+            break; // cut short by a crash
+        }
+        let r = serde_json::from_str::<EpisodeResult>(line.trim_end()).map_err(|e| {
+            EvalError::Format {
+                path: path.to_path_buf(),
+                why: format!("line {} is not an episode result: {e}", number + 1),
+            }
+        })?;
+        done.push(r);
+        kept += line.len();
+    }
+    Ok((done, kept, text.len()))
 }
 
 /// An open run record: appends finished episodes to the journal.

@@ -167,12 +167,15 @@ fn ndarray_rows(v: &Value) -> Result<Vec<Vec<f64>>, String> {
             ));
         }
     };
-    let count: usize = shape.iter().product();
-    if data.len() != count * width {
+    // A declared shape is untrusted: its product may overflow.
+    let need = shape
+        .iter()
+        .try_fold(width, |n, &d| n.checked_mul(d))
+        .filter(|&n| n == data.len());
+    if need.is_none() {
         return Err(format!(
-            "the array's data has {} bytes, but shape {shape:?} of `{dtype}` needs {}",
-            data.len(),
-            count * width
+            "the array's data has {} bytes, which is not shape {shape:?} of `{dtype}`",
+            data.len()
         ));
     }
     let signed = dtype.as_bytes()[1] == b'i';
@@ -292,6 +295,8 @@ mod tests {
         }
         let bad = ndarray(Keys::Text, vec![0; 5], "<f4", &[2]);
         assert!(actions(&bad).unwrap_err().contains("5 bytes"));
+        let huge = ndarray(Keys::Text, vec![], "<f4", &[1 << 62, 1 << 4]);
+        assert!(actions(&huge).unwrap_err().contains("not shape"));
         let odd = ndarray(Keys::Text, vec![0; 16], "<c8", &[2]);
         assert!(actions(&odd).unwrap_err().contains("dtype `<c8`"));
         let big = ndarray(Keys::Binary, 1.5f64.to_be_bytes().to_vec(), ">f8", &[1, 1]);

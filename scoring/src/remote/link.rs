@@ -5,7 +5,7 @@
 //!
 //! It does not know any message format (see `openpi` and `vla_eval`).
 
-use std::io::ErrorKind;
+use std::io::{ErrorKind, Read, Write};
 use std::net::{SocketAddr, TcpStream, ToSocketAddrs};
 use std::time::{Duration, Instant};
 use tungstenite::{Message, WebSocket};
@@ -47,7 +47,40 @@ pub struct Link {
     pub attempts: u32,
     /// The first retry's wait; doubled for each further retry.
     pub backoff: Duration,
-    socket: Option<WebSocket<TcpStream>>,
+    socket: Option<WebSocket<Timed>>,
+}
+
+/// The longest wait between connection attempts.
+const MAX_BACKOFF: Duration = Duration::from_secs(30);
+
+/// A TCP stream whose reads end at a deadline: every read waits at most the time left, so a
+/// server that pings, or trickles a frame byte by byte, cannot stretch a reply's timeout.
+#[derive(Debug)]
+struct Timed {
+    stream: TcpStream,
+    deadline: Option<Instant>,
+}
+
+impl Read for Timed {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        if let Some(d) = self.deadline {
+            let left = d.saturating_duration_since(Instant::now());
+            if left.is_zero() {
+                return Err(ErrorKind::TimedOut.into());
+            }
+            self.stream.set_read_timeout(Some(left))?;
+        }
+        self.stream.read(buf)
+    }
+}
+
+impl Write for Timed {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.stream.write(buf)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.stream.flush()
+    }
 }
 
 impl Link {
@@ -106,7 +139,7 @@ impl Link {
             }
             if attempt < self.attempts {
                 std::thread::sleep(wait);
-                wait *= 2;
+                wait = (wait * 2).min(MAX_BACKOFF);
             }
         }
         Err(WireError::Connect {
@@ -117,7 +150,7 @@ impl Link {
         })
     }
 
-    fn open_once(&self) -> Result<WebSocket<TcpStream>, String> {
+    fn open_once(&self) -> Result<WebSocket<Timed>, String> {
         let addrs: Vec<SocketAddr> = self
             .addr
             .to_socket_addrs()
@@ -129,12 +162,19 @@ impl Link {
                 Ok(stream) => {
                     stream.set_nodelay(true).ok();
                     stream
-                        .set_read_timeout(Some(self.timeout))
-                        .and_then(|_| stream.set_write_timeout(Some(self.timeout)))
+                        .set_write_timeout(Some(self.timeout))
                         .map_err(|e| e.to_string())?;
-                    return tungstenite::client(self.url.as_str(), stream)
-                        .map(|(ws, _)| ws)
-                        .map_err(|e| format!("websocket handshake failed: {e}"));
+                    let timed = Timed {
+                        stream,
+                        deadline: Some(Instant::now() + self.timeout),
+                    };
+                    return match tungstenite::client(self.url.as_str(), timed) {
+                        Ok((mut ws, _)) => {
+                            ws.get_mut().deadline = None;
+                            Ok(ws)
+                        }
+                        Err(e) => Err(format!("websocket handshake failed: {e}")),
+                    };
                 }
                 Err(e) => last = e.to_string(),
             }
@@ -191,13 +231,14 @@ impl Link {
         let Some(ws) = self.socket.as_mut() else {
             return Err(WireError::Closed(" before the reply".into()));
         };
-        ws.get_mut().set_read_timeout(Some(wait)).ok();
-        loop {
+        // One deadline for the whole reply: pings and partial frames do not extend it.
+        ws.get_mut().deadline = Some(Instant::now() + wait);
+        let result = loop {
             match ws.read() {
-                Ok(Message::Binary(b)) => return Ok(Frame::Binary(b.to_vec())),
-                Ok(Message::Text(t)) => return Ok(Frame::Text(t.to_string())),
+                Ok(Message::Binary(b)) => break Ok(Frame::Binary(b.to_vec())),
+                Ok(Message::Text(t)) => break Ok(Frame::Text(t.to_string())),
                 Ok(Message::Close(c)) => {
-                    return Err(WireError::Closed(match c {
+                    break Err(WireError::Closed(match c {
                         Some(c) if !c.reason.is_empty() => {
                             format!(" (code {}: {})", u16::from(c.code), c.reason)
                         }
@@ -206,9 +247,11 @@ impl Link {
                     }));
                 }
                 Ok(_) => continue,
-                Err(e) => return Err(classify(e, wait.as_secs_f64())),
+                Err(e) => break Err(classify(e, wait.as_secs_f64())),
             }
-        }
+        };
+        ws.get_mut().deadline = None;
+        result
     }
 }
 

@@ -15,8 +15,9 @@
 //!   servers keep the chunk and answer one action per observation; a chunk is accepted too.
 //!
 //! Failures of the server (no connection, closed, silent past the timeout, error frames, frames
-//! that do not decode) are [`crate::PolicyError::Server`]; decodable replies with wrong actions
-//! are [`crate::PolicyError::BadActions`]. It does not render or step the simulation.
+//! that do not decode or break the wire's framing) are [`crate::PolicyError::Server`]; decodable
+//! replies without usable actions (no `actions` key, wrong shape or dtype) are
+//! [`crate::PolicyError::BadActions`]. It does not render or step the simulation.
 
 pub mod codec;
 pub mod link;
@@ -187,36 +188,52 @@ impl Model {
         Ok(self.seq)
     }
 
-    /// A vla-eval frame answering `seq`: its type and payload; an `error` frame is an error.
+    /// A vla-eval frame answering `seq`: its type and payload; an `error` frame is an error. An
+    /// error answering an earlier frame (vla-eval answers a failed `episode_start` so) is
+    /// remembered and reported once the reply to `seq` has been read, so that it fails the
+    /// episode it belongs to and leaves no stale reply behind.
     fn recv_frame(&mut self, seq: u64) -> Result<(String, Value), WireError> {
-        let bytes = match self.link.recv(None)? {
-            Frame::Binary(b) => b,
-            Frame::Text(t) => return self.error_frame(t),
-        };
-        let v = codec::decode(&bytes).map_err(|e| self.malformed(e))?;
-        let field = |k: &str| codec::get(&v, k).cloned();
-        let (Some(kind), Some(payload), Some(echo)) =
-            (field("type"), field("payload"), field("seq"))
-        else {
-            return Err(self.malformed("a frame without `type`, `payload` and `seq`".into()));
-        };
-        let kind = kind.as_str().unwrap_or_default().to_string();
-        if kind == "error" {
-            let why = codec::get(&payload, "error")
-                .and_then(|e| e.as_str().map(str::to_string))
-                .unwrap_or_else(|| codec::to_json(&payload).to_string());
-            return self.error_frame(why);
+        let mut earlier: Option<String> = None;
+        loop {
+            let bytes = match self.link.recv(None)? {
+                Frame::Binary(b) => b,
+                Frame::Text(t) => return self.error_frame(t),
+            };
+            let v = codec::decode(&bytes).map_err(|e| self.malformed(e))?;
+            let field = |k: &str| codec::get(&v, k).cloned();
+            let (Some(kind), Some(payload), Some(echo)) =
+                (field("type"), field("payload"), field("seq"))
+            else {
+                return Err(self.malformed("a frame without `type`, `payload` and `seq`".into()));
+            };
+            let kind = kind.as_str().unwrap_or_default().to_string();
+            let answers = echo.as_u64() == Some(seq);
+            if kind == "error" {
+                let why = codec::get(&payload, "error")
+                    .and_then(|e| e.as_str().map(str::to_string))
+                    .unwrap_or_else(|| codec::to_json(&payload).to_string());
+                if answers {
+                    // An earlier error (a failed `episode_start`) is the cause of this one.
+                    return self.error_frame(earlier.unwrap_or(why));
+                }
+                earlier.get_or_insert(why);
+                continue;
+            }
+            if !answers {
+                return Err(self.malformed(format!(
+                    "the reply to frame {seq} carries seq {echo}; replies must echo their request's seq"
+                )));
+            }
+            if let Some(why) = earlier {
+                return self.error_frame(why);
+            }
+            return Ok((kind, payload));
         }
-        if echo.as_u64() != Some(seq) {
-            return Err(self.malformed(format!(
-                "the reply to frame {seq} carries seq {echo}; replies must echo their request's seq"
-            )));
-        }
-        Ok((kind, payload))
     }
 
     /// Tells the server an episode starts.
     pub fn start_episode(&mut self, info: &EpisodeInfo) -> Result<(), WireError> {
+        self.drop_if_stale();
         self.open()?;
         let task = codec::map(vec![
             ("name", codec::str(info.task_id)),
@@ -236,6 +253,26 @@ impl Model {
         }
     }
 
+    /// Drops a kept connection the server has closed since the last episode (a restart, a
+    /// keepalive timeout), so that the episode starts on a fresh one instead of failing at its
+    /// first query. A frame waiting there is a late openpi metadata frame, or a sign the
+    /// connection's state is unknown.
+    fn drop_if_stale(&mut self) {
+        if !self.link.is_open() {
+            return;
+        }
+        match self.link.try_recv(Duration::from_millis(1)) {
+            Ok(None) => {}
+            Ok(Some(Frame::Binary(b))) if self.wire == Wire::Openpi && self.metadata_pending => {
+                if self.take_metadata(&b).is_err() {
+                    self.link.drop_connection();
+                }
+            }
+            Ok(Some(_)) => self.link.drop_connection(),
+            Err(_) => {}
+        }
+    }
+
     /// Tells the server how the episode ended (vla-eval); failures here change nothing.
     pub fn end_episode(&mut self, success: bool, steps: u64) {
         if self.wire == Wire::VlaEval && self.link.is_open() {
@@ -250,46 +287,65 @@ impl Model {
         }
     }
 
-    /// One query: the observation (in the wire's layout) out, the action rows back.
-    fn infer(&mut self, obs: Value) -> Result<Vec<Vec<f64>>, WireError> {
-        self.open()?;
+    /// One query: the observation (in the wire's layout) out, the action rows back. A reply
+    /// that decodes but holds no usable actions is [`PolicyError::BadActions`].
+    fn infer(&mut self, obs: Value) -> Result<Vec<Vec<f64>>, PolicyError> {
+        self.open().map_err(PolicyError::Server)?;
         let reply = match self.wire {
-            Wire::Openpi => {
-                self.link.send(codec::encode(&obs))?;
-                loop {
-                    let bytes = match self.link.recv(None)? {
-                        Frame::Binary(b) => b,
-                        Frame::Text(t) => return self.error_frame(t),
-                    };
-                    let v = codec::decode(&bytes).map_err(|e| self.malformed(e))?;
-                    let has_actions =
-                        codec::get(&v, "actions").is_some() || codec::get(&v, "action").is_some();
-                    if !has_actions && self.metadata_pending {
-                        // A metadata frame that came after we stopped waiting for it.
-                        self.take_metadata(&bytes)?;
-                        continue;
-                    }
-                    self.metadata_pending = false;
-                    break v;
-                }
-            }
+            Wire::Openpi => self.openpi_reply(obs).map_err(PolicyError::Server)?,
             Wire::VlaEval => {
-                let seq = self.send_frame("observation", obs)?;
-                let (kind, payload) = self.recv_frame(seq)?;
+                let seq = self
+                    .send_frame("observation", obs)
+                    .map_err(PolicyError::Server)?;
+                let (kind, payload) = self.recv_frame(seq).map_err(PolicyError::Server)?;
                 if kind != "action" {
-                    return Err(self.malformed(format!("expected an `action` frame, got `{kind}`")));
+                    return Err(PolicyError::Server(
+                        self.malformed(format!("expected an `action` frame, got `{kind}`")),
+                    ));
                 }
                 payload
             }
         };
         let Some(actions) = codec::get(&reply, "actions").or_else(|| codec::get(&reply, "action"))
         else {
-            return Err(WireError::Malformed(format!(
+            return Err(PolicyError::BadActions(format!(
                 "the reply has no `actions` (nor `action`) key: {}",
                 short(&codec::to_json(&reply).to_string())
             )));
         };
-        codec::actions(actions).map_err(WireError::Malformed)
+        codec::actions(actions).map_err(PolicyError::BadActions)
+    }
+
+    /// openpi: the observation out, its reply back (a metadata frame met on the way is kept).
+    fn openpi_reply(&mut self, obs: Value) -> Result<Value, WireError> {
+        self.link.send(codec::encode(&obs))?;
+        let mut took_metadata = false;
+        loop {
+            let frame = match self.link.recv(None) {
+                // We took a reply without actions for a late metadata frame: it was the reply.
+                Err(WireError::Timeout(_)) if took_metadata => {
+                    return Err(WireError::Malformed(
+                        "the first reply had no `actions` (nor `action`) key".into(),
+                    ));
+                }
+                other => other?,
+            };
+            let bytes = match frame {
+                Frame::Binary(b) => b,
+                Frame::Text(t) => return self.error_frame(t),
+            };
+            let v = codec::decode(&bytes).map_err(|e| self.malformed(e))?;
+            let has_actions =
+                codec::get(&v, "actions").is_some() || codec::get(&v, "action").is_some();
+            if !has_actions && self.metadata_pending {
+                // A metadata frame that came after we stopped waiting for it.
+                self.take_metadata(&bytes)?;
+                took_metadata = true;
+                continue;
+            }
+            self.metadata_pending = false;
+            return Ok(v);
+        }
     }
 
     /// The observation in this wire's and profile's layout.
@@ -385,7 +441,7 @@ impl Policy for ModelPolicy<'_> {
 
     fn act(&mut self, obs: &Observation) -> Result<Vec<Vec<f64>>, PolicyError> {
         let value = self.model.observation(obs, &self.layout);
-        let rows = self.model.infer(value).map_err(PolicyError::Server)?;
+        let rows = self.model.infer(value)?;
         let p = &self.model.profile.profile;
         let len = self.layout.state_len;
         if rows.is_empty() {
