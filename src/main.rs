@@ -64,16 +64,26 @@ enum Command {
     },
     /// Compile a protocol and print the task as JSON
     Compile { file: PathBuf },
-    /// Record scripted-expert demonstrations (MCAP with camera images) into a folder
+    /// Record scripted-expert demonstrations: MCAP recordings, or a LeRobot dataset (v2.1 for
+    /// openpi, v3.0 for lerobot 0.4+) with every camera at 50 Hz; failed episodes are not written
     Demo {
-        #[arg(long)]
-        protocol: PathBuf,
+        #[arg(long, required = true)]
+        protocol: Vec<PathBuf>,
         #[arg(long, default_value_t = 1)]
         episodes: usize,
         #[arg(long, default_value_t = 0)]
         seed: u64,
         #[arg(long, default_value = "out/demo")]
         out: PathBuf,
+        /// `mcap` (one recording per episode), `lerobot-v21` or `lerobot-v30`
+        #[arg(long, default_value = "mcap")]
+        format: DemoFormat,
+        /// Dataset videos: `av1` (libsvtav1, LeRobot's default) or `h264`
+        #[arg(long, default_value = "av1")]
+        codec: String,
+        /// Continue the dataset in --out (episodes already in it are not recorded again)
+        #[arg(long)]
+        resume: bool,
     },
     /// Evaluate a policy on protocols: seeded episodes, a results table and results JSON
     Eval {
@@ -142,6 +152,15 @@ enum Command {
         )]
         protocol: Vec<PathBuf>,
     },
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum DemoFormat {
+    Mcap,
+    #[value(name = "lerobot-v21")]
+    LerobotV21,
+    #[value(name = "lerobot-v30")]
+    LerobotV30,
 }
 
 #[derive(Subcommand)]
@@ -274,34 +293,44 @@ fn run(cli: Cli) -> Result<ExitCode> {
             episodes,
             seed,
             out,
+            format,
+            codec,
+            resume,
         } => {
-            let task = front.load(&protocol)?;
-            let opts = scoring::eval::EvalOptions {
-                policy: "expert".into(),
+            let tasks = protocol
+                .iter()
+                .map(|p| front.load(p))
+                .collect::<Result<Vec<_>>>()?;
+            let version = match format {
+                DemoFormat::Mcap => return demo_mcap(&tasks, episodes, seed, &out),
+                DemoFormat::LerobotV21 => dataset::Version::V21,
+                DemoFormat::LerobotV30 => dataset::Version::V30,
+            };
+            let codec = match codec.as_str() {
+                "av1" => dataset::Codec::Av1,
+                "h264" => dataset::Codec::H264,
+                other => bail!("unknown codec `{other}`: av1 or h264"),
+            };
+            let opts = dataset::GenerateOptions {
                 episodes,
                 seed,
-                out: Some(out.clone()),
-                record: true,
-                image_every: 5,
-                ..Default::default()
+                out: out.clone(),
+                version,
+                codec,
+                resume,
+                image_size: [224, 224],
             };
-            let report = scoring::evaluate(&task, &opts, |p| {
-                let e = p.result;
-                outln!(
-                    "seed {:>4}  {}  {:.1} s  {}",
-                    e.seed,
-                    if e.success { "success" } else { "FAIL   " },
-                    e.sim_time_s,
-                    e.recording.as_deref().unwrap_or("")
-                );
-            })
-            .map_err(anyhow::Error::msg)?;
+            let done = dataset::generate(&tasks, &opts, |task, seed, r| match r {
+                Ok(frames) => errln!("  {task} seed {seed}: {frames} frames"),
+                Err(why) => errln!("  {task} seed {seed}: failed, not written: {why}"),
+            })?;
             outln!(
-                "{} demonstrations of {} in {} ({} successful)",
-                report.summary.episodes,
-                task.id,
+                "{}: {} episodes in the dataset, {} written, {} failed, {} frames recorded",
                 out.display(),
-                report.summary.successes
+                done.written,
+                done.written - done.resumed,
+                done.failed.len(),
+                done.frames
             );
             Ok(ExitCode::SUCCESS)
         }
@@ -534,4 +563,37 @@ fn print_runs(rows: &[scoring::EvalReport]) {
             );
         }
     }
+}
+
+/// `demo --format mcap`: one MCAP recording (with camera images) per expert episode.
+fn demo_mcap(tasks: &[compiler::Task], episodes: usize, seed: u64, out: &Path) -> Result<ExitCode> {
+    for task in tasks {
+        let opts = scoring::eval::EvalOptions {
+            policy: "expert".into(),
+            episodes,
+            seed,
+            out: Some(out.to_path_buf()),
+            record: true,
+            image_every: 5,
+            ..Default::default()
+        };
+        let report = scoring::evaluate(task, &opts, |p| {
+            let e = p.result;
+            outln!(
+                "seed {:>4}  {}  {:.1} s  {}",
+                e.seed,
+                if e.success { "success" } else { "FAIL   " },
+                e.sim_time_s,
+                e.recording.as_deref().unwrap_or("")
+            );
+        })?;
+        outln!(
+            "{} demonstrations of {} in {} ({} successful)",
+            report.summary.episodes,
+            task.id,
+            out.display(),
+            report.summary.successes
+        );
+    }
+    Ok(ExitCode::SUCCESS)
 }

@@ -7,7 +7,7 @@ use crate::verdict::{Judge, Verdict};
 use compiler::{SceneInstance, Task};
 use runtime::Episode;
 use runtime::record::Recorder;
-use runtime::render::Cameras;
+use runtime::render::{Cameras, Image};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 use std::path::PathBuf;
@@ -106,6 +106,15 @@ pub fn policy_failed(
     }
 }
 
+/// Receives every control step of an episode (datasets): the observation's state before the
+/// action, the action, and every task camera's frame at the sink's size.
+pub trait StepSink {
+    /// Render every camera at this size (width, height) each control step.
+    fn image_size(&self) -> Option<[usize; 2]>;
+    /// One control step; an error ends the episode as a failure.
+    fn step(&mut self, state: &[f64], action: &[f64], images: &[Image]) -> Result<(), String>;
+}
+
 /// Runs one episode of `task` with the scene instance for `seed`.
 pub fn run_episode(
     task: &Task,
@@ -113,6 +122,18 @@ pub fn run_episode(
     instance: &SceneInstance,
     policy: &mut dyn Policy,
     opts: &EpisodeOptions,
+) -> Result<EpisodeResult, String> {
+    run_episode_with(task, scene, instance, policy, opts, None)
+}
+
+/// [`run_episode`], also feeding every control step to `sink`.
+pub fn run_episode_with(
+    task: &Task,
+    scene: &Arc<runtime::Scene>,
+    instance: &SceneInstance,
+    policy: &mut dyn Policy,
+    opts: &EpisodeOptions,
+    mut sink: Option<&mut dyn StepSink>,
 ) -> Result<EpisodeResult, String> {
     let start = Instant::now();
     let mut ep = Episode::new(scene.clone(), task, instance);
@@ -138,6 +159,10 @@ pub fn run_episode(
         None => None,
     };
     let mut previous: Option<Vec<runtime::render::Image>> = None;
+    let mut sink_eyes = match sink.as_ref().and_then(|s| s.image_size()) {
+        Some([w, h]) => Some(Cameras::new(scene, w, h)?),
+        None => None,
+    };
     let mut policy_time = 0.0;
     let mut hasher = Sha256::new();
     let mut steps = 0u64;
@@ -210,6 +235,17 @@ pub fn run_episode(
                 previous = Some(c.render(&mut ep.data, &cam_names)?);
             }
             let t = ep.time();
+            if let Some(s) = sink.as_mut() {
+                let frames = match sink_eyes.as_mut() {
+                    Some(c) => c.render(&mut ep.data, &cam_names)?,
+                    None => Vec::new(),
+                };
+                if let Err(e) = s.step(&ep.state(), &action, &frames) {
+                    error = Some(format!("the step sink failed: {e}"));
+                    outcome = Some(Outcome::PolicyError);
+                    break 'episode;
+                }
+            }
             if let Some(r) = rec.as_mut() {
                 let mut rest = action.as_slice();
                 for (k, ids) in robots.iter().enumerate() {

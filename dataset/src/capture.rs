@@ -1,0 +1,89 @@
+//! One episode being captured for a dataset: the episode loop's step sink. Every control step's
+//! state and action are kept; every camera's frame streams into its own staged video and
+//! histogram. Nothing reaches the dataset until the writer commits the capture.
+
+use crate::DatasetError;
+use crate::stats::ImageStats;
+use crate::video::{Codec, VideoWriter};
+use runtime::render::Image;
+use std::path::PathBuf;
+
+pub struct Capture {
+    pub(crate) dir: PathBuf,
+    pub(crate) task_id: String,
+    pub(crate) seed: u64,
+    pub(crate) rows: Vec<(Vec<f32>, Vec<f32>)>,
+    pub(crate) videos: Vec<VideoWriter>,
+    pub(crate) images: Vec<ImageStats>,
+    size: [usize; 2],
+    error: Option<DatasetError>,
+}
+
+impl Capture {
+    pub(crate) fn new(
+        dir: PathBuf,
+        cameras: usize,
+        size: [usize; 2],
+        fps: u32,
+        codec: Codec,
+    ) -> Result<Capture, DatasetError> {
+        if dir.exists() {
+            std::fs::remove_dir_all(&dir).map_err(|e| DatasetError::io("clear", &dir, e))?;
+        }
+        std::fs::create_dir_all(&dir).map_err(|e| DatasetError::io("create", &dir, e))?;
+        let videos = (0..cameras)
+            .map(|k| {
+                VideoWriter::create(
+                    &dir.join(format!("camera{k}.mp4")),
+                    size[0],
+                    size[1],
+                    fps,
+                    codec,
+                )
+            })
+            .collect::<Result<_, _>>()?;
+        Ok(Capture {
+            dir,
+            task_id: String::new(),
+            seed: 0,
+            rows: Vec::new(),
+            videos,
+            images: vec![ImageStats::default(); cameras],
+            size,
+            error: None,
+        })
+    }
+
+    /// The first failure while capturing (a video that could not be written), if any.
+    pub(crate) fn take_error(&mut self) -> Option<DatasetError> {
+        self.error.take()
+    }
+
+    /// Throws the capture away (a failed episode).
+    pub fn discard(self) {
+        for v in self.videos {
+            v.finish().ok();
+        }
+        std::fs::remove_dir_all(&self.dir).ok();
+    }
+}
+
+impl scoring::episode::StepSink for Capture {
+    fn image_size(&self) -> Option<[usize; 2]> {
+        Some(self.size)
+    }
+
+    fn step(&mut self, state: &[f64], action: &[f64], images: &[Image]) -> Result<(), String> {
+        let f = |v: &[f64]| v.iter().map(|&x| x as f32).collect();
+        self.rows.push((f(state), f(action)));
+        for (k, img) in images.iter().enumerate() {
+            self.images[k].add(&img.rgb);
+            if let Err(e) = self.videos[k].push(&img.rgb) {
+                let why = e.to_string();
+                self.error.get_or_insert(e);
+                return Err(why);
+            }
+        }
+        Ok(())
+    }
+}

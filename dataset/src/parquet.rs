@@ -1,0 +1,295 @@
+//! Parquet files in the Arrow types LeRobot's loaders expect: frames (`observation.state` and
+//! `action` as `FixedSizeList<float32>`, `timestamp` float32, the int64 indices) with the
+//! `huggingface` schema metadata `datasets` reads its features from; v3.0's episodes table; and
+//! v3.0's `tasks.parquet`, a pandas frame indexed by the task string (with pandas' metadata, so
+//! pandas rebuilds the index).
+//!
+//! It writes tables only; layouts and statistics live elsewhere.
+
+use crate::DatasetError;
+use arrow_array::builder::{ListBuilder, StringBuilder};
+use arrow_array::{
+    ArrayRef, FixedSizeListArray, Float32Array, Float64Array, Int64Array, RecordBatch, StringArray,
+};
+use arrow_schema::{DataType, Field, Schema};
+use parquet::arrow::ArrowWriter;
+use parquet::basic::Compression;
+use parquet::file::properties::WriterProperties;
+use serde_json::json;
+use std::collections::HashMap;
+use std::path::Path;
+use std::sync::Arc;
+
+/// One frame's row.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Row {
+    pub state: Vec<f32>,
+    pub action: Vec<f32>,
+    pub timestamp: f32,
+    pub frame_index: i64,
+    pub episode_index: i64,
+    pub index: i64,
+    pub task_index: i64,
+}
+
+fn write(path: &Path, batch: RecordBatch) -> Result<(), DatasetError> {
+    let bad = |e: String| DatasetError::Parquet {
+        path: path.to_path_buf(),
+        why: e,
+    };
+    let file = std::fs::File::create(path).map_err(|e| DatasetError::io("create", path, e))?;
+    let props = WriterProperties::builder()
+        .set_compression(Compression::SNAPPY)
+        .set_created_by("autobio".into())
+        .build();
+    let mut w =
+        ArrowWriter::try_new(file, batch.schema(), Some(props)).map_err(|e| bad(e.to_string()))?;
+    w.write(&batch).map_err(|e| bad(e.to_string()))?;
+    let file = w.into_inner().map_err(|e| bad(e.to_string()))?;
+    file.sync_all()
+        .map_err(|e| DatasetError::io("sync", path, e))
+}
+
+fn list(values: Vec<f32>, width: usize) -> Result<ArrayRef, String> {
+    let item = Arc::new(Field::new("item", DataType::Float32, true));
+    FixedSizeListArray::try_new(
+        item,
+        width as i32,
+        Arc::new(Float32Array::from(values)),
+        None,
+    )
+    .map(|a| Arc::new(a) as ArrayRef)
+    .map_err(|e| e.to_string())
+}
+
+/// The frames table: one row per frame.
+pub fn write_frames(path: &Path, rows: &[Row]) -> Result<(), DatasetError> {
+    let bad = |e: String| DatasetError::Parquet {
+        path: path.to_path_buf(),
+        why: e,
+    };
+    let sw = rows.first().map_or(0, |r| r.state.len());
+    let aw = rows.first().map_or(0, |r| r.action.len());
+    let item = Arc::new(Field::new("item", DataType::Float32, true));
+    let seq = |n: usize| DataType::FixedSizeList(item.clone(), n as i32);
+    let value = |dtype: &str| json!({"dtype": dtype, "_type": "Value"});
+    let sequence =
+        |n: usize| json!({"feature": value("float32"), "length": n, "_type": "Sequence"});
+    let hf = json!({"info": {"features": {
+        "observation.state": sequence(sw),
+        "action": sequence(aw),
+        "timestamp": value("float32"),
+        "frame_index": value("int64"),
+        "episode_index": value("int64"),
+        "index": value("int64"),
+        "task_index": value("int64"),
+    }}});
+    let schema = Schema::new_with_metadata(
+        vec![
+            Field::new("observation.state", seq(sw), true),
+            Field::new("action", seq(aw), true),
+            Field::new("timestamp", DataType::Float32, true),
+            Field::new("frame_index", DataType::Int64, true),
+            Field::new("episode_index", DataType::Int64, true),
+            Field::new("index", DataType::Int64, true),
+            Field::new("task_index", DataType::Int64, true),
+        ],
+        HashMap::from([("huggingface".to_string(), hf.to_string())]),
+    );
+    let ints = |f: fn(&Row) -> i64| {
+        Arc::new(Int64Array::from(rows.iter().map(f).collect::<Vec<_>>())) as ArrayRef
+    };
+    let columns: Vec<ArrayRef> = vec![
+        list(
+            rows.iter().flat_map(|r| r.state.iter().copied()).collect(),
+            sw,
+        )
+        .map_err(bad)?,
+        list(
+            rows.iter().flat_map(|r| r.action.iter().copied()).collect(),
+            aw,
+        )
+        .map_err(bad)?,
+        Arc::new(Float32Array::from(
+            rows.iter().map(|r| r.timestamp).collect::<Vec<_>>(),
+        )),
+        ints(|r| r.frame_index),
+        ints(|r| r.episode_index),
+        ints(|r| r.index),
+        ints(|r| r.task_index),
+    ];
+    let batch = RecordBatch::try_new(Arc::new(schema), columns).map_err(|e| bad(e.to_string()))?;
+    write(path, batch)
+}
+
+/// v3.0's `meta/tasks.parquet`: `task_index`, indexed by the task string.
+pub fn write_tasks(path: &Path, tasks: &[String]) -> Result<(), DatasetError> {
+    let bad = |e: String| DatasetError::Parquet {
+        path: path.to_path_buf(),
+        why: e,
+    };
+    let pandas = json!({
+        "index_columns": ["__index_level_0__"],
+        "column_indexes": [{"name": null, "field_name": null, "pandas_type": "unicode", "numpy_type": "object", "metadata": {"encoding": "UTF-8"}}],
+        "columns": [
+            {"name": "task_index", "field_name": "task_index", "pandas_type": "int64", "numpy_type": "int64", "metadata": null},
+            {"name": null, "field_name": "__index_level_0__", "pandas_type": "unicode", "numpy_type": "object", "metadata": null}
+        ],
+        "creator": {"library": "autobio", "version": env!("CARGO_PKG_VERSION")},
+        "pandas_version": "2.2.3"
+    });
+    let schema = Schema::new_with_metadata(
+        vec![
+            Field::new("task_index", DataType::Int64, true),
+            Field::new("__index_level_0__", DataType::Utf8, true),
+        ],
+        HashMap::from([("pandas".to_string(), pandas.to_string())]),
+    );
+    let batch = RecordBatch::try_new(
+        Arc::new(schema),
+        vec![
+            Arc::new(Int64Array::from(
+                (0..tasks.len() as i64).collect::<Vec<_>>(),
+            )),
+            Arc::new(StringArray::from(tasks.to_vec())),
+        ],
+    )
+    .map_err(|e| bad(e.to_string()))?;
+    write(path, batch)
+}
+
+/// One episode's row in v3.0's `meta/episodes` table.
+#[derive(Clone, Debug)]
+pub struct EpisodeRow {
+    pub episode_index: i64,
+    pub tasks: Vec<String>,
+    pub length: i64,
+    pub from_index: i64,
+    pub to_index: i64,
+    /// Per camera key: (from_timestamp, to_timestamp) inside the shared video file.
+    pub videos: Vec<(String, f64, f64)>,
+}
+
+/// v3.0's `meta/episodes/chunk-000/file-000.parquet` (everything in chunk 0, file 0).
+pub fn write_episodes(path: &Path, eps: &[EpisodeRow]) -> Result<(), DatasetError> {
+    let bad = |e: String| DatasetError::Parquet {
+        path: path.to_path_buf(),
+        why: e,
+    };
+    let ints = |f: &dyn Fn(&EpisodeRow) -> i64| {
+        Arc::new(Int64Array::from(eps.iter().map(f).collect::<Vec<_>>())) as ArrayRef
+    };
+    let mut tasks = ListBuilder::new(StringBuilder::new());
+    for e in eps {
+        for t in &e.tasks {
+            tasks.values().append_value(t);
+        }
+        tasks.append(true);
+    }
+    let mut fields = vec![
+        Field::new("episode_index", DataType::Int64, true),
+        Field::new(
+            "tasks",
+            DataType::List(Arc::new(Field::new("item", DataType::Utf8, true))),
+            true,
+        ),
+        Field::new("length", DataType::Int64, true),
+        Field::new("data/chunk_index", DataType::Int64, true),
+        Field::new("data/file_index", DataType::Int64, true),
+        Field::new("dataset_from_index", DataType::Int64, true),
+        Field::new("dataset_to_index", DataType::Int64, true),
+    ];
+    let mut columns: Vec<ArrayRef> = vec![
+        ints(&|e| e.episode_index),
+        Arc::new(tasks.finish()),
+        ints(&|e| e.length),
+        ints(&|_| 0),
+        ints(&|_| 0),
+        ints(&|e| e.from_index),
+        ints(&|e| e.to_index),
+    ];
+    let keys: Vec<String> = eps
+        .first()
+        .map(|e| e.videos.iter().map(|v| v.0.clone()).collect())
+        .unwrap_or_default();
+    for (k, key) in keys.iter().enumerate() {
+        for name in ["chunk_index", "file_index"] {
+            fields.push(Field::new(
+                format!("videos/{key}/{name}"),
+                DataType::Int64,
+                true,
+            ));
+            columns.push(ints(&|_| 0));
+        }
+        fields.push(Field::new(
+            format!("videos/{key}/from_timestamp"),
+            DataType::Float64,
+            true,
+        ));
+        columns.push(Arc::new(Float64Array::from(
+            eps.iter().map(|e| e.videos[k].1).collect::<Vec<_>>(),
+        )));
+        fields.push(Field::new(
+            format!("videos/{key}/to_timestamp"),
+            DataType::Float64,
+            true,
+        ));
+        columns.push(Arc::new(Float64Array::from(
+            eps.iter().map(|e| e.videos[k].2).collect::<Vec<_>>(),
+        )));
+    }
+    for name in ["meta/episodes/chunk_index", "meta/episodes/file_index"] {
+        fields.push(Field::new(name, DataType::Int64, true));
+        columns.push(ints(&|_| 0));
+    }
+    let batch = RecordBatch::try_new(Arc::new(Schema::new(fields)), columns)
+        .map_err(|e| bad(e.to_string()))?;
+    write(path, batch)
+}
+
+/// Joins episodes' frame tables, in order, into one file (v3.0's shared data file).
+pub fn concat_frames(parts: &[std::path::PathBuf], out: &Path) -> Result<(), DatasetError> {
+    use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
+    let bad = |e: String| DatasetError::Parquet {
+        path: out.to_path_buf(),
+        why: e,
+    };
+    let mut writer: Option<ArrowWriter<std::fs::File>> = None;
+    for p in parts {
+        let file = std::fs::File::open(p).map_err(|e| DatasetError::io("open", p, e))?;
+        let builder =
+            ParquetRecordBatchReaderBuilder::try_new(file).map_err(|e| bad(e.to_string()))?;
+        // The file's schema, with its metadata (the batches' schemas carry none).
+        let schema = builder.schema().clone();
+        let reader = builder.build().map_err(|e| bad(e.to_string()))?;
+        for batch in reader {
+            let batch = batch.map_err(|e| bad(e.to_string()))?;
+            if writer.is_none() {
+                let file =
+                    std::fs::File::create(out).map_err(|e| DatasetError::io("create", out, e))?;
+                let props = WriterProperties::builder()
+                    .set_compression(Compression::SNAPPY)
+                    .set_created_by("autobio".into())
+                    .build();
+                writer = Some(
+                    ArrowWriter::try_new(file, schema.clone(), Some(props))
+                        .map_err(|e| bad(e.to_string()))?,
+                );
+            }
+            let batch = batch
+                .with_schema(schema.clone())
+                .map_err(|e| bad(e.to_string()))?;
+            writer
+                .as_mut()
+                .expect("made above")
+                .write(&batch)
+                .map_err(|e| bad(e.to_string()))?;
+        }
+    }
+    if let Some(w) = writer {
+        let file = w.into_inner().map_err(|e| bad(e.to_string()))?;
+        file.sync_all()
+            .map_err(|e| DatasetError::io("sync", out, e))?;
+    }
+    Ok(())
+}

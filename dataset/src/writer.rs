@@ -1,0 +1,605 @@
+//! The dataset folder: LeRobot v2.1 or v3.0 layout, plus `meta/autobio.jsonl` (one line per
+//! committed episode: its task, seed, length, instruction and statistics), the commit record
+//! from which every other metadata file is rebuilt, so a crash between files loses nothing and
+//! duplicates nothing.
+//!
+//! v2.1: `data/chunk-XXX/episode_XXXXXX.parquet`, `videos/chunk-XXX/<key>/episode_XXXXXX.mp4`,
+//! `meta/{info.json, episodes.jsonl, tasks.jsonl, episodes_stats.jsonl, stats.json}`.
+//! v3.0: episodes staged in `.episodes/`, then assembled by `finish` into
+//! `data/chunk-000/file-000.parquet`, `videos/<key>/chunk-000/file-000.mp4` (stream-copied),
+//! `meta/episodes/chunk-000/file-000.parquet`, `meta/tasks.parquet`, `meta/{info,stats}.json`.
+
+use crate::DatasetError;
+use crate::capture::Capture;
+use crate::parquet::{EpisodeRow, Row, write_episodes, write_frames, write_tasks};
+use crate::stats::{self, FeatureStats};
+use crate::video::{self, Codec};
+use serde::{Deserialize, Serialize};
+use serde_json::{Value, json};
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+pub const FPS: u32 = 50;
+const CHUNK: usize = 1000;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Version {
+    #[serde(rename = "v2.1")]
+    V21,
+    #[serde(rename = "v3.0")]
+    V30,
+}
+
+impl Version {
+    fn code(self) -> &'static str {
+        match self {
+            Version::V21 => "v2.1",
+            Version::V30 => "v3.0",
+        }
+    }
+}
+
+/// One committed episode, as `meta/autobio.jsonl` keeps it.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Committed {
+    episode_index: usize,
+    task_id: String,
+    seed: u64,
+    length: usize,
+    instruction: String,
+    /// Per feature: LeRobot's stats JSON with quantiles.
+    stats: BTreeMap<String, Value>,
+}
+
+pub struct DatasetWriter {
+    root: PathBuf,
+    version: Version,
+    codec: Codec,
+    size: [usize; 2],
+    robot_type: String,
+    state_names: Vec<String>,
+    action_names: Vec<String>,
+    /// Camera names and their feature keys (`observation.images.<camera>`).
+    cameras: Vec<(String, String)>,
+    done: Vec<Committed>,
+}
+
+fn create_dir(p: &Path) -> Result<(), DatasetError> {
+    std::fs::create_dir_all(p).map_err(|e| DatasetError::io("create", p, e))
+}
+
+fn write_file(p: &Path, text: &str) -> Result<(), DatasetError> {
+    let tmp = p.with_extension("tmp");
+    std::fs::File::create(&tmp)
+        .and_then(|mut f| {
+            f.write_all(text.as_bytes())?;
+            f.sync_all()
+        })
+        .and_then(|_| std::fs::rename(&tmp, p))
+        .map_err(|e| DatasetError::io("write", p, e))
+}
+
+fn rename(from: &Path, to: &Path) -> Result<(), DatasetError> {
+    if let Some(parent) = to.parent() {
+        create_dir(parent)?;
+    }
+    std::fs::rename(from, to).map_err(|e| DatasetError::io("move", to, e))
+}
+
+impl DatasetWriter {
+    /// Opens `root` for writing: a new dataset (the folder absent or empty), or with `resume`
+    /// the dataset a run left there, of the same version and robots.
+    pub fn open(
+        root: &Path,
+        version: Version,
+        codec: Codec,
+        tasks: &[compiler::Task],
+        size: [usize; 2],
+        resume: bool,
+    ) -> Result<DatasetWriter, DatasetError> {
+        let first = tasks.first().ok_or_else(|| DatasetError::Existing {
+            path: root.to_path_buf(),
+            why: "no task to record".into(),
+        })?;
+        let mut state_names = Vec::new();
+        let mut action_names = Vec::new();
+        let mut robot_type = Vec::new();
+        for r in &first.robots {
+            if let Some(m) = robots::model(&r.model) {
+                state_names.extend(m.state_names().iter().map(|n| format!("{}/{n}", r.name)));
+                action_names.extend(m.action_names().iter().map(|n| format!("{}/{n}", r.name)));
+                robot_type.push(m.name.to_string());
+            }
+        }
+        for t in tasks {
+            let same = t
+                .robots
+                .iter()
+                .map(|r| &r.model)
+                .eq(first.robots.iter().map(|r| &r.model))
+                && t.cameras
+                    .iter()
+                    .map(|c| &c.name)
+                    .eq(first.cameras.iter().map(|c| &c.name));
+            if !same {
+                return Err(DatasetError::Existing {
+                    path: root.to_path_buf(),
+                    why: format!(
+                        "{} and {} have different robots or cameras; one dataset holds one layout",
+                        first.id, t.id
+                    ),
+                });
+            }
+        }
+        let cameras = first
+            .cameras
+            .iter()
+            .map(|c| {
+                (
+                    c.name.clone(),
+                    format!("observation.images.{}", c.name.replace('/', "_")),
+                )
+            })
+            .collect();
+        let record = root.join("meta/autobio.jsonl");
+        let mut done = Vec::new();
+        let occupied = std::fs::read_dir(root).is_ok_and(|mut d| d.next().is_some());
+        if occupied && !resume {
+            return Err(DatasetError::Existing {
+                path: root.to_path_buf(),
+                why: "is not empty; continue its dataset with --resume, or use another --out"
+                    .into(),
+            });
+        }
+        if occupied {
+            let info: Value = std::fs::read_to_string(root.join("meta/info.json"))
+                .ok()
+                .and_then(|t| serde_json::from_str(&t).ok())
+                .unwrap_or(Value::Null);
+            if info["codebase_version"] != version.code() {
+                return Err(DatasetError::Existing {
+                    path: root.to_path_buf(),
+                    why: format!(
+                        "holds a dataset of version {}, not {}",
+                        info["codebase_version"],
+                        version.code()
+                    ),
+                });
+            }
+            let text = std::fs::read_to_string(&record).unwrap_or_default();
+            for line in text.split_inclusive('\n').filter(|l| l.ends_with('\n')) {
+                match serde_json::from_str::<Committed>(line) {
+                    Ok(c) => done.push(c),
+                    Err(e) => {
+                        return Err(DatasetError::Existing {
+                            path: record,
+                            why: format!("a line is not a committed episode: {e}"),
+                        });
+                    }
+                }
+            }
+        }
+        create_dir(&root.join("meta"))?;
+        let w = DatasetWriter {
+            root: root.to_path_buf(),
+            version,
+            codec,
+            size,
+            robot_type: robot_type.join("+"),
+            state_names,
+            action_names,
+            cameras,
+            done,
+        };
+        // The record is the truth: drop a torn last line, rebuild the metadata from it.
+        let kept: String = w
+            .done
+            .iter()
+            .map(|c| serde_json::to_string(c).expect("json") + "\n")
+            .collect();
+        write_file(&record, &kept)?;
+        w.write_metadata()?;
+        Ok(w)
+    }
+
+    /// Episodes committed so far.
+    pub fn episodes(&self) -> usize {
+        self.done.len()
+    }
+
+    /// Whether an episode of `task` with `seed` is already in the dataset.
+    pub fn has(&self, task: &str, seed: u64) -> bool {
+        self.done
+            .iter()
+            .any(|c| c.task_id == task && c.seed == seed)
+    }
+
+    /// A capture staged for the next episode.
+    pub fn capture(&self, task: &compiler::Task, seed: u64) -> Result<Capture, DatasetError> {
+        let dir = self
+            .root
+            .join(".staging")
+            .join(format!("{}_seed{seed}", task.id));
+        let mut c = Capture::new(dir, self.cameras.len(), self.size, FPS, self.codec)?;
+        c.task_id = task.id.clone();
+        c.seed = seed;
+        Ok(c)
+    }
+
+    fn total_frames(&self) -> usize {
+        self.done.iter().map(|c| c.length).sum()
+    }
+
+    fn tasks(&self) -> Vec<String> {
+        let mut tasks: Vec<String> = Vec::new();
+        for c in &self.done {
+            if !tasks.contains(&c.instruction) {
+                tasks.push(c.instruction.clone());
+            }
+        }
+        tasks
+    }
+
+    /// Where episode `index`'s parquet and videos live (v2.1 final, v3.0 staged).
+    fn episode_paths(&self, index: usize) -> (PathBuf, Vec<PathBuf>) {
+        let chunk = index / CHUNK;
+        match self.version {
+            Version::V21 => (
+                self.root
+                    .join(format!("data/chunk-{chunk:03}/episode_{index:06}.parquet")),
+                self.cameras
+                    .iter()
+                    .map(|(_, key)| {
+                        self.root.join(format!(
+                            "videos/chunk-{chunk:03}/{key}/episode_{index:06}.mp4"
+                        ))
+                    })
+                    .collect(),
+            ),
+            Version::V30 => (
+                self.root
+                    .join(format!(".episodes/episode_{index:06}.parquet")),
+                (0..self.cameras.len())
+                    .map(|k| {
+                        self.root
+                            .join(format!(".episodes/episode_{index:06}_camera{k}.mp4"))
+                    })
+                    .collect(),
+            ),
+        }
+    }
+
+    /// Moves a finished capture into the dataset as the next episode; returns its frames.
+    pub fn commit(
+        &mut self,
+        mut capture: Capture,
+        instruction: &str,
+    ) -> Result<usize, DatasetError> {
+        if let Some(e) = capture.take_error() {
+            capture.discard();
+            return Err(e);
+        }
+        let index = self.done.len();
+        let length = capture.rows.len();
+        let mut tasks = self.tasks();
+        let task_index = tasks
+            .iter()
+            .position(|t| t == instruction)
+            .unwrap_or_else(|| {
+                tasks.push(instruction.to_string());
+                tasks.len() - 1
+            });
+        let first = self.total_frames();
+        let rows: Vec<Row> = capture
+            .rows
+            .iter()
+            .enumerate()
+            .map(|(i, (state, action))| Row {
+                state: state.clone(),
+                action: action.clone(),
+                timestamp: (i as f64 / FPS as f64) as f32,
+                frame_index: i as i64,
+                episode_index: index as i64,
+                index: (first + i) as i64,
+                task_index: task_index as i64,
+            })
+            .collect();
+        let staged = capture.dir.join("data.parquet");
+        write_frames(&staged, &rows)?;
+        let mut stats: BTreeMap<String, Value> = BTreeMap::new();
+        let column =
+            |f: &dyn Fn(&Row) -> Vec<f64>| stats::vectors(&rows.iter().map(f).collect::<Vec<_>>());
+        let features: [(&str, FeatureStats); 7] = [
+            (
+                "observation.state",
+                column(&|r| r.state.iter().map(|&x| x as f64).collect()),
+            ),
+            (
+                "action",
+                column(&|r| r.action.iter().map(|&x| x as f64).collect()),
+            ),
+            ("timestamp", column(&|r| vec![r.timestamp as f64])),
+            ("frame_index", column(&|r| vec![r.frame_index as f64])),
+            ("episode_index", column(&|r| vec![r.episode_index as f64])),
+            ("index", column(&|r| vec![r.index as f64])),
+            ("task_index", column(&|r| vec![r.task_index as f64])),
+        ];
+        for (name, s) in features {
+            stats.insert(name.into(), s.to_json(true));
+        }
+        for ((_, key), img) in self.cameras.iter().zip(&capture.images) {
+            stats.insert(key.clone(), img.finish().to_json(true));
+        }
+        let videos = std::mem::take(&mut capture.videos);
+        for v in videos {
+            let frames = v.finish()?;
+            if frames != length {
+                return Err(DatasetError::Episode {
+                    task: capture.task_id.clone(),
+                    seed: capture.seed,
+                    why: format!("a camera has {frames} frames for {length} steps"),
+                });
+            }
+        }
+        let (data, videos) = self.episode_paths(index);
+        rename(&staged, &data)?;
+        for (k, to) in videos.iter().enumerate() {
+            rename(&capture.dir.join(format!("camera{k}.mp4")), to)?;
+        }
+        std::fs::remove_dir_all(&capture.dir).ok();
+        let committed = Committed {
+            episode_index: index,
+            task_id: capture.task_id.clone(),
+            seed: capture.seed,
+            length,
+            instruction: instruction.to_string(),
+            stats,
+        };
+        // The commit point: the episode exists once its line is on disk.
+        let record = self.root.join("meta/autobio.jsonl");
+        std::fs::OpenOptions::new()
+            .append(true)
+            .create(true)
+            .open(&record)
+            .and_then(|mut f| {
+                writeln!(f, "{}", serde_json::to_string(&committed).expect("json"))?;
+                f.sync_data()
+            })
+            .map_err(|e| DatasetError::io("append to", &record, e))?;
+        self.done.push(committed);
+        if self.version == Version::V21 {
+            self.write_metadata()?;
+        }
+        Ok(length)
+    }
+
+    fn features(&self) -> Value {
+        let scalar = |dtype: &str| json!({"dtype": dtype, "shape": [1], "names": null});
+        let mut f = serde_json::Map::new();
+        f.insert(
+            "observation.state".into(),
+            json!({"dtype": "float32", "shape": [self.state_names.len()], "names": self.state_names}),
+        );
+        f.insert(
+            "action".into(),
+            json!({"dtype": "float32", "shape": [self.action_names.len()], "names": self.action_names}),
+        );
+        let [w, h] = self.size;
+        for (_, key) in &self.cameras {
+            f.insert(
+                key.clone(),
+                json!({"dtype": "video", "shape": [h, w, 3], "names": ["height", "width", "channel"],
+                       "info": {"video.height": h, "video.width": w, "video.codec": self.codec.name(),
+                                "video.pix_fmt": "yuv420p", "video.is_depth_map": false,
+                                "video.fps": FPS, "video.channels": 3, "has_audio": false}}),
+            );
+        }
+        f.insert("timestamp".into(), scalar("float32"));
+        for k in ["frame_index", "episode_index", "index", "task_index"] {
+            f.insert(k.into(), scalar("int64"));
+        }
+        Value::Object(f)
+    }
+
+    /// Aggregated statistics over every committed episode.
+    fn stats(&self, quantiles: bool) -> Value {
+        let mut out = serde_json::Map::new();
+        let Some(first) = self.done.first() else {
+            return Value::Object(out);
+        };
+        for name in first.stats.keys() {
+            let parts: Vec<FeatureStats> = self
+                .done
+                .iter()
+                .map(|c| from_json(&c.stats[name]))
+                .collect();
+            let refs: Vec<&FeatureStats> = parts.iter().collect();
+            out.insert(name.clone(), stats::aggregate(&refs).to_json(quantiles));
+        }
+        Value::Object(out)
+    }
+
+    fn info(&self) -> Value {
+        let n = self.done.len();
+        let mut info = json!({
+            "codebase_version": self.version.code(),
+            "robot_type": self.robot_type,
+            "total_episodes": n,
+            "total_frames": self.total_frames(),
+            "total_tasks": self.tasks().len(),
+            "chunks_size": CHUNK,
+            "fps": FPS,
+            "splits": {"train": format!("0:{n}")},
+            "features": self.features(),
+        });
+        match self.version {
+            Version::V21 => {
+                info["total_videos"] = json!(n * self.cameras.len());
+                info["total_chunks"] = json!(n.div_ceil(CHUNK).max(1));
+                info["data_path"] =
+                    json!("data/chunk-{episode_chunk:03d}/episode_{episode_index:06d}.parquet");
+                info["video_path"] = json!(
+                    "videos/chunk-{episode_chunk:03d}/{video_key}/episode_{episode_index:06d}.mp4"
+                );
+            }
+            Version::V30 => {
+                info["data_files_size_in_mb"] = json!(100);
+                info["video_files_size_in_mb"] = json!(500);
+                info["data_path"] =
+                    json!("data/chunk-{chunk_index:03d}/file-{file_index:03d}.parquet");
+                info["video_path"] =
+                    json!("videos/{video_key}/chunk-{chunk_index:03d}/file-{file_index:03d}.mp4");
+            }
+        }
+        info
+    }
+
+    /// v2.1's metadata, rebuilt from the commit record (v3.0's is written by `finish`).
+    fn write_metadata(&self) -> Result<(), DatasetError> {
+        let meta = self.root.join("meta");
+        write_file(
+            &meta.join("info.json"),
+            &serde_json::to_string_pretty(&self.info()).expect("json"),
+        )?;
+        if self.version != Version::V21 {
+            return Ok(());
+        }
+        let tasks = self.tasks();
+        let lines = |f: &dyn Fn(&Committed) -> Value| -> String {
+            self.done.iter().map(|c| f(c).to_string() + "\n").collect()
+        };
+        write_file(
+            &meta.join("episodes.jsonl"),
+            &lines(
+                &|c| json!({"episode_index": c.episode_index, "tasks": [c.instruction], "length": c.length}),
+            ),
+        )?;
+        write_file(
+            &meta.join("tasks.jsonl"),
+            &tasks
+                .iter()
+                .enumerate()
+                .map(|(i, t)| json!({"task_index": i, "task": t}).to_string() + "\n")
+                .collect::<String>(),
+        )?;
+        write_file(
+            &meta.join("episodes_stats.jsonl"),
+            &lines(&|c| {
+                let stats: serde_json::Map<String, Value> = c
+                    .stats
+                    .iter()
+                    .map(|(k, v)| (k.clone(), from_json(v).to_json(false)))
+                    .collect();
+                json!({"episode_index": c.episode_index, "stats": stats})
+            }),
+        )?;
+        write_file(
+            &meta.join("stats.json"),
+            &serde_json::to_string_pretty(&self.stats(false)).expect("json"),
+        )
+    }
+
+    /// Completes the dataset (v3.0: assembles the shared files) and removes the staging area;
+    /// returns the episodes written.
+    pub fn finish(self) -> Result<usize, DatasetError> {
+        std::fs::remove_dir_all(self.root.join(".staging")).ok();
+        if self.version == Version::V30 {
+            self.assemble_v30()?;
+        }
+        self.write_metadata()?;
+        Ok(self.done.len())
+    }
+
+    fn assemble_v30(&self) -> Result<(), DatasetError> {
+        let meta = self.root.join("meta");
+        let data = self.root.join("data/chunk-000/file-000.parquet");
+        create_dir(data.parent().expect("has a parent"))?;
+        let staged: Vec<PathBuf> = (0..self.done.len())
+            .map(|i| self.episode_paths(i).0)
+            .collect();
+        crate::parquet::concat_frames(&staged, &data)?;
+        let mut rows: Vec<EpisodeRow> = Vec::new();
+        let mut from_index = 0;
+        let mut from_s = 0.0;
+        for c in &self.done {
+            let to_s = from_s + c.length as f64 / FPS as f64;
+            rows.push(EpisodeRow {
+                episode_index: c.episode_index as i64,
+                tasks: vec![c.instruction.clone()],
+                length: c.length as i64,
+                from_index,
+                to_index: from_index + c.length as i64,
+                videos: self
+                    .cameras
+                    .iter()
+                    .map(|(_, key)| (key.clone(), from_s, to_s))
+                    .collect(),
+            });
+            from_index += c.length as i64;
+            from_s = to_s;
+        }
+        for (k, (_, key)) in self.cameras.iter().enumerate() {
+            let out = self
+                .root
+                .join(format!("videos/{key}/chunk-000/file-000.mp4"));
+            create_dir(out.parent().expect("has a parent"))?;
+            let parts: Vec<PathBuf> = (0..self.done.len())
+                .map(|i| self.episode_paths(i).1[k].clone())
+                .collect();
+            video::concatenate(&parts, &out)?;
+        }
+        let eps = meta.join("episodes/chunk-000/file-000.parquet");
+        create_dir(eps.parent().expect("has a parent"))?;
+        write_episodes(&eps, &rows)?;
+        write_tasks(&meta.join("tasks.parquet"), &self.tasks())?;
+        write_file(
+            &meta.join("stats.json"),
+            &serde_json::to_string_pretty(&self.stats(true)).expect("json"),
+        )
+    }
+}
+
+/// Stats back from their JSON (images' `[[[x]]]` flattened).
+fn from_json(v: &Value) -> FeatureStats {
+    let mut out = BTreeMap::new();
+    let mut image = false;
+    let mut count = 0;
+    for (k, vals) in v.as_object().into_iter().flatten() {
+        if k == "count" {
+            count = vals[0].as_u64().unwrap_or(0);
+            continue;
+        }
+        let flat: Vec<f64> = vals
+            .as_array()
+            .into_iter()
+            .flatten()
+            .map(|x| {
+                if x.is_array() {
+                    image = true;
+                    x[0][0].as_f64().unwrap_or(f64::NAN)
+                } else {
+                    x.as_f64().unwrap_or(f64::NAN)
+                }
+            })
+            .collect();
+        let key: &'static str = match k.as_str() {
+            "min" => "min",
+            "max" => "max",
+            "mean" => "mean",
+            "std" => "std",
+            "q01" => "q01",
+            "q10" => "q10",
+            "q50" => "q50",
+            "q90" => "q90",
+            "q99" => "q99",
+            _ => continue,
+        };
+        out.insert(key, flat);
+    }
+    FeatureStats {
+        stats: out,
+        count,
+        image,
+    }
+}

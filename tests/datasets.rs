@@ -1,0 +1,149 @@
+//! `autobio demo --format lerobot-v21|lerobot-v30`: datasets checked by readers that are not
+//! ours (tests/datasets/check_lerobot.py: pyarrow for parquet and metadata, ffprobe for every
+//! frame's time), byte-identical parquet for the same seeds, no failed episode written, and an
+//! interrupted run resumed.
+
+mod common;
+
+use common::{autobio, scratch, text};
+use serde_json::Value;
+use std::path::Path;
+use std::process::Command;
+
+const CLOSE: &str = "protocols/thermal_cycler/close_lid.toml";
+
+fn demo(
+    format: &str,
+    episodes: &str,
+    seed: &str,
+    out: &Path,
+    extra: &[&str],
+) -> std::process::Output {
+    let mut args = vec![
+        "demo",
+        "--protocol",
+        CLOSE,
+        "--format",
+        format,
+        "--episodes",
+        episodes,
+        "--seed",
+        seed,
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend(extra);
+    autobio(&args)
+}
+
+fn check(dir: &Path, version: &str) -> Value {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let out = Command::new(root.join(".deps/servers/bin/python"))
+        .arg(root.join("tests/datasets/check_lerobot.py"))
+        .arg(dir)
+        .arg(version)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}: {}",
+        dir.display(),
+        text(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+#[test]
+fn v21_datasets_are_lerobots_layout_and_byte_identical_per_seed() {
+    let (a, b) = (scratch("v21-a").join("ds"), scratch("v21-b").join("ds"));
+    for dir in [&a, &b] {
+        let out = demo("lerobot-v21", "1", "3", dir, &[]);
+        assert!(out.status.success(), "{}", text(&out.stderr));
+    }
+    let summary = check(&a, "v2.1");
+    assert_eq!(summary["episodes"], 1);
+    let video = &summary["videos"]["observation.images.table_front"];
+    assert_eq!(video["codec_name"], "av1");
+    assert_eq!(video["avg_frame_rate"], "50/1");
+    assert_eq!(
+        (video["width"].as_u64(), video["height"].as_u64()),
+        (Some(224), Some(224))
+    );
+    let parquet = "data/chunk-000/episode_000000.parquet";
+    assert_eq!(
+        std::fs::read(a.join(parquet)).unwrap(),
+        std::fs::read(b.join(parquet)).unwrap(),
+        "the same seed must give the same parquet, byte for byte"
+    );
+    // Into the same folder again without --resume: refused, nothing touched.
+    let again = demo("lerobot-v21", "1", "3", &a, &[]);
+    assert_eq!(again.status.code(), Some(2));
+    assert!(
+        text(&again.stderr).contains("--resume"),
+        "{}",
+        text(&again.stderr)
+    );
+}
+
+#[test]
+fn v30_datasets_share_files_and_resume() {
+    let dir = scratch("v30").join("ds");
+    let out = demo("lerobot-v30", "1", "0", &dir, &["--codec", "h264"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    // Resumed with one more episode: the first is kept, the second added, the shared files
+    // rebuilt.
+    let out = demo(
+        "lerobot-v30",
+        "2",
+        "0",
+        &dir,
+        &["--codec", "h264", "--resume"],
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(
+        text(&out.stdout).contains("1 written"),
+        "{}",
+        text(&out.stdout)
+    );
+    let summary = check(&dir, "v3.0");
+    assert_eq!(summary["episodes"], 2);
+    assert_eq!(
+        summary["videos"]["observation.images.table_front"]["codec_name"],
+        "h264"
+    );
+    assert!(!dir.join(".staging").exists());
+}
+
+#[test]
+fn a_failed_expert_episode_is_not_written() {
+    // An edited protocol whose time limit is too short for the expert: every episode fails and
+    // none is written, and the run says so.
+    let dir = scratch("failed");
+    let text_ = std::fs::read_to_string(CLOSE).unwrap();
+    let short = text_.replacen("time_limit = \"31.5 s\"", "time_limit = \"0.5 s\"", 1);
+    assert_ne!(short, text_);
+    let path = dir.join("short.toml");
+    std::fs::write(&path, short).unwrap();
+    let out = autobio(&[
+        "demo",
+        "--protocol",
+        path.to_str().unwrap(),
+        "--format",
+        "lerobot-v21",
+        "--episodes",
+        "1",
+        "--out",
+        dir.join("ds").to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    assert!(
+        stdout.contains("0 written") && stdout.contains("1 failed"),
+        "{stdout}"
+    );
+    let info: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("ds/meta/info.json")).unwrap())
+            .unwrap();
+    assert_eq!(info["total_episodes"], 0);
+    assert!(!dir.join("ds/data").exists());
+}
