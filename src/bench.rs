@@ -11,7 +11,8 @@
 //!   model in the loop (the reference openpi server on loopback answering the expert's recorded
 //!   actions), the harness's time per control step beyond the same episodes run in-process:
 //!   rendering, encoding and the round trip, for a query every 50 steps (pi0's chunks) and every
-//!   step (as vla-eval servers are driven).
+//!   step (as vla-eval servers are driven); recorded frames/s of dataset generation with one
+//!   worker and two.
 
 use anyhow::Result;
 use mujoco_rs::prelude::*;
@@ -353,7 +354,39 @@ fn harness_figures(task: &compiler::Task) -> Result<()> {
         two / one,
         task.id
     );
-    model_in_the_loop(task)
+    model_in_the_loop(task)?;
+    dataset_figures(task)
+}
+
+/// Recorded frames/s of dataset generation (two cameras at 224x224, 50 Hz, AV1), with one
+/// worker and with two.
+fn dataset_figures(task: &compiler::Task) -> Result<()> {
+    let dir = std::env::temp_dir().join(format!("autobio-bench-ds-{}", std::process::id()));
+    let mut rates = Vec::new();
+    for workers in [1, 2] {
+        let _ = std::fs::remove_dir_all(&dir);
+        let opts = dataset::GenerateOptions {
+            episodes: 2,
+            seed: 0,
+            out: dir.clone(),
+            version: dataset::Version::V21,
+            codec: dataset::Codec::Av1,
+            resume: false,
+            image_size: [224, 224],
+            workers,
+        };
+        let t = Instant::now();
+        let done = dataset::generate(std::slice::from_ref(task), &opts, |_, _, _| {})?;
+        rates.push(done.frames as f64 / t.elapsed().as_secs_f64());
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    outln!(
+        "dataset  lerobot-v21    {:>10.1} frames/s recorded with 2 workers, {:.1} with 1: {:.2}x (2 cameras at 224x224, AV1, 2 episodes)",
+        rates[1],
+        rates[0],
+        rates[1] / rates[0]
+    );
+    Ok(())
 }
 
 /// The harness's cost per control step with a model server in the loop, against the same

@@ -84,6 +84,9 @@ enum Command {
         /// Continue the dataset in --out (episodes already in it are not recorded again)
         #[arg(long)]
         resume: bool,
+        /// Episodes recorded at once (datasets), each thread with its own scene and renderer
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=256))]
+        workers: u32,
     },
     /// Evaluate a policy on protocols: seeded episodes, a results table and results JSON
     Eval {
@@ -296,6 +299,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             format,
             codec,
             resume,
+            workers,
         } => {
             let tasks = protocol
                 .iter()
@@ -319,6 +323,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 codec,
                 resume,
                 image_size: [224, 224],
+                workers: workers as usize,
             };
             let done = dataset::generate(&tasks, &opts, |task, seed, r| match r {
                 Ok(frames) => errln!("  {task} seed {seed}: {frames} frames"),

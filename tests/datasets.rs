@@ -55,13 +55,15 @@ fn check(dir: &Path, version: &str) -> Value {
 
 #[test]
 fn v21_datasets_are_lerobots_layout_and_byte_identical_per_seed() {
+    // One worker and two: the same seeds give the same files, byte for byte, at the same
+    // episode indices.
     let (a, b) = (scratch("v21-a").join("ds"), scratch("v21-b").join("ds"));
-    for dir in [&a, &b] {
-        let out = demo("lerobot-v21", "1", "3", dir, &[]);
+    for (dir, workers) in [(&a, "1"), (&b, "2")] {
+        let out = demo("lerobot-v21", "2", "3", dir, &["--workers", workers]);
         assert!(out.status.success(), "{}", text(&out.stderr));
     }
     let summary = check(&a, "v2.1");
-    assert_eq!(summary["episodes"], 1);
+    assert_eq!(summary["episodes"], 2);
     let video = &summary["videos"]["observation.images.table_front"];
     assert_eq!(video["codec_name"], "av1");
     assert_eq!(video["avg_frame_rate"], "50/1");
@@ -69,11 +71,18 @@ fn v21_datasets_are_lerobots_layout_and_byte_identical_per_seed() {
         (video["width"].as_u64(), video["height"].as_u64()),
         (Some(224), Some(224))
     );
-    let parquet = "data/chunk-000/episode_000000.parquet";
+    check(&b, "v2.1");
+    for i in 0..2 {
+        let parquet = format!("data/chunk-000/episode_{i:06}.parquet");
+        assert_eq!(
+            std::fs::read(a.join(&parquet)).unwrap(),
+            std::fs::read(b.join(&parquet)).unwrap(),
+            "{parquet}: the same seed must give the same parquet, byte for byte"
+        );
+    }
     assert_eq!(
-        std::fs::read(a.join(parquet)).unwrap(),
-        std::fs::read(b.join(parquet)).unwrap(),
-        "the same seed must give the same parquet, byte for byte"
+        std::fs::read(a.join("meta/episodes.jsonl")).unwrap(),
+        std::fs::read(b.join("meta/episodes.jsonl")).unwrap()
     );
     // Into the same folder again without --resume: refused, nothing touched.
     let again = demo("lerobot-v21", "1", "3", &a, &[]);

@@ -18,7 +18,10 @@ pub use capture::Capture;
 pub use video::Codec;
 pub use writer::{DatasetWriter, Version};
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Arc, mpsc};
 
 #[derive(Debug, thiserror::Error)]
 pub enum DatasetError {
@@ -62,6 +65,8 @@ pub struct GenerateOptions {
     pub resume: bool,
     /// Camera images' size (width, height).
     pub image_size: [usize; 2],
+    /// Episodes recorded at once, each thread with its own scene and renderer.
+    pub workers: usize,
 }
 
 /// What a generation run did.
@@ -76,8 +81,10 @@ pub struct Generated {
     pub frames: usize,
 }
 
-/// Records `opts.episodes` seeded expert episodes of each task into one dataset; `progress`
-/// hears each episode (task id, seed, whether it was written).
+/// Records `opts.episodes` seeded expert episodes of each task into one dataset, on
+/// `opts.workers` threads; `progress` hears each episode (task id, seed, its frames or why it
+/// failed). Episodes are committed in plan order (task, then seed) whatever thread finishes
+/// first, so a dataset's episode indices do not depend on the number of workers.
 pub fn generate(
     tasks: &[compiler::Task],
     opts: &GenerateOptions,
@@ -95,60 +102,121 @@ pub fn generate(
         resumed: writer.episodes(),
         ..Default::default()
     };
-    for task in tasks {
-        let mut scene: Option<std::sync::Arc<runtime::Scene>> = None;
-        for i in 0..opts.episodes {
-            let seed = opts.seed.wrapping_add(i as u64);
-            if writer.has(&task.id, seed) {
-                continue;
-            }
-            let instance = task.sample(seed);
-            if scene
-                .as_ref()
-                .is_none_or(|s| s.placements != instance.labware_placement)
-            {
-                let built =
-                    runtime::Scene::build(task, &instance).map_err(|e| DatasetError::Episode {
-                        task: task.id.clone(),
-                        seed,
-                        why: e.to_string(),
-                    })?;
-                scene = Some(std::sync::Arc::new(built));
-            }
-            let scene = scene.as_ref().expect("built above");
-            let episode_err = |why: String| DatasetError::Episode {
-                task: task.id.clone(),
-                seed,
-                why,
-            };
-            let mut capture = writer.capture(task, seed)?;
-            let result = match scoring::policy::make("expert", task, scene, &instance) {
-                Ok(mut policy) => scoring::episode::run_episode_with(
-                    task,
-                    scene,
-                    &instance,
-                    policy.as_mut(),
-                    &Default::default(),
-                    Some(&mut capture),
-                )
-                .map_err(episode_err)?,
-                Err(e) => scoring::episode::policy_failed(task, scene, &instance, &e),
-            };
-            if result.success {
-                let frames = writer.commit(capture, &instance.instruction)?;
-                out.frames += frames;
-                progress(&task.id, seed, Ok(frames));
-            } else {
-                let why = result
-                    .error
-                    .clone()
-                    .unwrap_or_else(|| format!("{:?}", result.outcome));
-                capture.discard();
-                progress(&task.id, seed, Err(&why));
-                out.failed.push((task.id.clone(), seed, why));
+    let plan: Vec<(usize, u64)> = tasks
+        .iter()
+        .enumerate()
+        .flat_map(|(t, task)| {
+            (0..opts.episodes as u64)
+                .map(move |i| (t, opts.seed.wrapping_add(i)))
+                .filter(|(_, seed)| !writer.has(&task.id, *seed))
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    let spec = writer.capture_spec();
+    let next = AtomicUsize::new(0);
+    let stop = AtomicBool::new(false);
+    let mut failure = None;
+    std::thread::scope(|s| {
+        let (tx, rx) = mpsc::channel();
+        for _ in 0..opts.workers.clamp(1, plan.len().max(1)) {
+            let (tx, plan, next, stop, spec) = (tx.clone(), &plan, &next, &stop, &spec);
+            s.spawn(move || {
+                let mut scenes: Vec<Option<Arc<runtime::Scene>>> = vec![None; tasks.len()];
+                while !stop.load(Ordering::Relaxed) {
+                    let k = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(&(t, seed)) = plan.get(k) else { break };
+                    let r = record(&tasks[t], seed, spec, &mut scenes[t]);
+                    if tx.send((k, r)).is_err() {
+                        break;
+                    }
+                }
+            });
+        }
+        drop(tx);
+        // Finished episodes wait here until every earlier one is committed.
+        let mut waiting: BTreeMap<usize, Result<Recorded, DatasetError>> = BTreeMap::new();
+        let mut due = 0;
+        for (k, r) in rx {
+            waiting.insert(k, r);
+            while let Some(r) = waiting.remove(&due) {
+                let (t, seed) = plan[due];
+                due += 1;
+                let id = &tasks[t].id;
+                let step = r.and_then(|rec| match rec.outcome {
+                    Ok(instruction) => {
+                        let frames = writer.commit(rec.capture, &instruction)?;
+                        out.frames += frames;
+                        progress(id, seed, Ok(frames));
+                        Ok(())
+                    }
+                    Err(why) => {
+                        rec.capture.discard();
+                        progress(id, seed, Err(&why));
+                        out.failed.push((id.clone(), seed, why));
+                        Ok(())
+                    }
+                });
+                if let Err(e) = step {
+                    stop.store(true, Ordering::Relaxed);
+                    failure.get_or_insert(e);
+                }
             }
         }
+    });
+    if let Some(e) = failure {
+        return Err(e);
     }
     out.written = writer.finish()?;
     Ok(out)
+}
+
+/// One expert episode, captured: the instruction to commit it under, or why it failed.
+struct Recorded {
+    capture: Capture,
+    outcome: Result<String, String>,
+}
+
+fn record(
+    task: &compiler::Task,
+    seed: u64,
+    spec: &writer::CaptureSpec,
+    scene: &mut Option<Arc<runtime::Scene>>,
+) -> Result<Recorded, DatasetError> {
+    let episode_err = |why: String| DatasetError::Episode {
+        task: task.id.clone(),
+        seed,
+        why,
+    };
+    let instance = task.sample(seed);
+    if scene
+        .as_ref()
+        .is_none_or(|s| s.placements != instance.labware_placement)
+    {
+        let built =
+            runtime::Scene::build(task, &instance).map_err(|e| episode_err(e.to_string()))?;
+        *scene = Some(Arc::new(built));
+    }
+    let scene = scene.as_ref().expect("built above");
+    let mut capture = spec.capture(&task.id, seed)?;
+    let result = match scoring::policy::make("expert", task, scene, &instance) {
+        Ok(mut policy) => scoring::episode::run_episode_with(
+            task,
+            scene,
+            &instance,
+            policy.as_mut(),
+            &Default::default(),
+            Some(&mut capture),
+        )
+        .map_err(episode_err)?,
+        Err(e) => scoring::episode::policy_failed(task, scene, &instance, &e),
+    };
+    let outcome = if result.success {
+        Ok(instance.instruction.clone())
+    } else {
+        Err(result
+            .error
+            .clone()
+            .unwrap_or_else(|| format!("{:?}", result.outcome)))
+    };
+    Ok(Recorded { capture, outcome })
 }

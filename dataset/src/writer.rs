@@ -52,6 +52,26 @@ struct Committed {
     stats: BTreeMap<String, Value>,
 }
 
+/// Where and how captures are staged; a worker thread holds one.
+#[derive(Clone, Debug)]
+pub struct CaptureSpec {
+    staging: PathBuf,
+    cameras: usize,
+    size: [usize; 2],
+    codec: Codec,
+}
+
+impl CaptureSpec {
+    /// A capture staged for an episode of `task` with `seed`.
+    pub fn capture(&self, task: &str, seed: u64) -> Result<Capture, DatasetError> {
+        let dir = self.staging.join(format!("{task}_seed{seed}"));
+        let mut c = Capture::new(dir, self.cameras, self.size, FPS, self.codec)?;
+        c.task_id = task.to_string();
+        c.seed = seed;
+        Ok(c)
+    }
+}
+
 pub struct DatasetWriter {
     root: PathBuf,
     version: Version,
@@ -215,16 +235,14 @@ impl DatasetWriter {
             .any(|c| c.task_id == task && c.seed == seed)
     }
 
-    /// A capture staged for the next episode.
-    pub fn capture(&self, task: &compiler::Task, seed: u64) -> Result<Capture, DatasetError> {
-        let dir = self
-            .root
-            .join(".staging")
-            .join(format!("{}_seed{seed}", task.id));
-        let mut c = Capture::new(dir, self.cameras.len(), self.size, FPS, self.codec)?;
-        c.task_id = task.id.clone();
-        c.seed = seed;
-        Ok(c)
+    /// What a worker thread needs to stage captures.
+    pub fn capture_spec(&self) -> CaptureSpec {
+        CaptureSpec {
+            staging: self.root.join(".staging"),
+            cameras: self.cameras.len(),
+            size: self.size,
+            codec: self.codec,
+        }
     }
 
     fn total_frames(&self) -> usize {
