@@ -114,6 +114,14 @@ fn v30_datasets_share_files_and_resume() {
         "{}",
         text(&out.stdout)
     );
+    // Resumed with another codec: refused (the videos are joined by stream copy).
+    let other = demo("lerobot-v30", "3", "0", &dir, &["--resume"]);
+    assert_eq!(other.status.code(), Some(2));
+    assert!(
+        text(&other.stderr).contains("h264 videos, not 224x224 av1"),
+        "{}",
+        text(&other.stderr)
+    );
     let summary = check(&dir, "v3.0");
     assert_eq!(summary["episodes"], 2);
     assert_eq!(

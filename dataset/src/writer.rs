@@ -187,6 +187,30 @@ impl DatasetWriter {
                     ),
                 });
             }
+            // One dataset holds one video encoding and size: v3.0 joins episodes' videos by
+            // stream copy, and LeRobot reads `video.*` from the first episode.
+            let [w, h] = size;
+            let videos: Vec<&Value> = info["features"]
+                .as_object()
+                .into_iter()
+                .flatten()
+                .filter(|(_, f)| f["dtype"] == "video")
+                .map(|(_, f)| &f["info"])
+                .collect();
+            if let Some(v) = videos.iter().find(|v| {
+                v["video.codec"] != codec.name() || v["video.width"] != w || v["video.height"] != h
+            }) {
+                return Err(DatasetError::Existing {
+                    path: root.to_path_buf(),
+                    why: format!(
+                        "holds {}x{} {} videos, not {w}x{h} {}; resume with the same --codec",
+                        v["video.width"],
+                        v["video.height"],
+                        v["video.codec"].as_str().unwrap_or("unknown"),
+                        codec.name()
+                    ),
+                });
+            }
             let text = std::fs::read_to_string(&record).unwrap_or_default();
             for line in text.split_inclusive('\n').filter(|l| l.ends_with('\n')) {
                 match serde_json::from_str::<Committed>(line) {
