@@ -188,15 +188,8 @@ fn record(
         why,
     };
     let instance = task.sample(seed);
-    if scene
-        .as_ref()
-        .is_none_or(|s| s.placements != instance.labware_placement)
-    {
-        let built =
-            runtime::Scene::build(task, &instance).map_err(|e| episode_err(e.to_string()))?;
-        *scene = Some(Arc::new(built));
-    }
-    let scene = scene.as_ref().expect("built above");
+    let scene = &runtime::Scene::reuse_or_build(scene, task, &instance)
+        .map_err(|e| episode_err(e.to_string()))?;
     let mut capture = spec.capture(&task.id, seed)?;
     let result = match scoring::policy::make("expert", task, scene, &instance) {
         Ok(mut policy) => scoring::episode::run_episode_with(

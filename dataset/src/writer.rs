@@ -90,13 +90,7 @@ fn create_dir(p: &Path) -> Result<(), DatasetError> {
 }
 
 fn write_file(p: &Path, text: &str) -> Result<(), DatasetError> {
-    let tmp = p.with_extension("tmp");
-    std::fs::File::create(&tmp)
-        .and_then(|mut f| {
-            f.write_all(text.as_bytes())?;
-            f.sync_all()
-        })
-        .and_then(|_| std::fs::rename(&tmp, p))
+    scoring::eval::record::write_atomic(p, text.as_bytes())
         .map_err(|e| DatasetError::io("write", p, e))
 }
 

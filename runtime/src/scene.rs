@@ -334,6 +334,23 @@ fn labware_ids(m: &MjModel, l: &compiler::LabwareSpec) -> Result<LabwareIds, Sce
 
 impl Scene {
     /// Builds the model for one scene instance of a task.
+    /// The scene in `slot` when it fits `instance` (the same labware placements: a scene depends
+    /// on nothing else), or a new one built into it. Runs of many seeds keep one slot per thread.
+    pub fn reuse_or_build(
+        slot: &mut Option<std::sync::Arc<Scene>>,
+        task: &Task,
+        instance: &SceneInstance,
+    ) -> Result<std::sync::Arc<Scene>, SceneError> {
+        match slot {
+            Some(s) if s.placements == instance.labware_placement => Ok(s.clone()),
+            _ => {
+                let built = std::sync::Arc::new(Scene::build(task, instance)?);
+                *slot = Some(built.clone());
+                Ok(built)
+            }
+        }
+    }
+
     pub fn build(task: &Task, instance: &SceneInstance) -> Result<Scene, SceneError> {
         // Refused before anything is compiled: a task with an item that has no model, that
         // cannot start as declared, or that could never be won is not built.

@@ -426,19 +426,14 @@ impl Worker<'_> {
     fn episode(&mut self, run: u32, seed: u64) -> Result<EpisodeResult, EvalError> {
         let (task, opts) = (self.task, self.opts);
         let instance = task.sample(seed);
-        if self
-            .scene
-            .as_ref()
-            .is_none_or(|s| s.placements != instance.labware_placement)
-        {
-            let scene = runtime::Scene::build(task, &instance).map_err(|e| EvalError::Scene {
-                task: task.id.clone(),
-                seed,
-                why: e.to_string(),
+        let scene =
+            &runtime::Scene::reuse_or_build(&mut self.scene, task, &instance).map_err(|e| {
+                EvalError::Scene {
+                    task: task.id.clone(),
+                    seed,
+                    why: e.to_string(),
+                }
             })?;
-            self.scene = Some(Arc::new(scene));
-        }
-        let scene = self.scene.as_ref().expect("built above");
         let eo = EpisodeOptions {
             record: match (&opts.out, opts.record) {
                 (Some(d), true) => Some(recording_path(d, task, seed)),

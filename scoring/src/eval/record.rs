@@ -219,19 +219,24 @@ impl Manifest {
     }
 }
 
-/// Writes JSON to `path` through a temporary file and a rename, so that a crash leaves the old
-/// file or the new one, never half of one.
+/// Writes JSON to `path` through [`write_atomic`].
 pub fn write_json(path: &Path, value: &impl Serialize) -> Result<(), EvalError> {
-    let text = serde_json::to_string_pretty(value).expect("results serialise");
-    let tmp = path.with_extension("json.tmp");
+    let text = serde_json::to_string_pretty(value).expect("results serialise") + "\n";
+    write_atomic(path, text.as_bytes()).map_err(|e| EvalError::io("write", path, e))
+}
+
+/// Writes `bytes` to `path` through a synced temporary file and a rename, so that a crash
+/// leaves the old file or the new one, never half of one.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let mut tmp = path.as_os_str().to_owned();
+    tmp.push(".tmp");
+    let tmp = PathBuf::from(tmp);
     std::fs::File::create(&tmp)
         .and_then(|mut f| {
-            f.write_all(text.as_bytes())?;
-            f.write_all(b"\n")?;
+            f.write_all(bytes)?;
             f.sync_all()
         })
         .and_then(|_| std::fs::rename(&tmp, path))
-        .map_err(|e| EvalError::io("write", path, e))
 }
 
 /// The finished episodes of a journal; a last line cut short by a crash is dropped from the file.
