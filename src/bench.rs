@@ -23,19 +23,43 @@ use std::time::Instant;
 /// the figure the transfer scene is compared with (not measured here; see docs/physics.md).
 const UPSTREAM_TRANSFER_STEPS_S: f64 = 810.0;
 
-/// Every figure for each task's scene, then the lab-physics figures once.
-pub fn run(tasks: &[compiler::Task]) -> Result<()> {
-    front_end_figures()?;
-    if let Some(first) = tasks.first() {
+/// A group of figures (`autobio bench --only`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Section {
+    /// Checking a large parameter domain.
+    FrontEnd,
+    /// Workers, a model in the loop, dataset generation (on the first scene).
+    Harness,
+    /// Physics, rendering and the expert per task scene.
+    Scenes,
+    /// The lab mechanisms and the liquid.
+    Physics,
+}
+
+/// Every figure for each task's scene, then the lab-physics figures once; `only` (when not empty)
+/// picks sections.
+pub fn run(tasks: &[compiler::Task], only: &[Section]) -> Result<()> {
+    let wants = |s: Section| only.is_empty() || only.contains(&s);
+    if wants(Section::FrontEnd) {
+        front_end_figures()?;
+    }
+    if wants(Section::Harness)
+        && let Some(first) = tasks.first()
+    {
         harness_figures(first)?;
     }
     let mut first_step_s = None;
-    for task in tasks {
-        outln!("scene    {}", task.id);
-        let step_s = scene_figures(task)?;
-        first_step_s.get_or_insert(step_s);
+    if wants(Section::Scenes) {
+        for task in tasks {
+            outln!("scene    {}", task.id);
+            let step_s = scene_figures(task)?;
+            first_step_s.get_or_insert(step_s);
+        }
     }
-    physics_figures(first_step_s.unwrap_or(1e-4))
+    if wants(Section::Physics) {
+        physics_figures(first_step_s)?;
+    }
+    Ok(())
 }
 
 /// Physics (harness vs a bare `mj_step` loop on the same model), rendering and expert figures of
@@ -88,22 +112,20 @@ fn scene_figures(task: &compiler::Task) -> Result<f64> {
         }
     );
 
-    let mut cams = runtime::render::Cameras::new(&scene, 224, 224).map_err(anyhow::Error::msg)?;
     let names: Vec<String> = task.cameras.iter().map(|c| c.name.clone()).collect();
-    cams.render(&mut ep.data, &names)
-        .map_err(anyhow::Error::msg)?;
-    let rounds = 50;
-    let t = Instant::now();
-    for _ in 0..rounds {
-        ep.control_step()?;
-        cams.render(&mut ep.data, &names)
-            .map_err(anyhow::Error::msg)?;
+    let mut rates = Vec::new();
+    for detail in [robots::Detail::Full, robots::Detail::Simplified] {
+        rates.push(render_rate(&scene, &mut ep, &names, detail)?);
     }
-    let frames = rounds * names.len();
     outln!(
-        "render   224x224        {:>10.1} frames/s ({} cameras, 10 physics steps between sets)",
-        frames as f64 / t.elapsed().as_secs_f64(),
+        "render   224x224 full   {:>10.1} frames/s ({} cameras, one control step between sets, not timed)",
+        rates[0],
         names.len()
+    );
+    outln!(
+        "render   224x224 simple {:>10.1} frames/s   ratio {:.2}x (simplified visual meshes, the default at this size)",
+        rates[1],
+        rates[1] / rates[0]
     );
 
     let n = 3;
@@ -127,6 +149,32 @@ fn scene_figures(task: &compiler::Task) -> Result<f64> {
         report.summary.successes
     );
     Ok(1.0 / bare_rate)
+}
+
+/// Frames/s of every task camera at 224x224 with this level of detail: the best of three rounds
+/// of 40 frame sets, one control step between sets (not timed: rendering only).
+fn render_rate(
+    scene: &runtime::Scene,
+    ep: &mut runtime::Episode,
+    names: &[String],
+    detail: robots::Detail,
+) -> Result<f64> {
+    let mut cams = runtime::render::Cameras::with_detail(scene, 224, 224, detail)
+        .map_err(anyhow::Error::msg)?;
+    cams.render(&ep.data, names).map_err(anyhow::Error::msg)?;
+    let rounds = 40;
+    let mut best = f64::MAX;
+    for _ in 0..3 {
+        let mut spent = 0.0;
+        for _ in 0..rounds {
+            ep.control_step()?;
+            let t = Instant::now();
+            cams.render(&ep.data, names).map_err(anyhow::Error::msg)?;
+            spent += t.elapsed().as_secs_f64();
+        }
+        best = best.min(spent);
+    }
+    Ok((rounds * names.len()) as f64 / best)
 }
 
 /// Steps/s of a model from its XML: the best of three timed runs of `steps` steps, `drive` called
@@ -158,7 +206,7 @@ fn row(name: &str, with: f64, without: f64, note: &str) {
 /// the cost of one liquid surface solve.
 /// `task_step_s` is one physics step of the task scene measured above: the liquid's per-step cost
 /// is reported against it.
-pub fn physics_figures(task_step_s: f64) -> Result<()> {
+pub fn physics_figures(task_step_s: Option<f64>) -> Result<()> {
     use physics::detent::Detent;
     use physics::eccentric::{Eccentric, rpm_to_rad_s};
     use physics::liquid::{Container, Liquid, Nanolitres};
@@ -243,9 +291,12 @@ pub fn physics_figures(task_step_s: f64) -> Result<()> {
         with,
         without,
         &format!(
-            "(50 mL tube shaken; {:.2} µs per step = {:.1}% of a task-scene step, {:.1} iterations per 50 Hz solve; target < 10%)",
+            "(50 mL tube shaken; {:.2} µs per step{}, {:.1} iterations per 50 Hz solve; target < 10%)",
             per_step * 1e6,
-            100.0 * per_step / task_step_s,
+            match task_step_s {
+                Some(step) => format!(" = {:.1}% of a task-scene step", 100.0 * per_step / step),
+                None => String::new(),
+            },
             iterations as f64 / solves.max(1) as f64
         ),
     );
@@ -374,9 +425,10 @@ fn dataset_figures(task: &compiler::Task) -> Result<()> {
             resume: false,
             image_size: [224, 224],
             workers,
+            shard: None,
         };
         let t = Instant::now();
-        let done = dataset::generate(std::slice::from_ref(task), &opts, |_, _, _| {})?;
+        let done = dataset::generate(std::slice::from_ref(task), &opts, |_| {})?;
         rates.push(done.frames as f64 / t.elapsed().as_secs_f64());
     }
     let _ = std::fs::remove_dir_all(&dir);

@@ -4,8 +4,10 @@
 #[macro_use]
 mod output;
 mod bench;
+mod datasets;
 mod diagnostics;
 mod progress;
+mod replay;
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
@@ -87,6 +89,35 @@ enum Command {
         /// Episodes recorded at once (datasets), each thread with its own scene and renderer
         #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=256))]
         workers: u32,
+        /// Record only shard I of N (datasets): every N-th episode of the plan from position I,
+        /// into its own --out; join the shards with `autobio dataset merge`
+        #[arg(long, value_name = "I/N")]
+        shard: Option<scoring::eval::Shard>,
+    },
+    /// Turn MCAP recordings into a LeRobot dataset (cameras redrawn from the recorded states)
+    Export {
+        /// Recordings, or folders of them
+        #[arg(required = true)]
+        recordings: Vec<PathBuf>,
+        /// `lerobot-v21` or `lerobot-v30`
+        #[arg(long, default_value = "lerobot-v30")]
+        format: datasets::DatasetFormat,
+        #[arg(long)]
+        out: PathBuf,
+        /// Dataset videos: `av1` (libsvtav1, LeRobot's default) or `h264`
+        #[arg(long, value_enum, default_value = "av1")]
+        codec: datasets::CodecArg,
+        /// Camera image size WxH
+        #[arg(long, default_value = "224x224", value_parser = replay::parse_size)]
+        size: [usize; 2],
+        /// Continue the dataset in --out (recordings already in it are skipped)
+        #[arg(long)]
+        resume: bool,
+    },
+    /// Work with datasets
+    Dataset {
+        #[command(subcommand)]
+        command: DatasetCommand,
     },
     /// Evaluate a policy on protocols: seeded episodes, a results table and results JSON
     Eval {
@@ -144,8 +175,9 @@ enum Command {
         #[command(subcommand)]
         command: ResultsCommand,
     },
-    /// Re-score a recording offline from its recorded state (no simulation)
-    Replay { recording: PathBuf },
+    /// Re-score a recording offline; re-simulate it from its recorded state (--simulate) or redraw
+    /// its cameras at any size (--render)
+    Replay(replay::ReplayArgs),
     /// Measure throughput: physics steps/s (harness vs bare mj_step), rendered frames/s, expert episodes/min
     Bench {
         /// Task scenes to measure (repeatable)
@@ -154,6 +186,9 @@ enum Command {
             default_values = ["protocols/thermal_cycler/close_lid.toml", "protocols/tube/transfer.toml"]
         )]
         protocol: Vec<PathBuf>,
+        /// Measure only these sections (repeatable; default: all)
+        #[arg(long, value_enum)]
+        only: Vec<bench::Section>,
     },
 }
 
@@ -164,6 +199,19 @@ enum DemoFormat {
     LerobotV21,
     #[value(name = "lerobot-v30")]
     LerobotV30,
+}
+
+#[derive(Subcommand)]
+enum DatasetCommand {
+    /// Join the datasets of a generation's shards (`demo --shard I/N`, one folder each) into one
+    Merge {
+        /// The shards' --out folders
+        #[arg(required = true)]
+        shards: Vec<PathBuf>,
+        /// The folder for the merged dataset
+        #[arg(long)]
+        out: PathBuf,
+    },
 }
 
 #[derive(Subcommand)]
@@ -300,12 +348,16 @@ fn run(cli: Cli) -> Result<ExitCode> {
             codec,
             resume,
             workers,
+            shard,
         } => {
             let tasks = protocol
                 .iter()
                 .map(|p| front.load(p))
                 .collect::<Result<Vec<_>>>()?;
             let version = match format {
+                DemoFormat::Mcap if shard.is_some() => {
+                    bail!("--shard splits datasets; for recordings use eval --record --shard")
+                }
                 DemoFormat::Mcap => return demo_mcap(&tasks, episodes, seed, &out),
                 DemoFormat::LerobotV21 => dataset::Version::V21,
                 DemoFormat::LerobotV30 => dataset::Version::V30,
@@ -318,27 +370,36 @@ fn run(cli: Cli) -> Result<ExitCode> {
             let opts = dataset::GenerateOptions {
                 episodes,
                 seed,
-                out: out.clone(),
+                out,
                 version,
                 codec,
                 resume,
                 image_size: [224, 224],
                 workers: workers as usize,
+                shard,
             };
-            let done = dataset::generate(&tasks, &opts, |task, seed, r| match r {
-                Ok(frames) => errln!("  {task} seed {seed}: {frames} frames"),
-                Err(why) => errln!("  {task} seed {seed}: failed, not written: {why}"),
-            })?;
-            outln!(
-                "{}: {} episodes in the dataset, {} written, {} failed, {} frames recorded",
-                out.display(),
-                done.written,
-                done.written - done.resumed,
-                done.failed.len(),
-                done.frames
-            );
-            Ok(ExitCode::SUCCESS)
+            datasets::generate(&tasks, &opts)
         }
+        Command::Export {
+            recordings,
+            format,
+            out,
+            codec,
+            size,
+            resume,
+        } => {
+            let opts = dataset::ExportOptions {
+                out,
+                version: format.version(),
+                codec: codec.codec(),
+                image_size: size,
+                resume,
+            };
+            datasets::export(&recordings, &opts)
+        }
+        Command::Dataset {
+            command: DatasetCommand::Merge { shards, out },
+        } => datasets::merge(&shards, &out),
         Command::Eval {
             protocol,
             policy,
@@ -434,70 +495,13 @@ fn run(cli: Cli) -> Result<ExitCode> {
             outln!("merged: {}/<task>.results.json", out.display());
             Ok(ExitCode::SUCCESS)
         }
-        Command::Replay { recording } => {
-            let doing = || format!("cannot replay {}", recording.display());
-            let rec = runtime::record::read_recording(&recording).with_context(doing)?;
-            let task: compiler::Task = serde_json::from_value(rec.task.clone())
-                .context("the recording's task does not match this autobio's task schema")
-                .with_context(doing)?;
-            let params: compiler::params::Bindings =
-                serde_json::from_value(rec.instance["params"].clone())
-                    .context("the recording's scene instance has no drawn parameters")
-                    .with_context(doing)?;
-            let verdict = scoring::Judge::replay(&task, &params, &rec.labware_series);
-            outln!(
-                "{}: {} messages over {:.2} s",
-                recording.display(),
-                rec.messages,
-                rec.duration_s
-            );
-            for (topic, n) in &rec.topics {
-                outln!("  {topic:<28} {n}");
-            }
-            outln!(
-                "re-scored: {} (score {:.3})",
-                if verdict.success {
-                    "success"
-                } else {
-                    "failure"
-                },
-                verdict.score
-            );
-            for (i, st) in verdict.stages.iter().enumerate() {
-                let done = st
-                    .completed_at_s
-                    .map(|t| format!("done at {t:.2} s"))
-                    .unwrap_or_else(|| "not done".into());
-                outln!("  stage {} `{}`: {done}", i + 1, st.id);
-                for p in &st.predicates {
-                    outln!(
-                        "    [{}] {:<28} value {:+.4} target {:+.4} tol {}",
-                        if p.holds { "x" } else { " " },
-                        p.text,
-                        p.value,
-                        p.target,
-                        p.tolerance
-                    );
-                }
-            }
-            if let Some(v) = &rec.verdict {
-                let recorded = v["verdict"]["success"].as_bool();
-                if recorded != Some(verdict.success) {
-                    outln!("note: the recorded verdict was {recorded:?}");
-                }
-            }
-            Ok(if verdict.success {
-                ExitCode::SUCCESS
-            } else {
-                ExitCode::FAILURE
-            })
-        }
-        Command::Bench { protocol } => {
+        Command::Replay(args) => replay::run(&args),
+        Command::Bench { protocol, only } => {
             let tasks = protocol
                 .iter()
                 .map(|p| front.load(p))
                 .collect::<Result<Vec<_>>>()?;
-            bench::run(&tasks)?;
+            bench::run(&tasks, &only)?;
             Ok(ExitCode::SUCCESS)
         }
     }

@@ -1,6 +1,6 @@
-//! Progress of an evaluation on stderr: on a terminal, one bar redrawn in place (episodes done,
-//! running success rate, ETA) with failures printed above it; otherwise one plain line per
-//! episode, for logs and CI.
+//! Progress on stderr, for evaluations and dataset generation: on a terminal, one bar redrawn in
+//! place (items done, a running figure, ETA) with failures printed above it; otherwise one plain
+//! line per item, for logs and CI.
 
 use scoring::eval::Progress;
 use std::io::IsTerminal;
@@ -23,6 +23,7 @@ impl ProgressView {
         }
     }
 
+    /// One evaluated episode.
     pub fn update(&mut self, p: &Progress) {
         let e = p.result;
         let rate = 100.0 * p.successes as f64 / p.done.max(1) as f64;
@@ -30,26 +31,59 @@ impl ProgressView {
             .ok()
             .and_then(|v| v.as_str().map(str::to_string))
             .unwrap_or_default();
+        let reason = e
+            .error
+            .as_deref()
+            .map(|r| format!(": {r}"))
+            .unwrap_or_default();
+        self.draw(
+            (p.done, p.total, p.resumed),
+            &format!("success {rate:.1}%"),
+            e.error
+                .as_ref()
+                .map(|_| format!("seed {} (run {}): {outcome}{reason}", e.seed, e.run)),
+            &format!(
+                "{}/{} seed {} (run {}): {outcome}{reason}  running success {rate:.1}%",
+                p.done, p.total, e.seed, e.run
+            ),
+        );
+    }
+
+    /// One episode written to a dataset, or left out.
+    pub fn step(&mut self, s: &dataset::Step<'_>, failed: usize) {
+        let what = match s.result {
+            Ok(frames) => format!("{frames} frames"),
+            Err(why) => format!("not written: {why}"),
+        };
+        self.draw(
+            (s.done, s.total, 0),
+            &format!("{failed} left out"),
+            s.result
+                .err()
+                .map(|_| format!("{} seed {}: {what}", s.task, s.seed)),
+            &format!("{}/{} {} seed {}: {what}", s.done, s.total, s.task, s.seed),
+        );
+    }
+
+    /// `count`: (done, total, done before this run); `figure` follows the bar; `failure` is
+    /// printed above it; `plain` is the line when stderr is not a terminal.
+    fn draw(
+        &mut self,
+        (done, total, resumed): (usize, usize, usize),
+        figure: &str,
+        failure: Option<String>,
+        plain: &str,
+    ) {
         if !self.bar {
-            errln!(
-                "  {}/{} seed {} (run {}): {outcome}{}  running success {rate:.1}%",
-                p.done,
-                p.total,
-                e.seed,
-                e.run,
-                e.error
-                    .as_deref()
-                    .map(|r| format!(": {r}"))
-                    .unwrap_or_default(),
-            );
+            errln!("  {plain}");
             return;
         }
-        if let Some(reason) = &e.error {
+        if let Some(line) = failure {
             err!("\r\x1b[K");
-            errln!("  seed {} (run {}): {outcome}: {reason}", e.seed, e.run);
+            errln!("  {line}");
         }
-        let ran = p.done - p.resumed;
-        let left = p.total - p.done;
+        let ran = done - resumed.min(done);
+        let left = total.saturating_sub(done);
         let eta = if ran > 0 {
             let s = self.started.elapsed().as_secs_f64() / ran as f64 * left as f64;
             format!("{}:{:02}", (s / 60.0) as u64, s as u64 % 60)
@@ -57,14 +91,12 @@ impl ProgressView {
             "?".into()
         };
         const WIDTH: usize = 24;
-        let filled = WIDTH * p.done / p.total.max(1);
+        let filled = WIDTH * done.min(total) / total.max(1);
         err!(
-            "\r\x1b[K  {} [{}{}] {}/{}  success {rate:.1}%  ETA {eta}",
+            "\r\x1b[K  {} [{}{}] {done}/{total}  {figure}  ETA {eta}",
             self.label,
             "#".repeat(filled),
             ".".repeat(WIDTH - filled),
-            p.done,
-            p.total,
         );
         self.drawn = true;
     }

@@ -155,7 +155,7 @@ fn a_failed_expert_episode_is_not_written() {
     assert!(out.status.success(), "{}", text(&out.stderr));
     let stdout = text(&out.stdout);
     assert!(
-        stdout.contains("0 written") && stdout.contains("1 failed"),
+        stdout.contains("0 written") && stdout.contains("1 left out"),
         "{stdout}"
     );
     let info: Value =
@@ -163,4 +163,150 @@ fn a_failed_expert_episode_is_not_written() {
             .unwrap();
     assert_eq!(info["total_episodes"], 0);
     assert!(!dir.join("ds/data").exists());
+}
+
+fn same_file(a: &Path, b: &Path) {
+    let (x, y) = (std::fs::read(a).unwrap(), std::fs::read(b).unwrap());
+    assert!(x == y, "{} and {} differ", a.display(), b.display());
+}
+
+#[test]
+fn recordings_export_and_shards_merge_into_the_dataset_one_run_writes() {
+    let dir = scratch("export-merge");
+    let d = |n: &str| dir.join(n);
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let ok = |out: std::process::Output| {
+        assert!(
+            out.status.success(),
+            "{}{}",
+            text(&out.stdout),
+            text(&out.stderr)
+        );
+        text(&out.stdout)
+    };
+    // The reference: one run of two episodes.
+    ok(demo(
+        "lerobot-v30",
+        "2",
+        "0",
+        &d("ds"),
+        &["--codec", "h264"],
+    ));
+
+    // The same two episodes recorded as MCAP (no images), then exported: the cameras are
+    // redrawn from the recorded states, so the tables and statistics are the run's.
+    ok(autobio(&[
+        "eval",
+        "--protocol",
+        CLOSE,
+        "--episodes",
+        "2",
+        "--seed",
+        "0",
+        "--record",
+        "--image-every",
+        "0",
+        "--out",
+        &s(&d("rec")),
+    ]));
+    let out = ok(autobio(&[
+        "export",
+        &s(&d("rec")),
+        "--format",
+        "lerobot-v30",
+        "--codec",
+        "h264",
+        "--out",
+        &s(&d("ex")),
+    ]));
+    assert!(
+        out.contains("2 episodes in the dataset, 2 exported, 0 left out"),
+        "{out}"
+    );
+    for f in [
+        "data/chunk-000/file-000.parquet",
+        "meta/stats.json",
+        "meta/tasks.parquet",
+    ] {
+        same_file(&d("ds").join(f), &d("ex").join(f));
+    }
+    assert_eq!(check(&d("ex"), "v3.0")["episodes"], 2);
+
+    // Two shards of the same plan, merged in either order: the run's tables and statistics.
+    for i in ["0/2", "1/2"] {
+        let shard = d(&format!("shard{}", &i[..1]));
+        ok(demo(
+            "lerobot-v30",
+            "2",
+            "0",
+            &shard,
+            &["--codec", "h264", "--shard", i],
+        ));
+    }
+    let out = ok(autobio(&[
+        "dataset",
+        "merge",
+        &s(&d("shard1")),
+        &s(&d("shard0")),
+        "--out",
+        &s(&d("merged")),
+    ]));
+    let frames = check(&d("ds"), "v3.0")["frames"].clone();
+    assert!(
+        out.contains(&format!(
+            "2 episodes, {frames} frames, merged from 2 shards"
+        )),
+        "{out} ({frames} frames)"
+    );
+    for f in [
+        "data/chunk-000/file-000.parquet",
+        "meta/stats.json",
+        "meta/tasks.parquet",
+        "meta/episodes/chunk-000/file-000.parquet",
+        "meta/info.json",
+    ] {
+        same_file(&d("ds").join(f), &d("merged").join(f));
+    }
+    assert_eq!(check(&d("merged"), "v3.0")["episodes"], 2);
+
+    // Refusals: a missing shard, a shard twice, a dataset that is no shard, and a shard
+    // resumed without its --shard.
+    let refused = |args: &[&str], why: &str| {
+        let out = autobio(args);
+        assert_eq!(out.status.code(), Some(2), "{}", text(&out.stdout));
+        assert!(text(&out.stderr).contains(why), "{}", text(&out.stderr));
+    };
+    refused(
+        &["dataset", "merge", &s(&d("shard0")), "--out", &s(&d("m2"))],
+        "shard 1/2 is missing; merge needs all 2",
+    );
+    refused(
+        &[
+            "dataset",
+            "merge",
+            &s(&d("shard0")),
+            &s(&d("shard0")),
+            "--out",
+            &s(&d("m3")),
+        ],
+        "is shard 0/2 again",
+    );
+    refused(
+        &["dataset", "merge", &s(&d("ds")), "--out", &s(&d("m4"))],
+        "is not a shard",
+    );
+    let out = demo(
+        "lerobot-v30",
+        "2",
+        "0",
+        &d("shard0"),
+        &["--codec", "h264", "--resume"],
+    );
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        text(&out.stderr).contains("is a shard's dataset"),
+        "{}",
+        text(&out.stderr)
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -147,7 +147,7 @@ with open(sys.argv[1], "rb") as f:
             .unwrap_or_else(|| panic!("{topic} missing from {listing}"));
         assert!(line.ends_with(&format!(" {n}")), "{line} vs {n}");
     }
-    assert!(listing.contains("/camera/table_front foxglove.RawImage"));
+    assert!(listing.contains("/camera/table_front foxglove.CompressedImage"));
     assert!(listing.contains(&format!("total {}", rec.messages)));
     std::fs::remove_dir_all(&dir).unwrap();
 }

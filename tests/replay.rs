@@ -1,10 +1,12 @@
 //! Recordings replay to the verdict the live episode had, for a long-horizon chain (stage by
 //! stage), under progress scoring (a partial score) and for a timed-out episode; a recording of
-//! another schema version is refused by name; and the camera images a recording carries show the
-//! scene (not a blank frame) and change as the robot moves.
+//! another schema version is refused by name; the camera images a recording carries show the
+//! scene (not a blank frame) and change as the robot moves; re-simulating from the recorded state
+//! (from the start or mid-episode) repeats every state and the trajectory hash, and a tampered
+//! state is caught; redrawing the cameras from the recorded state gives the recorded frames byte
+//! for byte; and mcap's own protobuf decoder reads the binary channels.
 
-use base64::Engine;
-use runtime::record::{RecordError, Recorder, read_recording};
+use runtime::record::{RecordError, Recorder, proto, read_recording};
 mod common;
 
 use common::{compile, compile_edited};
@@ -49,14 +51,11 @@ fn frames(path: &PathBuf, topic: &str) -> Vec<Vec<u8>> {
         .map(|m| m.unwrap())
         .filter(|m| m.channel.topic == topic)
         .map(|m| {
-            let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
-            assert_eq!(
-                (v["width"].as_u64(), v["height"].as_u64()),
-                (Some(224), Some(224))
-            );
-            base64::engine::general_purpose::STANDARD
-                .decode(v["data"].as_str().unwrap())
-                .unwrap()
+            assert_eq!(m.channel.message_encoding, "protobuf");
+            let png = proto::image_data(&m.data).expect("a CompressedImage");
+            let img = runtime::render::Image::from_png("", png).unwrap();
+            assert_eq!((img.width, img.height), (224, 224));
+            img.rgb
         })
         .collect()
 }
@@ -184,4 +183,147 @@ fn replaying_recorded_actions_reproduces_the_episode_byte_for_byte() {
     std::fs::copy(&path, dir.join("thermal_cycler.close_lid_seed7.mcap")).unwrap();
     let from_folder = common::run(&task, 7, &format!("replay:{}", dir.display()));
     assert_eq!(from_folder.trajectory_hash, live.trajectory_hash);
+}
+
+/// The `autobio replay` binary on a recording: status, stdout.
+fn replay(args: &[&str]) -> (i32, String) {
+    let mut all = vec!["replay"];
+    all.extend_from_slice(args);
+    let out = common::autobio(&all);
+    let text = format!("{}{}", common::text(&out.stdout), common::text(&out.stderr));
+    (out.status.code().unwrap_or(-1), text)
+}
+
+/// A copy of `path` with one recorded MuJoCo state changed (the first qpos value at `step`).
+fn tampered(path: &std::path::Path, step: usize, name: &str) -> PathBuf {
+    let out = temp(name);
+    let mut w = Recorder::create(&out).unwrap();
+    let mut k = 0;
+    runtime::record::for_each_message(path, |m| {
+        if m.channel.topic != "/physics/state" {
+            return w.pass(m);
+        }
+        let (spec, mut state) = proto::state_values(&m.data).unwrap();
+        if k == step {
+            state[1] += 1e-9;
+        }
+        k += 1;
+        let mut changed = m.clone();
+        changed.data = std::borrow::Cow::Owned(proto::physics_state(m.log_time, spec, &state));
+        w.pass(&changed)
+    })
+    .unwrap();
+    w.finish().unwrap();
+    out
+}
+
+#[test]
+fn a_recording_resimulates_from_its_state_and_redraws_its_frames_exactly() {
+    let task = compile("protocols/thermal_cycler/close_lid.toml");
+    let (live, _, path) = record_and_replay(&task, 3, true, 25, "exact.mcap");
+    assert!(live.success, "{:?}", live.error);
+    let p = path.to_str().unwrap();
+
+    // From the first recorded state and from one mid-episode (instrument logic restored too).
+    for from in ["0", "240"] {
+        let (code, out) = replay(&[p, "--simulate", "--from-step", from]);
+        assert_eq!(code, 0, "{out}");
+        assert!(
+            out.contains(&format!("  trajectory hash  {}", live.trajectory_hash)),
+            "{out}"
+        );
+        assert!(
+            out.contains("every state equal to the recorded one, bit for bit"),
+            "{out}"
+        );
+        assert!(out.contains("reproduced (re-judged: success"), "{out}");
+    }
+    // A state changed by 1e-9 rad is caught at its step, and the command fails.
+    let bad = tampered(&path, 300, "tampered.mcap");
+    let (code, out) = replay(&[bad.to_str().unwrap(), "--simulate"]);
+    assert_eq!(code, 1, "{out}");
+    assert!(
+        out.contains("the state first differs at control step 300"),
+        "{out}"
+    );
+    assert!(out.contains("NOT reproduced"), "{out}");
+    let (code, out) = replay(&[p, "--simulate", "--from-step", "100000"]);
+    assert_eq!(code, 2, "{out}");
+    assert!(out.contains("step 100000 is not one of them"), "{out}");
+
+    // Redrawn from the recorded state at the recorded size and cadence: the same frames.
+    let again = temp("exact.render.mcap");
+    let (code, out) = replay(&[p, "--render", "--out", again.to_str().unwrap()]);
+    assert_eq!(code, 0, "{out}");
+    for topic in ["/camera/table_front", "/camera/arm/wrist"] {
+        let (a, b) = (frames(&path, topic), frames(&again, topic));
+        assert!(a.len() >= 10, "{topic}: {} frames", a.len());
+        assert_eq!(a.len(), b.len(), "{topic}");
+        for (i, (x, y)) in a.iter().zip(&b).enumerate() {
+            assert!(x == y, "{topic} frame {i} differs: {}", mean_abs_diff(x, y));
+        }
+    }
+    // Every other message is carried over.
+    let (orig, redrawn) = (
+        read_recording(&path).unwrap(),
+        read_recording(&again).unwrap(),
+    );
+    assert_eq!(orig.topics, redrawn.topics);
+    assert_eq!(orig.physics, redrawn.physics);
+
+    // Another size, every 100 steps, with PNG files.
+    let big = temp("exact.big.mcap");
+    let pngs = temp("pngs");
+    let (code, out) = replay(&[
+        p,
+        "--render",
+        "--size",
+        "320x240",
+        "--every",
+        "100",
+        "--out",
+        big.to_str().unwrap(),
+        "--png",
+        pngs.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{out}");
+    let steps = live.control_steps as usize;
+    let expected = steps.div_ceil(100);
+    assert!(
+        out.contains(&format!("rendered: {} frames at 320x240", 2 * expected)),
+        "{out}"
+    );
+    let first = std::fs::read(pngs.join("arm_wrist_00000.png")).unwrap();
+    let img = runtime::render::Image::from_png("wrist", &first).unwrap();
+    assert_eq!((img.width, img.height), (320, 240));
+    assert!(spread(&img.rgb) > 10.0);
+    let (code, out) = replay(&[p, "--render", "--size", "7x7"]);
+    assert_eq!(code, 2, "{out}");
+    assert!(
+        out.contains("`7` is not a side between 16 and 4096 pixels"),
+        "{out}"
+    );
+
+    // mcap's protobuf decoder (what Foxglove's tooling uses) reads the binary channels.
+    let python = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(".deps/servers/bin/python");
+    let out = std::process::Command::new(python)
+        .arg("tests/recordings/check_recording.py")
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", common::text(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    for cam in ["/camera/table_front", "/camera/arm/wrist"] {
+        let c = &v["cameras"][cam];
+        assert_eq!(c["format"], "png", "{v}");
+        assert_eq!(c["sizes"], serde_json::json!([[224, 224]]), "{v}");
+        assert_eq!(c["count"].as_u64(), Some(orig.topics[cam]), "{v}");
+        assert_eq!(v["topics"][cam]["schema"], "foxglove.CompressedImage");
+    }
+    assert_eq!(v["state"]["spec"], proto::STATE_SPEC, "{v}");
+    assert_eq!(v["state"]["count"].as_u64(), Some(steps as u64 + 1), "{v}");
+    assert_eq!(
+        v["state"]["lengths"],
+        serde_json::json!([orig.physics[0].1.len()])
+    );
 }

@@ -51,6 +51,9 @@ fn each_arm_does_its_own_step_and_both_are_recorded() {
     let mut last: std::collections::BTreeMap<String, Vec<f64>> = Default::default();
     for m in mcap::MessageStream::new(&buf).unwrap() {
         let m = m.unwrap();
+        if m.channel.message_encoding != "json" {
+            continue; // MuJoCo's state and camera frames are protobuf
+        }
         let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
         let t = m.log_time as f64 * 1e-9;
         if m.channel.topic == "/stage" {

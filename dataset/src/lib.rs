@@ -9,14 +9,18 @@
 //! and `--resume` continues it. It does not record MCAP (the runtime does) or score anything.
 
 mod capture;
+mod export;
+mod merge;
 mod parquet;
 pub mod stats;
 mod video;
 mod writer;
 
 pub use capture::Capture;
+pub use export::{ExportOptions, export};
+pub use merge::{Merged, merge};
 pub use video::Codec;
-pub use writer::{DatasetWriter, Version};
+pub use writer::{DatasetWriter, Layout, Version};
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -67,6 +71,19 @@ pub struct GenerateOptions {
     pub image_size: [usize; 2],
     /// Episodes recorded at once, each thread with its own scene and renderer.
     pub workers: usize,
+    /// Record only this shard's share of the plan: every `count`-th episode from `index`.
+    pub shard: Option<scoring::eval::Shard>,
+}
+
+/// One episode handled, for progress reports.
+pub struct Step<'a> {
+    pub task: &'a str,
+    pub seed: u64,
+    /// Its frames, or why it was not written.
+    pub result: Result<usize, &'a str>,
+    /// Episodes handled so far in this run, of `total`.
+    pub done: usize,
+    pub total: usize,
 }
 
 /// What a generation run did.
@@ -82,35 +99,49 @@ pub struct Generated {
 }
 
 /// Records `opts.episodes` seeded expert episodes of each task into one dataset, on
-/// `opts.workers` threads; `progress` hears each episode (task id, seed, its frames or why it
-/// failed). Episodes are committed in plan order (task, then seed) whatever thread finishes
+/// `opts.workers` threads; `progress` hears each episode. Episodes are committed in plan order (task, then seed) whatever thread finishes
 /// first, so a dataset's episode indices do not depend on the number of workers.
 pub fn generate(
     tasks: &[compiler::Task],
     opts: &GenerateOptions,
-    mut progress: impl FnMut(&str, u64, Result<usize, &str>),
+    mut progress: impl FnMut(Step<'_>),
 ) -> Result<Generated, DatasetError> {
     let mut writer = DatasetWriter::open(
         &opts.out,
         opts.version,
         opts.codec,
-        tasks,
+        Layout::of(tasks, &opts.out)?,
         opts.image_size,
         opts.resume,
     )?;
+    if let Some(shard) = opts.shard {
+        let asked = merge::ShardPlan {
+            shard,
+            tasks: tasks.iter().map(|t| t.id.clone()).collect(),
+            episodes: opts.episodes,
+            seed: opts.seed,
+        };
+        asked.write_new(&opts.out)?;
+    } else if opts.out.join(merge::SHARD_FILE).exists() {
+        return Err(DatasetError::Existing {
+            path: opts.out.clone(),
+            why: "is a shard's dataset; resume it with its --shard, or merge it with autobio dataset merge".into(),
+        });
+    }
     let mut out = Generated {
         resumed: writer.episodes(),
         ..Default::default()
     };
-    let plan: Vec<(usize, u64)> = tasks
+    // The whole plan (task, then seed), numbered; a shard keeps its share, a resumed run what
+    // the dataset lacks.
+    let plan: Vec<(usize, usize, u64)> = tasks
         .iter()
         .enumerate()
-        .flat_map(|(t, task)| {
-            (0..opts.episodes as u64)
-                .map(move |i| (t, opts.seed.wrapping_add(i)))
-                .filter(|(_, seed)| !writer.has(&task.id, *seed))
-                .collect::<Vec<_>>()
-        })
+        .flat_map(|(t, _)| (0..opts.episodes as u64).map(move |i| (t, opts.seed.wrapping_add(i))))
+        .enumerate()
+        .filter(|(k, _)| opts.shard.is_none_or(|s| s.takes(*k)))
+        .filter(|(_, (t, seed))| !writer.has(&tasks[*t].id, *seed))
+        .map(|(k, (t, seed))| (k, t, seed))
         .collect();
     let spec = writer.capture_spec();
     let next = AtomicUsize::new(0);
@@ -124,7 +155,9 @@ pub fn generate(
                 let mut scenes: Vec<Option<Arc<runtime::Scene>>> = vec![None; tasks.len()];
                 while !stop.load(Ordering::Relaxed) {
                     let k = next.fetch_add(1, Ordering::Relaxed);
-                    let Some(&(t, seed)) = plan.get(k) else { break };
+                    let Some(&(_, t, seed)) = plan.get(k) else {
+                        break;
+                    };
                     let r = record(&tasks[t], seed, spec, &mut scenes[t]);
                     if tx.send((k, r)).is_err() {
                         break;
@@ -139,19 +172,31 @@ pub fn generate(
         for (k, r) in rx {
             waiting.insert(k, r);
             while let Some(r) = waiting.remove(&due) {
-                let (t, seed) = plan[due];
+                let (position, t, seed) = plan[due];
                 due += 1;
                 let id = &tasks[t].id;
                 let step = r.and_then(|rec| match rec.outcome {
                     Ok(instruction) => {
-                        let frames = writer.commit(rec.capture, &instruction)?;
+                        let frames = writer.commit(rec.capture, &instruction, Some(position))?;
                         out.frames += frames;
-                        progress(id, seed, Ok(frames));
+                        progress(Step {
+                            task: id,
+                            seed,
+                            result: Ok(frames),
+                            done: due,
+                            total: plan.len(),
+                        });
                         Ok(())
                     }
                     Err(why) => {
                         rec.capture.discard();
-                        progress(id, seed, Err(&why));
+                        progress(Step {
+                            task: id,
+                            seed,
+                            result: Err(&why),
+                            done: due,
+                            total: plan.len(),
+                        });
                         out.failed.push((id.clone(), seed, why));
                         Ok(())
                     }

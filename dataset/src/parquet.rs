@@ -208,11 +208,15 @@ pub fn write_episodes(path: &Path, eps: &[EpisodeRow]) -> Result<(), DatasetErro
         ints(&|e| e.from_index),
         ints(&|e| e.to_index),
     ];
-    let keys: Vec<String> = eps
+    // Columns in key order, as info.json lists the features (not in camera order: a dataset
+    // read back, e.g. to merge shards, knows its cameras only by key).
+    let mut keys: Vec<(usize, String)> = eps
         .first()
-        .map(|e| e.videos.iter().map(|v| v.0.clone()).collect())
+        .map(|e| e.videos.iter().map(|v| v.0.clone()).enumerate().collect())
         .unwrap_or_default();
-    for (k, key) in keys.iter().enumerate() {
+    keys.sort_by(|a, b| a.1.cmp(&b.1));
+    for (k, key) in &keys {
+        let k = *k;
         for name in ["chunk_index", "file_index"] {
             fields.push(Field::new(
                 format!("videos/{key}/{name}"),
@@ -292,4 +296,46 @@ pub fn concat_frames(parts: &[std::path::PathBuf], out: &Path) -> Result<(), Dat
             .map_err(|e| DatasetError::io("sync", out, e))?;
     }
     Ok(())
+}
+
+/// One frame's `observation.state` and `action`.
+pub type StateAction = (Vec<f32>, Vec<f32>);
+
+/// Every frame's `observation.state` and `action` of an episode's frames table, in order.
+pub fn read_state_action(path: &Path) -> Result<Vec<StateAction>, DatasetError> {
+    use arrow_array::Array;
+    use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
+    let bad = |e: String| DatasetError::Parquet {
+        path: path.to_path_buf(),
+        why: e,
+    };
+    let file = std::fs::File::open(path).map_err(|e| DatasetError::io("open", path, e))?;
+    let reader = ParquetRecordBatchReaderBuilder::try_new(file)
+        .and_then(|b| b.build())
+        .map_err(|e| bad(e.to_string()))?;
+    let mut rows = Vec::new();
+    for batch in reader {
+        let batch = batch.map_err(|e| bad(e.to_string()))?;
+        let column = |name: &str| -> Result<Vec<Vec<f32>>, DatasetError> {
+            let list = batch
+                .column_by_name(name)
+                .and_then(|c| c.as_any().downcast_ref::<FixedSizeListArray>())
+                .ok_or_else(|| bad(format!("no fixed-size list column `{name}`")))?;
+            let width = list.value_length() as usize;
+            let values = list
+                .values()
+                .as_any()
+                .downcast_ref::<Float32Array>()
+                .ok_or_else(|| bad(format!("`{name}` is not float32")))?;
+            Ok((0..list.len())
+                .map(|i| values.values()[i * width..(i + 1) * width].to_vec())
+                .collect())
+        };
+        rows.extend(
+            column("observation.state")?
+                .into_iter()
+                .zip(column("action")?),
+        );
+    }
+    Ok(rows)
 }

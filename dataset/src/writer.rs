@@ -42,14 +42,18 @@ impl Version {
 
 /// One committed episode, as `meta/autobio.jsonl` keeps it.
 #[derive(Clone, Debug, Serialize, Deserialize)]
-struct Committed {
-    episode_index: usize,
-    task_id: String,
-    seed: u64,
-    length: usize,
-    instruction: String,
+pub(crate) struct Committed {
+    pub episode_index: usize,
+    pub task_id: String,
+    pub seed: u64,
+    /// Its position in the whole plan of the run that recorded it (across shards): merged
+    /// shards are put back in this order.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plan: Option<usize>,
+    pub length: usize,
+    pub instruction: String,
     /// Per feature: LeRobot's stats JSON with quantiles.
-    stats: BTreeMap<String, Value>,
+    pub stats: BTreeMap<String, Value>,
 }
 
 /// Where and how captures are staged; a worker thread holds one.
@@ -72,46 +76,19 @@ impl CaptureSpec {
     }
 }
 
-pub struct DatasetWriter {
-    root: PathBuf,
-    version: Version,
-    codec: Codec,
-    size: [usize; 2],
-    robot_type: String,
-    state_names: Vec<String>,
-    action_names: Vec<String>,
+/// What every episode of a dataset shares: robots, state and action names, cameras.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Layout {
+    pub robot_type: String,
+    pub state_names: Vec<String>,
+    pub action_names: Vec<String>,
     /// Camera names and their feature keys (`observation.images.<camera>`).
-    cameras: Vec<(String, String)>,
-    done: Vec<Committed>,
+    pub cameras: Vec<(String, String)>,
 }
 
-fn create_dir(p: &Path) -> Result<(), DatasetError> {
-    std::fs::create_dir_all(p).map_err(|e| DatasetError::io("create", p, e))
-}
-
-fn write_file(p: &Path, text: &str) -> Result<(), DatasetError> {
-    scoring::eval::record::write_atomic(p, text.as_bytes())
-        .map_err(|e| DatasetError::io("write", p, e))
-}
-
-fn rename(from: &Path, to: &Path) -> Result<(), DatasetError> {
-    if let Some(parent) = to.parent() {
-        create_dir(parent)?;
-    }
-    std::fs::rename(from, to).map_err(|e| DatasetError::io("move", to, e))
-}
-
-impl DatasetWriter {
-    /// Opens `root` for writing: a new dataset (the folder absent or empty), or with `resume`
-    /// the dataset a run left there, of the same version and robots.
-    pub fn open(
-        root: &Path,
-        version: Version,
-        codec: Codec,
-        tasks: &[compiler::Task],
-        size: [usize; 2],
-        resume: bool,
-    ) -> Result<DatasetWriter, DatasetError> {
+impl Layout {
+    /// The layout of episodes of these tasks, which must share robots and cameras.
+    pub fn of(tasks: &[compiler::Task], root: &Path) -> Result<Layout, DatasetError> {
         let first = tasks.first().ok_or_else(|| DatasetError::Existing {
             path: root.to_path_buf(),
             why: "no task to record".into(),
@@ -156,6 +133,61 @@ impl DatasetWriter {
                 )
             })
             .collect();
+        Ok(Layout {
+            robot_type: robot_type.join("+"),
+            state_names,
+            action_names,
+            cameras,
+        })
+    }
+}
+
+pub struct DatasetWriter {
+    root: PathBuf,
+    version: Version,
+    codec: Codec,
+    size: [usize; 2],
+    robot_type: String,
+    state_names: Vec<String>,
+    action_names: Vec<String>,
+    /// Camera names and their feature keys (`observation.images.<camera>`).
+    cameras: Vec<(String, String)>,
+    done: Vec<Committed>,
+}
+
+fn create_dir(p: &Path) -> Result<(), DatasetError> {
+    std::fs::create_dir_all(p).map_err(|e| DatasetError::io("create", p, e))
+}
+
+fn write_file(p: &Path, text: &str) -> Result<(), DatasetError> {
+    scoring::eval::record::write_atomic(p, text.as_bytes())
+        .map_err(|e| DatasetError::io("write", p, e))
+}
+
+fn rename(from: &Path, to: &Path) -> Result<(), DatasetError> {
+    if let Some(parent) = to.parent() {
+        create_dir(parent)?;
+    }
+    std::fs::rename(from, to).map_err(|e| DatasetError::io("move", to, e))
+}
+
+impl DatasetWriter {
+    /// Opens `root` for writing: a new dataset (the folder absent or empty), or with `resume`
+    /// the dataset a run left there, of the same version, layout, codec and image size.
+    pub fn open(
+        root: &Path,
+        version: Version,
+        codec: Codec,
+        layout: Layout,
+        size: [usize; 2],
+        resume: bool,
+    ) -> Result<DatasetWriter, DatasetError> {
+        let Layout {
+            robot_type,
+            state_names,
+            action_names,
+            cameras,
+        } = layout;
         let record = root.join("meta/autobio.jsonl");
         let mut done = Vec::new();
         let occupied = std::fs::read_dir(root).is_ok_and(|mut d| d.next().is_some());
@@ -224,7 +256,7 @@ impl DatasetWriter {
             version,
             codec,
             size,
-            robot_type: robot_type.join("+"),
+            robot_type,
             state_names,
             action_names,
             cameras,
@@ -279,56 +311,108 @@ impl DatasetWriter {
 
     /// Where episode `index`'s parquet and videos live (v2.1 final, v3.0 staged).
     fn episode_paths(&self, index: usize) -> (PathBuf, Vec<PathBuf>) {
-        let chunk = index / CHUNK;
-        match self.version {
-            Version::V21 => (
-                self.root
-                    .join(format!("data/chunk-{chunk:03}/episode_{index:06}.parquet")),
-                self.cameras
-                    .iter()
-                    .map(|(_, key)| {
-                        self.root.join(format!(
-                            "videos/chunk-{chunk:03}/{key}/episode_{index:06}.mp4"
-                        ))
-                    })
-                    .collect(),
-            ),
-            Version::V30 => (
-                self.root
-                    .join(format!(".episodes/episode_{index:06}.parquet")),
-                (0..self.cameras.len())
-                    .map(|k| {
-                        self.root
-                            .join(format!(".episodes/episode_{index:06}_camera{k}.mp4"))
-                    })
-                    .collect(),
-            ),
-        }
+        let keys: Vec<String> = self.cameras.iter().map(|(_, k)| k.clone()).collect();
+        episode_paths(&self.root, self.version, &keys, index)
     }
 
-    /// Moves a finished capture into the dataset as the next episode; returns its frames.
+    /// Moves a finished capture into the dataset as the next episode; `plan` is its position in
+    /// the whole plan (across shards); returns its frames.
     pub fn commit(
         &mut self,
         mut capture: Capture,
         instruction: &str,
+        plan: Option<usize>,
     ) -> Result<usize, DatasetError> {
         if let Some(e) = capture.take_error() {
             capture.discard();
             return Err(e);
         }
-        let index = self.done.len();
         let length = capture.rows.len();
+        let videos = std::mem::take(&mut capture.videos);
+        for v in videos {
+            let frames = v.finish()?;
+            if frames != length {
+                return Err(DatasetError::Episode {
+                    task: capture.task_id.clone(),
+                    seed: capture.seed,
+                    why: format!("a camera has {frames} frames for {length} steps"),
+                });
+            }
+        }
+        let episode = Episode {
+            task_id: capture.task_id.clone(),
+            seed: capture.seed,
+            plan,
+            instruction: instruction.to_string(),
+            image_stats: capture
+                .images
+                .iter()
+                .map(|img| img.finish().to_json(true))
+                .collect(),
+            videos: (0..self.cameras.len())
+                .map(|k| capture.dir.join(format!("camera{k}.mp4")))
+                .collect(),
+            owned: true,
+        };
+        self.add(&episode, &capture.rows, &capture.dir)?;
+        std::fs::remove_dir_all(&capture.dir).ok();
+        Ok(length)
+    }
+
+    /// The episode `index` of another dataset of this layout, as the next episode here (its
+    /// rows re-indexed, its videos copied, its image statistics kept).
+    pub(crate) fn adopt(&mut self, from: &Source, index: usize) -> Result<usize, DatasetError> {
+        let c = &from.done[index];
+        let (data, videos) = episode_paths(&from.root, from.version, &from.keys(), index);
+        let rows = crate::parquet::read_state_action(&data)?;
+        if rows.len() != c.length {
+            return Err(DatasetError::Existing {
+                path: data,
+                why: format!(
+                    "has {} frames; its commit record says {}",
+                    rows.len(),
+                    c.length
+                ),
+            });
+        }
+        let episode = Episode {
+            task_id: c.task_id.clone(),
+            seed: c.seed,
+            plan: c.plan,
+            instruction: c.instruction.clone(),
+            image_stats: from
+                .cameras
+                .iter()
+                .map(|(_, key)| c.stats.get(key).cloned().unwrap_or(Value::Null))
+                .collect(),
+            videos,
+            owned: false,
+        };
+        let staging = self.root.join(".staging/adopted");
+        create_dir(&staging)?;
+        self.add(&episode, &rows, &staging)?;
+        Ok(rows.len())
+    }
+
+    /// Writes an episode's table, places its videos, and appends its commit line.
+    fn add(
+        &mut self,
+        e: &Episode,
+        frames: &[(Vec<f32>, Vec<f32>)],
+        staging: &Path,
+    ) -> Result<(), DatasetError> {
+        let index = self.done.len();
+        let length = frames.len();
         let mut tasks = self.tasks();
         let task_index = tasks
             .iter()
-            .position(|t| t == instruction)
+            .position(|t| *t == e.instruction)
             .unwrap_or_else(|| {
-                tasks.push(instruction.to_string());
+                tasks.push(e.instruction.clone());
                 tasks.len() - 1
             });
         let first = self.total_frames();
-        let rows: Vec<Row> = capture
-            .rows
+        let rows: Vec<Row> = frames
             .iter()
             .enumerate()
             .map(|(i, (state, action))| Row {
@@ -341,7 +425,7 @@ impl DatasetWriter {
                 task_index: task_index as i64,
             })
             .collect();
-        let staged = capture.dir.join("data.parquet");
+        let staged = staging.join("data.parquet");
         write_frames(&staged, &rows)?;
         let mut stats: BTreeMap<String, Value> = BTreeMap::new();
         let column =
@@ -364,32 +448,25 @@ impl DatasetWriter {
         for (name, s) in features {
             stats.insert(name.into(), s.to_json(true));
         }
-        for ((_, key), img) in self.cameras.iter().zip(&capture.images) {
-            stats.insert(key.clone(), img.finish().to_json(true));
-        }
-        let videos = std::mem::take(&mut capture.videos);
-        for v in videos {
-            let frames = v.finish()?;
-            if frames != length {
-                return Err(DatasetError::Episode {
-                    task: capture.task_id.clone(),
-                    seed: capture.seed,
-                    why: format!("a camera has {frames} frames for {length} steps"),
-                });
-            }
+        for ((_, key), img) in self.cameras.iter().zip(&e.image_stats) {
+            stats.insert(key.clone(), img.clone());
         }
         let (data, videos) = self.episode_paths(index);
         rename(&staged, &data)?;
-        for (k, to) in videos.iter().enumerate() {
-            rename(&capture.dir.join(format!("camera{k}.mp4")), to)?;
+        for (from, to) in e.videos.iter().zip(&videos) {
+            if e.owned {
+                rename(from, to)?;
+            } else {
+                copy(from, to)?;
+            }
         }
-        std::fs::remove_dir_all(&capture.dir).ok();
         let committed = Committed {
             episode_index: index,
-            task_id: capture.task_id.clone(),
-            seed: capture.seed,
+            task_id: e.task_id.clone(),
+            seed: e.seed,
+            plan: e.plan,
             length,
-            instruction: instruction.to_string(),
+            instruction: e.instruction.clone(),
             stats,
         };
         // The commit point: the episode exists once its line is on disk.
@@ -407,7 +484,7 @@ impl DatasetWriter {
         if self.version == Version::V21 {
             self.write_metadata()?;
         }
-        Ok(length)
+        Ok(())
     }
 
     fn features(&self) -> Value {
@@ -594,6 +671,158 @@ impl DatasetWriter {
             &serde_json::to_string_pretty(&self.stats(true)).expect("json"),
         )
     }
+}
+
+/// Where episode `index` of a dataset at `root` keeps its parquet and videos (v2.1 final, v3.0
+/// staged).
+fn episode_paths(
+    root: &Path,
+    version: Version,
+    keys: &[String],
+    index: usize,
+) -> (PathBuf, Vec<PathBuf>) {
+    let chunk = index / CHUNK;
+    match version {
+        Version::V21 => (
+            root.join(format!("data/chunk-{chunk:03}/episode_{index:06}.parquet")),
+            keys.iter()
+                .map(|key| {
+                    root.join(format!(
+                        "videos/chunk-{chunk:03}/{key}/episode_{index:06}.mp4"
+                    ))
+                })
+                .collect(),
+        ),
+        Version::V30 => (
+            root.join(format!(".episodes/episode_{index:06}.parquet")),
+            keys.iter()
+                .map(|key| root.join(format!(".episodes/episode_{index:06}/{key}.mp4")))
+                .collect(),
+        ),
+    }
+}
+
+/// An episode as the writer takes it: per-camera image statistics (LeRobot's stats JSON) and
+/// video files, moved in when `owned`, else copied.
+struct Episode {
+    task_id: String,
+    seed: u64,
+    plan: Option<usize>,
+    instruction: String,
+    image_stats: Vec<Value>,
+    videos: Vec<PathBuf>,
+    owned: bool,
+}
+
+/// Another dataset read for merging: its layout and commit record.
+pub(crate) struct Source {
+    pub root: PathBuf,
+    pub robot_type: String,
+    pub version: Version,
+    pub codec: String,
+    pub size: [usize; 2],
+    pub state_names: Vec<String>,
+    pub action_names: Vec<String>,
+    pub cameras: Vec<(String, String)>,
+    pub done: Vec<Committed>,
+}
+
+impl Source {
+    fn keys(&self) -> Vec<String> {
+        self.cameras.iter().map(|(_, k)| k.clone()).collect()
+    }
+
+    /// Reads a dataset's layout and commit record (v3.0 needs its `.episodes/` parts).
+    pub fn open(root: &Path) -> Result<Source, DatasetError> {
+        let bad = |why: String| DatasetError::Existing {
+            path: root.to_path_buf(),
+            why,
+        };
+        let info_path = root.join("meta/info.json");
+        let info: Value = std::fs::read_to_string(&info_path)
+            .map_err(|e| DatasetError::io("read", &info_path, e))
+            .and_then(|t| {
+                serde_json::from_str(&t).map_err(|e| bad(format!("meta/info.json: {e}")))
+            })?;
+        let version = match info["codebase_version"].as_str() {
+            Some("v2.1") => Version::V21,
+            Some("v3.0") => Version::V30,
+            other => return Err(bad(format!("is a dataset of version {other:?}"))),
+        };
+        let features = info["features"]
+            .as_object()
+            .ok_or_else(|| bad("meta/info.json has no features".into()))?;
+        let names = |key: &str| -> Vec<String> {
+            features
+                .get(key)
+                .and_then(|f| f["names"].as_array())
+                .into_iter()
+                .flatten()
+                .filter_map(|n| n.as_str().map(str::to_string))
+                .collect()
+        };
+        let videos: Vec<(&String, &Value)> = features
+            .iter()
+            .filter(|(_, f)| f["dtype"] == "video")
+            .collect();
+        let first = videos.first().map(|(_, f)| &f["info"]);
+        let dim = |k: &str| first.and_then(|i| i[k].as_u64()).unwrap_or(0) as usize;
+        let record = root.join("meta/autobio.jsonl");
+        let text =
+            std::fs::read_to_string(&record).map_err(|e| DatasetError::io("read", &record, e))?;
+        let done = text
+            .lines()
+            .map(serde_json::from_str::<Committed>)
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(|e| bad(format!("meta/autobio.jsonl: {e}")))?;
+        let source = Source {
+            root: root.to_path_buf(),
+            robot_type: info["robot_type"].as_str().unwrap_or("").to_string(),
+            version,
+            codec: first
+                .and_then(|i| i["video.codec"].as_str())
+                .unwrap_or("")
+                .to_string(),
+            size: [dim("video.width"), dim("video.height")],
+            state_names: names("observation.state"),
+            action_names: names("action"),
+            // Camera names are not kept in a dataset; the feature keys stand for them.
+            cameras: videos
+                .iter()
+                .map(|(k, _)| ((*k).clone(), (*k).clone()))
+                .collect(),
+            done,
+        };
+        if version == Version::V30 && !source.done.is_empty() {
+            let (data, _) = episode_paths(root, version, &source.keys(), 0);
+            if !data.exists() {
+                return Err(bad(
+                    "has no per-episode parts in .episodes/ (kept by autobio demo); they are needed to merge it"
+                        .into(),
+                ));
+            }
+        }
+        Ok(source)
+    }
+
+    /// The layout its episodes share.
+    pub fn layout(&self) -> Layout {
+        Layout {
+            robot_type: self.robot_type.clone(),
+            state_names: self.state_names.clone(),
+            action_names: self.action_names.clone(),
+            cameras: self.cameras.clone(),
+        }
+    }
+}
+
+fn copy(from: &Path, to: &Path) -> Result<(), DatasetError> {
+    if let Some(parent) = to.parent() {
+        create_dir(parent)?;
+    }
+    std::fs::copy(from, to)
+        .map(|_| ())
+        .map_err(|e| DatasetError::io("copy", from, e))
 }
 
 /// Stats back from their JSON (images' `[[[x]]]` flattened).

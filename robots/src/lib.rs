@@ -14,6 +14,7 @@
 //! No MuJoCo API here: the runtime compiles what `prepare` writes; only file IO for the assets.
 
 mod assets;
+pub mod lod;
 pub mod ur5e_2f85;
 
 pub use assets::AssetError;
@@ -38,6 +39,14 @@ impl Gripper {
     pub fn clamp(&self, v: f64) -> f64 {
         v.clamp(self.open.min(self.closed), self.open.max(self.closed))
     }
+}
+
+/// Which meshes a prepared model uses: the packages' own, or [`lod`]'s simplified copies for
+/// small camera images.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Detail {
+    Full,
+    Simplified,
 }
 
 /// How the expert solves inverse kinematics for this arm.
@@ -73,8 +82,9 @@ pub struct RobotModel {
     pub expert_limits: ExpertLimits,
     pub ik: IkMethod,
     /// Writes the robot's MJCF from the installed packages under `deps` (idempotent) and returns
-    /// its path.
-    pub prepare: fn(deps: &Path) -> Result<PathBuf, AssetError>,
+    /// its path; with [`Detail::Simplified`] its visual meshes are [`lod`]'s simplified ones (the
+    /// bodies, joints and geoms are the same).
+    pub prepare: fn(deps: &Path, detail: Detail) -> Result<PathBuf, AssetError>,
 }
 
 impl RobotModel {

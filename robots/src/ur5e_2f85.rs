@@ -7,7 +7,7 @@
 //! action = 6 joint position targets (rad) + the fingers actuator (0 open .. 255 closed).
 
 use crate::assets::{self, AssetError};
-use crate::{ExpertLimits, Gripper, IkMethod, RobotModel};
+use crate::{Detail, ExpertLimits, Gripper, IkMethod, RobotModel, lod};
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::path::{Path, PathBuf};
 
@@ -57,7 +57,7 @@ pub const MODEL: RobotModel = RobotModel {
     prepare,
 };
 
-fn prepare(deps: &Path) -> Result<PathBuf, AssetError> {
+fn prepare(deps: &Path, detail: Detail) -> Result<PathBuf, AssetError> {
     let ur_dir = deps.join("robots/universal_robots_ur5e");
     let gr_dir = deps.join("robots/robotiq_2f85");
     let (ur_file, gr_file) = (ur_dir.join("ur5e.xml"), gr_dir.join("2f85.xml"));
@@ -65,16 +65,27 @@ fn prepare(deps: &Path) -> Result<PathBuf, AssetError> {
         return Err(AssetError::Missing(deps.join("robots")));
     }
     let gravcomp = |s: &str| s.replace("<body ", "<body gravcomp=\"1\" ");
+    let meshes = |dir: &Path| match detail {
+        Detail::Full => assets::absolute(&dir.join("assets")),
+        Detail::Simplified => assets::absolute(&lod::simplified_dir(
+            &dir.join("assets"),
+            &deps.join("lod"),
+        )?),
+    };
     let mut gripper = assets::read(&gr_file)?;
     gripper = assets::strip_element(&gripper, "<option", "/>");
     gripper = gravcomp(&gripper).replace(
         "meshdir=\"assets\"",
-        &format!("meshdir=\"{}\"", assets::absolute(&gr_dir.join("assets"))?),
+        &format!("meshdir=\"{}\"", meshes(&gr_dir)?),
     );
+    if detail == Detail::Simplified {
+        // Simplified meshes are OBJ files of the same names.
+        gripper = gripper.replace(".stl\"", ".obj\"");
+    }
     let mut arm = assets::read(&ur_file)?;
     arm = gravcomp(&arm).replace(
         "meshdir=\"assets\"",
-        &format!("meshdir=\"{}\"", assets::absolute(&ur_dir.join("assets"))?),
+        &format!("meshdir=\"{}\"", meshes(&ur_dir)?),
     );
     arm = assets::strip_element(&arm, "<keyframe>", "</keyframe>");
     arm = assets::strip_element(&arm, "<light name=\"spotlight\"", "/>");

@@ -34,6 +34,18 @@ pub enum StepError {
     },
 }
 
+/// A recorded state that does not fit this scene.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error(
+    "the recorded state does not fit this scene: {state} state values for {want}, logic for {logic} items of {items}"
+)]
+pub struct RestoreError {
+    pub state: usize,
+    pub want: usize,
+    pub logic: usize,
+    pub items: usize,
+}
+
 pub struct Episode {
     pub scene: Arc<Scene>,
     pub task: Task,
@@ -281,6 +293,50 @@ impl Episode {
         (0..self.scene.robots.len())
             .flat_map(|r| self.robot_state(r))
             .collect()
+    }
+
+    /// MuJoCo's full state ([`crate::record::proto::STATE_SPEC`]): with each item's logic, all a
+    /// step depends on.
+    pub fn physics_state(&self) -> Vec<f64> {
+        self.data.state(crate::record::proto::STATE_SPEC).into_vec()
+    }
+
+    /// Each item's logic state, in task order.
+    pub fn logic(&self) -> &[Logic] {
+        &self.logic
+    }
+
+    /// Puts the episode back into a recorded state: MuJoCo's state ([`Self::physics_state`]) and
+    /// each item's logic. Stepping on from here with the recorded actions repeats the recording.
+    pub fn restore(&mut self, state: &[f64], logic: Vec<Logic>) -> Result<(), RestoreError> {
+        let want = self
+            .scene
+            .model
+            .state_size(crate::record::proto::STATE_SPEC);
+        if state.len() != want || logic.len() != self.logic.len() {
+            return Err(RestoreError {
+                state: state.len(),
+                want,
+                logic: logic.len(),
+                items: self.logic.len(),
+            });
+        }
+        let set = |d: &mut MjData<Arc<MjModel>>| {
+            d.set_state(state, crate::record::proto::STATE_SPEC)
+                .map_err(|_| RestoreError {
+                    state: state.len(),
+                    want,
+                    logic: 0,
+                    items: 0,
+                })
+        };
+        set(&mut self.data)?;
+        // Positions for the readings; then the state again, so nothing `mj_forward` wrote
+        // (warm start aside, it writes only derived quantities) can differ.
+        self.data.forward();
+        set(&mut self.data)?;
+        self.logic = logic;
+        Ok(())
     }
 
     /// Every robot's current targets, concatenated in task order (the "no motion" action).

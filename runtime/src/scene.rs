@@ -12,8 +12,8 @@ use compiler::{CameraMount, SceneInstance, Task};
 use labware::mjcf::{Fragment, pose_attrs};
 use labware::{Mechanism, Pose};
 use mujoco_rs::prelude::*;
-use robots::RobotModel;
-use std::sync::Arc;
+use robots::{Detail, RobotModel};
+use std::sync::{Arc, OnceLock};
 
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
@@ -92,6 +92,9 @@ pub struct Scene {
     pub placements: Vec<Pose>,
     /// Each body's owner (`None`: the world, the bench, the room), for contact predicates.
     pub body_owner: Vec<Option<Owner>>,
+    /// What the simplified model is built from, and that model once a camera asked for it.
+    task: Task,
+    simplified: OnceLock<Result<Arc<MjModel>, String>>,
 }
 
 impl Scene {
@@ -148,7 +151,8 @@ fn plugin_instance(m: &Mechanism) -> (&'static str, String) {
 }
 
 /// The scene MJCF for a task with the given labware placements.
-pub fn scene_xml(task: &Task, placements: &[Pose]) -> Result<String, SceneError> {
+/// The scene's MJCF; `detail` picks the robots' visual meshes (nothing else differs).
+pub fn scene_xml(task: &Task, placements: &[Pose], detail: Detail) -> Result<String, SceneError> {
     let mut world = String::new();
     let mut assets = String::new();
     for cam in &task.cameras {
@@ -169,7 +173,7 @@ pub fn scene_xml(task: &Task, placements: &[Pose]) -> Result<String, SceneError>
     for (i, r) in task.robots.iter().enumerate() {
         let model = robot_model(task, i)?;
         if !prepared.contains(&model.name) {
-            let file = (model.prepare)(&deps::deps_dir())?;
+            let file = (model.prepare)(&deps::deps_dir(), detail)?;
             assets += &format!(
                 "<model name=\"{}\" file=\"{}\"/>\n",
                 model.name,
@@ -358,7 +362,7 @@ impl Scene {
         check_measurable(task)?;
         let placements = instance.labware_placement.clone();
         physics::register().map_err(|e| SceneError::Compile(e.to_string()))?;
-        let xml = scene_xml(task, &placements)?;
+        let xml = scene_xml(task, &placements, Detail::Full)?;
         let model =
             MjModel::from_xml_string(&xml).map_err(|e| SceneError::Compile(e.to_string()))?;
         let errors = physics::instance_errors(model.ffi(), MjData::new(&model).ffi());
@@ -396,7 +400,38 @@ impl Scene {
             xml,
             placements,
             body_owner,
+            task: task.clone(),
+            simplified: OnceLock::new(),
         })
+    }
+
+    /// The model cameras render with at `detail`: the simulated model itself, or the same scene
+    /// with the robots' simplified visual meshes (compiled once, on first use). Both have the same
+    /// bodies, joints and geoms, so a renderer copies the simulated `qpos` into its own data; the
+    /// simulation never runs on the simplified model.
+    pub fn render_model(&self, detail: Detail) -> Result<Arc<MjModel>, SceneError> {
+        if detail == Detail::Full {
+            return Ok(self.model.clone());
+        }
+        self.simplified
+            .get_or_init(|| {
+                let xml = scene_xml(&self.task, &self.placements, Detail::Simplified)
+                    .map_err(|e| e.to_string())?;
+                let m = MjModel::from_xml_string(&xml).map_err(|e| e.to_string())?;
+                let same = |a: &MjModel, b: &MjModel| {
+                    let (a, b) = (a.ffi(), b.ffi());
+                    (a.nq, a.nbody, a.ngeom, a.ncam, a.nmocap)
+                        == (b.nq, b.nbody, b.ngeom, b.ncam, b.nmocap)
+                };
+                if !same(&m, &self.model) {
+                    return Err(
+                        "the simplified model's structure differs from the simulated one".into(),
+                    );
+                }
+                Ok(Arc::new(m))
+            })
+            .clone()
+            .map_err(SceneError::Compile)
     }
 }
 

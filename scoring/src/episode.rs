@@ -175,7 +175,7 @@ pub fn run_episode_with(
     'episode: while !over && ep.time() < task.time_limit_s {
         let stage = judge.stage();
         let images = match eyes.as_mut() {
-            Some(c) => c.render(&mut ep.data, &cam_names)?,
+            Some(c) => c.render(&ep.data, &cam_names)?,
             None => Vec::new(),
         };
         let before = previous.take().unwrap_or_else(|| images.clone());
@@ -232,12 +232,12 @@ pub fn run_episode_with(
             if history_at == Some(k)
                 && let Some(c) = eyes.as_mut()
             {
-                previous = Some(c.render(&mut ep.data, &cam_names)?);
+                previous = Some(c.render(&ep.data, &cam_names)?);
             }
             let t = ep.time();
             if let Some(s) = sink.as_mut() {
                 let frames = match sink_eyes.as_mut() {
-                    Some(c) => c.render(&mut ep.data, &cam_names)?,
+                    Some(c) => c.render(&ep.data, &cam_names)?,
                     None => Vec::new(),
                 };
                 if let Err(e) = s.step(&ep.state(), &action, &frames) {
@@ -257,10 +257,12 @@ pub fn run_episode_with(
                 }
                 r.labware(t, &ep.labware_state())
                     .map_err(|e| e.to_string())?;
+                r.physics(t, &ep.physics_state())
+                    .map_err(|e| e.to_string())?;
                 if let Some(c) = cameras.as_mut()
                     && steps.is_multiple_of(opts.image_every as u64)
                 {
-                    for img in c.render(&mut ep.data, &cam_names)? {
+                    for img in c.render(&ep.data, &cam_names)? {
                         r.image(t, &img).map_err(|e| e.to_string())?;
                     }
                 }
@@ -290,15 +292,25 @@ pub fn run_episode_with(
         verdict.success = false;
     }
     policy.end_episode(verdict.success, steps);
+    let trajectory_hash: String = hasher
+        .finalize()
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect();
     if let Some(mut r) = rec {
         let t = ep.time();
         r.labware(t, &ep.labware_state())
+            .map_err(|e| e.to_string())?;
+        r.physics(t, &ep.physics_state())
             .map_err(|e| e.to_string())?;
         r.write(
             "/verdict",
             "autobio.Verdict",
             t,
-            &serde_json::json!({"verdict": verdict, "error": error}),
+            &serde_json::json!({
+                "verdict": verdict, "error": error,
+                "trajectory_hash": trajectory_hash, "control_steps": steps,
+            }),
         )
         .map_err(|e| e.to_string())?;
         r.finish().map_err(|e| e.to_string())?;
@@ -319,11 +331,7 @@ pub fn run_episode_with(
         control_steps: steps,
         wall_time_s: start.elapsed().as_secs_f64(),
         policy_time_s: policy_time,
-        trajectory_hash: hasher
-            .finalize()
-            .iter()
-            .map(|b| format!("{b:02x}"))
-            .collect(),
+        trajectory_hash,
         recording: opts.record.as_ref().map(|p| p.display().to_string()),
     })
 }

@@ -12,6 +12,7 @@ pub mod expert;
 pub mod policy;
 pub mod profile;
 pub mod remote;
+pub mod replay;
 pub mod verdict;
 
 pub use episode::{EpisodeOptions, EpisodeResult, Outcome, run_episode};

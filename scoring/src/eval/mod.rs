@@ -108,6 +108,13 @@ pub struct Shard {
     pub count: u32,
 }
 
+impl Shard {
+    /// Whether the plan's episode at `position` is this shard's.
+    pub fn takes(&self, position: usize) -> bool {
+        position as u64 % u64::from(self.count) == u64::from(self.index)
+    }
+}
+
 impl std::str::FromStr for Shard {
     type Err = EvalError;
     fn from_str(s: &str) -> Result<Shard, EvalError> {
@@ -225,7 +232,7 @@ pub fn plan(seed: u64, episodes: usize, runs: u32, shard: Option<Shard>) -> Vec<
             })
         })
         .enumerate()
-        .filter(|(k, _)| shard.is_none_or(|s| *k as u64 % s.count as u64 == s.index as u64))
+        .filter(|(k, _)| shard.is_none_or(|s| s.takes(*k)))
         .map(|(_, p)| p)
         .collect()
 }

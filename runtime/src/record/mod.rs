@@ -1,6 +1,7 @@
 //! Episode recordings as MCAP (zstd chunks), readable by the `mcap` CLI and Foxglove.
 //!
-//! Channels (all JSON messages with a JSON schema; log time = simulation time in ns):
+//! Channels (JSON messages with a JSON schema, or protobuf with its descriptor set, see
+//! [`proto`]; log time = simulation time in ns):
 //!
 //! | topic | schema | rate | content |
 //! |---|---|---|---|
@@ -8,14 +9,14 @@
 //! | `/robot/<name>/joint_state` | `autobio.JointState` | control (50 Hz) | one robot's `position` (its state layout: arm joints + gripper driver, rad) and `ctrl` |
 //! | `/robot/<name>/action` | `autobio.Action` | control | that robot's part of the action applied for the next period |
 //! | `/labware/state` | `autobio.LabwareState` | control | per labware: root pose, joints by role, loose parts' poses, logic state (latch flags), the robots touching it (`touched_by`, omitted when none) |
-//! | `/camera/<name>` | `foxglove.RawImage` | `image_every` control steps (default 10 Hz) | 224x224 `rgb8`, base64 |
+//! | `/physics/state` | `autobio.PhysicsState` (protobuf) | control | MuJoCo's state before the step's action (`mjSTATE_INTEGRATION`, [`proto::STATE_SPEC`]), and once more at the end: with `/labware/state`'s logic it is everything needed to re-simulate from any step or to redraw any frame |
+//! | `/camera/<name>` | `foxglove.CompressedImage` (protobuf) | `image_every` control steps (default 10 Hz) | 224x224 PNG (lossless) |
 //! | `/stage` | `autobio.StageEvent` | on event | expert motion / lab-step starts |
-//! | `/verdict` | `autobio.Verdict` | once, at the end | success and every predicate's value |
+//! | `/verdict` | `autobio.Verdict` | once, at the end | success and every predicate's value, the error if any, the trajectory hash and control steps |
 //! | `/liquid/<name>` | `autobio.Liquid` | physics or control | volume (µL), surface normal and offset (container frame), the surface disk's world pose and radius |
 
 use crate::LabwareState;
 use crate::render::Image;
-use base64::Engine;
 use serde::Serialize;
 use serde_json::json;
 use std::collections::BTreeMap;
@@ -23,8 +24,11 @@ use std::fs::File;
 use std::io::BufWriter;
 use std::path::Path;
 
+pub mod proto;
+
 /// 2: one joint-state and action channel per robot; labware state with poses, parts and logic.
-pub const RECORDING_SCHEMA_VERSION: u32 = 2;
+/// 3: MuJoCo's state on `/physics/state`; camera frames as PNG in `foxglove.CompressedImage`.
+pub const RECORDING_SCHEMA_VERSION: u32 = 3;
 
 #[derive(Debug, thiserror::Error)]
 pub enum RecordError {
@@ -54,7 +58,8 @@ impl From<mcap::McapError> for RecordError {
 }
 
 const OBJECT: &str = r#"{"type":"object"}"#;
-const RAW_IMAGE_SCHEMA: &str = r#"{"title":"foxglove.RawImage","type":"object","properties":{"timestamp":{"type":"object","properties":{"sec":{"type":"integer"},"nsec":{"type":"integer"}}},"frame_id":{"type":"string"},"width":{"type":"integer"},"height":{"type":"integer"},"encoding":{"type":"string"},"step":{"type":"integer"},"data":{"type":"string","contentEncoding":"base64"}}}"#;
+const IMAGE: &str = "foxglove.CompressedImage";
+const STATE: &str = "autobio.PhysicsState";
 
 pub struct Recorder {
     w: mcap::Writer<BufWriter<File>>,
@@ -86,20 +91,28 @@ impl Recorder {
         if let Some(&c) = self.channels.get(topic) {
             return Ok(c);
         }
+        let protobuf = match schema {
+            IMAGE => Some(proto::compressed_image_schema()),
+            STATE => Some(proto::physics_state_schema()),
+            _ => None,
+        };
         let sid = match self.schemas.get(schema) {
             Some(&s) => s,
             None => {
-                let body = if schema == "foxglove.RawImage" {
-                    RAW_IMAGE_SCHEMA
-                } else {
-                    OBJECT
+                let s = match &protobuf {
+                    Some(set) => self.w.add_schema(schema, "protobuf", set)?,
+                    None => self.w.add_schema(schema, "jsonschema", OBJECT.as_bytes())?,
                 };
-                let s = self.w.add_schema(schema, "jsonschema", body.as_bytes())?;
                 self.schemas.insert(schema, s);
                 s
             }
         };
-        let c = self.w.add_channel(sid, topic, "json", &BTreeMap::new())?;
+        let encoding = if protobuf.is_some() {
+            "protobuf"
+        } else {
+            "json"
+        };
+        let c = self.w.add_channel(sid, topic, encoding, &BTreeMap::new())?;
         self.channels.insert(topic.to_string(), c);
         Ok(c)
     }
@@ -111,9 +124,19 @@ impl Recorder {
         t: f64,
         msg: &T,
     ) -> Result<(), RecordError> {
-        let c = self.channel(topic, schema)?;
         let data =
             serde_json::to_vec(msg).map_err(|e| RecordError::Bad(topic.into(), e.to_string()))?;
+        self.write_bytes(topic, schema, t, &data)
+    }
+
+    fn write_bytes(
+        &mut self,
+        topic: &str,
+        schema: &'static str,
+        t: f64,
+        data: &[u8],
+    ) -> Result<(), RecordError> {
+        let c = self.channel(topic, schema)?;
         self.seq += 1;
         let header = mcap::records::MessageHeader {
             channel_id: c,
@@ -121,7 +144,38 @@ impl Recorder {
             log_time: ns(t),
             publish_time: ns(t),
         };
-        self.w.write_to_known_channel(&header, &data)?;
+        self.w.write_to_known_channel(&header, data)?;
+        Ok(())
+    }
+
+    /// Copies a message of another recording as it is (schema, channel, times, bytes).
+    pub fn pass(&mut self, m: &mcap::Message<'_>) -> Result<(), RecordError> {
+        let topic = &m.channel.topic;
+        let c = match self.channels.get(topic.as_str()) {
+            Some(&c) => c,
+            None => {
+                let sid = match &m.channel.schema {
+                    Some(s) => self.w.add_schema(&s.name, &s.encoding, &s.data)?,
+                    None => 0,
+                };
+                let c = self.w.add_channel(
+                    sid,
+                    topic,
+                    &m.channel.message_encoding,
+                    &m.channel.metadata,
+                )?;
+                self.channels.insert(topic.clone(), c);
+                c
+            }
+        };
+        self.seq += 1;
+        let header = mcap::records::MessageHeader {
+            channel_id: c,
+            sequence: self.seq,
+            log_time: m.log_time,
+            publish_time: m.publish_time,
+        };
+        self.w.write_to_known_channel(&header, &m.data)?;
         Ok(())
     }
 
@@ -167,19 +221,17 @@ impl Recorder {
         )
     }
 
+    /// One camera frame, as PNG.
     pub fn image(&mut self, t: f64, img: &Image) -> Result<(), RecordError> {
-        let ns = ns(t);
-        let msg = json!({
-            "timestamp": {"sec": ns / 1_000_000_000, "nsec": ns % 1_000_000_000},
-            "frame_id": img.camera, "width": img.width, "height": img.height, "encoding": "rgb8",
-            "step": img.width * 3, "data": base64::engine::general_purpose::STANDARD.encode(&img.rgb),
-        });
-        self.write(
-            &format!("/camera/{}", img.camera),
-            "foxglove.RawImage",
-            t,
-            &msg,
-        )
+        let png = img.to_png().map_err(RecordError::Write)?;
+        let msg = proto::compressed_image(ns(t), &img.camera, "png", &png);
+        self.write_bytes(&format!("/camera/{}", img.camera), IMAGE, t, &msg)
+    }
+
+    /// MuJoCo's state ([`proto::STATE_SPEC`]).
+    pub fn physics(&mut self, t: f64, state: &[f64]) -> Result<(), RecordError> {
+        let msg = proto::physics_state(ns(t), proto::STATE_SPEC, state);
+        self.write_bytes("/physics/state", STATE, t, &msg)
     }
 
     /// One liquid's state (see the channel table).
@@ -212,6 +264,13 @@ pub struct RecordingSummary {
     pub verdict: Option<serde_json::Value>,
     /// Each robot's recorded actions, in time order (one per control step).
     pub actions: BTreeMap<String, Vec<Vec<f64>>>,
+    /// Each robot's recorded state (its state layout), in time order (one per control step).
+    pub robot_states: BTreeMap<String, Vec<Vec<f64>>>,
+    /// MuJoCo's state ([`proto::STATE_SPEC`]) with its time: one per control step before the
+    /// action, then the final state.
+    pub physics: Vec<(f64, Vec<f64>)>,
+    /// Each camera's frames (time, PNG bytes), in time order.
+    pub images: BTreeMap<String, Vec<(f64, Vec<u8>)>>,
     pub messages: u64,
     pub topics: BTreeMap<String, u64>,
     pub duration_s: f64,
@@ -230,11 +289,26 @@ pub struct LiquidFrame {
     pub radius_m: f64,
 }
 
+/// Calls `each` with every message of a recording, in file order.
+pub fn for_each_message(
+    path: &Path,
+    mut each: impl FnMut(&mcap::Message<'_>) -> Result<(), RecordError>,
+) -> Result<(), RecordError> {
+    let buf = std::fs::read(path).map_err(RecordError::Read)?;
+    for m in mcap::MessageStream::new(&buf).map_err(RecordError::NotMcap)? {
+        each(&m.map_err(RecordError::NotMcap)?)?;
+    }
+    Ok(())
+}
+
 pub fn read_recording(path: &Path) -> Result<RecordingSummary, RecordError> {
     let buf = std::fs::read(path).map_err(RecordError::Read)?;
     let (mut task, mut instance, mut verdict) = (None, None, None);
     let mut series: Vec<(f64, Vec<LabwareState>)> = Vec::new();
     let mut actions: BTreeMap<String, Vec<Vec<f64>>> = BTreeMap::new();
+    let mut robot_states: BTreeMap<String, Vec<Vec<f64>>> = BTreeMap::new();
+    let mut physics = Vec::new();
+    let mut images: BTreeMap<String, Vec<(f64, Vec<u8>)>> = BTreeMap::new();
     let mut topics = BTreeMap::new();
     let mut messages = 0;
     let mut last_t = 0u64;
@@ -264,15 +338,44 @@ pub fn read_recording(path: &Path) -> Result<RecordingSummary, RecordError> {
                 series.push((m.log_time as f64 * 1e-9, states));
             }
             "/verdict" => verdict = Some(parse("/verdict")?),
+            "/physics/state" => {
+                let (spec, state) = proto::state_values(&m.data).ok_or_else(|| {
+                    RecordError::Bad("/physics/state".into(), "not protobuf".into())
+                })?;
+                if spec != proto::STATE_SPEC {
+                    return Err(RecordError::Bad(
+                        "/physics/state".into(),
+                        format!("state spec {spec}, expected {}", proto::STATE_SPEC),
+                    ));
+                }
+                physics.push((m.log_time as f64 * 1e-9, state));
+            }
             topic => {
-                if let Some(robot) = topic
-                    .strip_prefix("/robot/")
-                    .and_then(|t| t.strip_suffix("/action"))
-                {
-                    let v = parse(topic)?;
-                    let action: Vec<f64> = serde_json::from_value(v["action"].clone())
-                        .map_err(|e| RecordError::Bad(topic.into(), e.to_string()))?;
-                    actions.entry(robot.to_string()).or_default().push(action);
+                let robot_field =
+                    |suffix: &str, key: &str| -> Result<Option<(String, Vec<f64>)>, RecordError> {
+                        let Some(robot) = topic
+                            .strip_prefix("/robot/")
+                            .and_then(|t| t.strip_suffix(suffix))
+                        else {
+                            return Ok(None);
+                        };
+                        let v = parse(topic)?;
+                        let values = serde_json::from_value(v[key].clone())
+                            .map_err(|e| RecordError::Bad(topic.into(), e.to_string()))?;
+                        Ok(Some((robot.to_string(), values)))
+                    };
+                if let Some((robot, a)) = robot_field("/action", "action")? {
+                    actions.entry(robot).or_default().push(a);
+                } else if let Some((robot, s)) = robot_field("/joint_state", "position")? {
+                    robot_states.entry(robot).or_default().push(s);
+                } else if let Some(camera) = topic.strip_prefix("/camera/") {
+                    let png = proto::image_data(&m.data).ok_or_else(|| {
+                        RecordError::Bad(topic.into(), "not a CompressedImage".into())
+                    })?;
+                    images
+                        .entry(camera.to_string())
+                        .or_default()
+                        .push((m.log_time as f64 * 1e-9, png.to_vec()));
                 }
             }
         }
@@ -288,6 +391,9 @@ pub fn read_recording(path: &Path) -> Result<RecordingSummary, RecordError> {
         labware_series: series,
         verdict,
         actions,
+        robot_states,
+        physics,
+        images,
         messages,
         topics,
         duration_s: last_t as f64 * 1e-9,

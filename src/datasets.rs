@@ -1,0 +1,88 @@
+//! `autobio demo --format lerobot-*`, `autobio export` and `autobio dataset merge`: one call
+//! into `dataset` each, with a progress bar and a closing summary.
+
+use crate::progress::ProgressView;
+use anyhow::Result;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+/// `--format` of `export`.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum DatasetFormat {
+    #[value(name = "lerobot-v21")]
+    LerobotV21,
+    #[value(name = "lerobot-v30")]
+    LerobotV30,
+}
+
+impl DatasetFormat {
+    pub fn version(self) -> dataset::Version {
+        match self {
+            DatasetFormat::LerobotV21 => dataset::Version::V21,
+            DatasetFormat::LerobotV30 => dataset::Version::V30,
+        }
+    }
+}
+
+/// `--codec` of `export`.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum CodecArg {
+    Av1,
+    H264,
+}
+
+impl CodecArg {
+    pub fn codec(self) -> dataset::Codec {
+        match self {
+            CodecArg::Av1 => dataset::Codec::Av1,
+            CodecArg::H264 => dataset::Codec::H264,
+        }
+    }
+}
+
+fn summary(out: &Path, done: &dataset::Generated, verb: &str) {
+    outln!(
+        "{}: {} episodes in the dataset, {} {verb}, {} left out, {} frames",
+        out.display(),
+        done.written,
+        done.written - done.resumed,
+        done.failed.len(),
+        done.frames
+    );
+}
+
+pub fn generate(tasks: &[compiler::Task], opts: &dataset::GenerateOptions) -> Result<ExitCode> {
+    let mut view = ProgressView::new("demo");
+    let mut failed = 0;
+    let done = dataset::generate(tasks, opts, |s| {
+        failed += usize::from(s.result.is_err());
+        view.step(&s, failed);
+    });
+    view.finish();
+    summary(&opts.out, &done?, "written");
+    Ok(ExitCode::SUCCESS)
+}
+
+pub fn export(recordings: &[PathBuf], opts: &dataset::ExportOptions) -> Result<ExitCode> {
+    let mut view = ProgressView::new("export");
+    let mut failed = 0;
+    let done = dataset::export(recordings, opts, |s| {
+        failed += usize::from(s.result.is_err());
+        view.step(&s, failed);
+    });
+    view.finish();
+    summary(&opts.out, &done?, "exported");
+    Ok(ExitCode::SUCCESS)
+}
+
+pub fn merge(shards: &[PathBuf], out: &Path) -> Result<ExitCode> {
+    let m = dataset::merge(shards, out)?;
+    outln!(
+        "{}: {} episodes, {} frames, merged from {} shards",
+        out.display(),
+        m.episodes,
+        m.frames,
+        m.shards
+    );
+    Ok(ExitCode::SUCCESS)
+}
