@@ -426,6 +426,7 @@ fn dataset_figures(task: &compiler::Task) -> Result<()> {
             image_size: [224, 224],
             workers,
             shard: None,
+            file_sizes: Default::default(),
         };
         let t = Instant::now();
         let done = dataset::generate(std::slice::from_ref(task), &opts, |_| {})?;

@@ -40,6 +40,33 @@ impl CodecArg {
     }
 }
 
+/// Where a v3.0 dataset's shared files roll over.
+#[derive(Clone, Copy, Debug, clap::Args)]
+pub struct FileSizeArgs {
+    /// v3.0: start a new data file once one reaches this size (MiB)
+    #[arg(long, default_value_t = 100.0, value_name = "MIB", value_parser = positive)]
+    data_file_mb: f64,
+    /// v3.0: start a new video file once one reaches this size (MiB)
+    #[arg(long, default_value_t = 500.0, value_name = "MIB", value_parser = positive)]
+    video_file_mb: f64,
+}
+
+fn positive(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v > 0.0 && v.is_finite() => Ok(v),
+        _ => Err(format!("`{s}` is not a positive size")),
+    }
+}
+
+impl FileSizeArgs {
+    pub fn sizes(self) -> dataset::FileSizes {
+        dataset::FileSizes {
+            data_mb: self.data_file_mb,
+            video_mb: self.video_file_mb,
+        }
+    }
+}
+
 fn summary(out: &Path, done: &dataset::Generated, verb: &str) {
     outln!(
         "{}: {} episodes in the dataset, {} {verb}, {} left out, {} frames",

@@ -86,13 +86,15 @@ enum Command {
         /// Continue the dataset in --out (episodes already in it are not recorded again)
         #[arg(long)]
         resume: bool,
-        /// Episodes recorded at once (datasets), each thread with its own scene and renderer
+        /// Episodes recorded at once, each thread with its own scene and renderer
         #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=256))]
         workers: u32,
         /// Record only shard I of N (datasets): every N-th episode of the plan from position I,
         /// into its own --out; join the shards with `autobio dataset merge`
         #[arg(long, value_name = "I/N")]
         shard: Option<scoring::eval::Shard>,
+        #[command(flatten)]
+        files: datasets::FileSizeArgs,
     },
     /// Turn MCAP recordings into a LeRobot dataset (cameras redrawn from the recorded states)
     Export {
@@ -113,6 +115,8 @@ enum Command {
         /// Continue the dataset in --out (recordings already in it are skipped)
         #[arg(long)]
         resume: bool,
+        #[command(flatten)]
+        files: datasets::FileSizeArgs,
     },
     /// Work with datasets
     Dataset {
@@ -183,7 +187,11 @@ enum Command {
         /// Task scenes to measure (repeatable)
         #[arg(
             long,
-            default_values = ["protocols/thermal_cycler/close_lid.toml", "protocols/tube/transfer.toml"]
+            default_values = [
+                "protocols/thermal_cycler/close_lid.toml",
+                "protocols/tube/transfer.toml",
+                "protocols/two_arm/close_lid_and_transfer.toml"
+            ]
         )]
         protocol: Vec<PathBuf>,
         /// Measure only these sections (repeatable; default: all)
@@ -349,6 +357,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             resume,
             workers,
             shard,
+            files,
         } => {
             let tasks = protocol
                 .iter()
@@ -358,7 +367,9 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 DemoFormat::Mcap if shard.is_some() => {
                     bail!("--shard splits datasets; for recordings use eval --record --shard")
                 }
-                DemoFormat::Mcap => return demo_mcap(&tasks, episodes, seed, &out),
+                DemoFormat::Mcap => {
+                    return demo_mcap(&tasks, episodes, seed, &out, workers as usize);
+                }
                 DemoFormat::LerobotV21 => dataset::Version::V21,
                 DemoFormat::LerobotV30 => dataset::Version::V30,
             };
@@ -377,6 +388,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 image_size: [224, 224],
                 workers: workers as usize,
                 shard,
+                file_sizes: files.sizes(),
             };
             datasets::generate(&tasks, &opts)
         }
@@ -387,6 +399,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             codec,
             size,
             resume,
+            files,
         } => {
             let opts = dataset::ExportOptions {
                 out,
@@ -394,6 +407,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 codec: codec.codec(),
                 image_size: size,
                 resume,
+                file_sizes: files.sizes(),
             };
             datasets::export(&recordings, &opts)
         }
@@ -575,7 +589,13 @@ fn print_runs(rows: &[scoring::EvalReport]) {
 }
 
 /// `demo --format mcap`: one MCAP recording (with camera images) per expert episode.
-fn demo_mcap(tasks: &[compiler::Task], episodes: usize, seed: u64, out: &Path) -> Result<ExitCode> {
+fn demo_mcap(
+    tasks: &[compiler::Task],
+    episodes: usize,
+    seed: u64,
+    out: &Path,
+    workers: usize,
+) -> Result<ExitCode> {
     for task in tasks {
         let opts = scoring::eval::EvalOptions {
             policy: "expert".into(),
@@ -584,6 +604,7 @@ fn demo_mcap(tasks: &[compiler::Task], episodes: usize, seed: u64, out: &Path) -
             out: Some(out.to_path_buf()),
             record: true,
             image_every: 5,
+            workers,
             ..Default::default()
         };
         let report = scoring::evaluate(task, &opts, |p| {

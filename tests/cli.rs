@@ -49,6 +49,14 @@ fn every_subcommand_says_what_it_was_doing_once_on_a_missing_file() {
             &["replay", "no_such_recording.mcap"],
             format!("cannot replay no_such_recording.mcap: cannot read the recording: {os}"),
         ),
+        (
+            &["export", "no_such_recording.mcap", "--out", "out/never"],
+            format!("cannot export no_such_recording.mcap: cannot read the recording: {os}"),
+        ),
+        (
+            &["dataset", "merge", "no_such_shard", "--out", "out/never"],
+            format!("cannot read the shard no_such_shard: {os}"),
+        ),
     ];
     for (args, message) in cases {
         let out = autobio(args);

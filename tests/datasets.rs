@@ -232,6 +232,59 @@ fn recordings_export_and_shards_merge_into_the_dataset_one_run_writes() {
     }
     assert_eq!(check(&d("ex"), "v3.0")["episodes"], 2);
 
+    // Files roll over at the sizes asked (LeRobot's `*_files_size_in_mb`): with limits below
+    // one episode's size, each episode gets its own data and video files, which the checker
+    // follows through the episodes table.
+    ok(autobio(&[
+        "export",
+        &s(&d("rec")),
+        "--format",
+        "lerobot-v30",
+        "--codec",
+        "h264",
+        "--data-file-mb",
+        "0.001",
+        "--video-file-mb",
+        "0.001",
+        "--out",
+        &s(&d("rolled")),
+    ]));
+    // Relative paths, from another working directory (ffmpeg resolves a concat list's names
+    // against the list's folder).
+    let out = Command::new(env!("CARGO_BIN_EXE_autobio"))
+        .current_dir(&dir)
+        .args([
+            "export",
+            "rec",
+            "--format",
+            "lerobot-v30",
+            "--codec",
+            "h264",
+            "--out",
+            "relative",
+        ])
+        .output()
+        .unwrap();
+    ok(out);
+    same_file(
+        &d("ex/data/chunk-000/file-000.parquet"),
+        &d("relative/data/chunk-000/file-000.parquet"),
+    );
+    let rolled = check(&d("rolled"), "v3.0");
+    assert_eq!(rolled["data_files"], 2, "{rolled}");
+    for key in [
+        "observation.images.table_front",
+        "observation.images.arm_wrist",
+    ] {
+        assert_eq!(rolled["video_files"][key], 2, "{rolled}");
+    }
+    assert!(d("rolled/data/chunk-000/file-001.parquet").exists());
+    let info: Value =
+        serde_json::from_str(&std::fs::read_to_string(d("rolled/meta/info.json")).unwrap())
+            .unwrap();
+    assert_eq!(info["data_files_size_in_mb"], 0.001);
+    assert_eq!(check(&d("ds"), "v3.0")["data_files"], 1);
+
     // Two shards of the same plan, merged in either order: the run's tables and statistics.
     for i in ["0/2", "1/2"] {
         let shard = d(&format!("shard{}", &i[..1]));

@@ -18,6 +18,8 @@ pub struct ExportOptions {
     /// Camera images' size (width, height).
     pub image_size: [usize; 2],
     pub resume: bool,
+    /// Where v3.0's shared files roll over.
+    pub file_sizes: crate::FileSizes,
 }
 
 /// The `.mcap` files named, a folder standing for the recordings in it (sorted by name).
@@ -40,7 +42,7 @@ fn recordings(paths: &[PathBuf]) -> Result<Vec<PathBuf>, DatasetError> {
 }
 
 fn unreadable(path: &Path, e: ReplayError) -> DatasetError {
-    DatasetError::Existing {
+    DatasetError::Recording {
         path: path.to_path_buf(),
         why: e.to_string(),
     }
@@ -71,6 +73,7 @@ pub fn export(
         opts.image_size,
         opts.resume,
     )?;
+    writer.set_file_sizes(opts.file_sizes);
     let mut out = Generated {
         resumed: writer.episodes(),
         ..Default::default()

@@ -20,7 +20,7 @@ pub use capture::Capture;
 pub use export::{ExportOptions, export};
 pub use merge::{Merged, merge};
 pub use video::Codec;
-pub use writer::{DatasetWriter, Layout, Version};
+pub use writer::{DatasetWriter, FileSizes, Layout, Version};
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -29,11 +29,12 @@ use std::sync::{Arc, mpsc};
 
 #[derive(Debug, thiserror::Error)]
 pub enum DatasetError {
-    #[error("cannot {what} {path}: {source}")]
+    // The OS error is part of the message and not a `source`: a chain of causes prints it once.
+    #[error("cannot {what} {path}: {why}")]
     Io {
         what: &'static str,
         path: PathBuf,
-        source: std::io::Error,
+        why: std::io::Error,
     },
     #[error("ffmpeg failed on {path}: {why}")]
     Ffmpeg { path: PathBuf, why: String },
@@ -41,6 +42,8 @@ pub enum DatasetError {
     Parquet { path: PathBuf, why: String },
     #[error("{path}: {why}")]
     Existing { path: PathBuf, why: String },
+    #[error("cannot export {path}: {why}")]
+    Recording { path: PathBuf, why: String },
     #[error("episode {seed} of {task}: {why}")]
     Episode {
         task: String,
@@ -50,11 +53,11 @@ pub enum DatasetError {
 }
 
 impl DatasetError {
-    pub(crate) fn io(what: &'static str, path: &Path, source: std::io::Error) -> DatasetError {
+    pub(crate) fn io(what: &'static str, path: &Path, why: std::io::Error) -> DatasetError {
         DatasetError::Io {
             what,
             path: path.to_path_buf(),
-            source,
+            why,
         }
     }
 }
@@ -73,6 +76,8 @@ pub struct GenerateOptions {
     pub workers: usize,
     /// Record only this shard's share of the plan: every `count`-th episode from `index`.
     pub shard: Option<scoring::eval::Shard>,
+    /// Where v3.0's shared files roll over.
+    pub file_sizes: FileSizes,
 }
 
 /// One episode handled, for progress reports.
@@ -114,6 +119,7 @@ pub fn generate(
         opts.image_size,
         opts.resume,
     )?;
+    writer.set_file_sizes(opts.file_sizes);
     if let Some(shard) = opts.shard {
         let asked = merge::ShardPlan {
             shard,

@@ -82,6 +82,7 @@ pub fn merge(shards: &[PathBuf], out: &Path) -> Result<Merged, DatasetError> {
     let mut plans = Vec::new();
     let mut sources = Vec::new();
     for root in shards {
+        std::fs::metadata(root).map_err(|e| DatasetError::io("read the shard", root, e))?;
         plans.push(ShardPlan::read(root)?);
         sources.push(Source::open(root)?);
     }
@@ -158,6 +159,7 @@ pub fn merge(shards: &[PathBuf], out: &Path) -> Result<Merged, DatasetError> {
     };
     let mut writer =
         DatasetWriter::open(out, src0.version, codec, src0.layout(), src0.size, false)?;
+    writer.set_file_sizes(src0.file_sizes);
     let mut frames = 0;
     for (s, e) in &order {
         frames += writer.adopt(&sources[*s], *e)?;

@@ -166,11 +166,22 @@ pub struct EpisodeRow {
     pub length: i64,
     pub from_index: i64,
     pub to_index: i64,
-    /// Per camera key: (from_timestamp, to_timestamp) inside the shared video file.
-    pub videos: Vec<(String, f64, f64)>,
+    /// The data file holding its rows: (chunk, file).
+    pub data_file: (i64, i64),
+    /// Per camera key: its video file (chunk, file) and (from_timestamp, to_timestamp) inside it.
+    pub videos: Vec<EpisodeVideo>,
 }
 
-/// v3.0's `meta/episodes/chunk-000/file-000.parquet` (everything in chunk 0, file 0).
+/// Where one camera's frames of an episode are in v3.0's shared videos.
+#[derive(Clone, Debug)]
+pub struct EpisodeVideo {
+    pub key: String,
+    pub file: (i64, i64),
+    pub from_s: f64,
+    pub to_s: f64,
+}
+
+/// v3.0's `meta/episodes/chunk-000/file-000.parquet` (one metadata file).
 pub fn write_episodes(path: &Path, eps: &[EpisodeRow]) -> Result<(), DatasetError> {
     let bad = |e: String| DatasetError::Parquet {
         path: path.to_path_buf(),
@@ -203,8 +214,8 @@ pub fn write_episodes(path: &Path, eps: &[EpisodeRow]) -> Result<(), DatasetErro
         ints(&|e| e.episode_index),
         Arc::new(tasks.finish()),
         ints(&|e| e.length),
-        ints(&|_| 0),
-        ints(&|_| 0),
+        ints(&|e| e.data_file.0),
+        ints(&|e| e.data_file.1),
         ints(&|e| e.from_index),
         ints(&|e| e.to_index),
     ];
@@ -212,18 +223,21 @@ pub fn write_episodes(path: &Path, eps: &[EpisodeRow]) -> Result<(), DatasetErro
     // read back, e.g. to merge shards, knows its cameras only by key).
     let mut keys: Vec<(usize, String)> = eps
         .first()
-        .map(|e| e.videos.iter().map(|v| v.0.clone()).enumerate().collect())
+        .map(|e| e.videos.iter().map(|v| v.key.clone()).enumerate().collect())
         .unwrap_or_default();
     keys.sort_by(|a, b| a.1.cmp(&b.1));
     for (k, key) in &keys {
         let k = *k;
-        for name in ["chunk_index", "file_index"] {
+        for (name, part) in [("chunk_index", 0), ("file_index", 1)] {
             fields.push(Field::new(
                 format!("videos/{key}/{name}"),
                 DataType::Int64,
                 true,
             ));
-            columns.push(ints(&|_| 0));
+            columns.push(ints(&|e| {
+                let f = e.videos[k].file;
+                if part == 0 { f.0 } else { f.1 }
+            }));
         }
         fields.push(Field::new(
             format!("videos/{key}/from_timestamp"),
@@ -231,7 +245,7 @@ pub fn write_episodes(path: &Path, eps: &[EpisodeRow]) -> Result<(), DatasetErro
             true,
         ));
         columns.push(Arc::new(Float64Array::from(
-            eps.iter().map(|e| e.videos[k].1).collect::<Vec<_>>(),
+            eps.iter().map(|e| e.videos[k].from_s).collect::<Vec<_>>(),
         )));
         fields.push(Field::new(
             format!("videos/{key}/to_timestamp"),
@@ -239,7 +253,7 @@ pub fn write_episodes(path: &Path, eps: &[EpisodeRow]) -> Result<(), DatasetErro
             true,
         ));
         columns.push(Arc::new(Float64Array::from(
-            eps.iter().map(|e| e.videos[k].2).collect::<Vec<_>>(),
+            eps.iter().map(|e| e.videos[k].to_s).collect::<Vec<_>>(),
         )));
     }
     for name in ["meta/episodes/chunk_index", "meta/episodes/file_index"] {

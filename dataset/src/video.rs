@@ -2,6 +2,11 @@
 //! LeRobot's defaults (`libsvtav1`, `yuv420p`, keyframe every 2 frames, CRF 30) or H.264
 //! (`libx264`, the same GOP), at a constant frame rate so that frame i sits at exactly i/fps.
 //!
+//! SVT-AV1 runs at preset 12 (LeRobot leaves the preset to the encoder's default, 10): on a
+//! thermal-cycler episode at 224x224 it encodes 2.4x faster (145 against 60 frames/s per core)
+//! for 0.1 dB less PSNR (46.6 against 46.7 dB) and 7% larger files; at preset 10 encoding took
+//! four times as long as simulating and rendering together.
+//!
 //! It does not decide file names or layouts (the writers do).
 
 use crate::DatasetError;
@@ -29,7 +34,7 @@ impl Codec {
 
     fn args(self) -> &'static [&'static str] {
         match self {
-            Codec::Av1 => &["-c:v", "libsvtav1", "-crf", "30", "-preset", "10"],
+            Codec::Av1 => &["-c:v", "libsvtav1", "-crf", "30", "-preset", "12"],
             Codec::H264 => &[
                 "-c:v", "libx264", "-crf", "23", "-preset", "fast", "-bf", "0",
             ],
@@ -130,15 +135,15 @@ impl VideoWriter {
 /// shared files).
 pub fn concatenate(parts: &[PathBuf], out: &Path) -> Result<(), DatasetError> {
     let list = out.with_extension("txt");
-    let text: String = parts
-        .iter()
-        .map(|p| {
-            format!(
-                "file '{}'\n",
-                p.display().to_string().replace('\'', "'\\''")
-            )
-        })
-        .collect();
+    // Absolute: ffmpeg resolves a list's relative names against the list's own folder.
+    let mut text = String::new();
+    for p in parts {
+        let p = std::path::absolute(p).map_err(|e| DatasetError::io("resolve", p, e))?;
+        text += &format!(
+            "file '{}'\n",
+            p.display().to_string().replace('\'', "'\\''")
+        );
+    }
     std::fs::write(&list, text).map_err(|e| DatasetError::io("write", &list, e))?;
     let status = Command::new("ffmpeg")
         .args([

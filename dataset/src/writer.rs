@@ -11,7 +11,7 @@
 
 use crate::DatasetError;
 use crate::capture::Capture;
-use crate::parquet::{EpisodeRow, Row, write_episodes, write_frames, write_tasks};
+use crate::parquet::{EpisodeRow, EpisodeVideo, Row, write_episodes, write_frames, write_tasks};
 use crate::stats::{self, FeatureStats};
 use crate::video::{self, Codec};
 use serde::{Deserialize, Serialize};
@@ -153,6 +153,7 @@ pub struct DatasetWriter {
     /// Camera names and their feature keys (`observation.images.<camera>`).
     cameras: Vec<(String, String)>,
     done: Vec<Committed>,
+    file_sizes: FileSizes,
 }
 
 fn create_dir(p: &Path) -> Result<(), DatasetError> {
@@ -261,6 +262,7 @@ impl DatasetWriter {
             action_names,
             cameras,
             done,
+            file_sizes: FileSizes::default(),
         };
         // The record is the truth: drop a torn last line, rebuild the metadata from it.
         let kept: String = w
@@ -271,6 +273,11 @@ impl DatasetWriter {
         write_file(&record, &kept)?;
         w.write_metadata()?;
         Ok(w)
+    }
+
+    /// Where v3.0's shared files roll over (LeRobot's 100 MiB and 500 MiB by default).
+    pub fn set_file_sizes(&mut self, sizes: FileSizes) {
+        self.file_sizes = sizes;
     }
 
     /// Episodes committed so far.
@@ -557,8 +564,8 @@ impl DatasetWriter {
                 );
             }
             Version::V30 => {
-                info["data_files_size_in_mb"] = json!(100);
-                info["video_files_size_in_mb"] = json!(500);
+                info["data_files_size_in_mb"] = json!(self.file_sizes.data_mb);
+                info["video_files_size_in_mb"] = json!(self.file_sizes.video_mb);
                 info["data_path"] =
                     json!("data/chunk-{chunk_index:03d}/file-{file_index:03d}.parquet");
                 info["video_path"] =
@@ -626,41 +633,66 @@ impl DatasetWriter {
 
     fn assemble_v30(&self) -> Result<(), DatasetError> {
         let meta = self.root.join("meta");
-        let data = self.root.join("data/chunk-000/file-000.parquet");
-        create_dir(data.parent().expect("has a parent"))?;
-        let staged: Vec<PathBuf> = (0..self.done.len())
-            .map(|i| self.episode_paths(i).0)
-            .collect();
-        crate::parquet::concat_frames(&staged, &data)?;
+        // The shared files are derived from `.episodes/`: rebuilt whole.
+        for derived in ["data", "videos"] {
+            let d = self.root.join(derived);
+            if d.exists() {
+                std::fs::remove_dir_all(&d).map_err(|e| DatasetError::io("clear", &d, e))?;
+            }
+        }
+        let n = self.done.len();
+        let data_parts: Vec<PathBuf> = (0..n).map(|i| self.episode_paths(i).0).collect();
+        let data_files = roll_over(&data_parts, self.file_sizes.data_mb)?;
+        for (g, group) in data_files.iter().enumerate() {
+            let (chunk, file) = file_position(g);
+            let out = self
+                .root
+                .join(format!("data/chunk-{chunk:03}/file-{file:03}.parquet"));
+            create_dir(out.parent().expect("has a parent"))?;
+            let parts: Vec<PathBuf> = group.iter().map(|&i| data_parts[i].clone()).collect();
+            crate::parquet::concat_frames(&parts, &out)?;
+        }
         let mut rows: Vec<EpisodeRow> = Vec::new();
         let mut from_index = 0;
-        let mut from_s = 0.0;
-        for c in &self.done {
-            let to_s = from_s + c.length as f64 / FPS as f64;
+        for (i, c) in self.done.iter().enumerate() {
+            let g = data_files.iter().position(|f| f.contains(&i)).unwrap_or(0);
+            let (chunk, file) = file_position(g);
             rows.push(EpisodeRow {
                 episode_index: c.episode_index as i64,
                 tasks: vec![c.instruction.clone()],
                 length: c.length as i64,
                 from_index,
                 to_index: from_index + c.length as i64,
-                videos: self
-                    .cameras
-                    .iter()
-                    .map(|(_, key)| (key.clone(), from_s, to_s))
-                    .collect(),
+                data_file: (chunk as i64, file as i64),
+                videos: Vec::new(),
             });
             from_index += c.length as i64;
-            from_s = to_s;
         }
         for (k, (_, key)) in self.cameras.iter().enumerate() {
-            let out = self
-                .root
-                .join(format!("videos/{key}/chunk-000/file-000.mp4"));
-            create_dir(out.parent().expect("has a parent"))?;
-            let parts: Vec<PathBuf> = (0..self.done.len())
-                .map(|i| self.episode_paths(i).1[k].clone())
-                .collect();
-            video::concatenate(&parts, &out)?;
+            let parts: Vec<PathBuf> = (0..n).map(|i| self.episode_paths(i).1[k].clone()).collect();
+            for (g, group) in roll_over(&parts, self.file_sizes.video_mb)?
+                .iter()
+                .enumerate()
+            {
+                let (chunk, file) = file_position(g);
+                let out = self
+                    .root
+                    .join(format!("videos/{key}/chunk-{chunk:03}/file-{file:03}.mp4"));
+                create_dir(out.parent().expect("has a parent"))?;
+                let mine: Vec<PathBuf> = group.iter().map(|&i| parts[i].clone()).collect();
+                video::concatenate(&mine, &out)?;
+                let mut from_s = 0.0;
+                for &i in group {
+                    let to_s = from_s + self.done[i].length as f64 / FPS as f64;
+                    rows[i].videos.push(EpisodeVideo {
+                        key: key.clone(),
+                        file: (chunk as i64, file as i64),
+                        from_s,
+                        to_s,
+                    });
+                    from_s = to_s;
+                }
+            }
         }
         let eps = meta.join("episodes/chunk-000/file-000.parquet");
         create_dir(eps.parent().expect("has a parent"))?;
@@ -670,6 +702,47 @@ impl DatasetWriter {
             &meta.join("stats.json"),
             &serde_json::to_string_pretty(&self.stats(true)).expect("json"),
         )
+    }
+}
+
+/// LeRobot's file sequence: files 0..999 in chunk 0, then chunk 1, and so on.
+fn file_position(g: usize) -> (usize, usize) {
+    (g / CHUNK, g % CHUNK)
+}
+
+/// Consecutive episodes' parts grouped into shared files as LeRobot fills them: a file takes
+/// episodes until it has reached `limit_mb` (MiB, as LeRobot counts), then the next one starts.
+fn roll_over(parts: &[PathBuf], limit_mb: f64) -> Result<Vec<Vec<usize>>, DatasetError> {
+    let limit = (limit_mb * 1024.0 * 1024.0) as u64;
+    let mut files: Vec<Vec<usize>> = Vec::new();
+    let mut size = 0u64;
+    for (i, p) in parts.iter().enumerate() {
+        if files.is_empty() || size >= limit {
+            files.push(Vec::new());
+            size = 0;
+        }
+        files.last_mut().expect("pushed above").push(i);
+        size += std::fs::metadata(p)
+            .map_err(|e| DatasetError::io("read", p, e))?
+            .len();
+    }
+    Ok(files)
+}
+
+/// The sizes at which v3.0's shared files roll over to the next file (MiB).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FileSizes {
+    pub data_mb: f64,
+    pub video_mb: f64,
+}
+
+impl Default for FileSizes {
+    /// LeRobot's defaults.
+    fn default() -> FileSizes {
+        FileSizes {
+            data_mb: 100.0,
+            video_mb: 500.0,
+        }
     }
 }
 
@@ -717,6 +790,7 @@ struct Episode {
 /// Another dataset read for merging: its layout and commit record.
 pub(crate) struct Source {
     pub root: PathBuf,
+    pub file_sizes: FileSizes,
     pub robot_type: String,
     pub version: Version,
     pub codec: String,
@@ -775,8 +849,17 @@ impl Source {
             .map(serde_json::from_str::<Committed>)
             .collect::<Result<Vec<_>, _>>()
             .map_err(|e| bad(format!("meta/autobio.jsonl: {e}")))?;
+        let defaults = FileSizes::default();
         let source = Source {
             root: root.to_path_buf(),
+            file_sizes: FileSizes {
+                data_mb: info["data_files_size_in_mb"]
+                    .as_f64()
+                    .unwrap_or(defaults.data_mb),
+                video_mb: info["video_files_size_in_mb"]
+                    .as_f64()
+                    .unwrap_or(defaults.video_mb),
+            },
             robot_type: info["robot_type"].as_str().unwrap_or("").to_string(),
             version,
             codec: first

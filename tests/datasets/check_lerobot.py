@@ -121,22 +121,49 @@ def main(root, version):
         assert pandas["index_columns"] == ["__index_level_0__"], pandas
         names = tasks.column("__index_level_0__").to_pylist()
         assert tasks.column("task_index").to_pylist() == list(range(len(names)))
-        data = pq.read_table(os.path.join(root, "data/chunk-000/file-000.parquet"))
-        check_schema(data.schema, sd, ad)
-        check_rows(data, [(e["episode_index"], e["length"]) for e in eps], 0)
+        def sequence(files):
+            """LeRobot's file order: file 0..999 of chunk 0, then chunk 1..."""
+            want = [(g // 1000, g % 1000) for g in range(len(files))]
+            assert sorted(files) == want, f"file indices {sorted(files)}"
+
+        # Rows: each data file holds consecutive episodes, its first row the first one's.
+        by_file = {}
+        for e in eps:
+            by_file.setdefault((e["data/chunk_index"], e["data/file_index"]), []).append(e)
+        sequence(by_file)
+        first = 0
+        for (c, f), group in sorted(by_file.items()):
+            path = os.path.join(root, info["data_path"].format(chunk_index=c, file_index=f))
+            data = pq.read_table(path)
+            check_schema(data.schema, sd, ad)
+            assert group[0]["dataset_from_index"] == first, f"{path} starts at {group[0]['dataset_from_index']}"
+            check_rows(data, [(e["episode_index"], e["length"]) for e in group], first)
+            first += data.num_rows
+        assert first == info["total_frames"]
         for e in eps:
             assert e["dataset_to_index"] - e["dataset_from_index"] == e["length"]
+        summary["data_files"] = len(by_file)
+        summary["video_files"] = {}
         for k in video_keys:
-            v = os.path.join(root, f"videos/{k}/chunk-000/file-000.mp4")
-            stream, times = frames(v)
-            assert len(times) == info["total_frames"], f"{v}: {len(times)} frames"
+            by_video = {}
             for e in eps:
-                start = e[f"videos/{k}/from_timestamp"]
-                assert abs(e[f"videos/{k}/to_timestamp"] - start - e["length"] / FPS) < TOL
-                for j in range(e["length"]):
-                    t = times[e["dataset_from_index"] + j]
-                    assert abs(t - (start + j / FPS)) < TOL, f"{v}: episode {e['episode_index']} frame {j} at {t}"
-            summary["videos"][k] = stream
+                by_video.setdefault((e[f"videos/{k}/chunk_index"], e[f"videos/{k}/file_index"]), []).append(e)
+            sequence(by_video)
+            for (c, f), group in sorted(by_video.items()):
+                v = os.path.join(root, info["video_path"].format(video_key=k, chunk_index=c, file_index=f))
+                stream, times = frames(v)
+                assert len(times) == sum(e["length"] for e in group), f"{v}: {len(times)} frames"
+                offset = 0
+                for e in group:
+                    start = e[f"videos/{k}/from_timestamp"]
+                    assert abs(start - offset / FPS) < TOL, f"{v}: episode {e['episode_index']} starts at {start}"
+                    assert abs(e[f"videos/{k}/to_timestamp"] - start - e["length"] / FPS) < TOL
+                    for j in range(e["length"]):
+                        t = times[offset + j]
+                        assert abs(t - (start + j / FPS)) < TOL, f"{v}: episode {e['episode_index']} frame {j} at {t}"
+                    offset += e["length"]
+                summary["videos"][k] = stream
+            summary["video_files"][k] = len(by_video)
         check_stats(json.load(open(os.path.join(root, "meta/stats.json"))), info, quantiles=True)
         summary["tasks"] = names
     print(json.dumps(summary))
