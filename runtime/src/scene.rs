@@ -151,6 +151,21 @@ fn plugin_instance(m: &Mechanism) -> (&'static str, String) {
 }
 
 /// The scene MJCF for a task with the given labware placements.
+/// The lab room around the bench: a vinyl floor, four walls with a skirting, a ceiling light
+/// panel (visual only: the walls collide with nothing), so that cameras see a room, not a void.
+/// The bench stands at the origin; the fixed camera looks from -y towards the +y wall.
+const ROOM: &str = r#"    <light name="ceiling" pos="0 0 3" dir="0 0 -1" directional="true" castshadow="false" diffuse="0.4 0.4 0.4"/>
+    <geom name="floor" type="plane" size="3 3 0.1" rgba="0.48 0.51 0.54 1"/>
+    <geom name="room/wall_back" type="box" size="3 0.05 1.5" pos="0 2.2 1.5" rgba="0.84 0.85 0.82 1" contype="0" conaffinity="0"/>
+    <geom name="room/wall_front" type="box" size="3 0.05 1.5" pos="0 -2.6 1.5" rgba="0.84 0.85 0.82 1" contype="0" conaffinity="0"/>
+    <geom name="room/wall_left" type="box" size="0.05 2.4 1.5" pos="-2.4 -0.2 1.5" rgba="0.80 0.82 0.80 1" contype="0" conaffinity="0"/>
+    <geom name="room/wall_right" type="box" size="0.05 2.4 1.5" pos="2.4 -0.2 1.5" rgba="0.80 0.82 0.80 1" contype="0" conaffinity="0"/>
+    <geom name="room/skirting" type="box" size="2.35 0.02 0.05" pos="0 2.13 0.05" rgba="0.35 0.37 0.40 1" contype="0" conaffinity="0"/>
+    <geom name="room/cabinet" type="box" size="0.9 0.3 0.45" pos="-1.2 1.85 0.45" rgba="0.70 0.72 0.74 1" contype="0" conaffinity="0"/>
+    <geom name="room/shelf" type="box" size="0.9 0.15 0.015" pos="-1.2 2.0 1.55" rgba="0.62 0.55 0.45 1" contype="0" conaffinity="0"/>
+    <geom name="room/ceiling_panel" type="box" size="0.6 0.3 0.01" pos="0 -0.4 2.95" rgba="1 1 0.97 1" contype="0" conaffinity="0"/>
+"#;
+
 /// The scene's MJCF; `detail` picks the robots' visual meshes (nothing else differs).
 pub fn scene_xml(task: &Task, placements: &[Pose], detail: Detail) -> Result<String, SceneError> {
     let mut world = String::new();
@@ -227,9 +242,7 @@ pub fn scene_xml(task: &Task, placements: &[Pose], detail: Detail) -> Result<Str
   <asset>
 {assets}{labware_assets}  </asset>
   <worldbody>
-    <light name="ceiling" pos="0 0 3" dir="0 0 -1" directional="true" castshadow="false" diffuse="0.4 0.4 0.4"/>
-    <geom name="floor" type="plane" size="4 4 0.1" rgba="0.42 0.43 0.45 1"/>
-    <body name="table">
+{room}    <body name="table">
       <geom name="table/top" type="box" size="0.409 0.652 0.412" pos="0 0 0.412" rgba="0.72 0.66 0.56 1"/>
     </body>
 {world}{labware_world}  </worldbody>
@@ -240,6 +253,7 @@ pub fn scene_xml(task: &Task, placements: &[Pose], detail: Detail) -> Result<Str
 </mujoco>
 "#,
         id = task.id,
+        room = ROOM,
         dt = task.physics.timestep_s,
         labware_assets = labware.asset,
         labware_world = labware.worldbody,
