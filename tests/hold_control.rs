@@ -69,6 +69,8 @@ fn every_simulated_task_scores_zero_without_motion() {
     assert_eq!(
         simulated,
         [
+            "centrifuge_mini.close_lid",
+            "centrifuge_mini.open_lid",
             "thermal_cycler.close_lid",
             "thermal_cycler.close_then_open",
             "thermal_cycler.open_lid",

@@ -10,6 +10,7 @@
 //! MuJoCo's API or robots: it produces text and plain numbers.
 
 pub mod catalogue;
+pub mod centrifuge_mini;
 pub mod frame;
 pub mod mjcf;
 pub mod model;
