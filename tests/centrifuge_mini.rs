@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{compile, compile_edited, run, scene};
+use common::{compile, compile_edited, run, scene, spread};
 use runtime::render::Cameras;
 use scoring::Judge;
 
@@ -80,15 +80,6 @@ fn the_fixed_camera_sees_the_lid_open_and_shut() {
         cams.render(&ep.data, &names).unwrap().remove(0).rgb
     };
     let (open, shut) = (frame(CLOSE), frame(OPEN));
-    let spread = |rgb: &[u8]| {
-        let n = rgb.len() as f64;
-        let mean = rgb.iter().map(|&v| f64::from(v)).sum::<f64>() / n;
-        (rgb.iter()
-            .map(|&v| (f64::from(v) - mean).powi(2))
-            .sum::<f64>()
-            / n)
-            .sqrt()
-    };
     assert!(spread(&open) > 10.0 && spread(&shut) > 10.0);
     let changed = open.iter().zip(&shut).filter(|(a, b)| a != b).count();
     assert!(

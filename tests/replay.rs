@@ -9,7 +9,7 @@
 use runtime::record::{RecordError, Recorder, proto, read_recording};
 mod common;
 
-use common::{compile, compile_edited};
+use common::{compile, compile_edited, spread};
 use scoring::Judge;
 use scoring::episode::EpisodeOptions;
 use std::path::PathBuf;
@@ -58,17 +58,6 @@ fn frames(path: &PathBuf, topic: &str) -> Vec<Vec<u8>> {
             img.rgb
         })
         .collect()
-}
-
-/// Standard deviation of the pixel values: a blank (one-colour) frame has none.
-fn spread(rgb: &[u8]) -> f64 {
-    let n = rgb.len() as f64;
-    let mean = rgb.iter().map(|&v| f64::from(v)).sum::<f64>() / n;
-    (rgb.iter()
-        .map(|&v| (f64::from(v) - mean).powi(2))
-        .sum::<f64>()
-        / n)
-        .sqrt()
 }
 
 fn mean_abs_diff(a: &[u8], b: &[u8]) -> f64 {

@@ -6,7 +6,7 @@
 //! Frame of the instrument: origin at the centre of the footprint, +y the front (the tab's side),
 //! +z up. Joint conventions: lid 0 = open (98° up, past upright), -1.712 rad = closed.
 
-use crate::frame::{Pose, Rot, Vec3, axis_angle, pose, translation};
+use crate::frame::{Pose, Rot, Vec3, pose, translation, x_turn};
 use crate::mjcf::{Fragment, box_inertia, pose_attrs, v3};
 use crate::model::{Affordance, Instrument, LabwareState, Logic, Measure, Reset, Symmetry};
 use serde::{Deserialize, Serialize};
@@ -73,10 +73,6 @@ impl Names {
             grip_site: format!("{prefix}/grip"),
         }
     }
-}
-
-fn x_turn(angle: f64) -> Rot {
-    axis_angle([1.0, 0.0, 0.0], angle)
 }
 
 impl Params {

@@ -35,6 +35,11 @@ pub fn axis_angle(axis: Vec3, angle: f64) -> Rot {
     }
 }
 
+/// A turn about +x (a hinge along x: lids and levers).
+pub fn x_turn(angle: f64) -> Rot {
+    axis_angle([1.0, 0.0, 0.0], angle)
+}
+
 pub fn position(p: &Pose) -> Vec3 {
     let t = p.translation.vector;
     [t.x, t.y, t.z]

@@ -7,7 +7,7 @@
 //! the lid opens from), +z up. Joint conventions follow the upstream task: lid 0 = open,
 //! -1.9 rad = closed; lever 0 = raised, -0.94 rad = pressed.
 
-use crate::frame::{Pose, Rot, Vec3, axis_angle, pose, translation};
+use crate::frame::{Pose, Rot, Vec3, pose, translation, x_turn};
 use crate::mjcf::{Fragment, box_inertia, pose_attrs, v3};
 use crate::model::{
     Affordance, Instrument, LabwareState, Logic, Measure, Mechanism, Reset, Symmetry,
@@ -98,10 +98,6 @@ impl Names {
             lock: format!("{prefix}/lid_lock"),
         }
     }
-}
-
-fn x_turn(angle: f64) -> Rot {
-    axis_angle([1.0, 0.0, 0.0], angle)
 }
 
 impl Params {

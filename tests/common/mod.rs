@@ -125,3 +125,14 @@ impl Drop for Server {
         let _ = self.child.wait();
     }
 }
+
+/// Standard deviation of an image's pixel values: a blank (one-colour) frame has none.
+pub fn spread(rgb: &[u8]) -> f64 {
+    let n = rgb.len() as f64;
+    let mean = rgb.iter().map(|&v| f64::from(v)).sum::<f64>() / n;
+    (rgb.iter()
+        .map(|&v| (f64::from(v) - mean).powi(2))
+        .sum::<f64>()
+        / n)
+        .sqrt()
+}
