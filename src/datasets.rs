@@ -78,28 +78,32 @@ fn summary(out: &Path, done: &dataset::Generated, verb: &str) {
     );
 }
 
-pub fn generate(tasks: &[compiler::Task], opts: &dataset::GenerateOptions) -> Result<ExitCode> {
-    let mut view = ProgressView::new("demo");
-    let mut failed = 0;
-    let done = dataset::generate(tasks, opts, |s| {
-        failed += usize::from(s.result.is_err());
-        view.step(&s, failed);
-    });
+/// Runs a dataset job with a progress bar labelled `label`, then prints its summary.
+fn with_progress(
+    label: &str,
+    verb: &str,
+    out: &Path,
+    job: impl FnOnce(
+        &mut dyn FnMut(dataset::Step<'_>),
+    ) -> Result<dataset::Generated, dataset::DatasetError>,
+) -> Result<ExitCode> {
+    let mut view = ProgressView::new(label);
+    let done = job(&mut |s| view.step(&s));
     view.finish();
-    summary(&opts.out, &done?, "written");
+    summary(out, &done?, verb);
     Ok(ExitCode::SUCCESS)
 }
 
+pub fn generate(tasks: &[compiler::Task], opts: &dataset::GenerateOptions) -> Result<ExitCode> {
+    with_progress("demo", "written", &opts.out, |progress| {
+        dataset::generate(tasks, opts, progress)
+    })
+}
+
 pub fn export(recordings: &[PathBuf], opts: &dataset::ExportOptions) -> Result<ExitCode> {
-    let mut view = ProgressView::new("export");
-    let mut failed = 0;
-    let done = dataset::export(recordings, opts, |s| {
-        failed += usize::from(s.result.is_err());
-        view.step(&s, failed);
-    });
-    view.finish();
-    summary(&opts.out, &done?, "exported");
-    Ok(ExitCode::SUCCESS)
+    with_progress("export", "exported", &opts.out, |progress| {
+        dataset::export(recordings, opts, progress)
+    })
 }
 
 pub fn merge(shards: &[PathBuf], out: &Path) -> Result<ExitCode> {

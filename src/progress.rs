@@ -11,6 +11,8 @@ pub struct ProgressView {
     bar: bool,
     started: Instant,
     drawn: bool,
+    /// Dataset episodes left out so far.
+    left_out: usize,
 }
 
 impl ProgressView {
@@ -20,6 +22,7 @@ impl ProgressView {
             bar: std::io::stderr().is_terminal(),
             started: Instant::now(),
             drawn: false,
+            left_out: 0,
         }
     }
 
@@ -50,14 +53,15 @@ impl ProgressView {
     }
 
     /// One episode written to a dataset, or left out.
-    pub fn step(&mut self, s: &dataset::Step<'_>, failed: usize) {
+    pub fn step(&mut self, s: &dataset::Step<'_>) {
+        self.left_out += usize::from(s.result.is_err());
         let what = match s.result {
             Ok(frames) => format!("{frames} frames"),
             Err(why) => format!("not written: {why}"),
         };
         self.draw(
             (s.done, s.total, 0),
-            &format!("{failed} left out"),
+            &format!("{} left out", self.left_out),
             s.result
                 .err()
                 .map(|_| format!("{} seed {}: {what}", s.task, s.seed)),

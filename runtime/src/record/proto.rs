@@ -214,45 +214,46 @@ fn set(files: &[Vec<u8>]) -> Vec<u8> {
 
 const TIMESTAMP: &str = ".google.protobuf.Timestamp";
 
-/// The schema of `foxglove.CompressedImage`, as Foxglove defines it.
-pub fn compressed_image_schema() -> Vec<u8> {
+/// A descriptor set for one message `package.name` in `file`, with the timestamp's file.
+fn schema(file_name: &str, package: &str, name: &str, fields: &[Vec<u8>]) -> Vec<u8> {
     set(&[
         timestamp_file(),
         file(
-            "foxglove/CompressedImage.proto",
-            "foxglove",
+            file_name,
+            package,
             &["google/protobuf/timestamp.proto"],
-            &[message(
-                "CompressedImage",
-                &[
-                    field("timestamp", 1, OPTIONAL, T_MESSAGE, TIMESTAMP),
-                    field("frame_id", 4, OPTIONAL, T_STRING, ""),
-                    field("data", 2, OPTIONAL, T_BYTES, ""),
-                    field("format", 3, OPTIONAL, T_STRING, ""),
-                ],
-            )],
+            &[message(name, fields)],
         ),
     ])
 }
 
+/// The schema of `foxglove.CompressedImage`, as Foxglove defines it.
+pub fn compressed_image_schema() -> Vec<u8> {
+    schema(
+        "foxglove/CompressedImage.proto",
+        "foxglove",
+        "CompressedImage",
+        &[
+            field("timestamp", 1, OPTIONAL, T_MESSAGE, TIMESTAMP),
+            field("frame_id", 4, OPTIONAL, T_STRING, ""),
+            field("data", 2, OPTIONAL, T_BYTES, ""),
+            field("format", 3, OPTIONAL, T_STRING, ""),
+        ],
+    )
+}
+
 /// The schema of `autobio.PhysicsState`.
 pub fn physics_state_schema() -> Vec<u8> {
-    set(&[
-        timestamp_file(),
-        file(
-            "autobio/PhysicsState.proto",
-            "autobio",
-            &["google/protobuf/timestamp.proto"],
-            &[message(
-                "PhysicsState",
-                &[
-                    field("timestamp", 1, OPTIONAL, T_MESSAGE, TIMESTAMP),
-                    field("spec", 2, OPTIONAL, T_UINT32, ""),
-                    field("state", 3, REPEATED, T_DOUBLE, ""),
-                ],
-            )],
-        ),
-    ])
+    schema(
+        "autobio/PhysicsState.proto",
+        "autobio",
+        "PhysicsState",
+        &[
+            field("timestamp", 1, OPTIONAL, T_MESSAGE, TIMESTAMP),
+            field("spec", 2, OPTIONAL, T_UINT32, ""),
+            field("state", 3, REPEATED, T_DOUBLE, ""),
+        ],
+    )
 }
 
 #[cfg(test)]
