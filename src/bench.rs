@@ -161,7 +161,8 @@ fn render_rate(
 ) -> Result<f64> {
     let mut cams = runtime::render::Cameras::with_detail(scene, 224, 224, detail)
         .map_err(anyhow::Error::msg)?;
-    cams.render(&ep.data, names).map_err(anyhow::Error::msg)?;
+    cams.render(&ep.data, ep.logic(), names)
+        .map_err(anyhow::Error::msg)?;
     let rounds = 40;
     let mut best = f64::MAX;
     for _ in 0..3 {
@@ -169,7 +170,8 @@ fn render_rate(
         for _ in 0..rounds {
             ep.control_step()?;
             let t = Instant::now();
-            cams.render(&ep.data, names).map_err(anyhow::Error::msg)?;
+            cams.render(&ep.data, ep.logic(), names)
+                .map_err(anyhow::Error::msg)?;
             spent += t.elapsed().as_secs_f64();
         }
         best = best.min(spent);

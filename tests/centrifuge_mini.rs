@@ -77,7 +77,10 @@ fn the_fixed_camera_sees_the_lid_open_and_shut() {
         let ep = runtime::Episode::new(scene.clone(), &task, &instance);
         let names: Vec<String> = task.cameras.iter().map(|c| c.name.clone()).collect();
         let mut cams = Cameras::new(&scene, 224, 224).unwrap();
-        cams.render(&ep.data, &names).unwrap().remove(0).rgb
+        cams.render(&ep.data, ep.logic(), &names)
+            .unwrap()
+            .remove(0)
+            .rgb
     };
     let (open, shut) = (frame(CLOSE), frame(OPEN));
     assert!(spread(&open) > 10.0 && spread(&shut) > 10.0);

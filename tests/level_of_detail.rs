@@ -62,8 +62,8 @@ fn simplified_meshes_draw_the_same_scene_from_a_fraction_of_the_faces() {
     let mut lo = Cameras::new(&scene, 224, 224).unwrap();
     assert_eq!(lo.detail, Detail::Simplified);
     let (a, b) = (
-        hi.render(&ep.data, &names).unwrap(),
-        lo.render(&ep.data, &names).unwrap(),
+        hi.render(&ep.data, ep.logic(), &names).unwrap(),
+        lo.render(&ep.data, ep.logic(), &names).unwrap(),
     );
     for (x, y) in a.iter().zip(&b) {
         let p = psnr(&x.rgb, &y.rgb);
@@ -75,7 +75,7 @@ fn simplified_meshes_draw_the_same_scene_from_a_fraction_of_the_faces() {
         assert!(p > 26.0, "{}: PSNR {p:.1} dB between the levels", x.camera);
     }
     // Drawing is repeatable: the same state, the same bytes.
-    assert_eq!(lo.render(&ep.data, &names).unwrap(), b);
+    assert_eq!(lo.render(&ep.data, ep.logic(), &names).unwrap(), b);
 }
 
 #[test]

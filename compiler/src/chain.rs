@@ -347,7 +347,7 @@ fn lower_chain(
         physics: physics(),
         robots: first.robots.clone(),
         labware: first.labware.clone(),
-        cameras: check::default_cameras(&first.robots),
+        cameras: check::default_cameras(&first.robots, first.camera.as_ref()),
         params,
         stages,
     })

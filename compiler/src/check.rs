@@ -82,6 +82,8 @@ pub(crate) struct Lowered<'a> {
     pub predicates: Vec<CheckedPredicate>,
     /// Spans to point at, by labware name (the `at` value or the name).
     pub labware_spans: BTreeMap<String, Span>,
+    /// The fixed camera's mount when `[camera]` places it.
+    pub camera: Option<CameraMount>,
 }
 
 /// Checks one protocol's names, arguments, parameters and predicates and lowers it. Returns
@@ -128,6 +130,7 @@ pub(crate) fn lower<'a>(cx: &mut Cx, p: &'a Protocol, file: &str) -> Option<Lowe
         Some("progress") => Scoring::Progress,
         _ => Scoring::Binary,
     };
+    let camera = p.camera.as_ref().and_then(|c| fixed_camera(cx, c));
     let id = m.id.as_ref()?.value.clone();
     let stage = Stage {
         id: id.clone(),
@@ -154,6 +157,56 @@ pub(crate) fn lower<'a>(cx: &mut Cx, p: &'a Protocol, file: &str) -> Option<Lowe
         steps,
         predicates,
         labware_spans,
+        camera,
+    })
+}
+
+/// The fixed camera of a `[camera]` table: standing at `pos`, looking at `look_at` with the image's
+/// up as close to world up as the view allows.
+fn fixed_camera(cx: &mut Cx, c: &dsl::ast::Camera) -> Option<CameraMount> {
+    let (pos, at) = (c.pos.as_ref()?, c.look_at.as_ref()?);
+    let fovy = c
+        .fovy
+        .as_ref()
+        .map(|f| f.value)
+        .unwrap_or(45f64.to_radians());
+    if let Some(f) = &c.fovy
+        && !(1.0..=150.0).contains(&f.value.to_degrees())
+    {
+        cx.err(
+            Code::E0021,
+            f.span,
+            format!(
+                "a field of view of {:.1}° is no camera's",
+                f.value.to_degrees()
+            ),
+            Some("use 1° to 150°; 45° is the bench camera's".into()),
+        );
+        return None;
+    }
+    let v = |a: [f64; 3]| nalgebra::Vector3::new(a[0], a[1], a[2]);
+    let forward = v(at.value) - v(pos.value);
+    let right = forward.cross(&nalgebra::Vector3::z());
+    if forward.norm() < 1e-3 || right.norm() < 1e-6 * forward.norm() {
+        let msg = if forward.norm() < 1e-3 {
+            "the camera looks at the point it stands on"
+        } else {
+            "the camera looks straight up or down, so its image has no up"
+        };
+        cx.err(
+            Code::E0021,
+            at.span,
+            msg.into(),
+            Some("look at a point at least 1 mm away, not straight above or below".into()),
+        );
+        return None;
+    }
+    let x = right.normalize();
+    let y = x.cross(&forward.normalize());
+    Some(CameraMount::Fixed {
+        pos: pos.value,
+        xyaxes: [x.x, x.y, x.z, y.x, y.y, y.z],
+        fovy_deg: fovy.to_degrees(),
     })
 }
 
@@ -1306,19 +1359,23 @@ pub(crate) fn pose(p: &dsl::ast::Pose) -> Pose {
     labware::frame::yaw(pos, p.yaw.as_ref().map(|y| y.value).unwrap_or(0.0))
 }
 
-/// The fixed bench camera (in front of the bench, looking across it and 20° down) and one wrist
-/// camera per robot, all 224x224.
-pub(crate) fn default_cameras(robots: &[RobotSpec]) -> Vec<CameraSpec> {
+/// The fixed camera (`fixed`, else the bench camera in front of the bench, looking across it and
+/// 20° down) and one wrist camera per robot, all 224x224.
+pub(crate) fn default_cameras(
+    robots: &[RobotSpec],
+    fixed: Option<&CameraMount>,
+) -> Vec<CameraSpec> {
     let (s, c) = 20f64.to_radians().sin_cos();
+    let bench = CameraMount::Fixed {
+        pos: [0.0, -1.2, 1.65],
+        xyaxes: [1.0, 0.0, 0.0, 0.0, s, c],
+        fovy_deg: 45.0,
+    };
     let mut cams = vec![CameraSpec {
         name: "table_front".into(),
         width: 224,
         height: 224,
-        mount: CameraMount::Fixed {
-            pos: [0.0, -1.2, 1.65],
-            xyaxes: [1.0, 0.0, 0.0, 0.0, s, c],
-            fovy_deg: 45.0,
-        },
+        mount: fixed.cloned().unwrap_or(bench),
     }];
     for r in robots {
         cams.push(CameraSpec {

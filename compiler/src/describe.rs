@@ -278,6 +278,8 @@ mod tests {
         assert!(!line("pick(").contains("no expert motions"));
         assert!(line("hand_over(").contains("[no expert motions yet]"));
         assert_eq!(line("tube_50ml").trim(), "tube_50ml");
-        assert!(line("thermal_mixer").contains("[no simulation model yet]"));
+        assert!(!line("thermal_mixer").contains("[no simulation model yet]"));
+        assert!(!line("set_parameter(").contains("no expert motions"));
+        assert!(line("centrifuge_5910").contains("[no simulation model yet]"));
     }
 }

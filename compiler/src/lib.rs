@@ -65,7 +65,7 @@ pub fn compile(p: &Protocol, file: &str) -> (Option<Task>, Vec<Diagnostic>) {
             source: file.to_string(),
             time_limit_s: low.stage.time_limit_s,
             physics: physics(),
-            cameras: check::default_cameras(&low.robots),
+            cameras: check::default_cameras(&low.robots, low.camera.as_ref()),
             robots: low.robots,
             labware: low.labware,
             params: low.params,

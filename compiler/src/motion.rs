@@ -23,6 +23,13 @@ pub enum Target {
     /// The tool pose that stands the carried item's base on a slot's seat (`holder.slot`, a
     /// template over the task's parameters), raised by `above` metres.
     Seat { location: String, above: f64 },
+    /// The button that moves an instrument's panel value `param` toward `value` (a quantity as
+    /// the step renders it, e.g. `"1200 rpm"`), chosen from the live value.
+    Button {
+        labware: String,
+        param: String,
+        value: String,
+    },
 }
 
 /// One motion of the scripted expert.
@@ -43,6 +50,17 @@ pub enum Motion {
         goals: Goals,
         samples: usize,
     },
+    /// Straight in along the target's approach axis until the closed fingertips are `depth`
+    /// metres past it (a button pushed in).
+    Press { target: Target, depth: f64 },
+    /// Keep the tool still until the panel value `param` of `labware` shows `value` (a held
+    /// button repeating), for at most `timeout_s`.
+    HoldUntil {
+        labware: String,
+        param: String,
+        value: String,
+        timeout_s: f64,
+    },
     /// Close the gripper and wait for it to settle.
     Grasp,
     /// Open the gripper and wait for it to settle.
@@ -60,6 +78,8 @@ impl Motion {
             Motion::Reach { .. } => "reach",
             Motion::Transit { .. } => "transit",
             Motion::Follow { .. } => "follow",
+            Motion::Press { .. } => "press",
+            Motion::HoldUntil { .. } => "hold until",
             Motion::Grasp => "grasp",
             Motion::Release => "release",
             Motion::Lift { .. } => "lift",

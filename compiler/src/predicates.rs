@@ -278,6 +278,18 @@ pub fn quantity(template: &str, bound: &Bindings, dim: Dimension) -> Result<f64,
     Ok(q.si)
 }
 
+/// A panel value template (`"37 °C"`, `"{rpm} rpm"`) rendered and read in its own unit's
+/// dimension (rpm, °C or s); `None` when it does not read as a panel quantity.
+pub fn panel_quantity(template: &str, bound: &Bindings) -> Option<f64> {
+    let text = render(template, bound).ok()?;
+    let q = parse_quantity(&text).ok()?;
+    matches!(
+        q.dimension,
+        Dimension::Speed | Dimension::Temperature | Dimension::Time
+    )
+    .then_some(q.si)
+}
+
 impl Check {
     /// Why this check's target value cannot be read under these parameter values (a volume or
     /// panel value template that renders to a bare number or the wrong unit); `None` when it can.

@@ -61,6 +61,18 @@ pub struct Protocol {
     pub success: Success,
     /// `[tolerances]`: name -> quantity as written (the compiler checks its dimension).
     pub tolerances: Vec<(Spanned<String>, Spanned<String>)>,
+    /// `[camera]`: where the fixed camera stands, when not at the bench's default.
+    pub camera: Option<Camera>,
+}
+
+/// The `[camera]` table: the fixed camera's position and the point it looks at (metres, world
+/// frame) and its vertical field of view (radians).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Camera {
+    pub pos: Option<Spanned<[f64; 3]>>,
+    pub look_at: Option<Spanned<[f64; 3]>>,
+    pub fovy: Option<Spanned<f64>>,
+    pub span: Span,
 }
 
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]

@@ -89,6 +89,7 @@ const TOP_KEYS: &[&str] = &[
     "steps",
     "success",
     "tolerances",
+    "camera",
 ];
 const CHAIN_TOP_KEYS: &[&str] = &["format", "chain", "stages"];
 const CHAIN_KEYS: &[&str] = &["id", "version", "level", "instruction"];
@@ -102,6 +103,7 @@ const LABWARE_KEYS: &[&str] = &["kind", "pose", "at", "state"];
 const POSE_KEYS: &[&str] = &["pos", "yaw"];
 const RANDOM_KEYS: &[&str] = &["joints", "xy", "yaw"];
 const SUCCESS_KEYS: &[&str] = &["all", "scoring", "weights"];
+const CAMERA_KEYS: &[&str] = &["pos", "look_at", "fovy"];
 const SCORINGS: &[&str] = &["binary", "progress"];
 const LEVELS: &[&str] = &["easy", "medium", "hard"];
 const MAX_ID_LEN: usize = 128;
@@ -418,6 +420,7 @@ impl Parser {
                 "steps" => p.steps = self.steps(value),
                 "success" => p.success = self.success(value),
                 "tolerances" => p.tolerances = self.tolerances(value),
+                "camera" => p.camera = self.camera(value),
                 _ => self.unknown_key(key, TOP_KEYS, "the top level"),
             }
         }
@@ -583,6 +586,43 @@ impl Parser {
             }
         }
         p
+    }
+
+    fn camera(&mut self, v: &Value<'_>) -> Option<Camera> {
+        let t = self.table(v, "`[camera]`")?;
+        let mut c = Camera {
+            pos: None,
+            look_at: None,
+            fovy: None,
+            span: span_of(v),
+        };
+        let point = |p: &mut Self, k: &str, value: &Value<'_>| {
+            p.quantity_array(k, value, Dimension::Length, Some(3))
+                .map(|s| Spanned::new([s.value[0], s.value[1], s.value[2]], s.span))
+        };
+        for (key, value) in self.settings(t) {
+            let k = key.get_ref().as_ref();
+            match split_unit(k).0 {
+                "pos" => c.pos = point(self, k, value),
+                "look_at" => c.look_at = point(self, k, value),
+                "fovy" => c.fovy = self.quantity(k, value, Dimension::Angle),
+                _ => self.unknown_key(key, CAMERA_KEYS, "`[camera]`"),
+            }
+        }
+        for (needed, example) in [
+            ("pos", "pos_m = [0.0, -0.6, 1.3]"),
+            ("look_at", "look_at_m = [0.0, 0.0, 0.9]"),
+        ] {
+            if !t.iter().any(|(k, _)| split_unit(k.get_ref()).0 == needed) {
+                self.err(
+                    Code::E0002,
+                    c.span,
+                    format!("`[camera]` has no `{needed}`"),
+                    Some(format!("e.g. {example}")),
+                );
+            }
+        }
+        Some(c)
     }
 
     fn randomise(&mut self, target: Spanned<String>, t: &DeTable<'_>) -> Randomisation {

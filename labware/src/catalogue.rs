@@ -337,7 +337,7 @@ pub const KINDS: &[LabwareKind] = &[
                 name: "time",
                 unit: "s",
                 min: 5.0,
-                max: 595.0,
+                max: 300.0,
                 step: 5.0,
                 initial: 60.0,
             },

@@ -5,8 +5,10 @@
 //!
 //! What a model owns: its MJCF (through [`crate::mjcf`]), the mechanisms it asks the runtime for
 //! ([`Mechanism`]), its joints and equality switches by role, reset from declared part states, the
-//! per-step logic hook (latches now; buttons and displays next), the readout the judge scores
-//! ([`Instrument::measure`], [`Instrument::readout`]), and affordances as functions of live state.
+//! per-step logic hook (latches, buttons), panel values and the displays that show them (drawn into
+//! textures the runtime uploads), the readout the judge scores ([`Instrument::measure`],
+//! [`Instrument::panel_value`], [`Instrument::readout`]), and affordances as functions of live
+//! state.
 
 use crate::frame::{Pose, serde_pose};
 use crate::mjcf::Fragment;
@@ -118,6 +120,17 @@ pub struct Affordance {
     pub symmetry: Symmetry,
 }
 
+/// A display an instrument draws: the MuJoCo texture (declared in the model's fragment, 8-bit RGB)
+/// that [`Instrument::draw_display`] fills.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Display {
+    pub texture: String,
+    pub width: usize,
+    pub height: usize,
+    /// The logic values it shows: the runtime redraws it when one of them changes.
+    pub shows: Vec<String>,
+}
+
 /// Joint values and logic state an item starts an episode with.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Reset {
@@ -171,16 +184,36 @@ pub trait Instrument {
         Reset::default()
     }
 
-    /// Instrument logic after each physics step: updates `logic` from the joints and pushes each
-    /// switch's wanted state onto `switches` (which the runtime empties and reuses, so a step
-    /// allocates nothing). Also called once right after reset.
+    /// Instrument logic after each physics step of `dt` seconds: updates `logic` from the joints
+    /// and pushes each switch's wanted state onto `switches` (which the runtime empties and reuses,
+    /// so a step allocates nothing). Also called once right after reset, with `dt` 0.
     fn step(
         &self,
+        _dt: f64,
         _joints: &BTreeMap<String, f64>,
         _logic: &mut Logic,
         _switches: &mut Vec<(&'static str, bool)>,
     ) {
     }
+
+    /// The value a panel shows (`speed`, `temperature`...), from live state.
+    fn panel_value(&self, _param: &str, _s: &LabwareState) -> Option<f64> {
+        None
+    }
+
+    /// The button that moves a panel value toward `target` (an affordance name).
+    fn button_toward(&self, _param: &str, _target: f64, _s: &LabwareState) -> Option<String> {
+        None
+    }
+
+    /// The displays the item draws, in the order [`Instrument::draw_display`] numbers them.
+    fn displays(&self, _name: &str) -> Vec<Display> {
+        Vec::new()
+    }
+
+    /// Draws display `index` for the logic state into `rgb` (its texture's pixels, row-major, top
+    /// row first). Pure: the same logic always draws the same pixels.
+    fn draw_display(&self, _index: usize, _logic: &Logic, _rgb: &mut [u8]) {}
 
     /// A named joint goal, e.g. `("lid", "closed")` -> the lid's closed angle.
     fn joint_goal(&self, _role: &str, _goal: &str) -> Option<f64> {

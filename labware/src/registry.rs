@@ -4,7 +4,7 @@
 //! self-contained); "has a simulation model" is [`Model::for_kind`] returning one.
 
 use crate::model::Instrument;
-use crate::{centrifuge_mini, rack, thermal_cycler, tube};
+use crate::{centrifuge_mini, rack, thermal_cycler, thermal_mixer, tube};
 use serde::{Deserialize, Serialize};
 
 macro_rules! registry {
@@ -45,6 +45,7 @@ macro_rules! registry {
 registry! {
     ThermalCycler(thermal_cycler::Params) { "thermal_cycler" => thermal_cycler::Params::default() },
     CentrifugeMini(centrifuge_mini::Params) { "centrifuge_mini" => centrifuge_mini::Params::default() },
+    ThermalMixer(thermal_mixer::Params) { "thermal_mixer" => thermal_mixer::Params::default() },
     Rack(rack::Params) {
         "tube_rack" => rack::Params::tube_rack(),
         "microtube_rack" => rack::Params::microtube_rack(),

@@ -302,6 +302,7 @@ impl Instrument for Params {
 
     fn step(
         &self,
+        _dt: f64,
         joints: &BTreeMap<String, f64>,
         logic: &mut Logic,
         switches: &mut Vec<(&'static str, bool)>,

@@ -27,6 +27,12 @@ pub enum PlanError {
     NoSlot(String),
     #[error("a slot is targeted, but the step carries nothing to seat")]
     NothingCarried,
+    #[error("`{labware}` has no button that sets `{param}` toward `{value}`")]
+    NoButton {
+        labware: String,
+        param: String,
+        value: String,
+    },
 }
 
 /// The labware as the expert sees it at one moment: each item's model and live state, and the
@@ -110,6 +116,32 @@ impl<'a> Lab<'a> {
             .ok_or_else(|| PlanError::NoSlot(text.clone()))
     }
 
+    /// The affordance of the button that moves a panel value toward `value` from its live value.
+    fn button(&self, labware: &str, param: &str, value: &str) -> Result<Affordance, PlanError> {
+        let (model, state) = self.item(labware)?;
+        let no_button = || PlanError::NoButton {
+            labware: labware.into(),
+            param: param.into(),
+            value: value.into(),
+        };
+        let target =
+            compiler::predicates::panel_quantity(value, self.params).ok_or_else(no_button)?;
+        let name = model
+            .button_toward(param, target, state)
+            .ok_or_else(no_button)?;
+        self.affordance(labware, &name, state)
+    }
+
+    /// The value a panel shows now, and the target `value` (a quantity) read in its unit.
+    pub fn panel(&self, labware: &str, param: &str, value: &str) -> Option<(f64, f64)> {
+        let (model, state) = self.item(labware).ok()?;
+        let shown = model.panel_value(param, state)?;
+        Some((
+            shown,
+            compiler::predicates::panel_quantity(value, self.params)?,
+        ))
+    }
+
     /// The live pose of an item's root body.
     pub fn pose_of(&self, labware: &str) -> Result<Pose, PlanError> {
         Ok(self.item(labware)?.1.pose)
@@ -123,35 +155,48 @@ pub struct StepFrame {
     turn: Rot,
     /// The carried item and its pose in the tool frame, when the step seats it somewhere.
     carried: Option<(String, Pose)>,
+    /// How far the robot's closed fingertips reach past its TCP along the tool axis (m).
+    finger_reach: f64,
 }
 
 impl StepFrame {
     /// Chooses, for the step's first affordance target, the symmetric grasp closest to the current
-    /// tool orientation, and measures how `carried` (if any) sits in the hand.
+    /// tool orientation, and measures how `carried` (if any) sits in the hand. `finger_reach`: the
+    /// robot's closed fingertips past its TCP (for presses).
     pub fn new(
         motions: &[Motion],
         lab: &Lab,
         tcp_now: &Pose,
         carried: Option<&str>,
+        finger_reach: f64,
     ) -> Result<StepFrame, PlanError> {
         let mut frame = StepFrame {
             turn: Rot::identity(),
             carried: None,
+            finger_reach,
         };
         let first = motions.iter().find_map(|m| match m {
             Motion::Approach { target, .. }
             | Motion::Reach { target }
-            | Motion::Transit { target } => Some(target),
+            | Motion::Transit { target }
+            | Motion::Press { target, .. } => Some(target),
             _ => None,
         });
-        if let Some(Target::Affordance {
-            labware,
-            name,
-            goals,
-        }) = first
-        {
-            let a = lab.affordance(labware, name, &lab.at_goals(labware, goals)?)?;
-            frame.turn = closest_turn(&a, tcp_now);
+        match first {
+            Some(Target::Affordance {
+                labware,
+                name,
+                goals,
+            }) => {
+                let a = lab.affordance(labware, name, &lab.at_goals(labware, goals)?)?;
+                frame.turn = closest_turn(&a, tcp_now);
+            }
+            Some(Target::Button {
+                labware,
+                param,
+                value,
+            }) => frame.turn = closest_turn(&lab.button(labware, param, value)?, tcp_now),
+            _ => {}
         }
         let seats = motions.iter().any(|m| {
             matches!(
@@ -192,6 +237,11 @@ impl StepFrame {
                 let seat = labware::frame::pose([p[0], p[1], p[2] + above], heading);
                 Ok(seat * item_in_tool.inverse())
             }
+            Target::Button {
+                labware,
+                param,
+                value,
+            } => Ok(lab.button(labware, param, value)?.pose * self.turn),
         }
     }
 
@@ -245,7 +295,15 @@ impl StepFrame {
                 &translated_local(tcp_now, [0.0, 0.0, -distance]),
                 6,
             ),
-            Motion::Grasp | Motion::Release => Vec::new(),
+            Motion::Press { target, depth } => {
+                let at = self.target(target, lab)?;
+                line(
+                    tcp_now,
+                    &translated_local(&at, [0.0, 0.0, depth - self.finger_reach]),
+                    6,
+                )
+            }
+            Motion::Grasp | Motion::Release | Motion::HoldUntil { .. } => Vec::new(),
         })
     }
 }
@@ -325,7 +383,7 @@ mod tests {
         let reach = [Motion::Reach {
             target: grip.clone(),
         }];
-        let plain = StepFrame::new(&reach, &lab, &Pose::identity(), None).unwrap();
+        let plain = StepFrame::new(&reach, &lab, &Pose::identity(), None, 0.0).unwrap();
         let closed = plain.target(&grip, &lab).unwrap();
         // Lid closed, lever raised: the grip's outward axis is +y, so the tool approaches along -y.
         let z = closed.rotation * Vector3::z();
@@ -334,7 +392,7 @@ mod tests {
         // fingers turned over.
         let flipped_tool =
             closed * labware::frame::pose([0.0; 3], axis_angle([0.0, 0.0, 1.0], 3.0));
-        let flipped = StepFrame::new(&reach, &lab, &flipped_tool, None).unwrap();
+        let flipped = StepFrame::new(&reach, &lab, &flipped_tool, None, 0.0).unwrap();
         let other = flipped.target(&grip, &lab).unwrap();
         assert!((other.translation.vector - closed.translation.vector).norm() < 1e-12);
         assert!((other.rotation * Vector3::z()).dot(&z) > 1.0 - 1e-9);
@@ -396,7 +454,7 @@ mod tests {
         let place = [Motion::Reach {
             target: seat_b3.clone(),
         }];
-        let frame = StepFrame::new(&place, &lab, &tcp, Some("tube")).unwrap();
+        let frame = StepFrame::new(&place, &lab, &tcp, Some("tube"), 0.0).unwrap();
         let tool = frame.target(&seat_b3, &lab).unwrap();
         // Where the tube would be with the tool there: exactly on the seat, upright.
         let tube_then = tool * frame.carried.clone().unwrap().1;
@@ -404,7 +462,7 @@ mod tests {
         assert!((tube_then.translation.vector - seat.translation.vector).norm() < 1e-12);
         assert!((tube_then.rotation * Vector3::z()).z > 1.0 - 1e-12);
         assert!(matches!(
-            StepFrame::new(&place, &lab, &tcp, None),
+            StepFrame::new(&place, &lab, &tcp, None, 0.0),
             Err(PlanError::NothingCarried)
         ));
     }

@@ -32,6 +32,9 @@ pub struct Gripper {
     pub closed: f64,
     /// How long a grasp or release takes to settle (s).
     pub settle_s: f64,
+    /// How far the closed fingertips reach past the TCP along the tool axis (m): where a press
+    /// with the closed gripper as a finger touches.
+    pub finger_reach: f64,
 }
 
 impl Gripper {

@@ -39,6 +39,7 @@ pub const MODEL: RobotModel = RobotModel {
         open: 0.0,
         closed: 255.0,
         settle_s: 0.6,
+        finger_reach: 0.02,
     },
     tcp_site: "tcp",
     wrist_camera: "wrist_cam",

@@ -148,19 +148,37 @@ impl Episode {
                 }
             }
         }
-        self.run_logic();
+        self.apply_panel_start(instance);
+        self.run_logic(0.0);
         self.data.forward();
     }
 
-    /// Every item's per-step logic, and the switches it asks for.
-    fn run_logic(&mut self) {
+    /// Panel values a protocol starts away from the kind's defaults (`[labware.x] state`), rendered
+    /// for this instance.
+    fn apply_panel_start(&mut self, instance: &SceneInstance) {
+        for (i, spec) in self.task.labware.iter().enumerate() {
+            for (param, text) in &spec.panel {
+                if let Some(v) = compiler::predicates::panel_quantity(text, &instance.params) {
+                    labware::model::set(&mut self.logic[i], param, v);
+                }
+            }
+        }
+    }
+
+    /// Every item's per-step logic after `dt` seconds of physics, and the switches it asks for.
+    fn run_logic(&mut self, dt: f64) {
         let scene = self.scene.clone();
         for (i, ids) in scene.labware.iter().enumerate() {
             for (role, adr) in &ids.joints {
                 labware::model::set(&mut self.joints[i], role, self.data.qpos()[*adr]);
             }
             self.switches.clear();
-            instrument(&self.task, i).step(&self.joints[i], &mut self.logic[i], &mut self.switches);
+            instrument(&self.task, i).step(
+                dt,
+                &self.joints[i],
+                &mut self.logic[i],
+                &mut self.switches,
+            );
             for (role, on) in &self.switches {
                 if let Some((_, eq)) = ids.switches.iter().find(|(r, _)| r == role) {
                     self.data.eq_active_mut()[*eq] = *on;
@@ -237,7 +255,7 @@ impl Episode {
     pub fn physics_step(&mut self) -> Result<(), StepError> {
         self.data.step();
         self.physics_steps += 1;
-        self.run_logic();
+        self.run_logic(self.data.model().opt().timestep);
         let warnings = &self.data.ffi().warning;
         for (idx, what) in FATAL_WARNINGS {
             if warnings[idx].number > 0 {

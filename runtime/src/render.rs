@@ -10,8 +10,14 @@
 //! exactly the state it is reported with (after `mj_step` the simulated data's positions are
 //! those of the state before the last integration), and a replay that sets a recorded state
 //! draws the same frame.
+//!
+//! Instrument displays are textures the instrument model draws (`labware::Instrument::
+//! draw_display`) from its logic state. They are retained: a display is redrawn and uploaded only
+//! when a value it shows changes, so a frame costs nothing extra while the panel is unchanged, and
+//! a replay that restores the recorded logic draws the same screen.
 
 use crate::scene::Scene;
+use labware::Logic;
 use mujoco_rs::prelude::*;
 use mujoco_rs::renderer::MjRenderer;
 use robots::Detail;
@@ -25,9 +31,26 @@ pub struct Cameras {
     ids: Vec<usize>,
     /// The renderer's own data: the drawn state, positions computed from its `qpos`.
     mirror: MjData<Arc<MjModel>>,
+    /// Instrument displays, and a copy of the render model whose texture pixels they are drawn
+    /// into (uploads read textures from it; nothing else uses it).
+    screens: Vec<Screen>,
+    textures: Option<MjModel>,
     pub detail: Detail,
     pub width: usize,
     pub height: usize,
+}
+
+/// One instrument display: whose it is, its texture, and the values it was last drawn with.
+struct Screen {
+    item: usize,
+    index: usize,
+    model: labware::Model,
+    texture: usize,
+    width: usize,
+    height: usize,
+    shows: Vec<String>,
+    drawn: Option<Vec<f64>>,
+    scratch: Vec<u8>,
 }
 
 /// One rendered frame.
@@ -104,23 +127,54 @@ impl Cameras {
             .depth(false)
             .build(&model)
             .map_err(|e| format!("cannot start the renderer: {e:?}"))?;
+        let mut screens = Vec::new();
+        for (item, ids) in scene.labware.iter().enumerate() {
+            let spec = &scene.task().labware[item];
+            let Some(instrument) = spec.params.instrument() else {
+                continue;
+            };
+            for (index, (d, &texture)) in instrument
+                .displays(&spec.name)
+                .into_iter()
+                .zip(&ids.displays)
+                .enumerate()
+            {
+                screens.push(Screen {
+                    item,
+                    index,
+                    model: spec.params.clone(),
+                    texture,
+                    width: d.width,
+                    height: d.height,
+                    shows: d.shows,
+                    drawn: None,
+                    scratch: vec![0; d.width * d.height * 3],
+                });
+            }
+        }
+        let textures = (!screens.is_empty()).then(|| (*model).clone());
         let mirror = MjData::new(model);
         Ok(Cameras {
             renderer,
             ids: scene.cameras.clone(),
             mirror,
+            screens,
+            textures,
             detail,
             width,
             height,
         })
     }
 
-    /// Renders every camera of the task, in task order.
+    /// Renders every camera of the task, in task order, with each item's logic state (`logic`, in
+    /// task order) on its displays.
     pub fn render(
         &mut self,
         data: &MjData<Arc<MjModel>>,
+        logic: &[Logic],
         names: &[String],
     ) -> Result<Vec<Image>, String> {
+        self.update_screens(logic)?;
         let m = &mut self.mirror;
         m.qpos_mut().copy_from_slice(data.qpos());
         m.mocap_pos_mut().copy_from_slice(data.mocap_pos());
@@ -149,5 +203,59 @@ impl Cameras {
             });
         }
         Ok(out)
+    }
+
+    /// Redraws and uploads the displays whose shown values changed since they were last drawn.
+    fn update_screens(&mut self, logic: &[Logic]) -> Result<(), String> {
+        let Some(textures) = self.textures.as_mut() else {
+            return Ok(());
+        };
+        for s in &mut self.screens {
+            let state = logic
+                .get(s.item)
+                .ok_or("no logic state for a display's item")?;
+            let values: Vec<f64> = s
+                .shows
+                .iter()
+                .map(|k| state.get(k).copied().unwrap_or(f64::NAN))
+                .collect();
+            // NaN never equals itself: compare bit patterns, so an unset value is drawn once.
+            let same = s.drawn.as_ref().is_some_and(|d| {
+                d.len() == values.len()
+                    && d.iter()
+                        .zip(&values)
+                        .all(|(a, b)| a.to_bits() == b.to_bits())
+            });
+            if same {
+                continue;
+            }
+            let instrument = s.model.instrument().ok_or("a display without a model")?;
+            instrument.draw_display(s.index, state, &mut s.scratch);
+            let adr = usize::try_from(textures.tex_adr()[s.texture])
+                .map_err(|_| "a display texture is not stored in the model")?;
+            let channels = textures.tex_nchannel()[s.texture] as usize;
+            let size = (
+                textures.tex_width()[s.texture] as usize,
+                textures.tex_height()[s.texture] as usize,
+            );
+            if size != (s.width, s.height) || channels < 3 {
+                return Err(format!(
+                    "display texture is {}x{}x{channels}, the model draws {}x{} RGB",
+                    size.0, size.1, s.width, s.height
+                ));
+            }
+            let pixels = &mut textures.tex_data_mut()[adr..adr + s.width * s.height * channels];
+            for (dst, src) in pixels
+                .chunks_exact_mut(channels)
+                .zip(s.scratch.chunks_exact(3))
+            {
+                dst[..3].copy_from_slice(src);
+            }
+            self.renderer
+                .update_texture_from(textures, s.texture)
+                .map_err(|e| format!("display upload failed: {e:?}"))?;
+            s.drawn = Some(values);
+        }
+        Ok(())
     }
 }

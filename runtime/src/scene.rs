@@ -72,6 +72,8 @@ pub struct LabwareIds {
     pub free: Vec<FreeJoint>,
     /// Loose parts: role, body id.
     pub parts: Vec<(&'static str, usize)>,
+    /// The texture id of each display the model draws (in its `displays` order).
+    pub displays: Vec<usize>,
 }
 
 /// What a body belongs to: a robot or a labware item (task indices).
@@ -98,6 +100,11 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// The task the scene was built for.
+    pub fn task(&self) -> &Task {
+        &self.task
+    }
+
     /// The total action length: every robot's action, concatenated in task order.
     pub fn action_len(&self) -> usize {
         self.robots.iter().map(|r| r.model.action_len()).sum()
@@ -341,8 +348,14 @@ fn labware_ids(m: &MjModel, l: &compiler::LabwareSpec) -> Result<LabwareIds, Sce
         .into_iter()
         .map(|(role, b)| Ok((role, id_of(m, MjtObjBase::mjOBJ_BODY, "body", &b)?)))
         .collect::<Result<Vec<_>, SceneError>>()?;
+    let displays = model
+        .displays(name)
+        .iter()
+        .map(|d| id_of(m, MjtObjBase::mjOBJ_TEXTURE, "texture", &d.texture))
+        .collect::<Result<Vec<_>, SceneError>>()?;
     Ok(LabwareIds {
         root_body: id_of(m, MjtObjBase::mjOBJ_BODY, "body", &model.root_body(name))?,
+        displays,
         joints,
         switches,
         free,
@@ -489,9 +502,32 @@ fn body_owners(
 fn check_measurable(task: &Task) -> Result<(), SceneError> {
     use compiler::predicates::Check;
     for p in task.stages.iter().flat_map(|s| &s.success) {
-        let why = match p.check {
+        let why = match &p.check {
             Check::Volume { .. } => "liquid volumes are not simulated in task scenes",
-            Check::Panel { .. } => "instrument panels are not simulated",
+            Check::Panel {
+                instrument, param, ..
+            } => {
+                let shows = task
+                    .labware
+                    .iter()
+                    .find(|l| &l.name == instrument)
+                    .and_then(|l| l.params.instrument())
+                    .is_some_and(|m| {
+                        let probe = labware::LabwareState {
+                            name: instrument.clone(),
+                            pose: Pose::identity(),
+                            joints: Default::default(),
+                            parts: Default::default(),
+                            logic: Default::default(),
+                            touched_by: Vec::new(),
+                        };
+                        m.panel_value(param, &probe).is_some()
+                    });
+                if shows {
+                    continue;
+                }
+                "the instrument's model has no such panel value"
+            }
             _ => continue,
         };
         return Err(SceneError::Unmeasurable(p.text.clone(), why));

@@ -175,7 +175,7 @@ pub fn run_episode_with(
     'episode: while !over && ep.time() < task.time_limit_s {
         let stage = judge.stage();
         let images = match eyes.as_mut() {
-            Some(c) => c.render(&ep.data, &cam_names)?,
+            Some(c) => c.render(&ep.data, ep.logic(), &cam_names)?,
             None => Vec::new(),
         };
         let before = previous.take().unwrap_or_else(|| images.clone());
@@ -232,12 +232,12 @@ pub fn run_episode_with(
             if history_at == Some(k)
                 && let Some(c) = eyes.as_mut()
             {
-                previous = Some(c.render(&ep.data, &cam_names)?);
+                previous = Some(c.render(&ep.data, ep.logic(), &cam_names)?);
             }
             let t = ep.time();
             if let Some(s) = sink.as_mut() {
                 let frames = match sink_eyes.as_mut() {
-                    Some(c) => c.render(&ep.data, &cam_names)?,
+                    Some(c) => c.render(&ep.data, ep.logic(), &cam_names)?,
                     None => Vec::new(),
                 };
                 if let Err(e) = s.step(&ep.state(), &action, &frames) {
@@ -262,7 +262,7 @@ pub fn run_episode_with(
                 if let Some(c) = cameras.as_mut()
                     && steps.is_multiple_of(opts.image_every as u64)
                 {
-                    for img in c.render(&ep.data, &cam_names)? {
+                    for img in c.render(&ep.data, ep.logic(), &cam_names)? {
                         r.image(t, &img).map_err(|e| e.to_string())?;
                     }
                 }

@@ -35,8 +35,20 @@ struct Step {
 }
 
 enum Active {
-    Path { traj: Trajectory, t0: f64 },
-    Hold { until: f64 },
+    Path {
+        traj: Trajectory,
+        t0: f64,
+    },
+    Hold {
+        until: f64,
+    },
+    /// Still until a panel shows a value (or the deadline passes: the judge tells what came of it).
+    Until {
+        labware: String,
+        param: String,
+        value: String,
+        deadline: f64,
+    },
 }
 
 struct Arm {
@@ -142,7 +154,8 @@ impl ExpertPolicy {
         let arm = &mut self.arms[step.robot];
         let tcp_now = arm.kin.tcp(&arm.target);
         if self.frame.as_ref().map(|(s, _)| *s) != Some(q.step) {
-            let frame = StepFrame::new(&step.motions, &lab, &tcp_now, step.on.as_deref())
+            let reach = arm.model.gripper.finger_reach;
+            let frame = StepFrame::new(&step.motions, &lab, &tcp_now, step.on.as_deref(), reach)
                 .map_err(|e| planning(context.clone(), e))?;
             self.frame = Some((q.step, frame));
             self.events.push(StageEvent {
@@ -164,6 +177,19 @@ impl ExpertPolicy {
                 };
                 return Ok(Active::Hold {
                     until: obs.time + gripper.settle_s,
+                });
+            }
+            Motion::HoldUntil {
+                labware,
+                param,
+                value,
+                timeout_s,
+            } => {
+                return Ok(Active::Until {
+                    labware,
+                    param,
+                    value,
+                    deadline: obs.time + timeout_s,
                 });
             }
             _ => {}
@@ -230,6 +256,22 @@ impl Policy for ExpertPolicy {
                 },
                 Some(Active::Hold { until }) => {
                     if obs.time + 1e-9 >= *until {
+                        self.active = None;
+                        continue;
+                    }
+                    return Ok(vec![self.action()]);
+                }
+                Some(Active::Until {
+                    labware,
+                    param,
+                    value,
+                    deadline,
+                }) => {
+                    let lab = Lab::new(&self.task, &obs.privileged.labware, &self.params);
+                    let shows = lab
+                        .panel(labware, param, value)
+                        .is_some_and(|(shown, target)| (shown - target).abs() < 1e-9);
+                    if shows || obs.time >= *deadline {
                         self.active = None;
                         continue;
                     }

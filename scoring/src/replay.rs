@@ -265,7 +265,9 @@ pub fn frames(
     // The last state follows the last action; an episode records frames only before actions.
     for k in (0..rec.steps()).step_by(every) {
         rec.restore(&mut ep, k)?;
-        let images = cams.render(&ep.data, &names).map_err(ReplayError::Render)?;
+        let images = cams
+            .render(&ep.data, ep.logic(), &names)
+            .map_err(ReplayError::Render)?;
         each(k, rec.summary.physics[k].0, images)?;
     }
     Ok(())

@@ -158,8 +158,34 @@ fn measure(
                 holds: distance <= tolerance.value,
             })
         }
-        // Volumes and panels need instruments the runtime cannot build yet.
-        _ => None,
+        // The value the instrument's panel shows against the target.
+        Check::Panel {
+            instrument,
+            param,
+            unit,
+            value,
+            tolerance,
+            ..
+        } => {
+            let target = compiler::predicates::quantity(
+                value,
+                params,
+                compiler::primitives::panel_dimension(unit),
+            )
+            .ok()?;
+            let shown = spec_of(instrument)?
+                .params
+                .instrument()?
+                .panel_value(param, state_of(instrument)?)?;
+            Some(Measure {
+                value: shown,
+                target,
+                tolerance: tolerance.value,
+                holds: (shown - target).abs() <= tolerance.value,
+            })
+        }
+        // Volumes need liquid the runtime does not simulate in task scenes.
+        Check::Volume { .. } => None,
     }
 }
 

@@ -1,6 +1,7 @@
 //! `set_parameter`: step a panel value to a target.
 
 use super::prelude::*;
+use crate::motion::{Motion, MotionStep, Target};
 
 pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     name: "set_parameter",
@@ -21,8 +22,36 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     requires: "the hand is empty; the target is within the panel's range and on its button grid",
     leaves: "the panel value at the target",
     effect,
-    motions: None,
+    motions: Some(motions),
 };
+
+/// With the gripper closed as a finger: come in front of the button that moves the value toward
+/// the target, push it in and hold it while it repeats until the panel shows the target, back off.
+fn motions(step: &MotionStep) -> Vec<Motion> {
+    let button = Target::Button {
+        labware: step.arg("on"),
+        param: step.arg("param"),
+        value: step.arg("value"),
+    };
+    vec![
+        Motion::Grasp,
+        Motion::Approach {
+            target: button.clone(),
+            standoff: 0.04,
+        },
+        Motion::Press {
+            target: button,
+            depth: 0.0045,
+        },
+        Motion::HoldUntil {
+            labware: step.arg("on"),
+            param: step.arg("param"),
+            value: step.arg("value"),
+            timeout_s: 20.0,
+        },
+        Motion::Retreat { distance: 0.04 },
+    ]
+}
 
 fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
     let (lw, kind) = step.on_empty_handed(w, env)?;
