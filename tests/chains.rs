@@ -190,9 +190,9 @@ fn describe_explain_and_json_check_as_processes() {
 
 #[test]
 fn unmodelled_labware_is_refused_by_the_runtime_with_a_reason() {
-    let task = compile("protocols/thermal_mixer/set_parameters.toml");
+    let task = compile("protocols/centrifuge/insert_symmetric.toml");
     let err = runtime::Scene::build(&task, &task.sample(0))
         .err()
-        .expect("no thermal mixer model yet");
+        .expect("no model of the Eppendorf 5430 yet");
     assert!(err.to_string().contains("no simulation model yet"), "{err}");
 }

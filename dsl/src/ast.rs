@@ -62,6 +62,7 @@ pub struct Protocol {
     /// `[tolerances]`: name -> quantity as written (the compiler checks its dimension).
     pub tolerances: Vec<(Spanned<String>, Spanned<String>)>,
     /// `[camera]`: where the fixed camera stands, when not at the bench's default.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub camera: Option<Camera>,
 }
 

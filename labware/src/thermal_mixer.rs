@@ -238,9 +238,9 @@ impl Params {
             }
         }
         let small = |x| Cell { x, y: 72, scale: 2 };
-        c.text(small(42), 12, "min", DISPLAY_INK);
-        c.text(small(158), 12, "°C", DISPLAY_INK);
-        c.text(small(270), 12, "rpm", DISPLAY_INK);
+        c.text(small(44), 12, "min", DISPLAY_INK);
+        c.text(small(162), 12, "°C", DISPLAY_INK);
+        c.text(small(274), 12, "rpm", DISPLAY_INK);
     }
 }
 
