@@ -1,7 +1,7 @@
 # Two commands on a fresh machine: `make demo` and `make test`. Both run `make setup` first.
 CARGO ?= cargo
 
-.PHONY: setup build demo test bench clean
+.PHONY: setup build demo test bench tasks-doc clean
 
 setup:
 	./scripts/setup.sh
@@ -10,8 +10,8 @@ build: setup
 	$(CARGO) build --release
 
 # The main job: check every shipped protocol, then the scripted expert on both thermal-cycler
-# protocols, the close-then-open chain and the tube transfer (20 seeded episodes each) and on the
-# two-arm task (5): a results table, results JSON and one MCAP recording per episode under
+# protocols, the close-then-open chain, the tube transfer, the mini centrifuge's lid and the
+# thermal mixer's panel (20 seeded episodes each) and on the two-arm task (5): a results table, results JSON and one MCAP recording per episode under
 # out/demo/. Then a model server in the loop: the reference openpi server answering with those
 # recordings, through `eval --model` (scripts/demo-model.sh). Last, the no-motion control
 # (`--policy hold`), which must score 0 everywhere.
@@ -23,6 +23,8 @@ demo: build
 	  --protocol protocols/thermal_cycler/open_lid.toml \
 	  --protocol protocols/thermal_cycler/close_then_open.toml \
 	  --protocol protocols/tube/transfer.toml \
+	  --protocol protocols/centrifuge_mini/close_lid.toml \
+	  --protocol protocols/thermal_mixer/set_parameters.toml \
 	  --episodes 20 --seed 0 --out out/demo --record
 	$(CARGO) run --release --quiet -- eval \
 	  --protocol protocols/two_arm/close_lid_and_transfer.toml \
@@ -32,6 +34,7 @@ demo: build
 	  --protocol protocols/thermal_cycler/close_lid.toml \
 	  --protocol protocols/thermal_cycler/open_lid.toml \
 	  --protocol protocols/tube/transfer.toml \
+	  --protocol protocols/thermal_mixer/set_parameters.toml \
 	  --episodes 3 --seed 0
 
 test: setup
@@ -41,6 +44,11 @@ test: setup
 
 bench: build
 	$(CARGO) run --release --quiet -- bench
+
+# The task table: every shipped task under the expert and under hold on seeds 0-99
+# (about 15 minutes on 2 cores).
+tasks-doc: build
+	$(CARGO) run --release --quiet -- tasks protocols --episodes 100 --seed 0 --workers 2 --out docs/tasks.md
 
 clean:
 	rm -rf out

@@ -8,6 +8,7 @@ mod datasets;
 mod diagnostics;
 mod progress;
 mod replay;
+mod tasks_doc;
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
@@ -182,6 +183,24 @@ enum Command {
     /// Re-score a recording offline; re-simulate it from its recorded state (--simulate) or redraw
     /// its cameras at any size (--render)
     Replay(replay::ReplayArgs),
+    /// Measure every task under the folders (expert and hold on the same seeds) and write the task
+    /// table (docs/tasks.md)
+    Tasks {
+        /// Folders of protocol files
+        #[arg(default_values = ["protocols"])]
+        dirs: Vec<PathBuf>,
+        /// Episodes per task and policy
+        #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..))]
+        episodes: u32,
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Episodes run at once
+        #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=256))]
+        workers: u32,
+        /// Where to write the table (default: standard output)
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Measure throughput: physics steps/s (harness vs bare mj_step), rendered frames/s, expert episodes/min
     Bench {
         /// Task scenes to measure (repeatable)
@@ -510,6 +529,30 @@ fn run(cli: Cli) -> Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
         Command::Replay(args) => replay::run(&args),
+        Command::Tasks {
+            dirs,
+            episodes,
+            seed,
+            workers,
+            out,
+        } => {
+            let opts = tasks_doc::Options {
+                dirs,
+                episodes: episodes as usize,
+                seed,
+                workers: workers as usize,
+            };
+            let table = tasks_doc::table(&opts, |line| eprintln!("{line}"))?;
+            match out {
+                Some(path) => {
+                    std::fs::write(&path, table)
+                        .with_context(|| format!("writing {}", path.display()))?;
+                    outln!("wrote {}", path.display());
+                }
+                None => outln!("{table}"),
+            }
+            Ok(ExitCode::SUCCESS)
+        }
         Command::Bench { protocol, only } => {
             let tasks = protocol
                 .iter()

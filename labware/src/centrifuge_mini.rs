@@ -258,6 +258,7 @@ impl Instrument for Params {
         (name == "grip").then(|| Affordance {
             pose: self.grip_affordance(&s.pose, s.joint("lid")),
             symmetry: Symmetry::HalfTurn,
+            touch: false,
         })
     }
 }

@@ -10,6 +10,7 @@
 //! MuJoCo's API or robots: it produces text and plain numbers.
 
 pub mod catalogue;
+pub mod centrifuge;
 pub mod centrifuge_mini;
 pub mod display;
 pub mod frame;

@@ -118,6 +118,9 @@ pub enum Symmetry {
 pub struct Affordance {
     pub pose: Pose,
     pub symmetry: Symmetry,
+    /// A point the closed fingertips touch (a button pressed, a lid pushed), not a grasp: the TCP
+    /// stands off it by the robot's finger reach, which only the robot model knows.
+    pub touch: bool,
 }
 
 /// A display an instrument draws: the MuJoCo texture (declared in the model's fragment, 8-bit RGB)
@@ -247,13 +250,15 @@ pub trait Instrument {
     }
 }
 
-/// Whether an item with root pose `item` stands in a slot seated at `seat`: in-plane distance
-/// (value) within `xy`, height within `z` and tilt within `tilt` (rad).
+/// Whether an item with root pose `item` stands in a slot seated at `seat`: distance (value) from
+/// the seat in the seat's plane within `xy`, height along the seat's axis within `z` and tilt from
+/// the seat's axis within `tilt` (rad). A rack's seats are upright; a fixed-angle rotor's lean.
 pub fn seated(seat: &Pose, item: &Pose, xy: f64, z: f64, tilt: f64) -> Measure {
-    let d = item.translation.vector - seat.translation.vector;
+    let d = seat.rotation.inverse() * (item.translation.vector - seat.translation.vector);
     let planar = (d.x * d.x + d.y * d.y).sqrt();
+    let axis = seat.rotation * nalgebra::Vector3::z();
     let up = item.rotation * nalgebra::Vector3::z();
-    let tilted = up.z.clamp(-1.0, 1.0).acos();
+    let tilted = up.dot(&axis).clamp(-1.0, 1.0).acos();
     Measure {
         value: planar,
         target: 0.0,

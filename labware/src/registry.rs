@@ -4,7 +4,7 @@
 //! self-contained); "has a simulation model" is [`Model::for_kind`] returning one.
 
 use crate::model::Instrument;
-use crate::{centrifuge_mini, rack, thermal_cycler, thermal_mixer, tube};
+use crate::{centrifuge, centrifuge_mini, rack, thermal_cycler, thermal_mixer, tube};
 use serde::{Deserialize, Serialize};
 
 macro_rules! registry {
@@ -45,6 +45,10 @@ macro_rules! registry {
 registry! {
     ThermalCycler(thermal_cycler::Params) { "thermal_cycler" => thermal_cycler::Params::default() },
     CentrifugeMini(centrifuge_mini::Params) { "centrifuge_mini" => centrifuge_mini::Params::default() },
+    Centrifuge(centrifuge::Params) {
+        "centrifuge_5430" => centrifuge::Params::eppendorf_5430(),
+        "centrifuge_5910" => centrifuge::Params::eppendorf_5910(),
+    },
     ThermalMixer(thermal_mixer::Params) { "thermal_mixer" => thermal_mixer::Params::default() },
     Rack(rack::Params) {
         "tube_rack" => rack::Params::tube_rack(),
@@ -70,7 +74,7 @@ mod tests {
             .map(|k| k.name)
             .collect();
         assert!(simulated.contains(&"thermal_cycler") && simulated.contains(&"tube_50ml"));
-        assert!(!simulated.contains(&"centrifuge_5430"));
+        assert!(!simulated.contains(&"vortex_mixer"));
         for k in simulated {
             let m = Model::for_kind(k).unwrap();
             let back: Model = serde_json::from_value(serde_json::to_value(&m).unwrap()).unwrap();

@@ -370,6 +370,7 @@ impl Instrument for Params {
         (name == "grip").then(|| Affordance {
             pose: self.grip_affordance(&s.pose, s.joint("lid"), s.joint("lever")),
             symmetry: Symmetry::HalfTurn,
+            touch: false,
         })
     }
 }

@@ -93,8 +93,8 @@ impl Default for Params {
             display_px: [360, 96],
             up_y: -0.044,
             down_y: -0.02,
-            button_radius: 0.0055,
-            button_height: 0.003,
+            button_radius: 0.009,
+            button_height: 0.004,
             button_travel: 0.003,
             button_stiffness: 250.0,
             button_damping: 0.5,
@@ -507,6 +507,7 @@ impl Instrument for Params {
         Some(Affordance {
             pose: s.pose * self.panel().frame * top * pose([0.0; 3], tool),
             symmetry: Symmetry::HalfTurn,
+            touch: true,
         })
     }
 

@@ -288,6 +288,7 @@ impl Instrument for Params {
         Some(Affordance {
             pose: cap * mid * crate::frame::pose([0.0; 3], down),
             symmetry: Symmetry::Axial,
+            touch: false,
         })
     }
 

@@ -223,7 +223,7 @@ impl StepFrame {
                 goals,
             } => {
                 let s = lab.at_goals(labware, goals)?;
-                Ok(lab.affordance(labware, name, &s)?.pose * self.turn)
+                Ok(self.tool_at(&lab.affordance(labware, name, &s)?))
             }
             Target::Seat { location, above } => {
                 let (item, item_in_tool) =
@@ -241,7 +241,18 @@ impl StepFrame {
                 labware,
                 param,
                 value,
-            } => Ok(lab.button(labware, param, value)?.pose * self.turn),
+            } => Ok(self.tool_at(&lab.button(labware, param, value)?)),
+        }
+    }
+
+    /// The TCP pose for an affordance: the chosen symmetric turn, and for a touch, standing off
+    /// so that the closed fingertips are at the point.
+    fn tool_at(&self, a: &Affordance) -> Pose {
+        let pose = a.pose * self.turn;
+        if a.touch {
+            translated_local(&pose, [0.0, 0.0, -self.finger_reach])
+        } else {
+            pose
         }
     }
 
@@ -283,7 +294,7 @@ impl StepFrame {
                         })
                         .collect();
                     let s = live.with_joints(&joints);
-                    out.push(lab.affordance(labware, affordance, &s)?.pose * self.turn);
+                    out.push(self.tool_at(&lab.affordance(labware, affordance, &s)?));
                 }
                 out
             }
@@ -297,11 +308,7 @@ impl StepFrame {
             ),
             Motion::Press { target, depth } => {
                 let at = self.target(target, lab)?;
-                line(
-                    tcp_now,
-                    &translated_local(&at, [0.0, 0.0, depth - self.finger_reach]),
-                    6,
-                )
+                line(tcp_now, &translated_local(&at, [0.0, 0.0, *depth]), 6)
             }
             Motion::Grasp | Motion::Release | Motion::HoldUntil { .. } => Vec::new(),
         })

@@ -32,8 +32,8 @@ pub struct Gripper {
     pub closed: f64,
     /// How long a grasp or release takes to settle (s).
     pub settle_s: f64,
-    /// How far the closed fingertips reach past the TCP along the tool axis (m): where a press
-    /// with the closed gripper as a finger touches.
+    /// How far the closed fingers reach past the TCP along the tool axis (m; negative: they stop
+    /// short of it): where a press or push with the closed gripper as a finger touches.
     pub finger_reach: f64,
 }
 

@@ -39,7 +39,9 @@ pub const MODEL: RobotModel = RobotModel {
         open: 0.0,
         closed: 255.0,
         settle_s: 0.6,
-        finger_reach: 0.02,
+        // Measured from MuJoCo's contact points: closed, the 2F-85's pads meet a button or a lid
+        // pushed along the tool axis 17.5 to 17.8 mm past the pinch point.
+        finger_reach: 0.0175,
     },
     tcp_site: "tcp",
     wrist_camera: "wrist_cam",

@@ -41,7 +41,7 @@ fn motions(step: &MotionStep) -> Vec<Motion> {
         },
         Motion::Press {
             target: button,
-            depth: 0.0045,
+            depth: 0.0027,
         },
         Motion::HoldUntil {
             labware: step.arg("on"),

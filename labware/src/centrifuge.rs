@@ -1,0 +1,600 @@
+//! Lidded centrifuges with a latch (Eppendorf 5430 and 5910 Ri proportions and lid dynamics,
+//! `../shared/reference/upstream-autobio.md` §5.3 and §11), one parametric model: a grey body
+//! with a sloped front control panel (display, start and stop keys), a heavy lid on a hinge along
+//! the back of its top, sprung towards open and heavily damped, with a grip bar on posts near its
+//! front edge and a window over the rotor. The 5430 has a fixed-angle rotor with 30 tube slots
+//! (its seats are what a tube is judged against), the 5910 a swing-bucket rotor. The latch is
+//! one-way: once the lid is within `latch_catch` of shut it locks (an equality holds it), and
+//! nothing unlocks it (upstream's logic).
+//!
+//! Frame of the instrument: origin at the centre of the footprint, +y the front (the panel's
+//! side), +z up. Joint conventions: lid 0 = open, `lid_closed` (negative) = closed; rotor angle
+//! about +z.
+
+use crate::frame::{Pose, Rot, Vec3, axis_angle, pose, translation, x_turn};
+use crate::mjcf::{Fragment, box_inertia, pose_attrs, rgba, v3};
+use crate::model::{Affordance, Instrument, LabwareState, Logic, Measure, Reset, Symmetry, set};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// What turns under the lid.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Rotor {
+    /// A disc with `slots` tube slots evenly around it: slot mouths at `radius` from the axis,
+    /// tilted `tilt` from vertical (tube tops toward the axis), a tube's base `depth` down the
+    /// slot from its mouth.
+    FixedAngle {
+        slots: u32,
+        radius: f64,
+        tilt: f64,
+        depth: f64,
+        disc_radius: f64,
+    },
+    /// Two crossed arms with a bucket at each end, `arm_radius` from the axis.
+    SwingBucket { arm_radius: f64, bucket_radius: f64 },
+}
+
+/// Every dimension of the instrument (metres, radians, kilograms, SI gains).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Params {
+    /// Half extents of the body below the lid.
+    pub base_half: Vec3,
+    /// Lid hinge (axis +x through it): y and z, on the back edge of the body's top.
+    pub hinge: [f64; 2],
+    /// Lid extent from the hinge to its front edge, half width, half thickness, mass, damping.
+    pub lid_depth: f64,
+    pub lid_half_width: f64,
+    pub lid_half_thickness: f64,
+    pub lid_mass: f64,
+    pub lid_damping: f64,
+    /// Spring towards open (N·m/rad).
+    pub lid_stiffness: f64,
+    pub lid_open: f64,
+    pub lid_closed: f64,
+    /// The latch catches the lid within this of closed (rad).
+    pub latch_catch: f64,
+    /// The grip bar near the lid's front edge, standing on two posts: its centre's distance in
+    /// from the edge and up from the lid's top, radius, half length.
+    pub bar_inset: f64,
+    pub bar_height: f64,
+    pub grip_radius: f64,
+    pub grip_half_length: f64,
+    /// The rotor: its axis (x, y), the height of its top, the bowl around it, and its kind.
+    pub rotor_axis: [f64; 2],
+    pub rotor_top: f64,
+    pub bowl_radius: f64,
+    pub rotor: Rotor,
+    /// Where the expert pushes the lid: across from the centre line, and a fraction of its depth
+    /// from the hinge.
+    pub push_x: f64,
+    pub push_at: f64,
+    /// Named tolerances of the success predicates (rad).
+    pub closed_tolerance: f64,
+    pub open_tolerance: f64,
+}
+
+impl Params {
+    /// The Eppendorf 5430: 0.341 x 0.432 x 0.221 m body, 2.95 kg lid over 99°, 30-slot rotor.
+    pub fn eppendorf_5430() -> Params {
+        Params {
+            base_half: [0.1705, 0.216, 0.1105],
+            hinge: [-0.198, 0.221],
+            lid_depth: 0.352,
+            lid_half_width: 0.17,
+            lid_half_thickness: 0.0135,
+            lid_mass: 2.95,
+            lid_damping: 20.0,
+            lid_stiffness: 3.2,
+            lid_open: 0.0,
+            lid_closed: -1.723,
+            latch_catch: 0.01,
+            bar_inset: 0.025,
+            bar_height: 0.028,
+            grip_radius: 0.011,
+            grip_half_length: 0.07,
+            rotor_axis: [0.0, 0.036],
+            rotor_top: 0.213,
+            bowl_radius: 0.108,
+            rotor: Rotor::FixedAngle {
+                slots: 30,
+                radius: 0.0749,
+                tilt: 50.4f64.to_radians(),
+                depth: 0.03,
+                disc_radius: 0.095,
+            },
+            push_x: 0.12,
+            push_at: 0.62,
+            closed_tolerance: 0.01,
+            open_tolerance: 0.01,
+        }
+    }
+
+    /// The Eppendorf 5910 Ri: 0.726 x 0.698 x 0.311 m body, 17.5 kg lid over 111°, swing-bucket
+    /// rotor.
+    pub fn eppendorf_5910() -> Params {
+        Params {
+            base_half: [0.363, 0.349, 0.1555],
+            hinge: [-0.29, 0.311],
+            lid_depth: 0.59,
+            lid_half_width: 0.36,
+            lid_half_thickness: 0.021,
+            lid_mass: 17.5,
+            lid_damping: 20.0,
+            lid_stiffness: 27.5,
+            lid_open: 0.0,
+            lid_closed: -1.94,
+            latch_catch: 0.01,
+            bar_inset: 0.03,
+            bar_height: 0.028,
+            grip_radius: 0.012,
+            grip_half_length: 0.12,
+            rotor_axis: [0.0, 0.01],
+            rotor_top: 0.29,
+            bowl_radius: 0.27,
+            rotor: Rotor::SwingBucket {
+                arm_radius: 0.157,
+                bucket_radius: 0.045,
+            },
+            push_x: 0.2,
+            push_at: 0.45,
+            closed_tolerance: 0.01,
+            open_tolerance: 0.01,
+        }
+    }
+
+    fn hinge_point(&self) -> Vec3 {
+        [0.0, self.hinge[0], self.hinge[1]]
+    }
+
+    /// Orientation of the lid body at joint angle 0: the closed geometry turned open about +x.
+    fn lid_rest(&self) -> Rot {
+        x_turn(self.lid_open - self.lid_closed)
+    }
+
+    /// The lid's frame at a lid angle (at the hinge; x along it, y towards the front edge, z the
+    /// lid's outward normal), in the frame `placement` is given in.
+    fn lid_frame(&self, placement: &Pose, lid: f64) -> Pose {
+        placement * pose(self.hinge_point(), self.lid_rest() * x_turn(lid))
+    }
+
+    /// The grip bar's centre for a lid angle, in the frame `placement` is given in.
+    pub fn bar_pose(&self, placement: &Pose, lid: f64) -> Pose {
+        self.lid_frame(placement, lid) * translation(self.bar_centre())
+    }
+
+    /// The bar's centre in the lid's frame.
+    fn bar_centre(&self) -> Vec3 {
+        [
+            0.0,
+            self.lid_depth - self.bar_inset,
+            2.0 * self.lid_half_thickness + self.bar_height,
+        ]
+    }
+
+    /// The rotor's frame at rotor angle `rotor`: on its axis at its top, z up.
+    fn rotor_frame(&self, rotor: f64) -> Pose {
+        let [x, y] = self.rotor_axis;
+        pose([x, y, self.rotor_top], axis_angle([0.0, 0.0, 1.0], rotor))
+    }
+
+    /// The number of tube slots (0 for a swing-bucket rotor).
+    pub fn slots(&self) -> u32 {
+        match self.rotor {
+            Rotor::FixedAngle { slots, .. } => slots,
+            Rotor::SwingBucket { .. } => 0,
+        }
+    }
+
+    /// A tube's base frame in slot `k` (1-based, evenly spaced) of the rotor's frame: down the
+    /// slot from its mouth, z along the slot towards the axis and up.
+    fn slot_in_rotor(&self, k: u32) -> Option<Pose> {
+        let Rotor::FixedAngle {
+            slots,
+            radius,
+            tilt,
+            depth,
+            ..
+        } = self.rotor
+        else {
+            return None;
+        };
+        let a = f64::from(k - 1) * std::f64::consts::TAU / f64::from(slots);
+        Some(
+            pose([0.0; 3], axis_angle([0.0, 0.0, 1.0], a))
+                * translation([radius, 0.0, 0.0])
+                * pose([0.0; 3], axis_angle([0.0, 1.0, 0.0], -tilt))
+                * translation([0.0, 0.0, -depth]),
+        )
+    }
+
+    pub fn lid_is_closed(&self, lid: f64) -> bool {
+        (lid - self.lid_closed).abs() < self.closed_tolerance
+    }
+
+    /// Where the hand pushes the lid shut: on its outer face, `push_x` off the centre line,
+    /// `push_at` of the way from the hinge to the front edge (clear of the grip bar), the tool
+    /// pointing into the lid (a touch: the closed fingertips go there). The frame turns with the lid, so following it while the lid closes pushes the lid
+    /// shut; the damper keeps the lid against the fingers. (Held by its bar instead, the 5430's
+    /// open lid is out of the arm's reach for a third of the arm's start poses.)
+    fn push_affordance(&self, placement: &Pose, lid: f64) -> Pose {
+        let at = [
+            self.push_x,
+            self.lid_depth * self.push_at,
+            2.0 * self.lid_half_thickness,
+        ];
+        let tool = crate::frame::from_axes([1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]);
+        self.lid_frame(placement, lid) * pose(at, tool)
+    }
+
+    /// The rotor's visual geoms, in the rotor body's frame.
+    fn rotor_geoms(&self, base: &str) -> String {
+        let geom = |name: &str, kind: &str, size: String, at: &Pose, colour: [f64; 4]| {
+            format!(
+                "    <geom name=\"{base}/{name}\" type=\"{kind}\" size=\"{size}\" {} rgba=\"{}\" contype=\"0\" conaffinity=\"0\"/>\n",
+                pose_attrs(at),
+                rgba(colour)
+            )
+        };
+        let metal = [0.62, 0.64, 0.66, 1.0];
+        let dark = [0.1, 0.1, 0.12, 1.0];
+        match self.rotor {
+            Rotor::FixedAngle {
+                slots,
+                depth,
+                disc_radius,
+                ..
+            } => {
+                let mut g = geom(
+                    "rotor_disc",
+                    "cylinder",
+                    format!("{disc_radius} 0.003"),
+                    &translation([0.0, 0.0, -0.004]),
+                    metal,
+                );
+                for k in 1..=slots {
+                    let mouth = self.slot_in_rotor(k).expect("fixed-angle slots")
+                        * translation([0.0, 0.0, depth]);
+                    g += &geom(
+                        &format!("hole{k}"),
+                        "cylinder",
+                        "0.0055 0.002".into(),
+                        &mouth,
+                        dark,
+                    );
+                }
+                g
+            }
+            Rotor::SwingBucket {
+                arm_radius,
+                bucket_radius,
+            } => {
+                let mut g = geom(
+                    "rotor_hub",
+                    "cylinder",
+                    "0.035 0.02".into(),
+                    &translation([0.0, 0.0, -0.02]),
+                    metal,
+                );
+                for (i, turn) in [0.0, std::f64::consts::FRAC_PI_2].iter().enumerate() {
+                    let arm = pose([0.0, 0.0, -0.015], axis_angle([0.0, 0.0, 1.0], *turn));
+                    g += &geom(
+                        &format!("rotor_arm{i}"),
+                        "box",
+                        format!("{} 0.008 0.012", arm_radius),
+                        &arm,
+                        metal,
+                    );
+                }
+                for k in 0..4 {
+                    let a = f64::from(k) * std::f64::consts::FRAC_PI_2;
+                    let at = translation([arm_radius * a.cos(), arm_radius * a.sin(), -0.03]);
+                    g += &geom(
+                        &format!("bucket{k}"),
+                        "cylinder",
+                        format!("{bucket_radius} 0.03"),
+                        &at,
+                        [0.45, 0.47, 0.5, 1.0],
+                    );
+                }
+                g
+            }
+        }
+    }
+}
+
+struct Names {
+    base: String,
+    lid_body: String,
+    lid_joint: String,
+    grip_site: String,
+    lock: String,
+}
+
+impl Names {
+    fn new(prefix: &str) -> Names {
+        Names {
+            base: format!("{prefix}/base"),
+            lid_body: format!("{prefix}/lid"),
+            lid_joint: format!("{prefix}/lid_hinge"),
+            grip_site: format!("{prefix}/grip"),
+            lock: format!("{prefix}/lid_lock"),
+        }
+    }
+}
+
+impl Instrument for Params {
+    fn fragment(&self, name: &str, placement: &Pose) -> Fragment {
+        let n = Names::new(name);
+        let b = self.base_half;
+        let top = 2.0 * b[2];
+        let lid_half = [
+            self.lid_half_width,
+            self.lid_depth / 2.0,
+            self.lid_half_thickness,
+        ];
+        let lid_c = [0.0, self.lid_depth / 2.0, self.lid_half_thickness];
+        let bar_c = self.bar_centre();
+        let (lo, hi) = (
+            self.lid_closed.min(self.lid_open),
+            self.lid_closed.max(self.lid_open),
+        );
+        let rotor = format!(
+            "  <body name=\"{base}/rotor\" {frame}>\n    <joint name=\"{base}/rotor_hinge\" type=\"hinge\" axis=\"0 0 1\" damping=\"0.0001\"/>\n    <inertial pos=\"0 0 -0.02\" mass=\"0.59\" diaginertia=\"0.0017 0.0017 0.0033\"/>\n{geoms}  </body>\n",
+            base = n.base,
+            frame = pose_attrs(&self.rotor_frame(0.0)),
+            geoms = self.rotor_geoms(&n.base),
+        );
+        // The control panel: a dark plate sloped back 30° along the front of the top, with a
+        // display and start (green) and stop (red) keys, sized to the body.
+        let slope = pose(
+            [0.0, b[1] - 0.02, top - 0.035],
+            x_turn(-std::f64::consts::FRAC_PI_6),
+        );
+        let on_panel = |x: f64, z: f64| {
+            slope
+                * pose([x, 0.0, 0.0], x_turn(-std::f64::consts::FRAC_PI_2))
+                * translation([0.0, z, 0.0122])
+        };
+        let (pw, ph) = (0.45 * b[0], 0.03);
+        let panel = format!(
+            r#"  <geom name="{base}/panel" type="box" size="{pw} 0.012 {ph}" {at} rgba="0.2 0.22 0.25 1" contype="0" conaffinity="0"/>
+  <geom name="{base}/display" type="box" size="{dw} 0.012 0.0005" {dat} rgba="0.35 0.75 0.9 1" contype="0" conaffinity="0"/>
+  <geom name="{base}/start" type="box" size="0.012 0.008 0.0005" {sat} rgba="0.2 0.65 0.3 1" contype="0" conaffinity="0"/>
+  <geom name="{base}/stop" type="box" size="0.012 0.008 0.0005" {tat} rgba="0.8 0.2 0.2 1" contype="0" conaffinity="0"/>
+"#,
+            base = n.base,
+            at = pose_attrs(&slope),
+            dw = 0.4 * pw,
+            dat = pose_attrs(&on_panel(-0.4 * pw, 0.0)),
+            sat = pose_attrs(&on_panel(0.35 * pw, 0.0)),
+            tat = pose_attrs(&on_panel(0.7 * pw, 0.0)),
+        );
+        let [rx, ry] = self.rotor_axis;
+        let worldbody = format!(
+            r#"<body name="{base}" {placement}>
+  <geom name="{base}/body" type="box" size="{bh}" pos="0 0 {bz}" rgba="0.78 0.80 0.82 1"/>
+  <geom name="{base}/bowl" type="cylinder" size="{bowl} 0.004" pos="{rx} {ry} {bowlz}" rgba="0.3 0.31 0.33 1" contype="0" conaffinity="0"/>
+{rotor}{panel}  <geom name="{base}/stripe" type="box" size="{sx} 0.001 0.006" pos="0 {sy} {stz}" rgba="0.15 0.3 0.6 1" contype="0" conaffinity="0"/>
+  <body name="{lid}" {lidframe}>
+    <joint name="{lidj}" type="hinge" axis="1 0 0" range="{lo} {hi}" damping="{lidd}" stiffness="{lidk}" springref="{open}" solreflimit="0.004 1" solimplimit="0.95 0.99 0.0005"/>
+    <inertial pos="{lidc}" mass="{lidm}" diaginertia="{lidi}"/>
+    <geom name="{lid}/shell" type="box" size="{lidh}" pos="{lidc}" rgba="0.84 0.85 0.87 1"/>
+    <geom name="{lid}/window" type="cylinder" size="{win} 0.001" pos="{rx} {winy} {winz}" rgba="0.15 0.2 0.28 0.85" contype="0" conaffinity="0"/>
+    <geom name="{lid}/label" type="box" size="{labw} 0.012 0.001" pos="0 {laby} {winz}" rgba="0.15 0.3 0.6 1" contype="0" conaffinity="0"/>
+    <geom name="{lid}/post_l" type="cylinder" size="0.007 {posth}" pos="{postx} {posty} {postz}" rgba="0.3 0.31 0.33 1"/>
+    <geom name="{lid}/post_r" type="cylinder" size="0.007 {posth}" pos="-{postx} {posty} {postz}" rgba="0.3 0.31 0.33 1"/>
+    <geom name="{lid}/bar" type="capsule" size="{gr} {gl}" pos="{barc}" quat="0.7071068 0 0.7071068 0" friction="1.5 0.01 0.001" rgba="0.3 0.31 0.33 1"/>
+    <site name="{grip}" pos="{barc}" size="0.005" rgba="1 0.2 0.2 0.5" group="4"/>
+  </body>
+</body>
+"#,
+            base = n.base,
+            placement = pose_attrs(placement),
+            bh = v3(b),
+            bz = b[2],
+            bowl = self.bowl_radius,
+            bowlz = top - 0.001,
+            sx = b[0] - 0.01,
+            sy = b[1] + 0.001,
+            stz = 0.03,
+            lid = n.lid_body,
+            lidframe = pose_attrs(&pose(self.hinge_point(), self.lid_rest())),
+            lidj = n.lid_joint,
+            lidd = self.lid_damping,
+            lidk = self.lid_stiffness,
+            open = self.lid_open,
+            lidc = v3(lid_c),
+            lidm = self.lid_mass,
+            lidi = v3(box_inertia(self.lid_mass, lid_half)),
+            lidh = v3(lid_half),
+            win = 0.65 * self.bowl_radius,
+            winy = ry - self.hinge[0],
+            winz = 2.0 * self.lid_half_thickness + 0.001,
+            labw = 0.3 * self.lid_half_width,
+            laby = self.lid_depth * 0.85,
+            posth = self.bar_height / 2.0,
+            postx = self.grip_half_length - 0.005,
+            posty = bar_c[1],
+            postz = 2.0 * self.lid_half_thickness + self.bar_height / 2.0,
+            gr = self.grip_radius,
+            gl = self.grip_half_length,
+            barc = v3(bar_c),
+            grip = n.grip_site,
+        );
+        let equality = format!(
+            r#"<joint name="{lock}" joint1="{lidj}" polycoef="{closed} 0 0 0 0" active="false" solref="0.01 1"/>
+"#,
+            lock = n.lock,
+            lidj = n.lid_joint,
+            closed = self.lid_closed,
+        );
+        let contact = format!("<exclude body1=\"{}\" body2=\"{}\"/>\n", n.base, n.lid_body);
+        Fragment {
+            asset: String::new(),
+            worldbody,
+            equality,
+            contact,
+        }
+    }
+
+    fn joints(&self, name: &str) -> Vec<(&'static str, String)> {
+        vec![
+            ("lid", Names::new(name).lid_joint),
+            ("rotor", format!("{name}/base/rotor_hinge")),
+        ]
+    }
+
+    fn slot_seat(&self, slot: &str, s: &LabwareState) -> Option<Pose> {
+        let k: u32 = slot
+            .parse()
+            .ok()
+            .filter(|k| (1..=self.slots()).contains(k))?;
+        let rotor = s.joints.get("rotor").copied().unwrap_or(0.0);
+        Some(s.pose * self.rotor_frame(rotor) * self.slot_in_rotor(k)?)
+    }
+
+    fn switches(&self, name: &str) -> Vec<(&'static str, String)> {
+        vec![("lock", Names::new(name).lock)]
+    }
+
+    fn reset(&self, initial: &BTreeMap<String, String>) -> Reset {
+        let state = initial.get("lid").map(String::as_str).unwrap_or("open");
+        let lid = if state == "open" {
+            self.lid_open
+        } else {
+            self.lid_closed
+        };
+        let mut logic = Logic::new();
+        set(&mut logic, "locked", f64::from(u8::from(state == "locked")));
+        Reset {
+            joints: vec![("lid", lid)],
+            logic,
+        }
+    }
+
+    /// The one-way latch: it catches a lid within `latch_catch` of shut and holds it.
+    fn step(
+        &self,
+        _dt: f64,
+        joints: &BTreeMap<String, f64>,
+        logic: &mut Logic,
+        switches: &mut Vec<(&'static str, bool)>,
+    ) {
+        let lid = joints.get("lid").copied().unwrap_or(self.lid_open);
+        let locked = logic.get("locked").is_some_and(|v| *v != 0.0)
+            || lid <= self.lid_closed + self.latch_catch;
+        set(logic, "locked", f64::from(u8::from(locked)));
+        switches.push(("lock", locked));
+    }
+
+    fn joint_goal(&self, role: &str, goal: &str) -> Option<f64> {
+        match (role, goal) {
+            ("lid", "open") => Some(self.lid_open),
+            // Pressed a little past the stop, so that the latch catches it against the spring.
+            ("lid", "closed") => Some(self.lid_closed - 0.03),
+            _ => None,
+        }
+    }
+
+    fn measure(
+        &self,
+        part: &str,
+        state: &str,
+        tolerance: Option<f64>,
+        s: &LabwareState,
+    ) -> Option<Measure> {
+        if part != "lid" {
+            return None;
+        }
+        let lid = s.joint("lid");
+        let locked = s.flag("locked");
+        let (target, extra, default) = match state {
+            "closed" => (self.lid_closed, true, self.closed_tolerance),
+            "locked" => (self.lid_closed, locked, self.closed_tolerance),
+            "open" => (self.lid_open, true, self.open_tolerance),
+            "unlocked" => (self.lid_open, !locked, self.open_tolerance),
+            _ => return None,
+        };
+        let tolerance = tolerance.unwrap_or(default);
+        Some(Measure {
+            value: lid,
+            target,
+            tolerance,
+            holds: (lid - target).abs() <= tolerance && extra,
+        })
+    }
+
+    fn readout(&self, s: &LabwareState) -> BTreeMap<String, String> {
+        let state = if s.flag("locked") {
+            "locked"
+        } else if self.lid_is_closed(s.joint("lid")) {
+            "closed"
+        } else {
+            "open"
+        };
+        BTreeMap::from([("lid".to_string(), state.to_string())])
+    }
+
+    fn affordance(&self, name: &str, s: &LabwareState) -> Option<Affordance> {
+        // The lid primitives take a lid at its `grip`: this lid is pushed shut, not held.
+        (name == "grip").then(|| Affordance {
+            pose: self.push_affordance(&s.pose, s.joint("lid")),
+            symmetry: Symmetry::HalfTurn,
+            touch: true,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn state(lid: f64, locked: bool) -> LabwareState {
+        let mut logic = Logic::new();
+        set(&mut logic, "locked", f64::from(u8::from(locked)));
+        LabwareState {
+            name: "c".into(),
+            pose: Pose::identity(),
+            joints: BTreeMap::from([("lid".to_string(), lid)]),
+            parts: BTreeMap::new(),
+            logic,
+            touched_by: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn the_latch_catches_a_shut_lid_and_never_lets_go() {
+        let p = Params::eppendorf_5430();
+        let mut logic = p.reset(&BTreeMap::new()).logic;
+        let mut run = |lid: f64| {
+            let mut sw = Vec::new();
+            p.step(
+                0.002,
+                &BTreeMap::from([("lid".to_string(), lid)]),
+                &mut logic,
+                &mut sw,
+            );
+            sw[0].1
+        };
+        assert!(!run(p.lid_open));
+        assert!(!run(p.lid_closed + 0.05));
+        assert!(run(p.lid_closed + 0.005));
+        assert!(run(p.lid_open), "a one-way latch");
+    }
+
+    #[test]
+    fn locked_needs_the_latch_and_the_lid_shut() {
+        let p = Params::eppendorf_5430();
+        let holds = |lid, locked, what| {
+            p.measure("lid", what, None, &state(lid, locked))
+                .unwrap()
+                .holds
+        };
+        assert!(holds(p.lid_closed, true, "locked"));
+        assert!(!holds(p.lid_closed, false, "locked"));
+        assert!(holds(p.lid_closed, false, "closed"));
+        assert!(!holds(p.lid_closed + 0.05, false, "closed"));
+        assert!(holds(p.lid_open, false, "open"));
+        assert_eq!(p.readout(&state(p.lid_closed, true))["lid"], "locked");
+    }
+}
