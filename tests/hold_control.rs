@@ -69,6 +69,9 @@ fn every_simulated_task_scores_zero_without_motion() {
     assert_eq!(
         simulated,
         [
+            "centrifuge.insert_symmetric",
+            "centrifuge_5430.close_lid",
+            "centrifuge_5910.close_lid",
             "centrifuge_mini.close_lid",
             "centrifuge_mini.open_lid",
             "thermal_cycler.close_lid",

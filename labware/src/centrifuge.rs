@@ -597,4 +597,34 @@ mod tests {
         assert!(holds(p.lid_open, false, "open"));
         assert_eq!(p.readout(&state(p.lid_closed, true))["lid"], "locked");
     }
+
+    #[test]
+    fn the_rotor_seats_thirty_tilted_slots_in_opposite_pairs() {
+        let p = Params::eppendorf_5430();
+        let s = state(p.lid_open, false);
+        let seat = |k: u32| p.slot_seat(&k.to_string(), &s).unwrap();
+        let [ax, ay] = p.rotor_axis;
+        for k in 1..=30 {
+            let a = seat(k);
+            // Leaning 50.4 degrees from vertical, its top towards the axis.
+            let z = a.rotation * nalgebra::Vector3::z();
+            assert!((z.z.acos() - 50.4f64.to_radians()).abs() < 1e-9);
+            let out = nalgebra::Vector3::new(a.translation.x - ax, a.translation.y - ay, 0.0);
+            assert!(z.dot(&out) < 0.0, "slot {k} leans outwards");
+            // The slot across the rotor mirrors it through the axis.
+            let b = seat((k + 14) % 30 + 1);
+            assert!((a.translation.x + b.translation.x - 2.0 * ax).abs() < 1e-9);
+            assert!((a.translation.y + b.translation.y - 2.0 * ay).abs() < 1e-9);
+        }
+        // 12 degrees apart, turning with the rotor.
+        let (a, b) = (seat(1).translation.vector, seat(2).translation.vector);
+        let (ra, rb) = ((a.x - ax).atan2(a.y - ay), (b.x - ax).atan2(b.y - ay));
+        assert!(((ra - rb).abs() - 12f64.to_radians()).abs() < 1e-9);
+        let turned = s.with_joints(&[("rotor".into(), 0.3)]);
+        let c = p.slot_seat("1", &turned).unwrap().translation.vector;
+        assert!((c - a).norm() > 0.01);
+        assert!(p.slot_seat("31", &s).is_none() && p.slot_seat("0", &s).is_none());
+        // The swing-bucket 5910 has no tube slots.
+        assert!(Params::eppendorf_5910().slot_seat("1", &s).is_none());
+    }
 }

@@ -1,0 +1,151 @@
+//! The latched centrifuges' lid tasks (issue 9): the expert pushes the 5430's and the 5910's lids
+//! shut until the latch catches, and `hold` scores nothing; "locked" fails a lid left a little
+//! open or shut without the latch; a latched lid stays shut against its spring; the fixed camera
+//! sees each centrifuge, and an open and a latched lid give different frames.
+
+mod common;
+
+use common::{compile, run, scene, spread};
+use runtime::render::Cameras;
+use scoring::Judge;
+
+const C5430: &str = "protocols/centrifuge_5430/close_lid.toml";
+const C5910: &str = "protocols/centrifuge_5910/close_lid.toml";
+
+#[test]
+fn the_expert_latches_both_lids_and_hold_scores_nothing() {
+    for (path, seed) in [(C5430, 31), (C5430, 32), (C5910, 33), (C5910, 34)] {
+        let task = compile(path);
+        let r = run(&task, seed, "expert");
+        assert!(
+            r.success,
+            "{path} seed {seed}: {:?} {:#?}",
+            r.error, r.verdict
+        );
+        let hold = run(&task, seed, "hold");
+        assert!(
+            !hold.success && hold.verdict.score == 0.0,
+            "{path}: {:#?}",
+            hold.verdict
+        );
+    }
+}
+
+/// The close task's verdict on its first state with the lid at `lid` (rad) and the latch as given.
+fn judged(path: &str, lid: f64, locked: bool) -> (bool, Vec<bool>) {
+    let task = compile(path);
+    let (instance, scene) = scene(&task, 0);
+    let ep = runtime::Episode::new(scene, &task, &instance);
+    let start = ep.labware_state();
+    let mut now = start.clone();
+    now[0].joints.insert("lid".into(), lid);
+    now[0]
+        .logic
+        .insert("locked".into(), f64::from(u8::from(locked)));
+    let mut judge = Judge::new(&task, &instance.params, &start);
+    judge.update(0.02, &now);
+    let v = judge.verdict();
+    (v.success, v.predicates().iter().map(|p| p.holds).collect())
+}
+
+#[test]
+fn locked_needs_the_lid_shut_and_the_latch_engaged() {
+    for (path, closed) in [(C5430, -1.723), (C5910, -1.94)] {
+        assert_eq!(
+            judged(path, closed, true),
+            (true, vec![true, true]),
+            "{path}"
+        );
+        // Shut but not latched: closed holds, locked does not.
+        assert_eq!(
+            judged(path, closed, false),
+            (false, vec![true, false]),
+            "{path}"
+        );
+        // A little open, latch flag or not: neither holds.
+        assert_eq!(
+            judged(path, closed + 0.05, true),
+            (false, vec![false, false]),
+            "{path}"
+        );
+        assert_eq!(
+            judged(path, 0.0, false),
+            (false, vec![false, false]),
+            "{path}"
+        );
+    }
+}
+
+/// An episode of the close task with the lid put at `lid` (rad) and the latch flag as given
+/// (the logic switches the latch's equality from it at the next step).
+fn episode_with_lid(path: &str, lid: f64, locked: bool) -> (runtime::Episode, compiler::Task) {
+    let task = compile(path);
+    let (instance, scene) = scene(&task, 0);
+    let mut ep = runtime::Episode::new(scene.clone(), &task, &instance);
+    let (_, adr) = scene.labware[0]
+        .joints
+        .iter()
+        .find(|(r, _)| *r == "lid")
+        .copied()
+        .unwrap();
+    ep.data.qpos_mut()[adr] = lid;
+    let state = ep.physics_state();
+    let mut logic = ep.logic().to_vec();
+    logic[0].insert("locked".into(), f64::from(u8::from(locked)));
+    ep.restore(&state, logic).unwrap();
+    ep.data.forward();
+    (ep, task)
+}
+
+#[test]
+fn a_latched_lid_stays_shut_and_an_unlatched_one_springs_open() {
+    for (path, closed) in [(C5430, -1.723), (C5910, -1.94)] {
+        // The lid after 2 s of a motionless arm.
+        let lid_after = |lid: f64, locked: bool| {
+            let (mut ep, _) = episode_with_lid(path, lid, locked);
+            let hold = ep.robot_ctrl(0);
+            for _ in 0..100 {
+                ep.apply(&hold).unwrap();
+                ep.control_step().unwrap();
+            }
+            let s = &ep.labware_state()[0];
+            (s.joints["lid"], s.flag("locked"))
+        };
+        let (locked, flag) = lid_after(closed, true);
+        assert!(
+            flag && (locked - closed).abs() < 0.01,
+            "{path}: a latched lid moved to {locked}"
+        );
+        // Left 0.05 rad short of shut, nothing holds it: the spring lifts it further open.
+        let (free, flag) = lid_after(closed + 0.05, false);
+        assert!(
+            !flag && free > closed + 0.055,
+            "{path}: an unlatched lid stayed at {free}"
+        );
+    }
+}
+
+#[test]
+fn the_fixed_camera_sees_each_centrifuge_open_and_latched() {
+    for (path, closed) in [(C5430, -1.723), (C5910, -1.94)] {
+        let frame = |lid: f64| {
+            let (ep, task) = episode_with_lid(path, lid, lid == closed);
+            let names: Vec<String> = task.cameras.iter().map(|c| c.name.clone()).collect();
+            let mut cams = Cameras::new(&ep.scene, 224, 224).unwrap();
+            cams.render(&ep.data, ep.logic(), &names)
+                .unwrap()
+                .remove(0)
+                .rgb
+        };
+        let (open, shut) = (frame(0.0), frame(closed));
+        assert!(
+            spread(&open) > 10.0 && spread(&shut) > 10.0,
+            "{path}: a blank frame"
+        );
+        let changed = open.iter().zip(&shut).filter(|(a, b)| a != b).count();
+        assert!(
+            changed > 500,
+            "{path}: the lid barely shows: {changed} pixels differ"
+        );
+    }
+}
