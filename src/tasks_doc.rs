@@ -136,11 +136,12 @@ fn render(opts: &Options, rows: &[Row], not_run: &[(String, String)]) -> String 
             / r.expert.episodes.len().max(1) as f64;
         let _ = writeln!(
             s,
-            "| `{}` | {} | {} | {} steps, {:.1} s | {:.1} s | {}/{} ({:.0}%, [{:.0}, {:.0}]) | {:.3} | {:.3} |",
+            "| `{}` | {} | {} | {} {}, {:.1} s | {:.1} s | {}/{} ({:.0}%, [{:.0}, {:.0}]) | {:.3} | {:.3} |",
             r.task.id,
             r.task.level,
             robots.join(", "),
             steps,
+            if steps == 1 { "step" } else { "steps" },
             mean_t,
             r.task.time_limit_s,
             e.successes,

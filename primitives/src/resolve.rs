@@ -157,6 +157,8 @@ pub struct StepFrame {
     carried: Option<(String, Pose)>,
     /// How far the robot's closed fingertips reach past its TCP along the tool axis (m).
     finger_reach: f64,
+    /// Whether the first affordance allows the grasp turned half a turn (see [`Self::other_grasp`]).
+    half_turn: bool,
 }
 
 impl StepFrame {
@@ -174,6 +176,7 @@ impl StepFrame {
             turn: Rot::identity(),
             carried: None,
             finger_reach,
+            half_turn: false,
         };
         let first = motions.iter().find_map(|m| match m {
             Motion::Approach { target, .. }
@@ -190,12 +193,17 @@ impl StepFrame {
             }) => {
                 let a = lab.affordance(labware, name, &lab.at_goals(labware, goals)?)?;
                 frame.turn = closest_turn(&a, tcp_now);
+                frame.half_turn = a.symmetry != Symmetry::None;
             }
             Some(Target::Button {
                 labware,
                 param,
                 value,
-            }) => frame.turn = closest_turn(&lab.button(labware, param, value)?, tcp_now),
+            }) => {
+                let a = lab.button(labware, param, value)?;
+                frame.turn = closest_turn(&a, tcp_now);
+                frame.half_turn = a.symmetry != Symmetry::None;
+            }
             _ => {}
         }
         let seats = motions.iter().any(|m| {
@@ -243,6 +251,16 @@ impl StepFrame {
                 value,
             } => Ok(self.tool_at(&lab.button(labware, param, value)?)),
         }
+    }
+
+    /// The same step with the other of a symmetric affordance's two grasps (half a turn about the
+    /// approach axis), when it has one: the expert's second try where the closest grasp winds a
+    /// wrist joint into its limit.
+    pub fn other_grasp(&self) -> Option<StepFrame> {
+        self.half_turn.then(|| StepFrame {
+            turn: self.turn * axis_angle([0.0, 0.0, 1.0], std::f64::consts::PI),
+            ..self.clone()
+        })
     }
 
     /// The TCP pose for an affordance: the chosen symmetric turn, and for a touch, standing off

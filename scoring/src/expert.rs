@@ -67,6 +67,8 @@ pub struct ExpertPolicy {
     queue: VecDeque<Queued>,
     active: Option<Active>,
     frame: Option<(usize, StepFrame)>,
+    /// Whether the current step has moved along a path yet (its grasp is then committed).
+    step_moved: bool,
     control_dt: f64,
     events: Vec<StageEvent>,
 }
@@ -142,6 +144,7 @@ impl ExpertPolicy {
             queue,
             active: None,
             frame: None,
+            step_moved: false,
             control_dt: 1.0 / task.physics.control_hz(),
             events: Vec::new(),
         })
@@ -158,6 +161,7 @@ impl ExpertPolicy {
             let frame = StepFrame::new(&step.motions, &lab, &tcp_now, step.on.as_deref(), reach)
                 .map_err(|e| planning(context.clone(), e))?;
             self.frame = Some((q.step, frame));
+            self.step_moved = false;
             self.events.push(StageEvent {
                 time: obs.time,
                 label: step.label.clone(),
@@ -198,16 +202,23 @@ impl ExpertPolicy {
         let poses = frame
             .poses(&q.motion, &lab, &tcp_now)
             .map_err(|e| planning(context.clone(), e))?;
-        let mut waypoints = vec![arm.target.clone()];
-        let mut seed = arm.target.clone();
-        for pose in poses.iter().skip(1) {
-            let qn = match arm.model.ik {
-                IkMethod::Qp => solve_ik(&mut arm.kin, pose, &seed, &Default::default()),
+        // Before the step's first path, the other symmetric grasp is a second try.
+        let waypoints = match solve_path(arm, &poses) {
+            Ok(w) => w,
+            Err(first) => {
+                let other = (!self.step_moved)
+                    .then(|| frame.other_grasp())
+                    .flatten()
+                    .ok_or_else(|| planning(context.clone(), first.clone()))?;
+                let poses = other
+                    .poses(&q.motion, &lab, &tcp_now)
+                    .map_err(|e| planning(context.clone(), e))?;
+                let w = solve_path(arm, &poses).map_err(|_| planning(context.clone(), first))?;
+                self.frame = Some((q.step, other));
+                w
             }
-            .map_err(|e| planning(context.clone(), e))?;
-            waypoints.push(qn.clone());
-            seed = qn;
-        }
+        };
+        self.step_moved = true;
         let limits = Limits {
             vmax: arm.model.expert_limits.vmax,
             amax: arm.model.expert_limits.amax,
@@ -228,6 +239,24 @@ impl ExpertPolicy {
     fn moving(&self) -> Option<usize> {
         self.frame.as_ref().map(|(s, _)| self.steps[*s].robot)
     }
+}
+
+/// Joint waypoints through `poses` (the first is where the arm's target is), each solved by IK
+/// from the last.
+fn solve_path(
+    arm: &mut Arm,
+    poses: &[labware::Pose],
+) -> Result<Vec<Vec<f64>>, primitives::IkError> {
+    let mut waypoints = vec![arm.target.clone()];
+    let mut seed = arm.target.clone();
+    for pose in poses.iter().skip(1) {
+        let qn = match arm.model.ik {
+            IkMethod::Qp => solve_ik(&mut arm.kin, pose, &seed, &Default::default())?,
+        };
+        waypoints.push(qn.clone());
+        seed = qn;
+    }
+    Ok(waypoints)
 }
 
 impl Policy for ExpertPolicy {
