@@ -280,6 +280,6 @@ mod tests {
         assert_eq!(line("tube_50ml").trim(), "tube_50ml");
         assert!(!line("thermal_mixer").contains("[no simulation model yet]"));
         assert!(!line("set_parameter(").contains("no expert motions"));
-        assert!(line("centrifuge_5910").contains("[no simulation model yet]"));
+        assert!(line("vortex_mixer").contains("[no simulation model yet]"));
     }
 }
