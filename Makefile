@@ -24,6 +24,7 @@ demo: build
 	  --protocol protocols/thermal_cycler/close_then_open.toml \
 	  --protocol protocols/tube/transfer.toml \
 	  --protocol protocols/centrifuge_mini/close_lid.toml \
+	  --protocol protocols/centrifuge_5430/open_lid.toml \
 	  --protocol protocols/thermal_mixer/set_parameters.toml \
 	  --episodes 20 --seed 0 --out out/demo --record
 	$(CARGO) run --release --quiet -- eval \

@@ -1,7 +1,9 @@
 //! The latched centrifuges' lid tasks (issue 9): the expert pushes the 5430's and the 5910's lids
-//! shut until the latch catches, and `hold` scores nothing; "locked" fails a lid left a little
-//! open or shut without the latch; a latched lid stays shut against its spring; the fixed camera
-//! sees each centrifuge, and an open and a latched lid give different frames.
+//! shut until the latch catches, and presses the 5430's lid key and lifts its lid open; `hold`
+//! scores nothing on either; "locked" fails a lid left a little open or shut without the latch,
+//! "open" a lid released but left shut or lifted part way; a latched lid stays shut against its
+//! spring; the fixed camera sees each centrifuge, and an open and a latched lid give different
+//! frames.
 
 mod common;
 
@@ -11,6 +13,7 @@ use scoring::Judge;
 
 const C5430: &str = "protocols/centrifuge_5430/close_lid.toml";
 const C5910: &str = "protocols/centrifuge_5910/close_lid.toml";
+const O5430: &str = "protocols/centrifuge_5430/open_lid.toml";
 
 #[test]
 fn the_expert_latches_both_lids_and_hold_scores_nothing() {
@@ -31,7 +34,36 @@ fn the_expert_latches_both_lids_and_hold_scores_nothing() {
     }
 }
 
-/// The close task's verdict on its first state with the lid at `lid` (rad) and the latch as given.
+#[test]
+fn the_expert_releases_the_5430s_latch_with_its_key_and_lifts_the_lid_open() {
+    let task = compile(O5430);
+    for seed in [41, 42] {
+        let r = run(&task, seed, "expert");
+        assert!(r.success, "seed {seed}: {:?} {:#?}", r.error, r.verdict);
+    }
+    // Without a press the latch holds the lid shut.
+    let hold = run(&task, 41, "hold");
+    assert!(
+        !hold.success && hold.verdict.score == 0.0,
+        "{:#?}",
+        hold.verdict
+    );
+}
+
+#[test]
+fn open_needs_the_lid_standing_open_and_the_latch_released() {
+    let closed = -1.723;
+    // Open and released.
+    assert_eq!(judged(O5430, 0.0, false), (true, vec![true, true]));
+    // Released but left shut, or lifted part way: not open.
+    assert_eq!(judged(O5430, closed, false), (false, vec![false, true]));
+    assert_eq!(judged(O5430, -0.5, false), (false, vec![false, true]));
+    assert_eq!(judged(O5430, -0.02, false), (false, vec![false, true]));
+    // Still latched.
+    assert_eq!(judged(O5430, closed, true), (false, vec![false, false]));
+}
+
+/// The task's verdict on its first state with the lid at `lid` (rad) and the latch as given.
 fn judged(path: &str, lid: f64, locked: bool) -> (bool, Vec<bool>) {
     let task = compile(path);
     let (instance, scene) = scene(&task, 0);

@@ -61,6 +61,8 @@ pub enum Motion {
         value: String,
         timeout_s: f64,
     },
+    /// Keep the tool still for `seconds` (a key held down).
+    Wait { seconds: f64 },
     /// Close the gripper and wait for it to settle.
     Grasp,
     /// Open the gripper and wait for it to settle.
@@ -80,6 +82,7 @@ impl Motion {
             Motion::Follow { .. } => "follow",
             Motion::Press { .. } => "press",
             Motion::HoldUntil { .. } => "hold until",
+            Motion::Wait { .. } => "wait",
             Motion::Grasp => "grasp",
             Motion::Release => "release",
             Motion::Lift { .. } => "lift",
@@ -88,9 +91,11 @@ impl Motion {
     }
 }
 
-/// A planned step with its arguments rendered for one episode.
+/// A planned step with its arguments rendered for one episode, and the catalogue kind of the
+/// item it acts `on` (what buttons and latches it has), when it names one.
 pub struct MotionStep<'a> {
     pub args: &'a BTreeMap<String, String>,
+    pub kind: Option<&'static labware::LabwareKind>,
 }
 
 impl MotionStep<'_> {

@@ -92,6 +92,13 @@ pub enum ButtonEffect {
     },
     /// Steps a panel value by `sign` steps.
     Step { param: &'static str, sign: i8 },
+    /// Releases a latch: a part in state `from` goes to `to` (in any other state, nothing
+    /// happens). A centrifuge's lid key unlocks its lid without opening it.
+    Release {
+        part: &'static str,
+        from: &'static str,
+        to: &'static str,
+    },
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -136,6 +143,13 @@ impl LabwareKind {
         self.buttons.iter().find(|b| b.name == name)
     }
 
+    /// The button that releases `part`'s latch, when a key (not the part's own handle) does.
+    pub fn release_key(&self, part: &str) -> Option<&'static Button> {
+        self.buttons
+            .iter()
+            .find(|b| matches!(b.effect, ButtonEffect::Release { part: p, .. } if p == part))
+    }
+
     pub fn tolerance(&self, name: &str) -> Option<f64> {
         self.tolerances
             .iter()
@@ -169,6 +183,16 @@ const CAP: PartState = PartState {
     initial: &["on", "off"],
 };
 const LID_PRIMITIVES: &[&str] = &["open_lid", "close_lid", "lock", "unlock"];
+const KEYED_LID_PRIMITIVES: &[&str] = &["open_lid", "close_lid", "lock", "unlock", "press"];
+/// The key on a centrifuge's panel that releases its lid's latch (the lid stays shut).
+const LID_KEY: &[Button] = &[Button {
+    name: "open",
+    effect: ButtonEffect::Release {
+        part: "lid",
+        from: "locked",
+        to: "closed",
+    },
+}];
 const TUBE_PRIMITIVES: &[&str] = &[
     "pick",
     "place",
@@ -246,6 +270,7 @@ const fn lidded(
     description: &'static str,
     parts: &'static [PartState],
     slots: Option<Slots>,
+    buttons: &'static [Button],
 ) -> LabwareKind {
     LabwareKind {
         name,
@@ -255,7 +280,7 @@ const fn lidded(
         capacity_ul: None,
         movable: false,
         panel: &[],
-        buttons: &[],
+        buttons,
         joints: &[("lid", "rad")],
         tolerances: &[
             ("lid_closed", 0.01),
@@ -263,7 +288,11 @@ const fn lidded(
             ("lid_open", 0.01),
             ("lid_unlocked", 0.01),
         ],
-        primitives: LID_PRIMITIVES,
+        primitives: if buttons.is_empty() {
+            LID_PRIMITIVES
+        } else {
+            KEYED_LID_PRIMITIVES
+        },
         liquid_tool: false,
     }
 }
@@ -296,18 +325,21 @@ pub const KINDS: &[LabwareKind] = &[
             layout: SlotLayout::Ring { n: 30 },
             accepts: &["tube_1_5ml"],
         }),
+        LID_KEY,
     ),
     lidded(
         "centrifuge_5910",
         "floor-standing centrifuge with a latched lid (Eppendorf 5910 Ri)",
         &[LID_LOCKING],
         None,
+        LID_KEY,
     ),
     lidded(
         "centrifuge_mini",
         "mini centrifuge with a lid and no latch (Tiangen TGear mini)",
         &[LID_PLAIN],
         None,
+        &[],
     ),
     LabwareKind {
         name: "thermal_mixer",
@@ -501,6 +533,10 @@ mod tests {
                 match b.effect {
                     ButtonEffect::Toggle { part, .. } => assert!(k.part(part).is_some()),
                     ButtonEffect::Step { param, .. } => assert!(k.panel_param(param).is_some()),
+                    ButtonEffect::Release { part, from, to } => {
+                        let p = k.part(part).expect("a released part exists");
+                        assert!(p.states.contains(&from) && p.states.contains(&to));
+                    }
                 }
             }
             for p in k.panel {

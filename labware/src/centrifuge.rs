@@ -1,11 +1,13 @@
 //! Lidded centrifuges with a latch (Eppendorf 5430 and 5910 Ri proportions and lid dynamics,
 //! `../shared/reference/upstream-autobio.md` §5.3 and §11), one parametric model: a grey body
-//! with a sloped front control panel (display, start and stop keys), a heavy lid on a hinge along
+//! with a control panel in front of the lid (display, start and stop marks, the lid key), a heavy lid on a hinge along
 //! the back of its top, sprung towards open and heavily damped, with a grip bar on posts near its
 //! front edge and a window over the rotor. The 5430 has a fixed-angle rotor with 30 tube slots
-//! (its seats are what a tube is judged against), the 5910 a swing-bucket rotor. The latch is
-//! one-way: once the lid is within `latch_catch` of shut it locks (an equality holds it), and
-//! nothing unlocks it (upstream's logic).
+//! (its seats are what a tube is judged against), the 5910 a swing-bucket rotor. The latch
+//! catches a lid pushed within `latch_catch` of shut (an equality then holds it), as upstream's;
+//! unlike upstream's, it can be released: the panel's sprung `open` key, held past its press
+//! force for its hold time, lets the lid go, and the latch re-arms once the lid has left the
+//! catch. The lid is damped so heavily that it stays shut until lifted by its grip bar.
 //!
 //! Frame of the instrument: origin at the centre of the footprint, +y the front (the panel's
 //! side), +z up. Joint conventions: lid 0 = open, `lid_closed` (negative) = closed; rotor angle
@@ -51,6 +53,9 @@ pub struct Params {
     pub lid_stiffness: f64,
     pub lid_open: f64,
     pub lid_closed: f64,
+    /// How far short of open a lid lifted by its bar may be let go: from there its spring opens
+    /// it the rest of the way (0: it must be carried open).
+    pub lid_let_go: f64,
     /// The latch catches the lid within this of closed (rad).
     pub latch_catch: f64,
     /// The grip bar near the lid's front edge, standing on two posts: its centre's distance in
@@ -71,6 +76,43 @@ pub struct Params {
     /// Named tolerances of the success predicates (rad).
     pub closed_tolerance: f64,
     pub open_tolerance: f64,
+    /// The key on the panel that releases the lid.
+    pub key: Key,
+}
+
+/// How far past the shut lid's face the expert's push goes (m).
+const PRESS_PAST: f64 = 0.02;
+
+/// A sprung key on the control panel (metres, N/m, newtons, seconds).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Key {
+    /// Across the panel from its centre, towards the instrument's +x.
+    pub x: f64,
+    pub radius: f64,
+    /// How far it stands out of the panel, and how far it can be pushed in.
+    pub height: f64,
+    pub travel: f64,
+    pub stiffness: f64,
+    pub damping: f64,
+    /// A press counts once the spring pushes back with this force for `hold_s`.
+    pub force: f64,
+    pub hold_s: f64,
+}
+
+impl Key {
+    /// The thermal mixer's button feel (0.5 N held 0.25 s, upstream's threshold), at `x`.
+    fn at(x: f64) -> Key {
+        Key {
+            x,
+            radius: 0.009,
+            height: 0.004,
+            travel: 0.003,
+            stiffness: 250.0,
+            damping: 0.5,
+            force: 0.5,
+            hold_s: 0.25,
+        }
+    }
 }
 
 impl Params {
@@ -87,6 +129,8 @@ impl Params {
             lid_stiffness: 3.2,
             lid_open: 0.0,
             lid_closed: -1.723,
+            // Its spring barely outweighs the lid near open: carried all the way.
+            lid_let_go: 0.0,
             latch_catch: 0.01,
             bar_inset: 0.025,
             bar_height: 0.028,
@@ -106,6 +150,7 @@ impl Params {
             push_at: 0.62,
             closed_tolerance: 0.01,
             open_tolerance: 0.01,
+            key: Key::at(0.06),
         }
     }
 
@@ -123,6 +168,8 @@ impl Params {
             lid_stiffness: 27.5,
             lid_open: 0.0,
             lid_closed: -1.94,
+            // Past its balance (1.09 rad from shut) the spring opens it: let go at 1.24.
+            lid_let_go: 0.7,
             latch_catch: 0.01,
             bar_inset: 0.03,
             bar_height: 0.028,
@@ -139,6 +186,7 @@ impl Params {
             push_at: 0.45,
             closed_tolerance: 0.01,
             open_tolerance: 0.01,
+            key: Key::at(0.14),
         }
     }
 
@@ -205,6 +253,38 @@ impl Params {
                 * pose([0.0; 3], axis_angle([0.0, 1.0, 0.0], -tilt))
                 * translation([0.0, 0.0, -depth]),
         )
+    }
+
+    /// The control panel: a plate on the strip of the body's top in front of the closed lid,
+    /// its face tilted 20° towards the front. Its centre frame (z the face's outward normal, on
+    /// the face) and half extents across and along the face.
+    fn panel(&self) -> (Pose, f64, f64) {
+        let b = self.base_half;
+        let front = self.hinge[0] + self.lid_depth;
+        let half_depth = (b[1] - front) / 2.0 - 0.002;
+        let frame = pose(
+            [0.0, (b[1] + front) / 2.0, 2.0 * b[2] + 0.012],
+            x_turn(-20f64.to_radians()),
+        );
+        (frame, 0.45 * b[0], half_depth)
+    }
+
+    /// A frame on the control panel's face, `x` across it from its centre: z the outward normal.
+    fn on_panel(&self, x: f64) -> Pose {
+        self.panel().0 * translation([x, 0.0, 0.0])
+    }
+
+    /// Where the closed fingertips press the lid key: on its cap, pointing into the panel.
+    fn key_affordance(&self, placement: &Pose) -> Pose {
+        let tool = crate::frame::from_axes([0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]);
+        placement * self.on_panel(self.key.x) * pose([0.0, 0.0, self.key.height], tool)
+    }
+
+    /// Where the gripper holds the grip bar to lift the lid: closing across the bar, pointing
+    /// into the lid.
+    fn bar_affordance(&self, placement: &Pose, lid: f64) -> Pose {
+        let tool = crate::frame::from_axes([0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]);
+        self.lid_frame(placement, lid) * pose(self.bar_centre(), tool)
     }
 
     pub fn lid_is_closed(&self, lid: f64) -> bool {
@@ -308,6 +388,7 @@ struct Names {
     lid_joint: String,
     grip_site: String,
     lock: String,
+    key: String,
 }
 
 impl Names {
@@ -318,6 +399,7 @@ impl Names {
             lid_joint: format!("{prefix}/lid_hinge"),
             grip_site: format!("{prefix}/grip"),
             lock: format!("{prefix}/lid_lock"),
+            key: format!("{prefix}/key_open"),
         }
     }
 }
@@ -344,30 +426,38 @@ impl Instrument for Params {
             frame = pose_attrs(&self.rotor_frame(0.0)),
             geoms = self.rotor_geoms(&n.base),
         );
-        // The control panel: a dark plate sloped back 30° along the front of the top, with a
-        // display and start (green) and stop (red) keys, sized to the body.
-        let slope = pose(
-            [0.0, b[1] - 0.02, top - 0.035],
-            x_turn(-std::f64::consts::FRAC_PI_6),
-        );
-        let on_panel = |x: f64, z: f64| {
-            slope
-                * pose([x, 0.0, 0.0], x_turn(-std::f64::consts::FRAC_PI_2))
-                * translation([0.0, z, 0.0122])
-        };
-        let (pw, ph) = (0.45 * b[0], 0.03);
+        // The control panel: a dark plate in front of the closed lid, its face tilted towards the
+        // front, with a display, start (green) and stop (red) marks and the sprung lid key (grey,
+        // a white bar across it).
+        let (face, pw, pd) = self.panel();
+        let plate = face * translation([0.0, 0.0, -0.008]);
+        let on_panel = |x: f64| self.on_panel(x);
         let panel = format!(
-            r#"  <geom name="{base}/panel" type="box" size="{pw} 0.012 {ph}" {at} rgba="0.2 0.22 0.25 1" contype="0" conaffinity="0"/>
-  <geom name="{base}/display" type="box" size="{dw} 0.012 0.0005" {dat} rgba="0.35 0.75 0.9 1" contype="0" conaffinity="0"/>
-  <geom name="{base}/start" type="box" size="0.012 0.008 0.0005" {sat} rgba="0.2 0.65 0.3 1" contype="0" conaffinity="0"/>
-  <geom name="{base}/stop" type="box" size="0.012 0.008 0.0005" {tat} rgba="0.8 0.2 0.2 1" contype="0" conaffinity="0"/>
+            r#"  <geom name="{base}/panel" type="box" size="{pw} {pd} 0.008" {at} rgba="0.2 0.22 0.25 1" contype="0" conaffinity="0"/>
+  <geom name="{base}/display" type="box" size="{dw} {dd} 0.0005" {dat} rgba="0.35 0.75 0.9 1" contype="0" conaffinity="0"/>
+  <geom name="{base}/start" type="box" size="0.008 0.006 0.0005" {sat} rgba="0.2 0.65 0.3 1" contype="0" conaffinity="0"/>
+  <geom name="{base}/stop" type="box" size="0.008 0.006 0.0005" {tat} rgba="0.8 0.2 0.2 1" contype="0" conaffinity="0"/>
+  <body name="{key}" {kat}>
+    <joint name="{key}/press" type="slide" axis="0 0 -1" range="0 {travel}" stiffness="{k}" damping="{d}" springref="0" solreflimit="0.004 1"/>
+    <geom name="{key}/cap" type="cylinder" size="{kr} {kh}" pos="0 0 {kh}" mass="0.004" rgba="0.55 0.57 0.6 1" friction="1.2 0.01 0.001"/>
+    <geom name="{key}/mark" type="box" size="0.005 0.0012 0.0003" pos="0 0 {mz}" rgba="0.95 0.95 0.95 1" contype="0" conaffinity="0"/>
+  </body>
 "#,
             base = n.base,
-            at = pose_attrs(&slope),
+            at = pose_attrs(&plate),
             dw = 0.4 * pw,
-            dat = pose_attrs(&on_panel(-0.4 * pw, 0.0)),
-            sat = pose_attrs(&on_panel(0.35 * pw, 0.0)),
-            tat = pose_attrs(&on_panel(0.7 * pw, 0.0)),
+            dd = 0.7 * pd,
+            dat = pose_attrs(&on_panel(-0.4 * pw)),
+            sat = pose_attrs(&on_panel(0.15 * pw)),
+            tat = pose_attrs(&on_panel(0.4 * pw)),
+            key = n.key,
+            kat = pose_attrs(&on_panel(self.key.x)),
+            travel = self.key.travel,
+            k = self.key.stiffness,
+            d = self.key.damping,
+            kr = self.key.radius,
+            kh = self.key.height / 2.0,
+            mz = self.key.height + 0.0003,
         );
         let [rx, ry] = self.rotor_axis;
         let worldbody = format!(
@@ -428,7 +518,12 @@ impl Instrument for Params {
             lidj = n.lid_joint,
             closed = self.lid_closed,
         );
-        let contact = format!("<exclude body1=\"{}\" body2=\"{}\"/>\n", n.base, n.lid_body);
+        let contact = format!(
+            "<exclude body1=\"{base}\" body2=\"{}\"/>\n<exclude body1=\"{base}\" body2=\"{}\"/>\n",
+            n.lid_body,
+            n.key,
+            base = n.base
+        );
         Fragment {
             asset: String::new(),
             worldbody,
@@ -438,9 +533,12 @@ impl Instrument for Params {
     }
 
     fn joints(&self, name: &str) -> Vec<(&'static str, String)> {
+        let n = Names::new(name);
         vec![
-            ("lid", Names::new(name).lid_joint),
+            ("lid", n.lid_joint),
             ("rotor", format!("{name}/base/rotor_hinge")),
+            // The role is the catalogue's name of the key.
+            ("open", format!("{}/press", n.key)),
         ]
     }
 
@@ -466,32 +564,58 @@ impl Instrument for Params {
         };
         let mut logic = Logic::new();
         set(&mut logic, "locked", f64::from(u8::from(state == "locked")));
+        // A lid that starts shut but unlatched must be lifted clear before the latch can catch.
+        set(&mut logic, "armed", f64::from(u8::from(state == "open")));
         Reset {
             joints: vec![("lid", lid)],
             logic,
         }
     }
 
-    /// The one-way latch: it catches a lid within `latch_catch` of shut and holds it.
+    /// The latch: it catches a lid within `latch_catch` of shut when armed; the lid key held
+    /// past its press force for `hold_s` releases it and disarms it until the lid has been
+    /// lifted twice the catch clear.
     fn step(
         &self,
-        _dt: f64,
+        dt: f64,
         joints: &BTreeMap<String, f64>,
         logic: &mut Logic,
         switches: &mut Vec<(&'static str, bool)>,
     ) {
         let lid = joints.get("lid").copied().unwrap_or(self.lid_open);
-        let locked = logic.get("locked").is_some_and(|v| *v != 0.0)
-            || lid <= self.lid_closed + self.latch_catch;
+        let pressed = joints
+            .get("open")
+            .is_some_and(|x| *x * self.key.stiffness > self.key.force);
+        let held = if pressed {
+            logic.get("key_held_s").copied().unwrap_or(0.0) + dt
+        } else {
+            0.0
+        };
+        let mut locked = logic.get("locked").is_some_and(|v| *v != 0.0);
+        let mut armed = logic.get("armed").is_some_and(|v| *v != 0.0)
+            || lid > self.lid_closed + 2.0 * self.latch_catch;
+        if held >= self.key.hold_s {
+            locked = false;
+            armed = false;
+        } else if armed && lid <= self.lid_closed + self.latch_catch {
+            locked = true;
+        }
+        set(logic, "key_held_s", held);
         set(logic, "locked", f64::from(u8::from(locked)));
+        set(logic, "armed", f64::from(u8::from(armed)));
         switches.push(("lock", locked));
     }
 
     fn joint_goal(&self, role: &str, goal: &str) -> Option<f64> {
         match (role, goal) {
             ("lid", "open") => Some(self.lid_open),
-            // Pressed a little past the stop, so that the latch catches it against the spring.
-            ("lid", "closed") => Some(self.lid_closed - 0.03),
+            ("lid", "lifted") => Some(self.lid_open - self.lid_let_go),
+            // Pressed past the stop, so that the latch catches it against the spring: the push
+            // point goes `PRESS_PAST` below the shut lid's face, more than the arm sags under
+            // gravity (about 1 cm at the UR5e's reach).
+            ("lid", "closed") => {
+                Some(self.lid_closed - PRESS_PAST / (self.push_at * self.lid_depth))
+            }
             _ => None,
         }
     }
@@ -512,7 +636,15 @@ impl Instrument for Params {
             "closed" => (self.lid_closed, true, self.closed_tolerance),
             "locked" => (self.lid_closed, locked, self.closed_tolerance),
             "open" => (self.lid_open, true, self.open_tolerance),
-            "unlocked" => (self.lid_open, !locked, self.open_tolerance),
+            "unlocked" => {
+                // Released: whatever the lid's angle.
+                return Some(Measure {
+                    value: f64::from(u8::from(locked)),
+                    target: 0.0,
+                    tolerance: 0.5,
+                    holds: !locked,
+                });
+            }
             _ => return None,
         };
         let tolerance = tolerance.unwrap_or(default);
@@ -535,12 +667,19 @@ impl Instrument for Params {
         BTreeMap::from([("lid".to_string(), state.to_string())])
     }
 
+    /// `lid_close`: the lid is pushed shut (a touch on its face); `lid_open`: it is lifted by its
+    /// grip bar; `open`: the lid key.
     fn affordance(&self, name: &str, s: &LabwareState) -> Option<Affordance> {
-        // The lid primitives take a lid at its `grip`: this lid is pushed shut, not held.
-        (name == "grip").then(|| Affordance {
-            pose: self.push_affordance(&s.pose, s.joint("lid")),
+        let (pose, touch) = match name {
+            "lid_close" => (self.push_affordance(&s.pose, s.joint("lid")), true),
+            "lid_open" => (self.bar_affordance(&s.pose, s.joint("lid")), false),
+            "open" => (self.key_affordance(&s.pose), true),
+            _ => return None,
+        };
+        Some(Affordance {
+            pose,
             symmetry: Symmetry::HalfTurn,
-            touch: true,
+            touch,
         })
     }
 }
@@ -563,7 +702,7 @@ mod tests {
     }
 
     #[test]
-    fn the_latch_catches_a_shut_lid_and_never_lets_go() {
+    fn the_latch_catches_a_shut_lid_and_holds_it_without_the_key() {
         let p = Params::eppendorf_5430();
         let mut logic = p.reset(&BTreeMap::new()).logic;
         let mut run = |lid: f64| {
@@ -579,7 +718,49 @@ mod tests {
         assert!(!run(p.lid_open));
         assert!(!run(p.lid_closed + 0.05));
         assert!(run(p.lid_closed + 0.005));
-        assert!(run(p.lid_open), "a one-way latch");
+        assert!(run(p.lid_open), "only the key lets go");
+    }
+
+    /// The latch after `seconds` of steps with the lid at `lid` and the key pushed in `key` (m).
+    fn run_latch(p: &Params, logic: &mut Logic, lid: f64, key: f64, seconds: f64) -> bool {
+        let dt = 0.002;
+        let mut locked = false;
+        for _ in 0..(seconds / dt).round() as usize {
+            let mut sw = Vec::new();
+            let joints = BTreeMap::from([("lid".to_string(), lid), ("open".to_string(), key)]);
+            p.step(dt, &joints, logic, &mut sw);
+            locked = sw[0].1;
+        }
+        locked
+    }
+
+    #[test]
+    fn the_key_held_releases_the_latch_a_tap_does_not_and_the_latch_rearms_once_lifted() {
+        let p = Params::eppendorf_5430();
+        let locked = BTreeMap::from([("lid".to_string(), "locked".to_string())]);
+        let mut logic = p.reset(&locked).logic;
+        let pushed = 0.9 * p.key.travel;
+        assert!(
+            run_latch(&p, &mut logic, p.lid_closed, 0.0, 0.5),
+            "starts latched"
+        );
+        // Pushed in past its press force, but let go before the hold time: still latched.
+        assert!(run_latch(&p, &mut logic, p.lid_closed, pushed, 0.2));
+        assert!(run_latch(&p, &mut logic, p.lid_closed, 0.0, 0.1));
+        // Pushed in but not to the press force: still latched.
+        assert!(run_latch(
+            &p,
+            &mut logic,
+            p.lid_closed,
+            0.5 * p.key.force / p.key.stiffness,
+            1.0
+        ));
+        // Held: released, and the shut lid is not caught again while it stays in the catch.
+        assert!(!run_latch(&p, &mut logic, p.lid_closed, pushed, 0.3));
+        assert!(!run_latch(&p, &mut logic, p.lid_closed, 0.0, 1.0));
+        // Lifted clear, then pushed shut again: caught.
+        assert!(!run_latch(&p, &mut logic, p.lid_closed + 0.1, 0.0, 0.1));
+        assert!(run_latch(&p, &mut logic, p.lid_closed + 0.005, 0.0, 0.1));
     }
 
     #[test]

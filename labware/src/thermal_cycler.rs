@@ -367,7 +367,8 @@ impl Instrument for Params {
     }
 
     fn affordance(&self, name: &str, s: &LabwareState) -> Option<Affordance> {
-        (name == "grip").then(|| Affordance {
+        // The lid primitives hold the lid by the same handle to open and to close it.
+        matches!(name, "lid_open" | "lid_close").then(|| Affordance {
             pose: self.grip_affordance(&s.pose, s.joint("lid"), s.joint("lever")),
             symmetry: Symmetry::HalfTurn,
             touch: false,

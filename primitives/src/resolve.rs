@@ -328,7 +328,9 @@ impl StepFrame {
                 let at = self.target(target, lab)?;
                 line(tcp_now, &translated_local(&at, [0.0, 0.0, *depth]), 6)
             }
-            Motion::Grasp | Motion::Release | Motion::HoldUntil { .. } => Vec::new(),
+            Motion::Grasp | Motion::Release | Motion::HoldUntil { .. } | Motion::Wait { .. } => {
+                Vec::new()
+            }
         })
     }
 }
@@ -402,7 +404,7 @@ mod tests {
         };
         let grip = Target::Affordance {
             labware: "cycler".into(),
-            name: "grip".into(),
+            name: "lid_close".into(),
             goals: goals(&[("lid", "closed"), ("lever", "raised")]),
         };
         let reach = [Motion::Reach {
@@ -427,7 +429,7 @@ mod tests {
         // Following the lid shut ends at the closed grasp.
         let follow = Motion::Follow {
             labware: "cycler".into(),
-            affordance: "grip".into(),
+            affordance: "lid_close".into(),
             goals: goals(&[("lid", "closed"), ("lever", "raised")]),
             samples: 5,
         };
@@ -436,7 +438,7 @@ mod tests {
         assert!((path[5].translation.vector - closed.translation.vector).norm() < 1e-12);
         let bad = Target::Affordance {
             labware: "cycler".into(),
-            name: "grip".into(),
+            name: "lid_close".into(),
             goals: goals(&[("lid", "ajar")]),
         };
         assert!(matches!(

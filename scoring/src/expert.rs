@@ -106,7 +106,11 @@ impl ExpertPolicy {
                     (k.clone(), v)
                 })
                 .collect();
-            let motions = expand(&MotionStep { args: &args });
+            let kind = args
+                .get("on")
+                .and_then(|on| task.labware.iter().find(|l| &l.name == on))
+                .and_then(|l| labware::kind(&l.kind));
+            let motions = expand(&MotionStep { args: &args, kind });
             queue.extend(motions.iter().map(|motion| Queued {
                 step: i,
                 stage,
@@ -183,6 +187,11 @@ impl ExpertPolicy {
                     until: obs.time + gripper.settle_s,
                 });
             }
+            Motion::Wait { seconds } => {
+                return Ok(Active::Hold {
+                    until: obs.time + seconds,
+                });
+            }
             Motion::HoldUntil {
                 labware,
                 param,
@@ -243,15 +252,14 @@ impl ExpertPolicy {
 
 /// Joint waypoints through `poses` (the first is where the arm's target is), each solved by IK
 /// from the last.
-fn solve_path(
-    arm: &mut Arm,
-    poses: &[labware::Pose],
-) -> Result<Vec<Vec<f64>>, primitives::IkError> {
+fn solve_path(arm: &mut Arm, poses: &[labware::Pose]) -> Result<Vec<Vec<f64>>, PlanFailure> {
     let mut waypoints = vec![arm.target.clone()];
     let mut seed = arm.target.clone();
-    for pose in poses.iter().skip(1) {
+    let of = poses.len().saturating_sub(1);
+    for (i, pose) in poses.iter().enumerate().skip(1) {
         let qn = match arm.model.ik {
-            IkMethod::Qp => solve_ik(&mut arm.kin, pose, &seed, &Default::default())?,
+            IkMethod::Qp => solve_ik(&mut arm.kin, pose, &seed, &Default::default())
+                .map_err(|source| PlanFailure::IkAt { at: i, of, source })?,
         };
         waypoints.push(qn.clone());
         seed = qn;

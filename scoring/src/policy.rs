@@ -56,6 +56,13 @@ pub enum PlanFailure {
     Resolve(#[from] primitives::PlanError),
     #[error(transparent)]
     Ik(#[from] primitives::IkError),
+    /// IK failed at one pose of a path (1-based, of `of` after the start).
+    #[error("at pose {at} of {of}: {source}")]
+    IkAt {
+        at: usize,
+        of: usize,
+        source: primitives::IkError,
+    },
 }
 
 /// A labelled moment of an episode (start of a motion, of a lab step).

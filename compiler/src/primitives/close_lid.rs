@@ -18,10 +18,12 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
 fn motions(step: &MotionStep) -> Vec<Motion> {
     lid::handle_motions(
         step,
+        "lid_close",
         &[("lid", "open"), ("lever", "raised")],
         &[
             (&[("lid", "closed"), ("lever", "raised")], 30),
             (&[("lid", "closed"), ("lever", "press")], 10),
         ],
+        0.1,
     )
 }

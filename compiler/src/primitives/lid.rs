@@ -10,7 +10,11 @@ pub(super) fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), V
     let latched = kind
         .part("lid")
         .is_some_and(|p| p.states.contains(&"locked"));
+    // A lid whose latch a key releases is unlocked by its own step (`unlock`: the key is pressed)
+    // before `open_lid` lifts it; a lid with a lever on its handle is unlatched as it is opened.
+    let keyed = kind.release_key("lid").is_some();
     let (needs, leaves): (&[&str], &str) = match name {
+        "open_lid" if keyed => (&["closed"], "open"),
         "open_lid" => (&["closed", "locked"], "open"),
         "close_lid" => (&["open"], if latched { "locked" } else { "closed" }),
         "lock" => (&["closed"], "locked"),
@@ -24,15 +28,23 @@ pub(super) fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), V
         ));
     }
     if !needs.contains(&state.as_str()) {
+        let hint = if keyed && name == "open_lid" && state == "locked" {
+            format!(
+                "add an `unlock` step on `{lw}` before this one: its latch is released by the `{}` key",
+                kind.release_key("lid").map(|b| b.name).unwrap_or_default()
+            )
+        } else {
+            format!(
+                "remove this step or add one before it that leaves the lid {}",
+                needs[0]
+            )
+        };
         return Err(precondition(
             format!(
                 "`{name}` needs `{lw}.lid` to be {}, but here it is `{state}`",
                 needs.join(" or "),
             ),
-            &format!(
-                "remove this step or add one before it that leaves the lid {}",
-                needs[0]
-            ),
+            &hint,
         ));
     }
     w.set_part(&lw, "lid", leaves);
@@ -50,17 +62,21 @@ fn lid_state<'w>(w: &'w World, lw: &str, kind: &LabwareKind) -> Result<&'w str, 
     }
 }
 
-/// Grip the handle where the lid and lever are at `at`, move through `path` (each a set of joint
-/// goals followed over some samples), let go and back off.
+/// Take the lid by its `affordance` (`lid_open` or `lid_close`: the instrument says what the hand
+/// does there, a grasp or a push) where the lid and lever are at `at` (live, where empty), move
+/// through `path` (each a set of joint goals followed over some samples), hold there a moment,
+/// let go and back off `retreat` metres.
 pub(super) fn handle_motions(
     step: &MotionStep,
+    affordance: &str,
     at: &[(&str, &str)],
     path: &[(&[(&str, &str)], usize)],
+    retreat: f64,
 ) -> Vec<Motion> {
     let on = step.arg("on");
     let grip = Target::Affordance {
         labware: on.clone(),
-        name: "grip".into(),
+        name: affordance.into(),
         goals: goals(at),
     };
     let mut m = vec![
@@ -73,11 +89,18 @@ pub(super) fn handle_motions(
     ];
     m.extend(path.iter().map(|(g, samples)| Motion::Follow {
         labware: on.clone(),
-        affordance: "grip".into(),
+        affordance: affordance.into(),
         goals: goals(g),
         samples: *samples,
     }));
+    // Held at the end a moment: a damped lid lags the hand, and a latch must catch it there.
+    m.push(Motion::Wait { seconds: 0.5 });
     m.push(Motion::Release);
-    m.push(Motion::Retreat { distance: 0.1 });
+    m.push(Motion::Retreat { distance: retreat });
     m
+}
+
+/// The key that releases the lid's latch, when a key does (see [`labware::LabwareKind::release_key`]).
+pub(super) fn release_key(step: &MotionStep) -> Option<&'static str> {
+    Some(step.kind?.release_key("lid")?.name)
 }

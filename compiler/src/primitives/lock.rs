@@ -2,6 +2,7 @@
 
 use super::lid;
 use super::prelude::*;
+use crate::motion::{Motion, MotionStep};
 
 pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     name: "lock",
@@ -10,5 +11,17 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     requires: "the hand is empty; the lid is closed and has a latch",
     leaves: "the lid locked",
     effect: lid::effect,
-    motions: None,
+    motions: Some(motions),
 };
+
+/// Take the closed lid by its closing handle and press it home: a lever into its notch, a lid
+/// a key releases past its stop until the latch catches.
+fn motions(step: &MotionStep) -> Vec<Motion> {
+    lid::handle_motions(
+        step,
+        "lid_close",
+        &[("lid", "closed"), ("lever", "raised")],
+        &[(&[("lid", "closed"), ("lever", "press")], 10)],
+        0.1,
+    )
+}

@@ -14,14 +14,22 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     motions: Some(motions),
 };
 
-/// Grip the pressed lever of the closed lid, raise it out of its notch, swing the lid open.
+/// A lid with a lever on its handle: grip the pressed lever of the closed lid, raise it out of
+/// its notch, swing the lid open. A lid a key has released (see `unlock`): lift it by its
+/// handle from where it rests until it is `lifted` (where the instrument's spring takes it the
+/// rest of the way open, or open itself).
 fn motions(step: &MotionStep) -> Vec<Motion> {
+    if lid::release_key(step).is_some() {
+        return lid::handle_motions(step, "lid_open", &[], &[(&[("lid", "lifted")], 30)], 0.04);
+    }
     lid::handle_motions(
         step,
+        "lid_open",
         &[("lid", "closed"), ("lever", "pressed")],
         &[
             (&[("lid", "closed"), ("lever", "raised")], 10),
             (&[("lid", "open"), ("lever", "raised")], 30),
         ],
+        0.1,
     )
 }

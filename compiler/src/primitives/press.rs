@@ -1,6 +1,7 @@
 //! `press`: press one button once.
 
 use super::prelude::*;
+use crate::motion::{Motion, MotionStep, Target};
 
 pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     name: "press",
@@ -16,8 +17,37 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     requires: "the hand is empty; the button exists; a stepped value stays within its range",
     leaves: "the button's effect: a switch toggled or a panel value stepped once",
     effect,
-    motions: None,
+    motions: Some(motions),
 };
+
+fn motions(step: &MotionStep) -> Vec<Motion> {
+    key_motions(step, &step.arg("button"))
+}
+
+/// With the gripper closed as a finger: come in front of the button (its affordance bears its
+/// name), push it in past its press force, hold it there long enough to register, back off and
+/// open the hand.
+pub(super) fn key_motions(step: &MotionStep, button: &str) -> Vec<Motion> {
+    let key = Target::Affordance {
+        labware: step.arg("on"),
+        name: button.to_string(),
+        goals: Vec::new(),
+    };
+    vec![
+        Motion::Grasp,
+        Motion::Approach {
+            target: key.clone(),
+            standoff: 0.04,
+        },
+        Motion::Press {
+            target: key,
+            depth: 0.0027,
+        },
+        Motion::Wait { seconds: 0.5 },
+        Motion::Retreat { distance: 0.04 },
+        Motion::Release,
+    ]
+}
 
 fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
     let (lw, kind) = step.on_empty_handed(w, env)?;
@@ -31,6 +61,11 @@ fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
         ButtonEffect::Toggle { part, a, b } => {
             let next = if w.part(&lw, part) == Some(a) { b } else { a };
             w.set_part(&lw, part, next);
+        }
+        ButtonEffect::Release { part, from, to } => {
+            if w.part(&lw, part) == Some(from) {
+                w.set_part(&lw, part, to);
+            }
         }
         ButtonEffect::Step { param, sign } => {
             let p = kind.panel_param(param).expect("catalogue is consistent");
