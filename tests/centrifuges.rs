@@ -3,7 +3,10 @@
 //! scores nothing on either; "locked" fails a lid left a little open or shut without the latch,
 //! "open" a lid released but left shut or lifted part way; a latched lid stays shut against its
 //! spring; the fixed camera sees each centrifuge, and an open and a latched lid give different
-//! frames.
+//! frames. Loading the 5430's rotor: the expert puts the tube into the slot across from the loaded
+//! one, down the slot's 50.4° lean, and hold scores nothing; the check fails the tube in a
+//! neighbouring slot, in the loaded slot's own neighbour, or sitting up out of the right one; the
+//! loaded slot shows in the protocol's camera.
 
 mod common;
 
@@ -14,6 +17,7 @@ use scoring::Judge;
 const C5430: &str = "protocols/centrifuge_5430/close_lid.toml";
 const C5910: &str = "protocols/centrifuge_5910/close_lid.toml";
 const O5430: &str = "protocols/centrifuge_5430/open_lid.toml";
+const ROTOR: &str = "protocols/centrifuge/insert_symmetric.toml";
 
 #[test]
 fn the_expert_latches_both_lids_and_hold_scores_nothing() {
@@ -180,4 +184,105 @@ fn the_fixed_camera_sees_each_centrifuge_open_and_latched() {
             "{path}: the lid barely shows: {changed} pixels differ"
         );
     }
+}
+
+#[test]
+fn the_expert_balances_the_rotor_and_hold_scores_nothing() {
+    let task = compile(ROTOR);
+    for seed in [51, 52] {
+        let r = run(&task, seed, "expert");
+        assert!(r.success, "seed {seed}: {:?} {:#?}", r.error, r.verdict);
+    }
+    let hold = run(&task, 51, "hold");
+    assert!(
+        !hold.success && hold.verdict.score == 0.0,
+        "{:#?}",
+        hold.verdict
+    );
+}
+
+/// The rotor task's verdict with the tube's base put on the seat of `slot`, raised `above`
+/// metres along the seat's axis.
+fn tube_judged(slot: &str, above: f64) -> bool {
+    let task = compile(ROTOR);
+    let (instance, scene) = scene(&task, 3);
+    let ep = runtime::Episode::new(scene, &task, &instance);
+    let start = ep.labware_state();
+    let centrifuge = task
+        .labware
+        .iter()
+        .position(|l| l.name == "centrifuge")
+        .unwrap();
+    let tube = task.labware.iter().position(|l| l.name == "tube").unwrap();
+    let model = task.labware[centrifuge].params.instrument().unwrap();
+    let seat = model.slot_seat(slot, &start[centrifuge]).unwrap();
+    let mut now = start.clone();
+    now[tube].pose = labware::frame::translated_local(&seat, [0.0, 0.0, above]);
+    let mut judge = Judge::new(&task, &instance.params, &start);
+    judge.update(0.02, &now);
+    judge.verdict().success
+}
+
+#[test]
+fn balanced_needs_the_tube_down_in_the_slot_across_from_the_loaded_one() {
+    let task = compile(ROTOR);
+    let (instance, _) = scene(&task, 3);
+    let balance: u32 = instance.params["balance"].parse().unwrap();
+    let first: u32 = instance.params["first"].parse().unwrap();
+    assert_eq!((first + 14) % 30 + 1, balance, "across the rotor");
+    let neighbour = |k: u32, d: u32| ((k - 1 + d) % 30 + 1).to_string();
+    assert!(tube_judged(&balance.to_string(), 0.0));
+    assert!(!tube_judged(&neighbour(balance, 1), 0.0), "the next slot");
+    assert!(
+        !tube_judged(&neighbour(balance, 29), 0.0),
+        "the slot before"
+    );
+    assert!(
+        !tube_judged(&neighbour(first, 1), 0.0),
+        "beside the loaded one"
+    );
+    assert!(
+        !tube_judged(&balance.to_string(), 0.01),
+        "sitting 1 cm up the slot"
+    );
+}
+
+#[test]
+fn the_rotor_camera_shows_where_the_loaded_tube_is() {
+    let task = compile(ROTOR);
+    let arm = task.sample(0).robot_q;
+    // The first frame of a draw, with the arm where draw 0 has it: only the loaded slot differs.
+    let frame = |seed: u64| {
+        let mut instance = task.sample(seed);
+        instance.robot_q = arm.clone();
+        let scene = std::sync::Arc::new(runtime::Scene::build(&task, &instance).unwrap());
+        let ep = runtime::Episode::new(scene, &task, &instance);
+        let names: Vec<String> = task.cameras.iter().map(|c| c.name.clone()).collect();
+        let mut cams = Cameras::new(&ep.scene, 224, 224).unwrap();
+        let rgb = cams
+            .render(&ep.data, ep.logic(), &names)
+            .unwrap()
+            .remove(0)
+            .rgb;
+        (instance.params["first"].clone(), rgb)
+    };
+    let (a, fa) = frame(0);
+    let (same, fs) = (1..30)
+        .map(frame)
+        .find(|(slot, _)| *slot == a)
+        .expect("a second draw with the same loaded slot");
+    let (b, fb) = (1..20)
+        .map(frame)
+        .find(|(slot, _)| *slot != a)
+        .expect("two draws with different loaded slots");
+    assert!(spread(&fa) > 10.0 && spread(&fb) > 10.0, "a blank frame");
+    assert_eq!(
+        fa, fs,
+        "slot {same} twice: the frames differ by something else"
+    );
+    let changed = fa.iter().zip(&fb).filter(|(x, y)| x != y).count();
+    assert!(
+        changed > 30,
+        "slots {a} and {b}: the loaded tube does not show ({changed} values differ)"
+    );
 }

@@ -80,6 +80,10 @@ pub struct Params {
     pub key: Key,
 }
 
+/// Half the inside width of a rotor slot's sleeve: a 1.5 mL tube (5.35 mm radius) with room to
+/// slide in at its lean.
+const SLEEVE_HALF: f64 = 0.0062;
+
 /// How far past the shut lid's face the expert's push goes (m).
 const PRESS_PAST: f64 = 0.02;
 
@@ -306,6 +310,95 @@ impl Params {
         self.lid_frame(placement, lid) * pose(at, tool)
     }
 
+    /// The floor of the rotor chamber: a rotor's tubes hang into it.
+    fn bowl_floor(&self) -> f64 {
+        self.rotor_top - 0.07
+    }
+
+    /// The housing below the lid: a slab under the rotor chamber and four walls around it, so that
+    /// the rotor and the tubes in it are seen and touched inside the chamber (collision and look).
+    fn housing(&self, base: &str) -> String {
+        let b = self.base_half;
+        let top = 2.0 * b[2];
+        let floor = self.bowl_floor();
+        let [ax, ay] = self.rotor_axis;
+        let r = self.bowl_radius;
+        let wall_h = (top - floor) / 2.0;
+        let wall_z = floor + wall_h;
+        // (name, centre, half extents)
+        let parts: [(&str, Vec3, Vec3); 5] = [
+            ("body", [0.0, 0.0, floor / 2.0], [b[0], b[1], floor / 2.0]),
+            (
+                "wall_left",
+                [(-b[0] + ax - r) / 2.0, 0.0, wall_z],
+                [(ax - r + b[0]) / 2.0, b[1], wall_h],
+            ),
+            (
+                "wall_right",
+                [(b[0] + ax + r) / 2.0, 0.0, wall_z],
+                [(b[0] - ax - r) / 2.0, b[1], wall_h],
+            ),
+            (
+                "wall_back",
+                [ax, (-b[1] + ay - r) / 2.0, wall_z],
+                [r, (ay - r + b[1]) / 2.0, wall_h],
+            ),
+            (
+                "wall_front",
+                [ax, (b[1] + ay + r) / 2.0, wall_z],
+                [r, (b[1] - ay - r) / 2.0, wall_h],
+            ),
+        ];
+        parts
+            .iter()
+            .map(|(name, c, h)| {
+                format!(
+                    "  <geom name=\"{base}/{name}\" type=\"box\" size=\"{}\" pos=\"{}\" rgba=\"0.78 0.80 0.82 1\"/>\n",
+                    v3(*h),
+                    v3(*c)
+                )
+            })
+            .collect()
+    }
+
+    /// A fixed-angle rotor's slot sleeves (in the rotor body's frame): four thin walls and a floor
+    /// around each slot's axis, from a tube's base up to the slot's mouth, that hold a tube at the
+    /// slot's lean.
+    fn sleeves(&self, base: &str) -> String {
+        let Rotor::FixedAngle { slots, depth, .. } = self.rotor else {
+            return String::new();
+        };
+        let (half, t) = (SLEEVE_HALF, 0.001);
+        let metal = rgba([0.55, 0.57, 0.6, 1.0]);
+        let mut out = String::new();
+        for k in 1..=slots {
+            let seat = self.slot_in_rotor(k).expect("fixed-angle slots");
+            let walls: [(&str, Vec3, Vec3); 5] = [
+                (
+                    "px",
+                    [half + t, 0.0, depth / 2.0],
+                    [t, half + 2.0 * t, depth / 2.0],
+                ),
+                (
+                    "nx",
+                    [-half - t, 0.0, depth / 2.0],
+                    [t, half + 2.0 * t, depth / 2.0],
+                ),
+                ("py", [0.0, half + t, depth / 2.0], [half, t, depth / 2.0]),
+                ("ny", [0.0, -half - t, depth / 2.0], [half, t, depth / 2.0]),
+                ("floor", [0.0, 0.0, -t], [half + 2.0 * t, half + 2.0 * t, t]),
+            ];
+            for (name, c, h) in walls {
+                out += &format!(
+                    "    <geom name=\"{base}/slot{k}_{name}\" type=\"box\" size=\"{}\" {} rgba=\"{metal}\"/>\n",
+                    v3(h),
+                    pose_attrs(&(seat * translation(c)))
+                );
+            }
+        }
+        out
+    }
+
     /// The rotor's visual geoms, in the rotor body's frame.
     fn rotor_geoms(&self, base: &str) -> String {
         let geom = |name: &str, kind: &str, size: String, at: &Pose, colour: [f64; 4]| {
@@ -408,7 +501,6 @@ impl Instrument for Params {
     fn fragment(&self, name: &str, placement: &Pose) -> Fragment {
         let n = Names::new(name);
         let b = self.base_half;
-        let top = 2.0 * b[2];
         let lid_half = [
             self.lid_half_width,
             self.lid_depth / 2.0,
@@ -421,10 +513,10 @@ impl Instrument for Params {
             self.lid_closed.max(self.lid_open),
         );
         let rotor = format!(
-            "  <body name=\"{base}/rotor\" {frame}>\n    <joint name=\"{base}/rotor_hinge\" type=\"hinge\" axis=\"0 0 1\" damping=\"0.0001\"/>\n    <inertial pos=\"0 0 -0.02\" mass=\"0.59\" diaginertia=\"0.0017 0.0017 0.0033\"/>\n{geoms}  </body>\n",
+            "  <body name=\"{base}/rotor\" {frame}>\n    <joint name=\"{base}/rotor_hinge\" type=\"hinge\" axis=\"0 0 1\" damping=\"0.0001\" frictionloss=\"0.05\"/>\n    <inertial pos=\"0 0 -0.02\" mass=\"0.59\" diaginertia=\"0.0017 0.0017 0.0033\"/>\n{geoms}  </body>\n",
             base = n.base,
             frame = pose_attrs(&self.rotor_frame(0.0)),
-            geoms = self.rotor_geoms(&n.base),
+            geoms = self.rotor_geoms(&n.base) + &self.sleeves(&n.base),
         );
         // The control panel: a dark plate in front of the closed lid, its face tilted towards the
         // front, with a display, start (green) and stop (red) marks and the sprung lid key (grey,
@@ -462,8 +554,7 @@ impl Instrument for Params {
         let [rx, ry] = self.rotor_axis;
         let worldbody = format!(
             r#"<body name="{base}" {placement}>
-  <geom name="{base}/body" type="box" size="{bh}" pos="0 0 {bz}" rgba="0.78 0.80 0.82 1"/>
-  <geom name="{base}/bowl" type="cylinder" size="{bowl} 0.004" pos="{rx} {ry} {bowlz}" rgba="0.3 0.31 0.33 1" contype="0" conaffinity="0"/>
+{housing}  <geom name="{base}/bowl" type="cylinder" size="{bowl} 0.002" pos="{rx} {ry} {bowlz}" rgba="0.3 0.31 0.33 1" contype="0" conaffinity="0"/>
 {rotor}{panel}  <geom name="{base}/stripe" type="box" size="{sx} 0.001 0.006" pos="0 {sy} {stz}" rgba="0.15 0.3 0.6 1" contype="0" conaffinity="0"/>
   <body name="{lid}" {lidframe}>
     <joint name="{lidj}" type="hinge" axis="1 0 0" range="{lo} {hi}" damping="{lidd}" stiffness="{lidk}" springref="{open}" solreflimit="0.004 1" solimplimit="0.95 0.99 0.0005"/>
@@ -480,10 +571,9 @@ impl Instrument for Params {
 "#,
             base = n.base,
             placement = pose_attrs(placement),
-            bh = v3(b),
-            bz = b[2],
+            housing = self.housing(&n.base),
             bowl = self.bowl_radius,
-            bowlz = top - 0.001,
+            bowlz = self.bowl_floor() + 0.002,
             sx = b[0] - 0.01,
             sy = b[1] + 0.001,
             stz = 0.03,

@@ -148,6 +148,9 @@ impl<'a> Lab<'a> {
     }
 }
 
+/// How far above its target a transit passes at least (m).
+const TRANSIT_CLEARANCE: f64 = 0.06;
+
 /// Choices a lab step makes once, at its start, so that all its motions agree.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StepFrame {
@@ -236,14 +239,17 @@ impl StepFrame {
             Target::Seat { location, above } => {
                 let (item, item_in_tool) =
                     self.carried.as_ref().ok_or(PlanError::NothingCarried)?;
-                // Upright on the seat, keeping the heading the item has now: a round item need
-                // not turn to the slot's yaw (and a half turn of the wrist would gain nothing).
-                let x = lab.pose_of(item)?.rotation * nalgebra::Vector3::x();
-                let heading = axis_angle([0.0, 0.0, 1.0], x.y.atan2(x.x));
+                // Along the seat's axis (upright in a rack, leaning in a fixed-angle rotor),
+                // `above` out of it, keeping the heading the item has now about that axis: a
+                // round item need not turn to the slot's yaw (and a half turn of the wrist would
+                // gain nothing).
                 let seat = lab.seat(location)?;
-                let p = position(&seat);
-                let seat = labware::frame::pose([p[0], p[1], p[2] + above], heading);
-                Ok(seat * item_in_tool.inverse())
+                let now = lab.pose_of(item)?.rotation;
+                let x = seat.rotation.inverse() * (now * nalgebra::Vector3::x());
+                let heading = axis_angle([0.0, 0.0, 1.0], x.y.atan2(x.x));
+                let target = translated_local(&seat, [0.0, 0.0, *above]);
+                let target = labware::frame::pose(position(&target), seat.rotation * heading);
+                Ok(target * item_in_tool.inverse())
             }
             Target::Button {
                 labware,
@@ -288,9 +294,24 @@ impl StepFrame {
             }
             Motion::Reach { target } => line(tcp_now, &self.target(target, lab)?, 6),
             Motion::Transit { target } => {
+                // At the current height, or where the target is higher (a rotor in its housing,
+                // above a rack's tubes), first straight up to `TRANSIT_CLEARANCE` above it.
                 let mut goal = self.target(target, lab)?;
-                goal.translation.vector.z = tcp_now.translation.vector.z;
-                line(tcp_now, &goal, 10)
+                let z = tcp_now
+                    .translation
+                    .vector
+                    .z
+                    .max(goal.translation.vector.z + TRANSIT_CLEARANCE);
+                goal.translation.vector.z = z;
+                if z > tcp_now.translation.vector.z + 1e-9 {
+                    let mut up = *tcp_now;
+                    up.translation.vector.z = z;
+                    let mut path = line(tcp_now, &up, 5);
+                    path.extend(line(&up, &goal, 10).into_iter().skip(1));
+                    path
+                } else {
+                    line(tcp_now, &goal, 10)
+                }
             }
             Motion::Follow {
                 labware,

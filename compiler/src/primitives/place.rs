@@ -69,6 +69,14 @@ fn motions(step: &MotionStep) -> Vec<Motion> {
                 above: 0.0,
             },
         },
+        // Down the slot's axis from just outside it: a rack's is vertical, a fixed-angle rotor's
+        // leans.
+        Motion::Reach {
+            target: Target::Seat {
+                location: to.clone(),
+                above: 0.04,
+            },
+        },
         Motion::Reach {
             target: Target::Seat {
                 location: to,
