@@ -10,8 +10,9 @@ build: setup
 	$(CARGO) build --release
 
 # The main job: check every shipped protocol, then the scripted expert on both thermal-cycler
-# protocols, the close-then-open chain, the tube transfer, the mini centrifuge's lid and the
-# thermal mixer's panel (20 seeded episodes each) and on the two-arm task (5): a results table, results JSON and one MCAP recording per episode under
+# protocols, the close-then-open chain, the tube transfer, the mini centrifuge's lid, the 5430's
+# lid opened with its key, the 5430's rotor balanced and the thermal mixer's panel (20 seeded
+# episodes each) and on the two-arm task (5): a results table, results JSON and one MCAP recording per episode under
 # out/demo/. Then a model server in the loop: the reference openpi server answering with those
 # recordings, through `eval --model` (scripts/demo-model.sh). Last, the no-motion control
 # (`--policy hold`), which must score 0 everywhere.
@@ -25,6 +26,7 @@ demo: build
 	  --protocol protocols/tube/transfer.toml \
 	  --protocol protocols/centrifuge_mini/close_lid.toml \
 	  --protocol protocols/centrifuge_5430/open_lid.toml \
+	  --protocol protocols/centrifuge/insert_symmetric.toml \
 	  --protocol protocols/thermal_mixer/set_parameters.toml \
 	  --episodes 20 --seed 0 --out out/demo --record
 	$(CARGO) run --release --quiet -- eval \
@@ -36,6 +38,8 @@ demo: build
 	  --protocol protocols/thermal_cycler/open_lid.toml \
 	  --protocol protocols/tube/transfer.toml \
 	  --protocol protocols/thermal_mixer/set_parameters.toml \
+	  --protocol protocols/centrifuge_5430/open_lid.toml \
+	  --protocol protocols/centrifuge/insert_symmetric.toml \
 	  --episodes 3 --seed 0
 
 test: setup
