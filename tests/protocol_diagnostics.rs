@@ -133,3 +133,37 @@ fn explain_documents_every_code() {
     assert!(out.status.success());
     assert!(String::from_utf8_lossy(&out.stdout).contains("precondition"));
 }
+
+/// The key-latched centrifuge: its `open` key releases the latch whether pressed by `press` or by
+/// `unlock`, after which `open_lid` compiles; without it the hint names the missing step, and
+/// `lock` is refused with the way to latch it.
+#[test]
+fn a_key_latched_lid_is_released_by_its_key_before_it_opens() {
+    let shipped = std::fs::read_to_string("protocols/centrifuge_5430/open_lid.toml").unwrap();
+    let compile = |source: &str| compiler::compile_source(source, "open_lid.toml");
+    assert!(compile(&shipped).0.is_some(), "unlock, then open_lid");
+    let pressed = shipped.replacen("do = \"unlock\"", "do = \"press\"\nbutton = \"open\"", 1);
+    assert!(
+        compile(&pressed).0.is_some(),
+        "press the key, then open_lid"
+    );
+    let unkeyed = shipped.replacen("do = \"unlock\"", "do = \"press\"\nbutton = \"start\"", 1);
+    let (task, diags) = compile(&unkeyed);
+    assert!(task.is_none() && diags.iter().any(|d| d.code.to_string() == "E0013"));
+    for (file, says) in [
+        (
+            "open_a_latched_centrifuge_without_its_key.toml",
+            "add an `unlock` step on `centrifuge`",
+        ),
+        (
+            "lock_a_key_latched_centrifuge.toml",
+            "`open_lid`, then `close_lid`",
+        ),
+    ] {
+        let path = format!("tests/corpus/faulty/{file}");
+        let (task, diags) = compile(&std::fs::read_to_string(path).unwrap());
+        assert!(task.is_none(), "{file}");
+        let hint = diags[0].hint.clone().unwrap_or_default();
+        assert!(hint.contains(says), "{file}: {hint}");
+    }
+}

@@ -2,7 +2,8 @@
 //! panel's buttons and `--policy hold` scores nothing; a wrong value fails its check and scores
 //! the paper's weighted relative progress; the display is legible at 224x224 in the task's fixed
 //! camera (its digits are read back from rendered frames by matching the display's own glyphs);
-//! and a recording's replay redraws the display from the recorded panel state.
+//! a recording's replay redraws the display from the recorded panel state; and the expert's
+//! `press` steps a value exactly once.
 
 mod common;
 
@@ -427,4 +428,15 @@ fn a_replay_redraws_the_display_from_the_recorded_panel() {
     assert_eq!(a, b, "the redrawn display differs from the recorded one");
     // And the display changed during the episode: the first and last frames differ.
     assert_ne!(a.first(), a.last());
+}
+
+#[test]
+fn the_experts_press_steps_a_value_once() {
+    // Speed up once, then temperature up once: 950 rpm and 26 °C must hold together, so a press
+    // held into a second repeat (1000 rpm) fails.
+    let task = compile("tests/data/mixer_press_twice.toml");
+    for seed in [43, 44] {
+        let r = run(&task, seed, "expert");
+        assert!(r.success, "seed {seed}: {:?} {:#?}", r.error, r.verdict);
+    }
 }

@@ -21,7 +21,8 @@ pub enum Target {
         goals: Goals,
     },
     /// The tool pose that stands the carried item's base on a slot's seat (`holder.slot`, a
-    /// template over the task's parameters), raised by `above` metres.
+    /// template over the task's parameters), lined up with the seat's axis (upright in a rack,
+    /// leaning in a rotor) and `above` metres out along it.
     Seat { location: String, above: f64 },
     /// The button that moves an instrument's panel value `param` toward `value` (a quantity as
     /// the step renders it, e.g. `"1200 rpm"`), chosen from the live value.

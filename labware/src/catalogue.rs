@@ -265,6 +265,18 @@ const fn rack(
     }
 }
 
+/// Whether one of the buttons releases a latch (a key-latched lid: `press` and `unlock` by key).
+const fn releases_a_latch(buttons: &[Button]) -> bool {
+    let mut i = 0;
+    while i < buttons.len() {
+        if matches!(buttons[i].effect, ButtonEffect::Release { .. }) {
+            return true;
+        }
+        i += 1;
+    }
+    false
+}
+
 const fn lidded(
     name: &'static str,
     description: &'static str,
@@ -286,12 +298,11 @@ const fn lidded(
             ("lid_closed", 0.01),
             ("lid_locked", 0.01),
             ("lid_open", 0.01),
-            ("lid_unlocked", 0.01),
         ],
-        primitives: if buttons.is_empty() {
-            LID_PRIMITIVES
-        } else {
+        primitives: if releases_a_latch(buttons) {
             KEYED_LID_PRIMITIVES
+        } else {
+            LID_PRIMITIVES
         },
         liquid_tool: false,
     }

@@ -6,8 +6,8 @@
 //! (its seats are what a tube is judged against), the 5910 a swing-bucket rotor. The latch
 //! catches a lid pushed within `latch_catch` of shut (an equality then holds it), as upstream's;
 //! unlike upstream's, it can be released: the panel's sprung `open` key, held past its press
-//! force for its hold time, lets the lid go, and the latch re-arms once the lid has left the
-//! catch. The lid is damped so heavily that it stays shut until lifted by its grip bar.
+//! force for its hold time, lets the lid go, and the latch re-arms once the lid has been lifted
+//! twice the catch clear. The lid is damped so heavily that it stays shut until lifted by its grip bar.
 //!
 //! Frame of the instrument: origin at the centre of the footprint, +y the front (the panel's
 //! side), +z up. Joint conventions: lid 0 = open, `lid_closed` (negative) = closed; rotor angle

@@ -294,8 +294,9 @@ impl StepFrame {
             }
             Motion::Reach { target } => line(tcp_now, &self.target(target, lab)?, 6),
             Motion::Transit { target } => {
-                // At the current height, or where the target is higher (a rotor in its housing,
-                // above a rack's tubes), first straight up to `TRANSIT_CLEARANCE` above it.
+                // At the current height, unless the target is less than `TRANSIT_CLEARANCE` below
+                // the hand (a rotor in its housing, above a rack's tubes): then first straight up
+                // to that clearance above it.
                 let mut goal = self.target(target, lab)?;
                 let z = tcp_now
                     .translation

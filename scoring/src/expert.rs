@@ -259,7 +259,7 @@ fn solve_path(arm: &mut Arm, poses: &[labware::Pose]) -> Result<Vec<Vec<f64>>, P
     for (i, pose) in poses.iter().enumerate().skip(1) {
         let qn = match arm.model.ik {
             IkMethod::Qp => solve_ik(&mut arm.kin, pose, &seed, &Default::default())
-                .map_err(|source| PlanFailure::IkAt { at: i, of, source })?,
+                .map_err(|ik| PlanFailure::IkAt { at: i, of, ik })?,
         };
         waypoints.push(qn.clone());
         seed = qn;

@@ -54,14 +54,12 @@ pub enum PlanFailure {
     NoMotions(String),
     #[error(transparent)]
     Resolve(#[from] primitives::PlanError),
-    #[error(transparent)]
-    Ik(#[from] primitives::IkError),
     /// IK failed at one pose of a path (1-based, of `of` after the start).
-    #[error("at pose {at} of {of}: {source}")]
+    #[error("at pose {at} of {of}: {ik}")]
     IkAt {
         at: usize,
         of: usize,
-        source: primitives::IkError,
+        ik: primitives::IkError,
     },
 }
 

@@ -27,6 +27,23 @@ pub(super) fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), V
             format!("`{lw}` (a {}) has no latch to {name}", kind.name),
         ));
     }
+    if keyed && name == "lock" {
+        // Such a latch catches the lid as it is pushed shut; once its key has released it, the
+        // lid must be lifted clear before it can catch again.
+        return Err(Violation {
+            hint: Some(format!(
+                "`{lw}` locks when its lid is pushed shut: `open_lid`, then `close_lid`"
+            )),
+            ..violation(
+                Code::E0014,
+                None,
+                format!(
+                    "`{lw}` (a {}) has no separate lock: its latch catches the lid as it shuts",
+                    kind.name
+                ),
+            )
+        });
+    }
     if !needs.contains(&state.as_str()) {
         let hint = if keyed && name == "open_lid" && state == "locked" {
             format!(

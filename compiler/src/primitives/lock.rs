@@ -14,8 +14,8 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     motions: Some(motions),
 };
 
-/// Take the closed lid by its closing handle and press it home: a lever into its notch, a lid
-/// a key releases past its stop until the latch catches.
+/// Take the closed lid by its closing handle and press its lever into its notch. (A lid whose
+/// latch a key releases has no separate lock: the compiler refuses `lock` on it.)
 fn motions(step: &MotionStep) -> Vec<Motion> {
     lid::handle_motions(
         step,

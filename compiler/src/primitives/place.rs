@@ -59,7 +59,8 @@ fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
     Ok(())
 }
 
-/// Transit above the slot at the carrying height, lower the item onto its seat, release, retreat.
+/// Transit above the slot at the carrying height, go to 4 cm out along the seat's axis, then down
+/// that axis onto the seat, release, retreat.
 fn motions(step: &MotionStep) -> Vec<Motion> {
     let to = step.arg("to");
     vec![
@@ -69,8 +70,8 @@ fn motions(step: &MotionStep) -> Vec<Motion> {
                 above: 0.0,
             },
         },
-        // Down the slot's axis from just outside it: a rack's is vertical, a fixed-angle rotor's
-        // leans.
+        // Down the seat's axis from 4 cm out (a rotor slot's mouth is 3 cm up it): a rack's axis
+        // is vertical, a fixed-angle rotor's leans.
         Motion::Reach {
             target: Target::Seat {
                 location: to.clone(),

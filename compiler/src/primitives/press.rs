@@ -15,7 +15,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
         },
     ],
     requires: "the hand is empty; the button exists; a stepped value stays within its range",
-    leaves: "the button's effect: a switch toggled or a panel value stepped once",
+    leaves: "the button's effect: a switch toggled, a panel value stepped once or a latch released",
     effect,
     motions: Some(motions),
 };
