@@ -1,7 +1,8 @@
 //! Every shipped protocol's first frame from its fixed camera (224x224, as a VLA sees it): not
 //! blank, not one flat colour, and showing its labware: hiding the labware (every labware geom
 //! made transparent) changes at least 1% of the frame (the least: the unscrew task's tube and rack,
-//! 1.5%, and the mini centrifuge, 2.2%). Frames that must differ between draws (the mixer's
+//! 1.5%; the mini centrifuge's tasks place their own camera, having been 2.2% from the bench
+//! camera). Frames that must differ between draws (the mixer's
 //! display, the rotor's loaded slot) are tested with their tasks.
 
 mod common;
