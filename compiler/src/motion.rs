@@ -91,6 +91,13 @@ impl Motion {
             Motion::Retreat { .. } => "retreat",
         }
     }
+
+    /// Whether the motion moves through free space between affordances (approach, transit):
+    /// the expert keeps it clear of the scene, going around what its straight path would hit.
+    /// The others end in contact, or leave it, on purpose.
+    pub fn through_free_space(&self) -> bool {
+        matches!(self, Motion::Approach { .. } | Motion::Transit { .. })
+    }
 }
 
 /// A planned step with its arguments rendered for one episode, and the catalogue kind of the

@@ -259,6 +259,13 @@ impl StepFrame {
         }
     }
 
+    /// The item the step carries to a seat, and its root pose in the tool frame.
+    pub fn carried(&self) -> Option<(&str, &Pose)> {
+        self.carried
+            .as_ref()
+            .map(|(item, pose)| (item.as_str(), pose))
+    }
+
     /// The same step with the other of a symmetric affordance's two grasps (half a turn about the
     /// approach axis), when it has one: the expert's second try where the closest grasp winds a
     /// wrist joint into its limit.
@@ -294,25 +301,16 @@ impl StepFrame {
             }
             Motion::Reach { target } => line(tcp_now, &self.target(target, lab)?, 6),
             Motion::Transit { target } => {
-                // At the current height, unless the target is less than `TRANSIT_CLEARANCE` below
-                // the hand (a rotor in its housing, above a rack's tubes): then first straight up
-                // to that clearance above it.
+                // Above the target at the current height, or `TRANSIT_CLEARANCE` above it when
+                // that is higher (a rotor in its housing, a rack's tubes), in a straight line:
+                // the expert goes around whatever that line would hit (`scoring::route`).
                 let mut goal = self.target(target, lab)?;
-                let z = tcp_now
+                goal.translation.vector.z = tcp_now
                     .translation
                     .vector
                     .z
                     .max(goal.translation.vector.z + TRANSIT_CLEARANCE);
-                goal.translation.vector.z = z;
-                if z > tcp_now.translation.vector.z + 1e-9 {
-                    let mut up = *tcp_now;
-                    up.translation.vector.z = z;
-                    let mut path = line(tcp_now, &up, 5);
-                    path.extend(line(&up, &goal, 10).into_iter().skip(1));
-                    path
-                } else {
-                    line(tcp_now, &goal, 10)
-                }
+                line(tcp_now, &goal, 10)
             }
             Motion::Follow {
                 labware,

@@ -306,6 +306,12 @@ impl Episode {
         c
     }
 
+    /// MuJoCo's generalized positions (every joint of every robot and item): what a collision
+    /// check of the scene as it is now starts from ([`crate::clearance::Clearance::sync`]).
+    pub fn qpos(&self) -> Vec<f64> {
+        self.data.qpos().to_vec()
+    }
+
     /// Every robot's state, concatenated in task order.
     pub fn state(&self) -> Vec<f64> {
         (0..self.scene.robots.len())

@@ -7,6 +7,7 @@
 //! It does not decide what to do (policies live in `scoring`) nor whether an episode succeeded
 //! (verdicts live in `scoring`); it reports state.
 
+pub mod clearance;
 pub mod deps;
 pub mod episode;
 pub mod kinematics;

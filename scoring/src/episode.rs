@@ -198,6 +198,7 @@ pub fn run_episode_with(
                     })
                     .collect(),
                 labware: ep.labware_state(),
+                qpos: ep.qpos(),
             },
         };
         let asked = Instant::now();

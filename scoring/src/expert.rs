@@ -5,6 +5,7 @@
 //! Gripper values, settle times and speed limits come from each robot's model.
 
 use crate::policy::{Observation, PlanFailure, Policy, PolicyError, StageEvent};
+use crate::route::{Route, route};
 use compiler::motion::{Motion, MotionStep};
 use compiler::params::{Bindings, render};
 use compiler::{SceneInstance, Task};
@@ -12,6 +13,7 @@ use primitives::topp::{Limits, Trajectory, plan_trajectory};
 use primitives::{Kinematics, Lab, StepFrame, solve_ik};
 use robots::{IkMethod, RobotModel};
 use runtime::Scene;
+use runtime::clearance::Clearance;
 use runtime::kinematics::ArmKinematics;
 use std::collections::{BTreeMap, VecDeque};
 
@@ -54,6 +56,7 @@ enum Active {
 struct Arm {
     model: &'static RobotModel,
     kin: ArmKinematics,
+    clearance: Clearance,
     target: Vec<f64>,
     gripper: f64,
 }
@@ -71,6 +74,9 @@ pub struct ExpertPolicy {
     step_moved: bool,
     control_dt: f64,
     events: Vec<StageEvent>,
+    /// The episode's seed, and the free-space motions routed so far: each route's planner seed.
+    seed: u64,
+    routed: u64,
 }
 
 fn planning(context: String, failure: impl Into<PlanFailure>) -> PolicyError {
@@ -135,6 +141,7 @@ impl ExpertPolicy {
             .map(|(r, ids)| Arm {
                 model: ids.model,
                 kin: ArmKinematics::new(scene, r),
+                clearance: Clearance::new(scene, r),
                 target: instance.robot_q[r].clone(),
                 gripper: ids.model.gripper.open,
             })
@@ -151,6 +158,8 @@ impl ExpertPolicy {
             step_moved: false,
             control_dt: 1.0 / task.physics.control_hz(),
             events: Vec::new(),
+            seed: instance.seed,
+            routed: 0,
         })
     }
 
@@ -228,6 +237,31 @@ impl ExpertPolicy {
             }
         };
         self.step_moved = true;
+        let waypoints = if q.motion.through_free_space() {
+            let frame = &self.frame.as_ref().expect("set above").1;
+            let carried = frame.carried().and_then(|(item, in_tool)| {
+                let index = self.task.labware.iter().position(|l| l.name == item)?;
+                Some((index, *in_tool))
+            });
+            arm.clearance.sync(&obs.privileged.qpos, carried);
+            let seed = self.seed.rotate_left(20) ^ self.routed;
+            self.routed += 1;
+            let limits = arm.kin.limits();
+            match route(&mut arm.clearance, &limits, waypoints, seed)
+                .map_err(|e| planning(context.clone(), e))?
+            {
+                Route::Straight(path) => path,
+                Route::Planned { path, hits, checks } => {
+                    self.events.push(StageEvent {
+                        time: obs.time,
+                        label: format!("planned around {hits} ({checks} collision checks)"),
+                    });
+                    path
+                }
+            }
+        } else {
+            waypoints
+        };
         let limits = Limits {
             vmax: arm.model.expert_limits.vmax,
             amax: arm.model.expert_limits.amax,

@@ -13,6 +13,7 @@ pub mod policy;
 pub mod profile;
 pub mod remote;
 pub mod replay;
+pub mod route;
 pub mod verdict;
 
 pub use episode::{EpisodeOptions, EpisodeResult, Outcome, run_episode};

@@ -31,6 +31,8 @@ pub struct Privileged {
     /// Per robot, in task order: arm joint angles and current targets (its action layout).
     pub robots: Vec<RobotPrivileged>,
     pub labware: Vec<LabwareState>,
+    /// MuJoCo's generalized positions: the scene the expert's collision checks start from.
+    pub qpos: Vec<f64>,
 }
 
 pub struct RobotPrivileged {
@@ -60,6 +62,12 @@ pub enum PlanFailure {
         at: usize,
         of: usize,
         ik: primitives::IkError,
+    },
+    /// A free-space motion's straight path collides and RRTConnect found no way around.
+    #[error("the straight path hits {hits}, and {error}")]
+    Blocked {
+        hits: String,
+        error: planner::PlanError,
     },
 }
 

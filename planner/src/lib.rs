@@ -1,0 +1,28 @@
+//! Collision-free joint-space paths for the scripted expert: OMPL 1.5's RRTConnect ([`rrt`],
+//! through a one-function C-ABI shim, `cpp/shim.cpp`) finds a path, then seeded random
+//! shortcutting ([`shortcut`]) straightens it. Validity is the caller's closure (the runtime's
+//! MuJoCo collision check), so this crate knows no robot, scene or simulator. Timing the path
+//! (TOPP) is `primitives::topp`'s job, not this crate's.
+//!
+//! Determinism: every call is seeded by the caller and budgeted in validity checks, never in
+//! wall-clock time, so the same problem and seed give the same path, byte for byte.
+
+pub mod rrt;
+pub mod shortcut;
+
+pub use rrt::{PlanError, Problem, plan};
+pub use shortcut::{segment_is_clear, shortcut};
+
+/// Euclidean distance between two joint vectors (rad).
+pub fn distance(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).powi(2))
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// The point a fraction `t` of the way from `a` to `b`.
+pub fn lerp(a: &[f64], b: &[f64], t: f64) -> Vec<f64> {
+    a.iter().zip(b).map(|(x, y)| x + (y - x) * t).collect()
+}
