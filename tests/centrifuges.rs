@@ -251,10 +251,19 @@ fn balanced_needs_the_tube_down_in_the_slot_across_from_the_loaded_one() {
 fn the_rotor_camera_shows_where_the_loaded_tube_is() {
     let task = compile(ROTOR);
     let arm = task.sample(0).robot_q;
-    // The first frame of a draw, with the arm where draw 0 has it: only the loaded slot differs.
-    let frame = |seed: u64| {
+    let rotor = task.sample(0).labware_joints;
+    // The first frame of a draw, with the arm and the rotor where draw 0 has them: only the
+    // loaded slot differs.
+    let frame_turned = |seed: u64, turn: f64| {
         let mut instance = task.sample(seed);
         instance.robot_q = arm.clone();
+        instance.labware_joints = rotor.clone();
+        *instance
+            .labware_joints
+            .get_mut("centrifuge")
+            .unwrap()
+            .get_mut("rotor")
+            .unwrap() += turn;
         let scene = std::sync::Arc::new(runtime::Scene::build(&task, &instance).unwrap());
         let ep = runtime::Episode::new(scene, &task, &instance);
         let names: Vec<String> = task.cameras.iter().map(|c| c.name.clone()).collect();
@@ -266,6 +275,7 @@ fn the_rotor_camera_shows_where_the_loaded_tube_is() {
             .rgb;
         (instance.params["first"].clone(), rgb)
     };
+    let frame = |seed: u64| frame_turned(seed, 0.0);
     let (a, fa) = frame(0);
     let (same, fs) = (1..30)
         .map(frame)
@@ -284,5 +294,59 @@ fn the_rotor_camera_shows_where_the_loaded_tube_is() {
     assert!(
         changed > 30,
         "slots {a} and {b}: the loaded tube does not show ({changed} values differ)"
+    );
+    // The same slot with the rotor turned by the draw's full range: the tube moves with it.
+    let (_, turned) = frame_turned(0, 0.2);
+    let changed = fa.iter().zip(&turned).filter(|(x, y)| x != y).count();
+    assert!(
+        changed > 30,
+        "the rotor turned 0.2 rad does not show ({changed} values differ)"
+    );
+}
+
+#[test]
+fn the_rotor_starts_at_its_drawn_angle_with_the_loaded_tube_in_its_turned_slot() {
+    let task = compile(ROTOR);
+    let centrifuge = task
+        .labware
+        .iter()
+        .position(|l| l.name == "centrifuge")
+        .unwrap();
+    let placed = task
+        .labware
+        .iter()
+        .position(|l| l.name == "placed")
+        .unwrap();
+    let model = task.labware[centrifuge].params.instrument().unwrap();
+    let mut angles = Vec::new();
+    for seed in 0..4 {
+        let (instance, scene) = scene(&task, seed);
+        assert_eq!(task.sample(seed), instance, "the same seed, the same draw");
+        let angle = instance.labware_joints["centrifuge"]["rotor"];
+        assert!(angle.abs() <= 0.1, "{angle}");
+        angles.push(angle);
+        let ep = runtime::Episode::new(scene, &task, &instance);
+        let state = ep.labware_state();
+        assert!((state[centrifuge].joint("rotor") - angle).abs() < 1e-9);
+        // The loaded tube is on its slot's seat as the rotor stands, not as it would at 0.
+        let first = &instance.params["first"];
+        let seat = model.slot_seat(first, &state[centrifuge]).unwrap();
+        let tube = state[placed].pose.translation.vector;
+        assert!(
+            (tube - seat.translation.vector).norm() < 1e-3,
+            "seed {seed}: {tube:?} vs {seat:?}"
+        );
+        let unturned = state[centrifuge].with_joints(&[("rotor".into(), 0.0)]);
+        let seat0 = model.slot_seat(first, &unturned).unwrap();
+        if angle.abs() > 0.03 {
+            assert!(
+                (tube - seat0.translation.vector).norm() > 2e-3,
+                "seed {seed}"
+            );
+        }
+    }
+    assert!(
+        angles.windows(2).any(|w| (w[0] - w[1]).abs() > 0.02),
+        "{angles:?}"
     );
 }

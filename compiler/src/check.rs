@@ -386,6 +386,7 @@ fn lower_labware(cx: &mut Cx, p: &Protocol) -> (Vec<Option<LabwareSpec>>, KindMa
                 placement: pose(&l.pose),
                 xy_jitter_m: 0.0,
                 yaw_jitter_rad: 0.0,
+                joint_jitter: BTreeMap::new(),
                 initial: k
                     .parts
                     .iter()
@@ -553,6 +554,15 @@ fn randomise(
                             high: high.value.clone(),
                         });
                     }
+                    RandomItem::LabwareJoints { span, .. } => cx.err(
+                        Code::E0003,
+                        *span,
+                        format!(
+                            "robot `{}`'s joints are randomised by `low` and `high` arrays",
+                            target.value
+                        ),
+                        Some("e.g. `joints = { low = [-0.1, 0, 0, 0, 0, 0], high = [0.1, 0, 0, 0, 0, 0] }`; `role = angle` pairs are for labware joints".into()),
+                    ),
                     RandomItem::Xy(q) | RandomItem::Yaw(q) => cx.err(
                         Code::E0003,
                         q.span,
@@ -574,9 +584,37 @@ fn randomise(
                     RandomItem::Joints { span, .. } => cx.err(
                         Code::E0003,
                         *span,
-                        format!("labware `{}` has no joints to randomise", target.value),
-                        Some("use `xy` and `yaw` for labware".into()),
+                        format!(
+                            "labware `{}`'s joints are randomised by role, not by `low` and `high` arrays",
+                            target.value
+                        ),
+                        Some("e.g. `joints = { rotor = \"0.1 rad\" }` (± that angle), or `xy` and `yaw` to move the item".into()),
                     ),
+                    RandomItem::LabwareJoints { joints, .. } => {
+                        let Some(kind) = labware::kind(&lw.kind) else {
+                            continue;
+                        };
+                        let roles: Vec<&str> = kind.joints.iter().map(|(j, _)| *j).collect();
+                        for (role, q) in joints {
+                            if roles.contains(&role.value.as_str()) {
+                                lw.joint_jitter.insert(role.value.clone(), q.value.abs());
+                            } else if roles.is_empty() {
+                                cx.err(
+                                    Code::E0003,
+                                    role.span,
+                                    format!("`{}` ({}) has no joints to randomise", target.value, lw.kind),
+                                    Some("use `xy` and `yaw` to move the item".into()),
+                                );
+                            } else {
+                                cx.err(
+                                    Code::E0003,
+                                    role.span,
+                                    format!("`{}` ({}) has no joint `{}`", target.value, lw.kind, role.value),
+                                    Some(hint_for(&role.value, &roles, "its joints")),
+                                );
+                            }
+                        }
+                    }
                 }
             }
         } else {

@@ -94,6 +94,9 @@ pub struct LabwareSpec {
     /// ± metres of uniform planar jitter, ± radians of uniform yaw jitter.
     pub xy_jitter_m: f64,
     pub yaw_jitter_rad: f64,
+    /// ± radians of uniform jitter of a joint's start angle, by role (a rotor's).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub joint_jitter: BTreeMap<String, f64>,
     /// Initial part states (every part of the kind).
     pub initial: BTreeMap<String, String>,
     /// Where a movable item starts (template `holder.slot`); `None`: at `placement`.
@@ -157,6 +160,9 @@ pub struct SceneInstance {
     pub labware_placement: Vec<Pose>,
     /// The drawn parameter values.
     pub params: Bindings,
+    /// Offsets of labware joints' start angles (rad), by item and role: only the jittered ones.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub labware_joints: BTreeMap<String, BTreeMap<String, f64>>,
     /// The task's instruction, and each stage's, with the parameters filled in.
     pub instruction: String,
     pub stage_instructions: Vec<String>,
@@ -164,8 +170,9 @@ pub struct SceneInstance {
 
 impl Task {
     /// Draws the scene for `seed`. Draw order: robots in order (one draw per joint), then labware in
-    /// order (x, y, yaw), then parameters in order. The same task and seed always give the same
-    /// instance.
+    /// order (x, y, yaw), then parameters in order, then labware joint offsets (items in order,
+    /// roles in name order; last, so that adding one leaves every other draw as it was). The same
+    /// task and seed always give the same instance.
     pub fn sample(&self, seed: u64) -> SceneInstance {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
         let robot_q = self
@@ -200,6 +207,19 @@ impl Task {
         // The compiler proved every combination it traced drawable; a sampled proof may miss one,
         // in which case the episode gets no parameters and its templates stay as written.
         let params = draw_all(&self.params, &mut rng).unwrap_or_default();
+        let labware_joints = self
+            .labware
+            .iter()
+            .filter(|l| !l.joint_jitter.is_empty())
+            .map(|l| {
+                let offsets = l
+                    .joint_jitter
+                    .iter()
+                    .map(|(role, &j)| (role.clone(), uniform(&mut rng, -j, j)))
+                    .collect();
+                (l.name.clone(), offsets)
+            })
+            .collect();
         let fill = |t: &str| render(t, &params).unwrap_or_else(|_| t.to_string());
         SceneInstance {
             seed,
@@ -208,6 +228,7 @@ impl Task {
             instruction: fill(&self.instruction),
             stage_instructions: self.stages.iter().map(|s| fill(&s.instruction)).collect(),
             params,
+            labware_joints,
         }
     }
 

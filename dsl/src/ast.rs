@@ -166,6 +166,11 @@ pub enum RandomItem {
     Xy(Spanned<f64>),
     /// Uniform yaw offset: ± radians.
     Yaw(Spanned<f64>),
+    /// Uniform offsets of a labware item's joints, by role: ± radians (a rotor's start angle).
+    LabwareJoints {
+        joints: Vec<(Spanned<String>, Spanned<f64>)>,
+        span: Span,
+    },
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize)]

@@ -637,6 +637,28 @@ impl Parser {
                     let Some(jt) = self.table(value, "`joints`") else {
                         continue;
                     };
+                    // `low`/`high` arrays: a robot's joints; `role = angle` pairs: an item's.
+                    let robot_form = ordered(jt)
+                        .iter()
+                        .any(|(jk, _)| matches!(jk.get_ref().as_ref(), "low" | "high"));
+                    if !robot_form && !ordered(jt).is_empty() {
+                        let mut joints = Vec::new();
+                        for (jk, jv) in ordered(jt) {
+                            // `joints_rad = { rotor = 0.1 }`: the outer key's unit covers the
+                            // values; else each value or key names its own.
+                            let key = jk.get_ref().as_ref();
+                            let unit_key = if split_unit(k).1.is_some() { k } else { key };
+                            if let Some(q) = self.quantity(unit_key, jv, Dimension::Angle) {
+                                let role = split_unit(key).0.to_string();
+                                joints.push((Spanned::new(role, span_of(jk)), q));
+                            }
+                        }
+                        r.items.push(RandomItem::LabwareJoints {
+                            joints,
+                            span: span_of(value),
+                        });
+                        continue;
+                    }
                     let (mut low, mut high) = (None, None);
                     for (jk, jv) in ordered(jt) {
                         match jk.get_ref().as_ref() {

@@ -328,16 +328,20 @@ pub const KINDS: &[LabwareKind] = &[
         primitives: &["open_lid", "close_lid"],
         liquid_tool: false,
     },
-    lidded(
-        "centrifuge_5430",
-        "benchtop centrifuge with a latched lid and a 30-place rotor for 1.5 mL tubes (Eppendorf 5430)",
-        &[LID_LOCKING],
-        Some(Slots {
-            layout: SlotLayout::Ring { n: 30 },
-            accepts: &["tube_1_5ml"],
-        }),
-        LID_KEY,
-    ),
+    LabwareKind {
+        // The rotor turns freely: its start angle can be drawn (`[randomise.x] joints`).
+        joints: &[("lid", "rad"), ("rotor", "rad")],
+        ..lidded(
+            "centrifuge_5430",
+            "benchtop centrifuge with a latched lid and a 30-place rotor for 1.5 mL tubes (Eppendorf 5430)",
+            &[LID_LOCKING],
+            Some(Slots {
+                layout: SlotLayout::Ring { n: 30 },
+                accepts: &["tube_1_5ml"],
+            }),
+            LID_KEY,
+        )
+    },
     lidded(
         "centrifuge_5910",
         "floor-standing centrifuge with a latched lid (Eppendorf 5910 Ri)",

@@ -78,10 +78,15 @@ pub(crate) fn start_seat(task: &Task, instance: &SceneInstance, i: usize) -> Opt
     let at = render(at, &instance.params).ok()?;
     let (holder, slot) = at.split_once('.')?;
     let h = task.labware_index(holder)?;
+    // The holder's joints as reset puts them: a rotor turned by its drawn offset.
     let holder_state = LabwareState {
         name: holder.to_string(),
         pose: instance.labware_placement[h],
-        joints: BTreeMap::new(),
+        joints: instance
+            .labware_joints
+            .get(holder)
+            .cloned()
+            .unwrap_or_default(),
         parts: BTreeMap::new(),
         logic: Logic::new(),
         touched_by: Vec::new(),
@@ -134,6 +139,12 @@ impl Episode {
             for (role, v) in reset.joints {
                 if let Some((_, adr)) = ids.joints.iter().find(|(r, _)| *r == role) {
                     self.data.qpos_mut()[*adr] = v;
+                }
+            }
+            let offsets = instance.labware_joints.get(&self.task.labware[i].name);
+            for (role, offset) in offsets.into_iter().flatten() {
+                if let Some((_, adr)) = ids.joints.iter().find(|(r, _)| r == role) {
+                    self.data.qpos_mut()[*adr] += offset;
                 }
             }
             self.logic[i] = reset.logic;
