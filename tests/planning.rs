@@ -57,24 +57,35 @@ fn the_check_fails_a_hand_or_a_carried_tube_pushed_into_the_bench() {
         "{hits:?}"
     );
 
-    // Carrying the tube 6 cm past the tool's centre point: its lower end is inside the bench
-    // while the hand, 5 cm up, is clear of it.
+    // The tube held 6 cm past the tool's centre point, the hand 15 cm up: clear. Carried, it
+    // follows the hand down to 5 cm up and goes 1 cm into the bench; not carried, it stays
+    // behind and the hand alone is clear there.
+    let high = ik(&mut kin, bench + 0.15);
+    let mut qpos = ep.qpos();
+    for (k, &adr) in scene.robots[0].qpos.iter().enumerate() {
+        qpos[adr] = high[k];
+    }
     let tube = task.labware.iter().position(|l| l.name == "tube").unwrap();
-    clear.sync(
-        &ep.qpos(),
-        Some((tube, labware::frame::translation([0.0, 0.0, 0.06]))),
-    );
-    assert!(clear.is_clear(&start), "{:?}", clear.collisions(&start));
+    let held = kin.tcp(&high) * labware::frame::translation([0.0, 0.0, 0.06]);
+    let adr = scene.labware[tube].free[0].qpos;
+    let p = held.translation.vector;
+    let r = labware::frame::wxyz(&held.rotation);
+    qpos[adr..adr + 7].copy_from_slice(&[p.x, p.y, p.z, r[0], r[1], r[2], r[3]]);
+    clear.sync(&qpos, Some(tube));
+    assert!(clear.is_clear(&high), "{:?}", clear.collisions(&high));
     let hits = clear.collisions(&above);
+    let names: Vec<(String, String)> = hits
+        .iter()
+        .map(|&(a, b)| (clear.body_name(a), clear.body_name(b)))
+        .collect();
     assert!(
-        hits.iter()
-            .any(|&(a, b)| clear.body_name(a).starts_with("tube")
-                || clear.body_name(b).starts_with("tube")),
-        "{:?}",
-        hits.iter()
-            .map(|&(a, b)| (clear.body_name(a), clear.body_name(b)))
-            .collect::<Vec<_>>()
+        names
+            .iter()
+            .any(|(a, b)| a.starts_with("tube") || b.starts_with("tube")),
+        "{names:?}"
     );
+    clear.sync(&qpos, None);
+    assert!(clear.is_clear(&above), "{:?}", clear.collisions(&above));
 }
 
 /// The expert, keeping a copy of the events it reports.

@@ -167,3 +167,38 @@ fn a_key_latched_lid_is_released_by_its_key_before_it_opens() {
         assert!(hint.contains(says), "{file}: {hint}");
     }
 }
+
+/// The rotor protocol with its `[randomise.centrifuge]` line replaced: the task, or the codes.
+fn rotor_jitter(line: &str) -> Result<f64, Vec<String>> {
+    let path = "protocols/centrifuge/insert_symmetric.toml";
+    let source = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(path))
+        .unwrap()
+        .replace("joints_rad = { rotor = 0.1 }", line);
+    let (task, diags) = compiler::compile_source(&source, path);
+    match task {
+        Some(t) => Ok(t.labware[0].joint_jitter["rotor"]),
+        None => Err(diags.iter().map(|d| d.code.to_string()).collect()),
+    }
+}
+
+#[test]
+fn a_labware_joint_offset_takes_its_own_unit_and_is_refused_where_it_cannot_apply() {
+    assert_eq!(rotor_jitter("joints_rad = { rotor = 0.1 }"), Ok(0.1));
+    assert_eq!(rotor_jitter("joints = { rotor = \"0.1 rad\" }"), Ok(0.1));
+    // A value's own unit wins over the table's.
+    let five_deg = rotor_jitter("joints_rad = { rotor_deg = 5 }").unwrap();
+    assert!((five_deg - 5f64.to_radians()).abs() < 1e-12, "{five_deg}");
+    assert!((rotor_jitter("joints = { rotor = \"-5 deg\" }").unwrap() - five_deg).abs() < 1e-12);
+    for (line, code) in [
+        ("joints_rad = { rotor = 0.1, rotor_deg = 5 }", "E0007"),
+        ("joints_rad = {}", "E0002"),
+        ("joints_rad = { lid = 0.1 }", "E0003"),
+        ("joints_rad = { roter = 0.1 }", "E0003"),
+        ("joints_rad = { rotor = 4 }", "E0021"),
+        ("joints = { rotor = \"4 kg\" }", "E0020"),
+        ("joints_rad = { low = [-0.1], high = [0.1] }", "E0004"),
+    ] {
+        let codes = rotor_jitter(line).expect_err(line);
+        assert!(codes.iter().any(|c| c == code), "{line}: {codes:?}");
+    }
+}

@@ -555,7 +555,7 @@ fn randomise(
                         });
                     }
                     RandomItem::LabwareJoints { span, .. } => cx.err(
-                        Code::E0003,
+                        Code::E0004,
                         *span,
                         format!(
                             "robot `{}`'s joints are randomised by `low` and `high` arrays",
@@ -582,7 +582,7 @@ fn randomise(
                     RandomItem::Xy(q) => lw.xy_jitter_m = q.value.abs(),
                     RandomItem::Yaw(q) => lw.yaw_jitter_rad = q.value.abs(),
                     RandomItem::Joints { span, .. } => cx.err(
-                        Code::E0003,
+                        Code::E0004,
                         *span,
                         format!(
                             "labware `{}`'s joints are randomised by role, not by `low` and `high` arrays",
@@ -596,8 +596,33 @@ fn randomise(
                         };
                         let roles: Vec<&str> = kind.joints.iter().map(|(j, _)| *j).collect();
                         for (role, q) in joints {
-                            if roles.contains(&role.value.as_str()) {
-                                lw.joint_jitter.insert(role.value.clone(), q.value.abs());
+                            let is_part = kind.parts.iter().any(|p| p.part == role.value);
+                            if is_part && roles.contains(&role.value.as_str()) {
+                                // A lid starts in its declared state (`open`, `closed`): the proof
+                                // and the latch rely on it.
+                                cx.err(
+                                    Code::E0003,
+                                    role.span,
+                                    format!(
+                                        "`{}`'s `{}` starts in its declared state and cannot be randomised",
+                                        target.value, role.value
+                                    ),
+                                    Some(format!(
+                                        "set it with `state = {{ {} = \"...\" }}`; free joints (a rotor) can be randomised",
+                                        role.value
+                                    )),
+                                );
+                            } else if roles.contains(&role.value.as_str()) {
+                                if q.value.abs() > std::f64::consts::PI {
+                                    cx.err(
+                                        Code::E0021,
+                                        q.span,
+                                        format!("± {} rad is more than half a turn", q.value.abs()),
+                                        Some("a joint offset is drawn from ±this angle; at most π".into()),
+                                    );
+                                } else {
+                                    lw.joint_jitter.insert(role.value.clone(), q.value.abs());
+                                }
                             } else if roles.is_empty() {
                                 cx.err(
                                     Code::E0003,
@@ -610,7 +635,7 @@ fn randomise(
                                     Code::E0003,
                                     role.span,
                                     format!("`{}` ({}) has no joint `{}`", target.value, lw.kind, role.value),
-                                    Some(hint_for(&role.value, &roles, "its joints")),
+                                    Some(hint_for(&role.value, &roles, "joints")),
                                 );
                             }
                         }

@@ -87,6 +87,10 @@ pub fn describe(task: &Task) -> String {
                 l.yaw_jitter_rad.to_degrees()
             );
         }
+        for (role, j) in &l.joint_jitter {
+            any = true;
+            let _ = writeln!(w, "  {}.{role} ± {} rad", l.name, format_number(*j));
+        }
     }
     for p in &task.params {
         any = true;

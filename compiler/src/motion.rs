@@ -42,8 +42,8 @@ pub enum Motion {
     Approach { target: Target, standoff: f64 },
     /// A straight line to the target.
     Reach { target: Target },
-    /// A straight horizontal move to above the target, at the current height (first straight up,
-    /// where the target is less than a clearance below it).
+    /// To above the target, at the current height or a clearance above the target when that is
+    /// higher: a straight line where that is clear, else planned around what it would hit.
     Transit { target: Target },
     /// Follow an affordance while the item's joints move from their live values to the goals.
     Follow {

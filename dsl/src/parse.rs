@@ -637,26 +637,46 @@ impl Parser {
                     let Some(jt) = self.table(value, "`joints`") else {
                         continue;
                     };
-                    // `low`/`high` arrays: a robot's joints; `role = angle` pairs: an item's.
+                    // Arrays (`low`/`high`): a robot's joints; `role = angle` pairs: an item's.
+                    // The form is the values' shape, so a misspelt `low` stays a robot's typo.
                     let robot_form = ordered(jt)
                         .iter()
-                        .any(|(jk, _)| matches!(jk.get_ref().as_ref(), "low" | "high"));
-                    if !robot_form && !ordered(jt).is_empty() {
+                        .any(|(_, jv)| matches!(jv.get_ref(), DeValue::Array(_)));
+                    if ordered(jt).is_empty() {
+                        self.err(
+                            Code::E0002,
+                            span_of(value),
+                            "`joints` is empty".into(),
+                            Some(
+                                "a robot's: `{ low = [..], high = [..] }`; an item's: `{ rotor = \"0.1 rad\" }`"
+                                    .into(),
+                            ),
+                        );
+                        continue;
+                    }
+                    if !robot_form {
                         let mut joints = Vec::new();
-                        for (jk, jv) in ordered(jt) {
-                            // `joints_rad = { rotor = 0.1 }`: the outer key's unit covers the
-                            // values; else each value or key names its own.
+                        for (jk, jv) in self.settings(jt) {
+                            // `joints_rad = { rotor = 0.1 }`: the outer key's unit covers a
+                            // value whose own key names none (`rotor_deg = 5` keeps its own).
                             let key = jk.get_ref().as_ref();
-                            let unit_key = if split_unit(k).1.is_some() { k } else { key };
+                            let unit_key =
+                                if split_unit(key).1.is_none() && split_unit(k).1.is_some() {
+                                    k
+                                } else {
+                                    key
+                                };
                             if let Some(q) = self.quantity(unit_key, jv, Dimension::Angle) {
                                 let role = split_unit(key).0.to_string();
                                 joints.push((Spanned::new(role, span_of(jk)), q));
                             }
                         }
-                        r.items.push(RandomItem::LabwareJoints {
-                            joints,
-                            span: span_of(value),
-                        });
+                        if !joints.is_empty() {
+                            r.items.push(RandomItem::LabwareJoints {
+                                joints,
+                                span: span_of(value),
+                            });
+                        }
                         continue;
                     }
                     let (mut low, mut high) = (None, None);

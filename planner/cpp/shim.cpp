@@ -1,9 +1,11 @@
 // autobio's only C++: one extern "C" function that plans a joint-space path with OMPL 1.5's
 // RRTConnect. Validity comes from a callback (the caller's collision check); sampling is seeded
-// per call and the planner stops after a budget of validity checks, so the same inputs give the
-// same path (no wall-clock limit, no process-wide RNG). No simplification here: the caller
+// per call, nearest neighbours are found by linear search (the default GNAT picks pivots with
+// OMPL's process-wide generator) and the planner stops after a budget of validity checks, so the
+// same inputs give the same path (no wall-clock limit). No simplification here: the caller
 // shortcuts with its own seeded RNG. Every C++ exception stays in this file.
 #include <ompl/base/StateSampler.h>
+#include <ompl/datastructures/NearestNeighborsLinear.h>
 #include <ompl/base/spaces/RealVectorStateSpace.h>
 #include <ompl/geometric/SimpleSetup.h>
 #include <ompl/geometric/planners/rrt/RRTConnect.h>
@@ -33,7 +35,8 @@ typedef bool (*autobio_valid_fn)(void *user, const double *q, unsigned dim);
 
 // Returns the number of states written to `out` (dim doubles each, start and goal included),
 // 0 when no path was found within `max_checks` validity checks, -1 when the start is invalid,
-// -2 when the goal is invalid, -3 when `max_states` is too small and -4 on an OMPL exception.
+// -2 when the goal is invalid, -3 when `max_states` is too small, -4 on an OMPL exception and
+// -5 on any other planner status (the caller checked bounds, so none is expected).
 int autobio_rrt_connect(unsigned dim, const double *lo, const double *hi, const double *start,
                         const double *goal, double range, double resolution,
                         unsigned long long max_checks, unsigned long long seed,
@@ -69,11 +72,16 @@ int autobio_rrt_connect(unsigned dim, const double *lo, const double *hi, const 
         if (!valid(user, goal, dim)) return -2;
         setup.setStartAndGoalStates(from, to);
         auto planner = std::make_shared<og::RRTConnect>(setup.getSpaceInformation());
+        planner->setNearestNeighbors<ompl::NearestNeighborsLinear>();
         if (range > 0) planner->setRange(range);
         setup.setPlanner(planner);
         setup.setup();
         ob::PlannerTerminationCondition budget([&] { return checks >= max_checks; });
-        if (setup.solve(budget) != ob::PlannerStatus::EXACT_SOLUTION) return 0;
+        const ob::PlannerStatus status = setup.solve(budget);
+        if (status == ob::PlannerStatus::TIMEOUT || status == ob::PlannerStatus::APPROXIMATE_SOLUTION) return 0;
+        if (status == ob::PlannerStatus::INVALID_START) return -1;
+        if (status == ob::PlannerStatus::INVALID_GOAL) return -2;
+        if (status != ob::PlannerStatus::EXACT_SOLUTION) return -5;
 
         auto &path = setup.getSolutionPath();
         const auto n = path.getStateCount();

@@ -13,6 +13,15 @@ pub mod shortcut;
 pub use rrt::{PlanError, Problem, plan};
 pub use shortcut::{segment_is_clear, shortcut};
 
+/// A planner seed from a base seed and a counter (SplitMix64's finaliser): every bit of both
+/// reaches the seed OMPL's 32-bit generator gets, so seeds that differ anywhere plan apart.
+pub fn mix(base: u64, n: u64) -> u64 {
+    let mut z = base ^ n.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
 /// Euclidean distance between two joint vectors (rad).
 pub fn distance(a: &[f64], b: &[f64]) -> f64 {
     a.iter()

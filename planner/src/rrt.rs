@@ -91,10 +91,28 @@ pub fn plan<F: FnMut(&[f64]) -> bool>(
     if !ordered || problem.step.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return Err(PlanError::Malformed("empty bounds or a non-positive step"));
     }
+    let inside = |q: &[f64]| {
+        q.iter()
+            .zip(&problem.bounds)
+            .all(|(v, (lo, hi))| (lo..=hi).contains(&v))
+    };
+    if !inside(&problem.start) || !inside(&problem.goal) {
+        return Err(PlanError::Malformed(
+            "the start or the goal lies outside the bounds",
+        ));
+    }
     let lo: Vec<f64> = problem.bounds.iter().map(|b| b.0).collect();
     let hi: Vec<f64> = problem.bounds.iter().map(|b| b.1).collect();
     // OMPL's resolution is a fraction of the space's extent (its diameter).
     let extent = crate::distance(&lo, &hi);
+    if problem.step >= extent {
+        return Err(PlanError::Malformed("the check step spans the whole space"));
+    }
+    // OMPL's generator takes 32 bits: fold all 64 in.
+    let seed = {
+        let s = crate::mix(problem.seed, 0);
+        (s ^ (s >> 32)) & 0xFFFF_FFFF
+    };
     let mut out = vec![0.0; MAX_STATES * dim];
     // SAFETY: every pointer is valid for the lengths the shim reads or writes (dim, and
     // MAX_STATES * dim for `out`), and `valid` outlives the call.
@@ -108,7 +126,7 @@ pub fn plan<F: FnMut(&[f64]) -> bool>(
             problem.range,
             problem.step / extent,
             problem.max_checks,
-            problem.seed,
+            seed,
             trampoline::<F>,
             &mut valid as *mut F as *mut c_void,
             out.as_mut_ptr(),

@@ -68,6 +68,8 @@ fn the_same_seed_plans_the_same_path_and_another_seed_another() {
     let b = plan(&problem(3), valid).unwrap();
     assert_eq!(a, b);
     assert_ne!(a, other);
+    // Seeds that differ only above the low 32 bits plan apart too.
+    assert_ne!(a, plan(&problem(3 + (1 << 32)), valid).unwrap());
     assert_eq!(
         shortcut(&a, 50, 0.02, 9, valid),
         shortcut(&b, 50, 0.02, 9, valid)
@@ -90,6 +92,12 @@ fn invalid_ends_and_a_closed_wall_are_typed_errors() {
         plan(&p, |q: &[f64]| q[0].abs() >= 0.3),
         Err(PlanError::NoPath(5_000))
     );
+    let mut p = problem(1);
+    p.goal[0] = 3.5;
+    assert!(matches!(plan(&p, valid), Err(PlanError::Malformed(_))));
+    let mut p = problem(1);
+    p.step = 100.0;
+    assert!(matches!(plan(&p, valid), Err(PlanError::Malformed(_))));
     // A panicking check is "not valid", not an unwind into C++.
     assert_eq!(
         plan(&problem(1), |_: &[f64]| -> bool { panic!("checker bug") }),

@@ -259,6 +259,16 @@ impl StepFrame {
         }
     }
 
+    /// Measures again how the carried item (if any) sits in the hand, with the tool at
+    /// `tcp_now`: a step's later seat motions then aim with the grasp as it is, not as it was
+    /// when the step began.
+    pub fn regrip(&mut self, lab: &Lab, tcp_now: &Pose) -> Result<(), PlanError> {
+        if let Some((item, in_tool)) = &mut self.carried {
+            *in_tool = tcp_now.inverse() * lab.pose_of(item)?;
+        }
+        Ok(())
+    }
+
     /// The item the step carries to a seat, and its root pose in the tool frame.
     pub fn carried(&self) -> Option<(&str, &Pose)> {
         self.carried

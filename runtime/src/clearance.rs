@@ -20,7 +20,8 @@ use std::sync::Arc;
 /// contacts between stacked items sit at fractions of a millimetre.
 const PENETRATION: f64 = 0.001;
 
-/// An item carried rigidly in the hand: each of its free joints follows the tool.
+/// An item carried rigidly in the hand: each of its free joints follows the tool. Only the item
+/// the caller names is carried: anything else in the hand would stay behind as an obstacle.
 struct Carried {
     /// Each free joint's qpos address and its body's pose in the tool frame.
     free: Vec<(usize, Pose)>,
@@ -58,10 +59,11 @@ impl Clearance {
         }
     }
 
-    /// Takes the scene's configuration `qpos` (the episode's [`crate::Episode::qpos`]) and,
-    /// when the arm carries an item, its index in the task and its root pose in the tool frame.
-    /// The contacts at this configuration become the allowed pairs.
-    pub fn sync(&mut self, qpos: &[f64], carried: Option<(usize, Pose)>) {
+    /// Takes the scene's configuration `qpos` (the episode's [`crate::Episode::qpos`]) and the
+    /// item the arm carries, if any (its index in the task): each of its free bodies keeps, in
+    /// every check, the pose in the tool frame it has in `qpos` (the grasp as it is, slip and
+    /// all). The contacts at this configuration become the allowed pairs.
+    pub fn sync(&mut self, qpos: &[f64], carried: Option<usize>) {
         self.data.qpos_mut().copy_from_slice(qpos);
         self.data.kinematics();
         let robot = self.robot;
@@ -70,27 +72,20 @@ impl Clearance {
             .iter()
             .map(|o| match o {
                 Some(Owner::Robot(r)) => *r == robot,
-                Some(Owner::Labware(l)) => carried.as_ref().is_some_and(|(c, _)| c == l),
+                Some(Owner::Labware(l)) => carried == Some(*l),
                 None => false,
             })
             .collect();
-        self.carried = carried.map(|(item, root_in_tool)| {
-            let ids = &self.labware[item];
-            let root = self.body_pose(ids.root_body);
-            let tool_from_root = root_in_tool * root.inverse();
-            let free = ids
+        let tool_from_world = self.tcp().inverse();
+        self.carried = carried.map(|item| Carried {
+            free: self.labware[item]
                 .free
                 .iter()
-                .map(|f| (f.qpos, tool_from_root * self.free_pose(f.qpos)))
-                .collect();
-            Carried { free }
+                .map(|f| (f.qpos, tool_from_world * self.free_pose(f.qpos)))
+                .collect(),
         });
         self.data.collision();
         self.allowed = self.colliding_pairs().into_iter().collect();
-    }
-
-    fn body_pose(&self, body: usize) -> Pose {
-        labware::frame::pose(self.data.xpos()[body], from_wxyz(self.data.xquat()[body]))
     }
 
     fn free_pose(&self, adr: usize) -> Pose {

@@ -78,23 +78,27 @@ pub(crate) fn start_seat(task: &Task, instance: &SceneInstance, i: usize) -> Opt
     let at = render(at, &instance.params).ok()?;
     let (holder, slot) = at.split_once('.')?;
     let h = task.labware_index(holder)?;
-    // The holder's joints as reset puts them: a rotor turned by its drawn offset.
+    // The holder's joints as reset puts them: its declared state, plus its drawn offsets (a
+    // rotor's turn).
+    let model = task.labware[h].params.instrument()?;
+    let mut joints: BTreeMap<String, f64> = model
+        .reset(&task.labware[h].initial)
+        .joints
+        .into_iter()
+        .map(|(role, v)| (role.to_string(), v))
+        .collect();
+    for (role, offset) in instance.labware_joints.get(holder).into_iter().flatten() {
+        *joints.entry(role.clone()).or_insert(0.0) += offset;
+    }
     let holder_state = LabwareState {
         name: holder.to_string(),
         pose: instance.labware_placement[h],
-        joints: instance
-            .labware_joints
-            .get(holder)
-            .cloned()
-            .unwrap_or_default(),
+        joints,
         parts: BTreeMap::new(),
         logic: Logic::new(),
         touched_by: Vec::new(),
     };
-    task.labware[h]
-        .params
-        .instrument()?
-        .slot_seat(slot, &holder_state)
+    model.slot_seat(slot, &holder_state)
 }
 
 impl Episode {

@@ -216,7 +216,13 @@ impl ExpertPolicy {
             }
             _ => {}
         }
-        let frame = &self.frame.as_ref().expect("set above").1;
+        let frame = &mut self.frame.as_mut().expect("set above").1;
+        // The item may have turned in the fingers on the way: each seat motion aims with the
+        // grasp as it is now.
+        frame
+            .regrip(&lab, &tcp_now)
+            .map_err(|e| planning(context.clone(), e))?;
+        let frame = &*frame;
         let poses = frame
             .poses(&q.motion, &lab, &tcp_now)
             .map_err(|e| planning(context.clone(), e))?;
@@ -237,14 +243,15 @@ impl ExpertPolicy {
             }
         };
         self.step_moved = true;
+        // TOPP's grid: 200 intervals, and for a planned route (~100 waypoints) 8 per waypoint.
+        let mut grid = 200;
         let waypoints = if q.motion.through_free_space() {
             let frame = &self.frame.as_ref().expect("set above").1;
-            let carried = frame.carried().and_then(|(item, in_tool)| {
-                let index = self.task.labware.iter().position(|l| l.name == item)?;
-                Some((index, *in_tool))
-            });
+            let carried = frame
+                .carried()
+                .and_then(|(item, _)| self.task.labware.iter().position(|l| l.name == item));
             arm.clearance.sync(&obs.privileged.qpos, carried);
-            let seed = self.seed.rotate_left(20) ^ self.routed;
+            let seed = planner::mix(self.seed, self.routed);
             self.routed += 1;
             let limits = arm.kin.limits();
             match route(&mut arm.clearance, &limits, waypoints, seed)
@@ -252,6 +259,7 @@ impl ExpertPolicy {
             {
                 Route::Straight(path) => path,
                 Route::Planned { path, hits, checks } => {
+                    grid = grid.max(8 * path.len());
                     self.events.push(StageEvent {
                         time: obs.time,
                         label: format!("planned around {hits} ({checks} collision checks)"),
@@ -266,7 +274,7 @@ impl ExpertPolicy {
             vmax: arm.model.expert_limits.vmax,
             amax: arm.model.expert_limits.amax,
         };
-        let traj = plan_trajectory(waypoints, &limits, 200);
+        let traj = plan_trajectory(waypoints, &limits, grid);
         Ok(Active::Path { traj, t0: obs.time })
     }
 
