@@ -269,11 +269,9 @@ impl StepFrame {
         Ok(())
     }
 
-    /// The item the step carries to a seat, and its root pose in the tool frame.
-    pub fn carried(&self) -> Option<(&str, &Pose)> {
-        self.carried
-            .as_ref()
-            .map(|(item, pose)| (item.as_str(), pose))
+    /// The item the step carries to a seat.
+    pub fn carried(&self) -> Option<&str> {
+        self.carried.as_ref().map(|(item, _)| item.as_str())
     }
 
     /// The same step with the other of a symmetric affordance's two grasps (half a turn about the

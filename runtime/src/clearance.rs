@@ -39,7 +39,7 @@ pub struct Clearance {
     carried: Option<Carried>,
     /// Body pairs (lower id first) in contact at the last sync.
     allowed: BTreeSet<(usize, usize)>,
-    /// Validity checks since construction (for the planner's budget and the bench).
+    /// Validity checks since construction (a planned route reports how many it took).
     pub checks: u64,
 }
 

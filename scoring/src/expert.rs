@@ -249,7 +249,7 @@ impl ExpertPolicy {
             let frame = &self.frame.as_ref().expect("set above").1;
             let carried = frame
                 .carried()
-                .and_then(|(item, _)| self.task.labware.iter().position(|l| l.name == item));
+                .and_then(|item| self.task.labware.iter().position(|l| l.name == item));
             arm.clearance.sync(&obs.privileged.qpos, carried);
             let seed = planner::mix(self.seed, self.routed);
             self.routed += 1;
