@@ -1,6 +1,6 @@
 //! The latched centrifuges' lid tasks (issue 9): the expert pushes the 5430's and the 5910's lids
-//! shut until the latch catches, and presses the 5430's lid key and lifts its lid open; `hold`
-//! scores nothing on either; "locked" fails a lid left a little open or shut without the latch,
+//! shut until the latch catches, and presses each one's lid key and lifts its lid open (the
+//! 5910's from an arm on a riser); `hold` scores nothing on any; "locked" fails a lid left a little open or shut without the latch,
 //! "open" a lid released but left shut or lifted part way; a latched lid stays shut against its
 //! spring; the fixed camera sees each centrifuge, and an open and a latched lid give different
 //! frames. Loading the 5430's rotor: the expert puts the tube into the slot across from the loaded
@@ -11,12 +11,14 @@
 mod common;
 
 use common::{compile, run, scene, spread};
+use mujoco_rs::prelude::*;
 use runtime::render::Cameras;
 use scoring::Judge;
 
 const C5430: &str = "protocols/centrifuge_5430/close_lid.toml";
 const C5910: &str = "protocols/centrifuge_5910/close_lid.toml";
 const O5430: &str = "protocols/centrifuge_5430/open_lid.toml";
+const O5910: &str = "protocols/centrifuge_5910/open_lid.toml";
 const ROTOR: &str = "protocols/centrifuge/insert_symmetric.toml";
 
 #[test]
@@ -39,32 +41,48 @@ fn the_expert_latches_both_lids_and_hold_scores_nothing() {
 }
 
 #[test]
-fn the_expert_releases_the_5430s_latch_with_its_key_and_lifts_the_lid_open() {
-    let task = compile(O5430);
-    for seed in [41, 42] {
-        let r = run(&task, seed, "expert");
-        assert!(r.success, "seed {seed}: {:?} {:#?}", r.error, r.verdict);
+fn the_expert_releases_each_latch_with_its_key_and_lifts_the_lid_open() {
+    for (path, seeds) in [(O5430, [41, 42]), (O5910, [43, 44])] {
+        let task = compile(path);
+        for seed in seeds {
+            let r = run(&task, seed, "expert");
+            assert!(
+                r.success,
+                "{path} seed {seed}: {:?} {:#?}",
+                r.error, r.verdict
+            );
+        }
+        // Without a press the latch holds the lid shut.
+        let hold = run(&task, seeds[0], "hold");
+        assert!(
+            !hold.success && hold.verdict.score == 0.0,
+            "{path}: {:#?}",
+            hold.verdict
+        );
     }
-    // Without a press the latch holds the lid shut.
-    let hold = run(&task, 41, "hold");
-    assert!(
-        !hold.success && hold.verdict.score == 0.0,
-        "{:#?}",
-        hold.verdict
-    );
 }
 
 #[test]
 fn open_needs_the_lid_standing_open_and_the_latch_released() {
-    let closed = -1.723;
-    // Open and released.
-    assert_eq!(judged(O5430, 0.0, false), (true, vec![true, true]));
-    // Released but left shut, or lifted part way: not open.
-    assert_eq!(judged(O5430, closed, false), (false, vec![false, true]));
-    assert_eq!(judged(O5430, -0.5, false), (false, vec![false, true]));
-    assert_eq!(judged(O5430, -0.02, false), (false, vec![false, true]));
-    // Still latched.
-    assert_eq!(judged(O5430, closed, true), (false, vec![false, false]));
+    for (path, closed) in [(O5430, -1.723), (O5910, -1.94)] {
+        // Open and released.
+        assert_eq!(judged(path, 0.0, false), (true, vec![true, true]), "{path}");
+        // Released but left shut, resting ajar on its spring, lifted part way, or just short of
+        // open: not open.
+        for lid in [closed, closed + 0.13, -0.5, -0.02] {
+            assert_eq!(
+                judged(path, lid, false),
+                (false, vec![false, true]),
+                "{path} at {lid}"
+            );
+        }
+        // Still latched.
+        assert_eq!(
+            judged(path, closed, true),
+            (false, vec![false, false]),
+            "{path}"
+        );
+    }
 }
 
 /// The task's verdict on its first state with the lid at `lid` (rad) and the latch as given.
@@ -163,7 +181,7 @@ fn a_latched_lid_stays_shut_and_an_unlatched_one_springs_open() {
 
 #[test]
 fn the_fixed_camera_sees_each_centrifuge_open_and_latched() {
-    for (path, closed) in [(C5430, -1.723), (C5910, -1.94)] {
+    for (path, closed) in [(C5430, -1.723), (C5910, -1.94), (O5910, -1.94)] {
         let frame = |lid: f64| {
             let (ep, task) = episode_with_lid(path, lid, lid == closed);
             let names: Vec<String> = task.cameras.iter().map(|c| c.name.clone()).collect();
@@ -349,4 +367,36 @@ fn the_rotor_starts_at_its_drawn_angle_with_the_loaded_tube_in_its_turned_slot()
         angles.windows(2).any(|w| (w[0] - w[1]).abs() > 0.02),
         "{angles:?}"
     );
+}
+
+/// The pedestal geom under `robot` in the seed-0 scene of `task`: its bottom and top heights.
+fn pedestal(task: &compiler::Task, robot: &str) -> Option<(f64, f64)> {
+    let (_, scene) = scene(task, 0);
+    let m = &scene.model;
+    let g = m.name_to_id(MjtObjBase::mjOBJ_GEOM, &format!("{robot}/pedestal"))?;
+    assert_ne!(m.geom_contype()[g], 0, "a pedestal the arm passes through");
+    let (z, half) = (m.geom_pos()[g][2], m.geom_size()[g][1]);
+    Some((z - half, z + half))
+}
+
+#[test]
+fn a_raised_arm_stands_on_a_pedestal_from_the_surface_below_it() {
+    // The 5910 opener's arm stands 0.546 m above the bench top (0.824 m): on a riser that
+    // reaches from the bench to its base.
+    let (bottom, top) = pedestal(&compile(O5910), "arm").expect("the raised arm's pedestal");
+    assert!(
+        (bottom - 0.824).abs() < 1e-9 && (top - 1.37).abs() < 1e-9,
+        "{bottom} {top}"
+    );
+    // Off the bench, the riser stands on the floor.
+    let off = common::compile_edited(O5910, |s| {
+        s.replace("[0.4, 0.25, 1.37]", "[0.6, 0.25, 1.37]")
+    });
+    let (bottom, top) = pedestal(&off, "arm").expect("the off-bench arm's pedestal");
+    assert!(
+        bottom.abs() < 1e-9 && (top - 1.37).abs() < 1e-9,
+        "{bottom} {top}"
+    );
+    // An arm standing on the bench has none.
+    assert_eq!(pedestal(&compile(C5910), "arm"), None);
 }

@@ -73,6 +73,7 @@ fn every_simulated_task_scores_zero_without_motion() {
             "centrifuge_5430.close_lid",
             "centrifuge_5430.open_lid",
             "centrifuge_5910.close_lid",
+            "centrifuge_5910.open_lid",
             "centrifuge_mini.close_lid",
             "centrifuge_mini.open_lid",
             "thermal_cycler.close_lid",

@@ -172,8 +172,9 @@ impl Params {
             lid_stiffness: 27.5,
             lid_open: 0.0,
             lid_closed: -1.94,
-            // Past its balance (1.09 rad from shut) the spring opens it: let go at 1.24.
-            lid_let_go: 0.7,
+            // Its spring opens it past its balance (1.09 rad from shut), but slowly (damped), and
+            // a lid let go short of open swings into the hand that let it go: carried all the way.
+            lid_let_go: 0.0,
             latch_catch: 0.01,
             bar_inset: 0.03,
             bar_height: 0.028,

@@ -173,6 +173,31 @@ const ROOM: &str = r#"    <light name="ceiling" pos="0 0 3" dir="0 0 -1" directi
     <geom name="room/ceiling_panel" type="box" size="0.6 0.3 0.01" pos="0 -0.4 2.95" rgba="1 1 0.97 1" contype="0" conaffinity="0"/>
 "#;
 
+/// The bench's top (its half extents and height): everything of a task stands on it.
+const BENCH_HALF: [f64; 2] = [0.409, 0.652];
+const BENCH_TOP: f64 = 0.824;
+/// A robot base this far above what it stands over gets a pedestal (m).
+const PEDESTAL_FROM: f64 = 0.01;
+const PEDESTAL_RADIUS: f64 = 0.09;
+
+/// A riser under a robot whose base stands above the bench (or, off the bench, above the floor):
+/// a grey column from the surface to the base, so that a raised arm stands on something that
+/// is seen and collides, as a lab mounts an arm on a riser. Empty for a base on the surface.
+fn pedestal(robot: &str, base: &Pose) -> String {
+    let [x, y, z] = [base.translation.x, base.translation.y, base.translation.z];
+    let on_bench = x.abs() <= BENCH_HALF[0] && y.abs() <= BENCH_HALF[1];
+    let surface = if on_bench { BENCH_TOP } else { 0.0 };
+    let height = z - surface;
+    if height < PEDESTAL_FROM {
+        return String::new();
+    }
+    format!(
+        "<geom name=\"{robot}/pedestal\" type=\"cylinder\" size=\"{PEDESTAL_RADIUS} {h}\" pos=\"{x} {y} {c}\" rgba=\"0.42 0.44 0.47 1\"/>\n",
+        h = height / 2.0,
+        c = surface + height / 2.0,
+    )
+}
+
 /// The scene's MJCF; `detail` picks the robots' visual meshes (nothing else differs).
 pub fn scene_xml(task: &Task, placements: &[Pose], detail: Detail) -> Result<String, SceneError> {
     let mut world = String::new();
@@ -203,6 +228,7 @@ pub fn scene_xml(task: &Task, placements: &[Pose], detail: Detail) -> Result<Str
             );
             prepared.push(model.name);
         }
+        world += &pedestal(&r.name, &r.base);
         let mount = r.base * labware::frame::axis_angle([0.0, 0.0, 1.0], model.mount_yaw);
         world += &format!(
             "<body name=\"{n}/mount\" {}>\n  <attach model=\"{}\" body=\"{}\" prefix=\"{n}/\"/>\n</body>\n",
@@ -250,7 +276,7 @@ pub fn scene_xml(task: &Task, placements: &[Pose], detail: Detail) -> Result<Str
 {assets}{labware_assets}  </asset>
   <worldbody>
 {room}    <body name="table">
-      <geom name="table/top" type="box" size="0.409 0.652 0.412" pos="0 0 0.412" rgba="0.72 0.66 0.56 1"/>
+      <geom name="table/top" type="box" size="{bx} {by} {bz}" pos="0 0 {bz}" rgba="0.72 0.66 0.56 1"/>
     </body>
 {world}{labware_world}  </worldbody>
   <equality>
@@ -261,6 +287,9 @@ pub fn scene_xml(task: &Task, placements: &[Pose], detail: Detail) -> Result<Str
 "#,
         id = task.id,
         room = ROOM,
+        bx = BENCH_HALF[0],
+        by = BENCH_HALF[1],
+        bz = BENCH_TOP / 2.0,
         dt = task.physics.timestep_s,
         labware_assets = labware.asset,
         labware_world = labware.worldbody,

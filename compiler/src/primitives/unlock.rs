@@ -14,11 +14,20 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     motions: Some(motions),
 };
 
-/// A latch released by a key: press the key. A lever on the lid's handle: grip it and raise it
-/// out of its notch.
+/// A latch released by a key: press the key, then wait while the released lid, which its spring
+/// pushes ajar, comes to rest (a hand reaching for its bar while it still rises meets it early).
+/// A lever on the lid's handle: grip it and raise it out of its notch.
+/// How long a lid released by its key takes to come to rest ajar (the 5910's heavy, damped lid:
+/// within 1 cm at its bar after 2.5 s).
+const KEY_RELEASE_SETTLE_S: f64 = 2.5;
+
 fn motions(step: &MotionStep) -> Vec<Motion> {
     if let Some(key) = lid::release_key(step) {
-        return super::press::key_motions(step, key);
+        let mut m = super::press::key_motions(step, key);
+        m.push(Motion::Wait {
+            seconds: KEY_RELEASE_SETTLE_S,
+        });
+        return m;
     }
     lid::handle_motions(
         step,
