@@ -14,13 +14,13 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     motions: Some(motions),
 };
 
-/// A latch released by a key: press the key, then wait while the released lid, which its spring
-/// pushes ajar, comes to rest (a hand reaching for its bar while it still rises meets it early).
-/// A lever on the lid's handle: grip it and raise it out of its notch.
 /// How long a lid released by its key takes to come to rest ajar (the 5910's heavy, damped lid:
 /// within 1 cm at its bar after 2.5 s).
 const KEY_RELEASE_SETTLE_S: f64 = 2.5;
 
+/// A latch released by a key: press the key, then wait while the released lid, which its spring
+/// pushes ajar, comes to rest (a hand reaching for its bar while it still rises meets it early).
+/// A lever on the lid's handle: grip it and raise it out of its notch.
 fn motions(step: &MotionStep) -> Vec<Motion> {
     if let Some(key) = lid::release_key(step) {
         let mut m = super::press::key_motions(step, key);
