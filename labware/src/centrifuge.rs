@@ -7,7 +7,8 @@
 //! catches a lid pushed within `latch_catch` of shut (an equality then holds it), as upstream's;
 //! unlike upstream's, it can be released: the panel's sprung `open` key, held past its press
 //! force for its hold time, lets the lid go, and the latch re-arms once the lid has been lifted
-//! twice the catch clear. The lid is damped so heavily that it stays shut until lifted by its grip bar.
+//! twice the catch clear. The lid is heavily damped: released, its spring raises it slowly a few
+//! degrees ajar (the 5910's: 0.13 rad), where it rests until lifted by its grip bar.
 //!
 //! Frame of the instrument: origin at the centre of the footprint, +y the front (the panel's
 //! side), +z up. Joint conventions: lid 0 = open, `lid_closed` (negative) = closed; rotor angle
