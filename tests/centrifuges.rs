@@ -1,6 +1,7 @@
 //! The latched centrifuges' lid tasks (issue 9): the expert pushes the 5430's and the 5910's lids
 //! shut until the latch catches, and presses each one's lid key and lifts its lid open (the
-//! 5910's from an arm on a riser); `hold` scores nothing on any; "locked" fails a lid left a little open or shut without the latch,
+//! 5910's from an arm on a riser); `hold` scores nothing on any; "locked" fails a lid left a
+//! little open or shut without the latch,
 //! "open" a lid released but left shut or lifted part way; a latched lid stays shut against its
 //! spring; the fixed camera sees each centrifuge, and an open and a latched lid give different
 //! frames. Loading the 5430's rotor: the expert puts the tube into the slot across from the loaded

@@ -54,9 +54,6 @@ pub struct Params {
     pub lid_stiffness: f64,
     pub lid_open: f64,
     pub lid_closed: f64,
-    /// How far short of open a lid lifted by its bar may be let go: from there its spring opens
-    /// it the rest of the way (0: it must be carried open).
-    pub lid_let_go: f64,
     /// The latch catches the lid within this of closed (rad).
     pub latch_catch: f64,
     /// The grip bar near the lid's front edge, standing on two posts: its centre's distance in
@@ -134,8 +131,6 @@ impl Params {
             lid_stiffness: 3.2,
             lid_open: 0.0,
             lid_closed: -1.723,
-            // Its spring barely outweighs the lid near open: carried all the way.
-            lid_let_go: 0.0,
             latch_catch: 0.01,
             bar_inset: 0.025,
             bar_height: 0.028,
@@ -173,9 +168,6 @@ impl Params {
             lid_stiffness: 27.5,
             lid_open: 0.0,
             lid_closed: -1.94,
-            // Its spring opens it past its balance (1.09 rad from shut), but slowly (damped), and
-            // a lid let go short of open swings into the hand that let it go: carried all the way.
-            lid_let_go: 0.0,
             latch_catch: 0.01,
             bar_inset: 0.03,
             bar_height: 0.028,
@@ -701,7 +693,6 @@ impl Instrument for Params {
     fn joint_goal(&self, role: &str, goal: &str) -> Option<f64> {
         match (role, goal) {
             ("lid", "open") => Some(self.lid_open),
-            ("lid", "lifted") => Some(self.lid_open - self.lid_let_go),
             // Pressed past the stop, so that the latch catches it against the spring: the push
             // point goes `PRESS_PAST` below the shut lid's face, more than the arm sags under
             // gravity (about 1 cm at the UR5e's reach).

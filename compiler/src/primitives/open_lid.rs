@@ -16,11 +16,11 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
 
 /// A lid with a lever on its handle: grip the pressed lever of the closed lid, raise it out of
 /// its notch, swing the lid open. A lid a key has released (see `unlock`): lift it by its
-/// handle from where it rests until it is `lifted` (where the instrument's spring takes it the
-/// rest of the way open, or open itself).
+/// handle from where it rests all the way open (a lid let go short of open, even past the balance
+/// of its spring, swings on into the hand that let it go).
 fn motions(step: &MotionStep) -> Vec<Motion> {
     if lid::release_key(step).is_some() {
-        return lid::handle_motions(step, "lid_open", &[], &[(&[("lid", "lifted")], 30)], 0.04);
+        return lid::handle_motions(step, "lid_open", &[], &[(&[("lid", "open")], 30)], 0.04);
     }
     lid::handle_motions(
         step,
