@@ -36,6 +36,30 @@ pub enum Section {
     Physics,
 }
 
+#[derive(Clone, Debug, clap::Args)]
+pub struct BenchArgs {
+    /// Task scenes to measure (repeatable)
+    #[arg(
+        long,
+        default_values = [
+            "protocols/thermal_cycler/close_lid.toml",
+            "protocols/tube/transfer.toml",
+            "protocols/two_arm/close_lid_and_transfer.toml"
+        ]
+    )]
+    protocol: Vec<std::path::PathBuf>,
+    /// Measure only these sections (repeatable; default: all)
+    #[arg(long, value_enum)]
+    only: Vec<Section>,
+}
+
+/// `autobio bench`.
+pub fn run_cli(front: &crate::front::Front, a: &BenchArgs) -> Result<std::process::ExitCode> {
+    let tasks = front.load_all(&a.protocol)?;
+    run(&tasks, &a.only)?;
+    Ok(std::process::ExitCode::SUCCESS)
+}
+
 /// Every figure for each task's scene, then the lab-physics figures once; `only` (when not empty)
 /// picks sections.
 pub fn run(tasks: &[compiler::Task], only: &[Section]) -> Result<()> {
@@ -130,7 +154,7 @@ fn scene_figures(task: &compiler::Task) -> Result<f64> {
 
     let n = 3;
     let opts = scoring::eval::EvalOptions {
-        policy: "expert".into(),
+        policy: scoring::policy::PolicySpec::Expert,
         episodes: n,
         seed: 0,
         out: None,

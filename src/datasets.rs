@@ -1,5 +1,6 @@
 //! `autobio demo --format lerobot-*`, `autobio export` and `autobio dataset merge`: one call
-//! into `dataset` each, with a progress bar and a closing summary.
+//! into `dataset` each, with a progress bar and a closing summary; the dataset arguments
+//! (`--format`, `--codec`, file sizes) parsed into their types.
 
 use crate::progress::ProgressView;
 use anyhow::Result;
@@ -24,7 +25,7 @@ impl DatasetFormat {
     }
 }
 
-/// `--codec` of `export`.
+/// `--codec` of `demo` and `export`.
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum CodecArg {
     Av1,
@@ -37,6 +38,62 @@ impl CodecArg {
             CodecArg::Av1 => dataset::Codec::Av1,
             CodecArg::H264 => dataset::Codec::H264,
         }
+    }
+}
+
+#[derive(Clone, Debug, clap::Args)]
+pub struct ExportArgs {
+    /// Recordings, or folders of them
+    #[arg(required = true)]
+    recordings: Vec<PathBuf>,
+    /// `lerobot-v21` or `lerobot-v30`
+    #[arg(long, value_enum, default_value = "lerobot-v30")]
+    format: DatasetFormat,
+    #[arg(long)]
+    out: PathBuf,
+    /// Dataset videos: `av1` (libsvtav1, LeRobot's default) or `h264`
+    #[arg(long, value_enum, default_value = "av1")]
+    codec: CodecArg,
+    /// Camera image size WxH
+    #[arg(long, default_value = "224x224", value_parser = crate::replay::parse_size)]
+    size: [usize; 2],
+    /// Continue the dataset in --out (recordings already in it are skipped)
+    #[arg(long)]
+    resume: bool,
+    #[command(flatten)]
+    files: FileSizeArgs,
+}
+
+#[derive(Clone, Debug, clap::Subcommand)]
+pub enum DatasetCommand {
+    /// Join the datasets of a generation's shards (`demo --shard I/N`, one folder each) into one
+    Merge {
+        /// The shards' --out folders
+        #[arg(required = true)]
+        shards: Vec<PathBuf>,
+        /// The folder for the merged dataset
+        #[arg(long)]
+        out: PathBuf,
+    },
+}
+
+/// `autobio export`.
+pub fn export_cli(a: &ExportArgs) -> Result<ExitCode> {
+    let opts = dataset::ExportOptions {
+        out: a.out.clone(),
+        version: a.format.version(),
+        codec: a.codec.codec(),
+        image_size: a.size,
+        resume: a.resume,
+        file_sizes: a.files.sizes(),
+    };
+    export(&a.recordings, &opts)
+}
+
+/// `autobio dataset ...`.
+pub fn dataset_cli(c: &DatasetCommand) -> Result<ExitCode> {
+    match c {
+        DatasetCommand::Merge { shards, out } => merge(shards, out),
     }
 }
 

@@ -8,8 +8,47 @@
 
 use anyhow::{Context, Result};
 use scoring::eval::{EvalOptions, EvalReport, evaluate};
+use scoring::policy::PolicySpec;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+#[derive(Clone, Debug, clap::Args)]
+pub struct TasksArgs {
+    /// Folders of protocol files
+    #[arg(default_values = ["protocols"])]
+    dirs: Vec<PathBuf>,
+    /// Episodes per task and policy
+    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..))]
+    episodes: u32,
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Episodes run at once
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=256))]
+    workers: u32,
+    /// Where to write the table (default: standard output)
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+/// `autobio tasks`: measures the table and writes it.
+pub fn run_cli(a: &TasksArgs) -> Result<ExitCode> {
+    let opts = Options {
+        dirs: a.dirs.clone(),
+        episodes: a.episodes as usize,
+        seed: a.seed,
+        workers: a.workers as usize,
+    };
+    let table = table(&opts, |line| eprintln!("{line}"))?;
+    match &a.out {
+        Some(path) => {
+            std::fs::write(path, table).with_context(|| format!("writing {}", path.display()))?;
+            outln!("wrote {}", path.display());
+        }
+        None => outln!("{table}"),
+    }
+    Ok(ExitCode::SUCCESS)
+}
 
 /// What the table is measured over.
 pub struct Options {
@@ -49,9 +88,9 @@ fn protocol_files(dirs: &[PathBuf]) -> Result<Vec<PathBuf>> {
     Ok(out)
 }
 
-fn run(task: &compiler::Task, policy: &str, opts: &Options) -> Result<EvalReport> {
+fn run(task: &compiler::Task, policy: PolicySpec, opts: &Options) -> Result<EvalReport> {
     let eval = EvalOptions {
-        policy: policy.into(),
+        policy: policy.clone(),
         episodes: opts.episodes,
         seed: opts.seed,
         workers: opts.workers,
@@ -76,8 +115,8 @@ pub fn table(opts: &Options, mut log: impl FnMut(&str)) -> Result<String> {
             not_run.push((file, e.to_string()));
             continue;
         }
-        let expert = run(&task, "expert", opts)?;
-        let hold = run(&task, "hold", opts)?;
+        let expert = run(&task, PolicySpec::Expert, opts)?;
+        let hold = run(&task, PolicySpec::Hold, opts)?;
         log(&format!(
             "{}: expert {}/{} ({:.3}), hold {:.3}",
             task.id,

@@ -54,6 +54,7 @@ fn near_measures_the_distance_from_the_live_pose() {
     let opts = scoring::EpisodeOptions {
         record: Some(path.clone()),
         image_every: 0,
+        ..Default::default()
     };
     let r = run_with(&recorded, 5, &opts, |t, s, i| {
         scoring::policy::make("expert", t, s, i).unwrap()

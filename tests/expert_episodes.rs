@@ -96,6 +96,7 @@ fn recording_rescores_offline_to_the_same_verdict() {
         &EpisodeOptions {
             record: Some(path.clone()),
             image_every: 25,
+            ..Default::default()
         },
     );
     assert!(r.success);

@@ -31,7 +31,7 @@ fn every_simulated_task_scores_zero_without_motion() {
             continue;
         }
         let opts = EvalOptions {
-            policy: "hold".into(),
+            policy: scoring::policy::PolicySpec::Hold,
             episodes: 1,
             seed: 0,
             out: None,

@@ -51,6 +51,7 @@ fn queries(chunk: usize, history: u32) -> Vec<Frames> {
     let opts = scoring::EpisodeOptions {
         record: Some(recording.clone()),
         image_every: 0,
+        ..Default::default()
     };
     scoring::run_episode(&task, &scene, &instance, expert.as_mut(), &opts).unwrap();
     let mut p = Chunked {

@@ -117,6 +117,7 @@ fn the_expert_goes_around_the_housing_into_the_rotor_with_rrt_connect() {
     let opts = scoring::EpisodeOptions {
         record: Some(common::scratch("planning").join("rotor.mcap")),
         image_every: 0,
+        ..Default::default()
     };
     let r = run_with(&task, 53, &opts, |t, s, i| {
         Box::new(Watched {

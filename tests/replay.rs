@@ -30,6 +30,7 @@ fn record_and_replay(
     let opts = EpisodeOptions {
         record: Some(path.clone()),
         image_every,
+        ..Default::default()
     };
     let policy = if expert { "expert" } else { "hold" };
     let live = common::run_with(task, seed, &opts, |t, s, i| {

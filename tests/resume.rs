@@ -14,7 +14,7 @@ const CLOSE: &str = "protocols/thermal_cycler/close_lid.toml";
 
 fn opts(out: &Path, policy: &str, episodes: usize, resume: bool) -> EvalOptions {
     EvalOptions {
-        policy: policy.into(),
+        policy: policy.parse().unwrap(),
         episodes,
         seed: 30,
         out: Some(out.to_path_buf()),

@@ -394,6 +394,7 @@ fn a_replay_redraws_the_display_from_the_recorded_panel() {
     let opts = scoring::episode::EpisodeOptions {
         record: Some(rec.clone()),
         image_every: 100,
+        ..Default::default()
     };
     let live = common::run_with(&task, 44, &opts, |t, s, i| {
         scoring::policy::make("expert", t, s, i).unwrap()

@@ -37,6 +37,7 @@ fn the_expert_moves_the_tube_into_the_named_slot_with_its_cap_on() {
         &EpisodeOptions {
             record: Some(path.clone()),
             image_every: 0,
+            ..Default::default()
         },
     );
     assert!(r.success, "{:?} {:#?}", r.error, r.verdict);
@@ -93,6 +94,7 @@ fn a_tube_placed_in_the_wrong_slot_fails_its_check() {
         &EpisodeOptions {
             record: Some(path.clone()),
             image_every: 0,
+            ..Default::default()
         },
     );
     assert!(r.error.is_none(), "{:?}", r.error);

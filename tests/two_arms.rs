@@ -30,6 +30,7 @@ fn each_arm_does_its_own_step_and_both_are_recorded() {
         &EpisodeOptions {
             record: Some(rec_path.clone()),
             image_every: 0,
+            ..Default::default()
         },
     )
     .unwrap();

@@ -1,4 +1,4 @@
-//! One episode being captured for a dataset: the episode loop's step sink. Every control step's
+//! One episode being captured for a dataset: an observer of the episode's environment. Every control step's
 //! state and action are kept; every camera's frame streams into its own staged video and
 //! histogram. Nothing reaches the dataset until the writer commits the capture.
 
@@ -6,6 +6,7 @@ use crate::DatasetError;
 use crate::stats::ImageStats;
 use crate::video::{Codec, VideoWriter};
 use runtime::render::Image;
+use runtime::{Env, ObserveError, Observer};
 use std::path::PathBuf;
 
 pub struct Capture {
@@ -68,21 +69,38 @@ impl Capture {
     }
 }
 
-impl scoring::episode::StepSink for Capture {
-    fn image_size(&self) -> Option<[usize; 2]> {
-        Some(self.size)
-    }
-
-    fn step(&mut self, state: &[f64], action: &[f64], images: &[Image]) -> Result<(), String> {
+impl Capture {
+    /// One control step: the state the action acts on, the action, every camera's frame.
+    pub fn push(
+        &mut self,
+        state: &[f64],
+        action: &[f64],
+        images: &[Image],
+    ) -> Result<(), DatasetError> {
         let f = |v: &[f64]| v.iter().map(|&x| x as f32).collect();
         self.rows.push((f(state), f(action)));
         for (k, img) in images.iter().enumerate() {
             self.images[k].add(&img.rgb);
-            if let Err(e) = self.videos[k].push(&img.rgb) {
-                let why = e.to_string();
-                self.error.get_or_insert(e);
-                return Err(why);
-            }
+            self.videos[k].push(&img.rgb)?;
+        }
+        Ok(())
+    }
+
+    /// The frame size this capture's videos take.
+    pub fn image_size(&self) -> [usize; 2] {
+        self.size
+    }
+}
+
+/// A capture watches an episode: every control step's state, action and frames.
+impl Observer for Capture {
+    fn before_step(&mut self, env: &mut Env, action: &[f64]) -> Result<(), ObserveError> {
+        let state = env.episode.state();
+        let frames = env.frames()?;
+        if let Err(e) = self.push(&state, action, frames) {
+            let why = e.to_string();
+            self.error.get_or_insert(e);
+            return Err(ObserveError::Own(why.into()));
         }
         Ok(())
     }

@@ -7,7 +7,6 @@
 
 use crate::writer::{DatasetWriter, Layout};
 use crate::{Codec, DatasetError, Generated, Step, Version};
-use scoring::episode::StepSink;
 use scoring::replay::{FrameOptions, Recording, ReplayError};
 use std::path::{Path, PathBuf};
 
@@ -129,8 +128,8 @@ pub fn export(
         };
         let drawn = scoring::replay::frames(rec, &frames, |k, _, images| {
             capture
-                .step(&states[k], &actions[k], &images)
-                .map_err(ReplayError::Render)
+                .push(&states[k], &actions[k], &images)
+                .map_err(|e| ReplayError::Consumer(e.into()))
         });
         if let Err(e) = drawn {
             capture.discard();

@@ -242,16 +242,20 @@ fn record(
     let scene = &runtime::Scene::reuse_or_build(scene, task, &instance)
         .map_err(|e| episode_err(e.to_string()))?;
     let mut capture = spec.capture(&task.id, seed)?;
+    let opts = scoring::EpisodeOptions {
+        image_size: Some(capture.image_size()),
+        ..Default::default()
+    };
     let result = match scoring::policy::make("expert", task, scene, &instance) {
         Ok(mut policy) => scoring::episode::run_episode_with(
             task,
             scene,
             &instance,
             policy.as_mut(),
-            &Default::default(),
+            &opts,
             Some(&mut capture),
         )
-        .map_err(episode_err)?,
+        .map_err(|e| episode_err(e.to_string()))?,
         Err(e) => scoring::episode::policy_failed(task, scene, &instance, &e),
     };
     let outcome = if result.success {

@@ -9,12 +9,16 @@
 
 pub mod clearance;
 pub mod deps;
+pub mod env;
 pub mod episode;
 pub mod kinematics;
-pub mod record;
 pub mod render;
 pub mod scene;
 
+/// Recordings are written and read by `results` (no simulator needed to read one).
+pub use results::recording as record;
+
+pub use env::{Env, EnvError, EnvOptions, ObserveError, Observer, Transition};
 pub use episode::{Episode, StepError};
 pub use labware::LabwareState;
 pub use scene::{Scene, SceneError};

@@ -53,49 +53,20 @@ struct Screen {
     scratch: Vec<u8>,
 }
 
-/// One rendered frame.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Image {
-    pub camera: String,
-    pub width: usize,
-    pub height: usize,
-    pub rgb: Vec<u8>,
-}
+pub use results::Image;
 
-impl Image {
-    /// The frame as PNG (fast compression; the same pixels always give the same bytes).
-    pub fn to_png(&self) -> std::io::Result<Vec<u8>> {
-        let mut out = Vec::with_capacity(self.rgb.len() / 2);
-        let mut enc = png::Encoder::new(&mut out, self.width as u32, self.height as u32);
-        enc.set_color(png::ColorType::Rgb);
-        enc.set_depth(png::BitDepth::Eight);
-        enc.set_compression(png::Compression::Fast);
-        let mut w = enc.write_header().map_err(std::io::Error::other)?;
-        w.write_image_data(&self.rgb)
-            .map_err(std::io::Error::other)?;
-        w.finish().map_err(std::io::Error::other)?;
-        Ok(out)
-    }
-
-    /// An 8-bit RGB PNG as a frame of `camera`.
-    pub fn from_png(camera: &str, png_bytes: &[u8]) -> std::io::Result<Image> {
-        let mut dec = png::Decoder::new(std::io::Cursor::new(png_bytes))
-            .read_info()
-            .map_err(std::io::Error::other)?;
-        let info = dec.info();
-        let (width, height) = (info.width as usize, info.height as usize);
-        if (info.color_type, info.bit_depth) != (png::ColorType::Rgb, png::BitDepth::Eight) {
-            return Err(std::io::Error::other("not an 8-bit RGB PNG"));
-        }
-        let mut rgb = vec![0; width * height * 3];
-        dec.next_frame(&mut rgb).map_err(std::io::Error::other)?;
-        Ok(Image {
-            camera: camera.to_string(),
-            width,
-            height,
-            rgb,
-        })
-    }
+/// Why cameras could not be made or could not draw a frame. MuJoCo's renderer reports its
+/// failures as debug text, kept here as it came.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    #[error("cannot prepare the render model: {0}")]
+    Model(#[from] crate::SceneError),
+    #[error("cannot start the renderer (EGL): {0}")]
+    Start(String),
+    #[error("cannot draw camera `{camera}`: {why}")]
+    Draw { camera: String, why: String },
+    #[error("cannot draw an instrument display: {0}")]
+    Display(String),
 }
 
 /// The level of detail for an image of this size.
@@ -109,7 +80,7 @@ pub fn detail_for(width: usize, height: usize) -> Detail {
 
 impl Cameras {
     /// Cameras at this size, with the level of detail the size calls for.
-    pub fn new(scene: &Scene, width: usize, height: usize) -> Result<Cameras, String> {
+    pub fn new(scene: &Scene, width: usize, height: usize) -> Result<Cameras, RenderError> {
         Self::with_detail(scene, width, height, detail_for(width, height))
     }
 
@@ -118,15 +89,15 @@ impl Cameras {
         width: usize,
         height: usize,
         detail: Detail,
-    ) -> Result<Cameras, String> {
-        let model = scene.render_model(detail).map_err(|e| e.to_string())?;
+    ) -> Result<Cameras, RenderError> {
+        let model = scene.render_model(detail)?;
         let renderer = MjRenderer::builder()
             .width(width as u32)
             .height(height as u32)
             .rgb(true)
             .depth(false)
             .build(&model)
-            .map_err(|e| format!("cannot start the renderer: {e:?}"))?;
+            .map_err(|e| RenderError::Start(format!("{e:?}")))?;
         let mut screens = Vec::new();
         for (item, ids) in scene.labware.iter().enumerate() {
             let spec = &scene.task().labware[item];
@@ -173,7 +144,7 @@ impl Cameras {
         data: &MjData<Arc<MjModel>>,
         logic: &[Logic],
         names: &[String],
-    ) -> Result<Vec<Image>, String> {
+    ) -> Result<Vec<Image>, RenderError> {
         self.update_screens(logic)?;
         let m = &mut self.mirror;
         m.qpos_mut().copy_from_slice(data.qpos());
@@ -183,17 +154,21 @@ impl Cameras {
         m.camlight();
         let mut out = Vec::with_capacity(self.ids.len());
         for (k, &id) in self.ids.iter().enumerate() {
+            let failed = |why: String| RenderError::Draw {
+                camera: names[k].clone(),
+                why,
+            };
             self.renderer.set_camera(MjvCamera::new_fixed(id));
             self.renderer
                 .sync_data(&mut self.mirror)
-                .map_err(|e| format!("render sync failed: {e:?}"))?;
+                .map_err(|e| failed(format!("sync: {e:?}")))?;
             self.renderer
                 .render()
-                .map_err(|e| format!("render failed: {e:?}"))?;
+                .map_err(|e| failed(format!("{e:?}")))?;
             let rgb = self
                 .renderer
                 .rgb_flat()
-                .ok_or("renderer produced no rgb")?
+                .ok_or_else(|| failed("the renderer produced no RGB".into()))?
                 .to_vec();
             out.push(Image {
                 camera: names[k].clone(),
@@ -206,14 +181,15 @@ impl Cameras {
     }
 
     /// Redraws and uploads the displays whose shown values changed since they were last drawn.
-    fn update_screens(&mut self, logic: &[Logic]) -> Result<(), String> {
+    fn update_screens(&mut self, logic: &[Logic]) -> Result<(), RenderError> {
+        let bad = |why: &str| RenderError::Display(why.to_string());
         let Some(textures) = self.textures.as_mut() else {
             return Ok(());
         };
         for s in &mut self.screens {
             let state = logic
                 .get(s.item)
-                .ok_or("no logic state for a display's item")?;
+                .ok_or_else(|| bad("no logic state for a display's item"))?;
             let values: Vec<f64> = s
                 .shows
                 .iter()
@@ -229,20 +205,23 @@ impl Cameras {
             if same {
                 continue;
             }
-            let instrument = s.model.instrument().ok_or("a display without a model")?;
+            let instrument = s
+                .model
+                .instrument()
+                .ok_or_else(|| bad("a display without a model"))?;
             instrument.draw_display(s.index, state, &mut s.scratch);
             let adr = usize::try_from(textures.tex_adr()[s.texture])
-                .map_err(|_| "a display texture is not stored in the model")?;
+                .map_err(|_| bad("a display texture is not stored in the model"))?;
             let channels = textures.tex_nchannel()[s.texture] as usize;
             let size = (
                 textures.tex_width()[s.texture] as usize,
                 textures.tex_height()[s.texture] as usize,
             );
             if size != (s.width, s.height) || channels < 3 {
-                return Err(format!(
+                return Err(RenderError::Display(format!(
                     "display texture is {}x{}x{channels}, the model draws {}x{} RGB",
                     size.0, size.1, s.width, s.height
-                ));
+                )));
             }
             let pixels = &mut textures.tex_data_mut()[adr..adr + s.width * s.height * channels];
             for (dst, src) in pixels
@@ -253,7 +232,7 @@ impl Cameras {
             }
             self.renderer
                 .update_texture_from(textures, s.texture)
-                .map_err(|e| format!("display upload failed: {e:?}"))?;
+                .map_err(|e| RenderError::Display(format!("upload: {e:?}")))?;
             s.drawn = Some(values);
         }
         Ok(())

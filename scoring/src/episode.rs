@@ -1,15 +1,17 @@
-//! The episode loop: reset, then observe -> act -> hold each action for one control period, until
-//! success (checked after every control period) or the time limit. A policy failure or an unstable
-//! simulation ends the episode as a failure with its reason; nothing already finished is lost.
+//! The episode loop, on [`runtime::Env`]: observe, ask the policy for a chunk of actions, step
+//! the environment with each until the episode ends (success, polled after every control step, or
+//! the time limit). What watches the episode is an observer of the environment: the recording
+//! ([`Recording`]), a dataset capture (any [`runtime::Observer`] the caller passes) and the
+//! frames a policy wants from before its query ([`History`]). A policy failure or an unstable
+//! simulation ends the episode as a failure with its reason; a recording or renderer fault ends
+//! the loop with a typed [`EpisodeError`].
 
-use crate::policy::{Observation, Policy, Privileged, RobotPrivileged};
-use crate::verdict::{Judge, Verdict};
+use crate::policy::{Observation, Policy, Privileged};
 use compiler::{SceneInstance, Task};
-use runtime::Episode;
-use runtime::record::Recorder;
-use runtime::render::{Cameras, Image};
-use serde::{Deserialize, Serialize};
-use sha2::{Digest, Sha256};
+use results::recording::{RecordError, Recorder};
+pub use results::{EpisodeResult, Outcome};
+use runtime::render::{Image, RenderError};
+use runtime::{Env, EnvError, EnvOptions, ObserveError, Observer};
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
@@ -20,47 +22,25 @@ pub struct EpisodeOptions {
     pub record: Option<PathBuf>,
     /// Render and record camera images every this many control steps (0 = no images).
     pub image_every: u32,
+    /// Every camera at this size; `None`: what the policy needs, else the task's camera spec.
+    pub image_size: Option<[usize; 2]>,
 }
 
-/// How an episode ended. Every class counts in a run's denominator.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Outcome {
-    /// Every stage's checks held.
-    Success,
-    /// The time limit passed first.
-    TimeLimit,
-    /// The policy failed, sent no actions, or sent actions of the wrong shape, not finite or
-    /// outside their actuators' ranges.
-    PolicyError,
-    /// The model server failed: refused or lost the connection, stayed silent past the
-    /// timeout, reported an error, or sent frames that do not decode.
-    ServerFault,
-    /// The simulation became unstable.
-    Unstable,
-}
-
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct EpisodeResult {
-    pub seed: u64,
-    /// The run it belongs to (`--runs`; 0 otherwise).
-    #[serde(default)]
-    pub run: u32,
-    pub success: bool,
-    pub outcome: Outcome,
-    pub verdict: Verdict,
-    /// Why the episode ended early as a failure (policy error, unstable physics), if it did.
-    pub error: Option<String>,
-    pub sim_time_s: f64,
-    pub control_steps: u64,
-    pub wall_time_s: f64,
-    /// Wall time spent inside the policy (a model's round trips included): the harness's own
-    /// time is `wall_time_s` minus this.
-    #[serde(default)]
-    pub policy_time_s: f64,
-    /// SHA-256 of every control step's qpos (little-endian f64): equal hashes, equal trajectories.
-    pub trajectory_hash: String,
-    pub recording: Option<String>,
+/// Why an episode could not be run to its end (an episode that fails is a result, not this).
+#[derive(Debug, thiserror::Error)]
+pub enum EpisodeError {
+    #[error("the recording {path}: {source}")]
+    Record {
+        path: PathBuf,
+        #[source]
+        source: RecordError,
+    },
+    #[error(transparent)]
+    Render(#[from] RenderError),
+    #[error(transparent)]
+    Env(EnvError),
+    #[error("cannot describe the task for its recording: {0}")]
+    Describe(#[from] serde_json::Error),
 }
 
 /// The outcome class of a policy's failure.
@@ -80,11 +60,8 @@ pub fn policy_failed(
     instance: &SceneInstance,
     failure: &crate::PolicyError,
 ) -> EpisodeResult {
-    let ep = Episode::new(scene.clone(), task, instance);
-    let initial = ep.labware_state();
-    let mut judge = Judge::new(task, &instance.params, &initial);
-    judge.update(ep.time(), &initial);
-    let mut verdict = judge.verdict();
+    let env = Env::new(scene.clone(), task, instance, EnvOptions::default());
+    let mut verdict = env.verdict();
     verdict.success = false;
     EpisodeResult {
         seed: instance.seed,
@@ -97,22 +74,147 @@ pub fn policy_failed(
         control_steps: 0,
         wall_time_s: 0.0,
         policy_time_s: 0.0,
-        trajectory_hash: Sha256::new()
-            .finalize()
-            .iter()
-            .map(|b| format!("{b:02x}"))
-            .collect(),
+        trajectory_hash: results::TrajectoryHash::new().hex(),
         recording: None,
     }
 }
 
-/// Receives every control step of an episode (datasets): the observation's state before the
-/// action, the action, and every task camera's frame at the sink's size.
-pub trait StepSink {
-    /// Render every camera at this size (width, height) each control step.
-    fn image_size(&self) -> Option<[usize; 2]>;
-    /// One control step; an error ends the episode as a failure.
-    fn step(&mut self, state: &[f64], action: &[f64], images: &[Image]) -> Result<(), String>;
+/// An episode's MCAP recording, as an observer: before each action every robot's state and
+/// action, the labware, MuJoCo's state and (every `image_every` steps) the cameras.
+pub struct Recording {
+    path: PathBuf,
+    writer: Recorder,
+    image_every: u64,
+}
+
+impl Recording {
+    pub fn create(
+        path: PathBuf,
+        task: &Task,
+        instance: &SceneInstance,
+        image_every: u32,
+    ) -> Result<Recording, EpisodeError> {
+        let failed = |source| EpisodeError::Record {
+            path: path.clone(),
+            source,
+        };
+        let mut writer = Recorder::create(&path).map_err(failed)?;
+        let (tj, ij) = (serde_json::to_value(task)?, serde_json::to_value(instance)?);
+        writer.task(&tj, &ij).map_err(failed)?;
+        Ok(Recording {
+            path,
+            writer,
+            image_every: u64::from(image_every),
+        })
+    }
+
+    fn failed(&self, source: RecordError) -> EpisodeError {
+        EpisodeError::Record {
+            path: self.path.clone(),
+            source,
+        }
+    }
+
+    /// A labelled moment (a motion's or a lab step's start).
+    pub fn stage(&mut self, t: f64, label: &str) -> Result<(), EpisodeError> {
+        self.writer.stage(t, label).map_err(|e| self.failed(e))
+    }
+
+    /// The state after the last step, the verdict, and the file closed.
+    pub fn finish(
+        mut self,
+        env: &Env,
+        error: Option<&str>,
+        verdict: &results::Verdict,
+    ) -> Result<(), EpisodeError> {
+        let t = env.time();
+        let ep = &env.episode;
+        let end = serde_json::json!({
+            "verdict": verdict, "error": error,
+            "trajectory_hash": env.trajectory_hash(), "control_steps": env.control_steps(),
+        });
+        let written = self
+            .writer
+            .labware(t, &ep.labware_state())
+            .and_then(|_| self.writer.physics(t, &ep.physics_state()))
+            .and_then(|_| self.writer.write("/verdict", "autobio.Verdict", t, &end));
+        written.map_err(|e| self.failed(e))?;
+        let path = self.path;
+        self.writer
+            .finish()
+            .map_err(|source| EpisodeError::Record { path, source })
+    }
+}
+
+impl Observer for Recording {
+    fn before_step(&mut self, env: &mut Env, action: &[f64]) -> Result<(), ObserveError> {
+        let t = env.time();
+        let ep = &env.episode;
+        let mut rest = action;
+        for (k, ids) in ep.scene.robots.iter().enumerate() {
+            let (mine, others) = rest.split_at(ids.model.action_len().min(rest.len()));
+            rest = others;
+            self.writer
+                .joint_state(t, &ids.name, &ep.robot_state(k), &ep.robot_ctrl(k))?;
+            self.writer.action(t, &ids.name, mine)?;
+        }
+        self.writer.labware(t, &ep.labware_state())?;
+        self.writer.physics(t, &ep.physics_state())?;
+        if self.image_every > 0 && env.control_steps().is_multiple_of(self.image_every) {
+            for img in env.frames()? {
+                self.writer.image(t, img)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The frames a policy asks for from `history_steps` control steps before its next query
+/// ([`crate::policy::Needs::history_steps`]): taken at that step of the chunk, or, for a chunk
+/// no longer than the history, the frames of the query itself.
+pub struct History {
+    steps: usize,
+    /// The step of the current chunk to take them at, and the chunk's next step.
+    at: Option<usize>,
+    k: usize,
+    frames: Option<Vec<Image>>,
+}
+
+impl History {
+    pub fn new(steps: u32) -> History {
+        History {
+            steps: steps as usize,
+            at: None,
+            k: 0,
+            frames: None,
+        }
+    }
+
+    /// The frames for the query now (`current` at the first query).
+    fn take(&mut self, current: &[Image]) -> Vec<Image> {
+        self.frames.take().unwrap_or_else(|| current.to_vec())
+    }
+
+    /// A chunk of `len` actions starts, answered to a query with `current` frames.
+    fn chunk(&mut self, len: usize, current: &[Image]) {
+        self.k = 0;
+        self.at = (self.steps > 0)
+            .then(|| len.checked_sub(self.steps))
+            .flatten();
+        if self.at.is_none() && self.steps > 0 {
+            self.frames = Some(current.to_vec());
+        }
+    }
+}
+
+impl Observer for History {
+    fn before_step(&mut self, env: &mut Env, _action: &[f64]) -> Result<(), ObserveError> {
+        if self.at == Some(self.k) {
+            self.frames = Some(env.frames()?.to_vec());
+        }
+        self.k += 1;
+        Ok(())
+    }
 }
 
 /// Runs one episode of `task` with the scene instance for `seed`.
@@ -122,83 +224,54 @@ pub fn run_episode(
     instance: &SceneInstance,
     policy: &mut dyn Policy,
     opts: &EpisodeOptions,
-) -> Result<EpisodeResult, String> {
+) -> Result<EpisodeResult, EpisodeError> {
     run_episode_with(task, scene, instance, policy, opts, None)
 }
 
-/// [`run_episode`], also feeding every control step to `sink`.
+/// [`run_episode`], with one more observer of every control step (a dataset capture). An
+/// observer's own failure ([`ObserveError::Own`]) fails the episode with its reason.
 pub fn run_episode_with(
     task: &Task,
     scene: &Arc<runtime::Scene>,
     instance: &SceneInstance,
     policy: &mut dyn Policy,
     opts: &EpisodeOptions,
-    mut sink: Option<&mut dyn StepSink>,
-) -> Result<EpisodeResult, String> {
+    mut extra: Option<&mut dyn Observer>,
+) -> Result<EpisodeResult, EpisodeError> {
     let start = Instant::now();
-    let mut ep = Episode::new(scene.clone(), task, instance);
-    let mut rec = match &opts.record {
-        Some(p) => {
-            let mut r = Recorder::create(p).map_err(|e| format!("{}: {e}", p.display()))?;
-            let tj = serde_json::to_value(task).map_err(|e| e.to_string())?;
-            let ij = serde_json::to_value(instance).map_err(|e| e.to_string())?;
-            r.task(&tj, &ij).map_err(|e| e.to_string())?;
-            Some(r)
-        }
-        None => None,
-    };
-    let mut cameras = if rec.is_some() && opts.image_every > 0 {
-        Some(Cameras::new(scene, 224, 224)?)
-    } else {
-        None
-    };
-    let cam_names: Vec<String> = task.cameras.iter().map(|c| c.name.clone()).collect();
     let needs = policy.needs();
-    let mut eyes = match needs.image_size {
-        Some([w, h]) => Some(Cameras::new(scene, w, h)?),
+    let image_size = needs.image_size.or(opts.image_size);
+    let mut env = Env::new(scene.clone(), task, instance, EnvOptions { image_size });
+    let mut recording = match &opts.record {
+        Some(p) => Some(Recording::create(
+            p.clone(),
+            task,
+            instance,
+            opts.image_every,
+        )?),
         None => None,
     };
-    let mut previous: Option<Vec<runtime::render::Image>> = None;
-    let mut sink_eyes = match sink.as_ref().and_then(|s| s.image_size()) {
-        Some([w, h]) => Some(Cameras::new(scene, w, h)?),
-        None => None,
-    };
+    let mut history = History::new(needs.history_steps);
     let mut policy_time = 0.0;
-    let mut hasher = Sha256::new();
-    let mut steps = 0u64;
-    let mut error = None;
-    let mut outcome = None;
-    let initial = ep.labware_state();
-    let mut judge = Judge::new(task, &instance.params, &initial);
-    let robots = ep.scene.robots.clone();
-    let mut over = judge.update(ep.time(), &initial);
-    'episode: while !over && ep.time() < task.time_limit_s {
-        let stage = judge.stage();
-        let images = match eyes.as_mut() {
-            Some(c) => c.render(&ep.data, ep.logic(), &cam_names)?,
+    let mut failure: Option<(Outcome, String)> = None;
+    'episode: while !env.done() {
+        let images = match needs.image_size {
+            Some(_) => env.frames()?.to_vec(),
             None => Vec::new(),
         };
-        let before = previous.take().unwrap_or_else(|| images.clone());
+        let previous = history.take(&images);
+        let seen = env.observe();
         let obs = Observation {
             images: &images,
-            previous: &before,
-            time: ep.time(),
-            state: ep.state(),
-            stage,
-            prompt: instance
-                .stage_instructions
-                .get(stage)
-                .map(String::as_str)
-                .unwrap_or(&instance.instruction),
+            previous: &previous,
+            time: seen.time,
+            state: seen.state,
+            stage: seen.stage,
+            prompt: &seen.instruction,
             privileged: Privileged {
-                robots: (0..robots.len())
-                    .map(|r| RobotPrivileged {
-                        arm_q: ep.arm_q(r),
-                        ctrl: ep.robot_ctrl(r),
-                    })
-                    .collect(),
-                labware: ep.labware_state(),
-                qpos: ep.qpos(),
+                robots: seen.robots,
+                labware: seen.labware,
+                qpos: seen.qpos,
             },
         };
         let asked = Instant::now();
@@ -207,116 +280,73 @@ pub fn run_episode_with(
         let chunk = match answer {
             Ok(c) if !c.is_empty() => c,
             Ok(_) => {
-                error = Some("policy returned an empty action chunk".into());
-                outcome = Some(Outcome::PolicyError);
+                failure = Some((
+                    Outcome::PolicyError,
+                    "policy returned an empty action chunk".into(),
+                ));
                 break;
             }
             Err(e) => {
-                error = Some(e.to_string());
-                outcome = Some(outcome_of(&e));
+                failure = Some((outcome_of(&e), e.to_string()));
                 break;
             }
         };
-        // The frames `history_steps` control steps before the next query.
-        let history_at = (needs.history_steps > 0)
-            .then(|| chunk.len().checked_sub(needs.history_steps as usize))
-            .flatten();
-        if history_at.is_none() && needs.history_steps > 0 {
-            previous = Some(images.clone());
-        }
-        if let Some(r) = rec.as_mut() {
+        history.chunk(chunk.len(), &images);
+        if let Some(r) = recording.as_mut() {
             for ev in policy.drain_events() {
-                r.stage(ev.time, &ev.label).map_err(|e| e.to_string())?;
+                r.stage(ev.time, &ev.label)?;
             }
         }
-        for (k, action) in chunk.into_iter().enumerate() {
-            if history_at == Some(k)
-                && let Some(c) = eyes.as_mut()
-            {
-                previous = Some(c.render(&ep.data, ep.logic(), &cam_names)?);
+        for action in chunk {
+            let mut observers: Vec<&mut dyn Observer> = Vec::with_capacity(3);
+            if let Some(o) = extra.as_deref_mut() {
+                observers.push(o);
             }
-            let t = ep.time();
-            if let Some(s) = sink.as_mut() {
-                let frames = match sink_eyes.as_mut() {
-                    Some(c) => c.render(&ep.data, ep.logic(), &cam_names)?,
-                    None => Vec::new(),
-                };
-                if let Err(e) = s.step(&ep.state(), &action, &frames) {
-                    error = Some(format!("the step sink failed: {e}"));
-                    outcome = Some(Outcome::PolicyError);
+            if let Some(r) = recording.as_mut() {
+                observers.push(r);
+            }
+            if needs.image_size.is_some() {
+                observers.push(&mut history);
+            }
+            match env.step_with(&action, &mut observers) {
+                Ok(t) if t.done() => break 'episode,
+                Ok(_) => {}
+                Err(EnvError::Step(e)) => {
+                    let outcome = match e {
+                        runtime::StepError::Unstable { .. } => Outcome::Unstable,
+                        _ => Outcome::PolicyError,
+                    };
+                    failure = Some((outcome, e.to_string()));
                     break 'episode;
                 }
-            }
-            if let Some(r) = rec.as_mut() {
-                let mut rest = action.as_slice();
-                for (k, ids) in robots.iter().enumerate() {
-                    let (mine, others) = rest.split_at(ids.model.action_len().min(rest.len()));
-                    rest = others;
-                    r.joint_state(t, &ids.name, &ep.robot_state(k), &ep.robot_ctrl(k))
-                        .map_err(|e| e.to_string())?;
-                    r.action(t, &ids.name, mine).map_err(|e| e.to_string())?;
+                Err(EnvError::Observe(ObserveError::Own(e))) => {
+                    failure = Some((Outcome::PolicyError, format!("the step sink failed: {e}")));
+                    break 'episode;
                 }
-                r.labware(t, &ep.labware_state())
-                    .map_err(|e| e.to_string())?;
-                r.physics(t, &ep.physics_state())
-                    .map_err(|e| e.to_string())?;
-                if let Some(c) = cameras.as_mut()
-                    && steps.is_multiple_of(opts.image_every as u64)
-                {
-                    for img in c.render(&ep.data, ep.logic(), &cam_names)? {
-                        r.image(t, &img).map_err(|e| e.to_string())?;
-                    }
+                Err(EnvError::Observe(ObserveError::Render(e)) | EnvError::Render(e)) => {
+                    return Err(e.into());
                 }
-            }
-            if let Err(e) = ep.apply(&action).and_then(|_| ep.control_step()) {
-                outcome = Some(match e {
-                    runtime::StepError::Unstable { .. } => Outcome::Unstable,
-                    runtime::StepError::BadAction { .. }
-                    | runtime::StepError::NonFinite { .. }
-                    | runtime::StepError::OutOfRange { .. } => Outcome::PolicyError,
-                });
-                error = Some(e.to_string());
-                break 'episode;
-            }
-            steps += 1;
-            for v in ep.data.qpos() {
-                hasher.update(v.to_le_bytes());
-            }
-            over = judge.update(ep.time(), &ep.labware_state());
-            if over || ep.time() >= task.time_limit_s {
-                break;
+                Err(EnvError::Observe(ObserveError::Record(source))) => {
+                    return Err(EpisodeError::Record {
+                        path: opts.record.clone().unwrap_or_default(),
+                        source,
+                    });
+                }
+                Err(e) => return Err(EpisodeError::Env(e)),
             }
         }
     }
-    let mut verdict = judge.verdict();
-    if error.is_some() {
+    let mut verdict = env.verdict();
+    if failure.is_some() {
         verdict.success = false;
     }
+    let steps = env.control_steps();
     policy.end_episode(verdict.success, steps);
-    let trajectory_hash: String = hasher
-        .finalize()
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect();
-    if let Some(mut r) = rec {
-        let t = ep.time();
-        r.labware(t, &ep.labware_state())
-            .map_err(|e| e.to_string())?;
-        r.physics(t, &ep.physics_state())
-            .map_err(|e| e.to_string())?;
-        r.write(
-            "/verdict",
-            "autobio.Verdict",
-            t,
-            &serde_json::json!({
-                "verdict": verdict, "error": error,
-                "trajectory_hash": trajectory_hash, "control_steps": steps,
-            }),
-        )
-        .map_err(|e| e.to_string())?;
-        r.finish().map_err(|e| e.to_string())?;
+    let error = failure.as_ref().map(|(_, why)| why.clone());
+    if let Some(r) = recording {
+        r.finish(&env, error.as_deref(), &verdict)?;
     }
-    let outcome = outcome.unwrap_or(if verdict.success {
+    let outcome = failure.map(|(o, _)| o).unwrap_or(if verdict.success {
         Outcome::Success
     } else {
         Outcome::TimeLimit
@@ -328,11 +358,11 @@ pub fn run_episode_with(
         outcome,
         verdict,
         error,
-        sim_time_s: ep.time(),
+        sim_time_s: env.time(),
         control_steps: steps,
         wall_time_s: start.elapsed().as_secs_f64(),
         policy_time_s: policy_time,
-        trajectory_hash,
+        trajectory_hash: env.trajectory_hash(),
         recording: opts.record.as_ref().map(|p| p.display().to_string()),
     })
 }

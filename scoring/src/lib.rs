@@ -10,13 +10,14 @@ pub mod episode;
 pub mod eval;
 pub mod expert;
 pub mod policy;
-pub mod profile;
 pub mod remote;
 pub mod replay;
 pub mod route;
-pub mod verdict;
 
-pub use episode::{EpisodeOptions, EpisodeResult, Outcome, run_episode};
+/// Profiles and verdicts live in `results` (no simulator needed to read them).
+pub use results::{profile, verdict};
+
+pub use episode::{EpisodeError, EpisodeOptions, EpisodeResult, Outcome, run_episode};
 pub use eval::{EvalError, EvalReport, EvalSummary, RESULTS_SCHEMA_VERSION, evaluate};
 pub use policy::{HoldPolicy, Observation, POLICIES, Policy, PolicyError, StageEvent};
-pub use verdict::{Judge, PredicateValue, StageVerdict, Verdict};
+pub use results::verdict::{Judge, PredicateValue, StageVerdict, Verdict};

@@ -35,10 +35,8 @@ pub struct Privileged {
     pub qpos: Vec<f64>,
 }
 
-pub struct RobotPrivileged {
-    pub arm_q: Vec<f64>,
-    pub ctrl: Vec<f64>,
-}
+/// One robot's arm joint angles and current targets.
+pub use runtime::env::RobotState as RobotPrivileged;
 
 impl Privileged {
     /// Every robot's current targets, concatenated: the action that changes nothing.
@@ -218,10 +216,63 @@ impl Policy for ReplayPolicy {
 /// The policies `make` knows by name (`replay:` takes a recording or a folder of them).
 pub const POLICIES: &[&str] = &["expert", "hold", "replay:<recording or folder>"];
 
+/// A policy named on the command line (`--policy`), parsed once.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum PolicySpec {
+    /// The scripted expert.
+    Expert,
+    /// The no-motion control.
+    Hold,
+    /// The actions of a recording, or of `<task>_seed<seed>.mcap` in a folder, for the same seed.
+    Replay(std::path::PathBuf),
+}
+
+impl std::str::FromStr for PolicySpec {
+    type Err = PolicyError;
+    fn from_str(name: &str) -> Result<PolicySpec, PolicyError> {
+        match name {
+            "expert" => Ok(PolicySpec::Expert),
+            "hold" => Ok(PolicySpec::Hold),
+            other => match other.strip_prefix("replay:") {
+                Some(path) if !path.is_empty() => Ok(PolicySpec::Replay(path.into())),
+                _ => Err(PolicyError::Unknown(other.to_string())),
+            },
+        }
+    }
+}
+
+impl std::fmt::Display for PolicySpec {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            PolicySpec::Expert => f.write_str("expert"),
+            PolicySpec::Hold => f.write_str("hold"),
+            PolicySpec::Replay(p) => write!(f, "replay:{}", p.display()),
+        }
+    }
+}
+
+impl PolicySpec {
+    /// Makes this policy for one episode.
+    pub fn make(
+        &self,
+        task: &Task,
+        scene: &Scene,
+        instance: &SceneInstance,
+    ) -> Result<Box<dyn Policy>, PolicyError> {
+        Ok(match self {
+            PolicySpec::Expert => {
+                Box::new(crate::expert::ExpertPolicy::new(task, scene, instance)?)
+            }
+            PolicySpec::Hold => Box::new(HoldPolicy),
+            PolicySpec::Replay(path) => Box::new(ReplayPolicy::new(path, task, instance)?),
+        })
+    }
+}
+
 /// Whether `make` knows the policy `name` (it may still fail for one episode, e.g. a replay
 /// without a recording of that seed).
 pub fn known(name: &str) -> bool {
-    matches!(name, "expert" | "hold") || name.strip_prefix("replay:").is_some_and(|p| !p.is_empty())
+    name.parse::<PolicySpec>().is_ok()
 }
 
 /// Makes the policy named `name` for one episode.
@@ -231,18 +282,5 @@ pub fn make(
     scene: &Scene,
     instance: &SceneInstance,
 ) -> Result<Box<dyn Policy>, PolicyError> {
-    match name {
-        "expert" => Ok(Box::new(crate::expert::ExpertPolicy::new(
-            task, scene, instance,
-        )?)),
-        "hold" => Ok(Box::new(HoldPolicy)),
-        other => match other.strip_prefix("replay:") {
-            Some(path) if !path.is_empty() => Ok(Box::new(ReplayPolicy::new(
-                std::path::Path::new(path),
-                task,
-                instance,
-            )?)),
-            _ => Err(PolicyError::Unknown(other.to_string())),
-        },
-    }
+    name.parse::<PolicySpec>()?.make(task, scene, instance)
 }

@@ -10,10 +10,10 @@
 
 use crate::verdict::{Judge, Verdict};
 use compiler::{SceneInstance, Task};
+use results::TrajectoryHash;
 use runtime::record::{RecordError, Recorder, RecordingSummary};
-use runtime::render::{Cameras, Image};
+use runtime::render::{Cameras, Image, RenderError};
 use runtime::{Episode, Scene};
-use sha2::{Digest, Sha256};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -40,8 +40,13 @@ pub enum ReplayError {
         step: usize,
         error: runtime::StepError,
     },
-    #[error("cannot render: {0}")]
-    Render(String),
+    #[error(transparent)]
+    Render(#[from] RenderError),
+    #[error("a recorded frame of `{camera}` does not decode: {why}")]
+    Frame { camera: String, why: std::io::Error },
+    /// What a caller drawing frames for its own use failed at (a dataset's video encoder).
+    #[error("{0}")]
+    Consumer(Box<dyn std::error::Error + Send + Sync>),
     // The OS error is part of the message and not a `source`: a chain of causes prints it once.
     #[error("cannot write {path}: {why}")]
     Write { path: PathBuf, why: std::io::Error },
@@ -131,8 +136,8 @@ impl Recording {
 pub struct Resimulation {
     pub from_step: usize,
     pub steps: usize,
-    /// SHA-256 over every control step's `qpos`, as an episode reports it: the recorded states up
-    /// to `from_step`, the re-simulated ones after.
+    /// The [`TrajectoryHash`] over the recorded states up to `from_step` and the re-simulated ones
+    /// after.
     pub hash: String,
     pub recorded_hash: Option<String>,
     /// The first control step whose re-simulated state differs from the recorded one.
@@ -162,11 +167,9 @@ pub fn resimulate(rec: &Recording, from_step: usize) -> Result<Resimulation, Rep
     let mut ep = rec.episode_at(&scene, from_step)?;
     let nq = scene.model.ffi().nq as usize;
     let qpos = |state: &[f64]| state[1..1 + nq].to_vec();
-    let mut hasher = Sha256::new();
+    let mut hash = TrajectoryHash::new();
     for (_, state) in &rec.summary.physics[1..=from_step] {
-        for v in qpos(state) {
-            hasher.update(v.to_le_bytes());
-        }
+        hash.step(&qpos(state));
     }
     let series = &rec.summary.labware_series;
     let first = series.first().map(|(_, s)| s.clone()).unwrap_or_default();
@@ -179,9 +182,7 @@ pub fn resimulate(rec: &Recording, from_step: usize) -> Result<Resimulation, Rep
         ep.apply(action)
             .and_then(|_| ep.control_step())
             .map_err(|error| ReplayError::Step { step: k, error })?;
-        for v in ep.data.qpos() {
-            hasher.update(v.to_le_bytes());
-        }
+        hash.step(ep.data.qpos());
         let now = ep.physics_state();
         let recorded = &rec.summary.physics[k + 1].1;
         let same = now.len() == recorded.len()
@@ -197,11 +198,7 @@ pub fn resimulate(rec: &Recording, from_step: usize) -> Result<Resimulation, Rep
     Ok(Resimulation {
         from_step,
         steps,
-        hash: hasher
-            .finalize()
-            .iter()
-            .map(|b| format!("{b:02x}"))
-            .collect(),
+        hash: hash.hex(),
         recorded_hash: rec.recorded_hash().map(str::to_string),
         first_divergence,
         verdict: judge.verdict(),
@@ -259,15 +256,13 @@ pub fn frames(
         .or_else(|| rec.recorded_every())
         .unwrap_or(1)
         .max(1);
-    let mut cams = Cameras::with_detail(&scene, w, h, detail).map_err(ReplayError::Render)?;
+    let mut cams = Cameras::with_detail(&scene, w, h, detail)?;
     let names: Vec<String> = rec.task.cameras.iter().map(|c| c.name.clone()).collect();
     let mut ep = Episode::new(scene.clone(), &rec.task, &rec.instance);
     // The last state follows the last action; an episode records frames only before actions.
     for k in (0..rec.steps()).step_by(every) {
         rec.restore(&mut ep, k)?;
-        let images = cams
-            .render(&ep.data, ep.logic(), &names)
-            .map_err(ReplayError::Render)?;
+        let images = cams.render(&ep.data, ep.logic(), &names)?;
         each(k, rec.summary.physics[k].0, images)?;
     }
     Ok(())
@@ -339,7 +334,10 @@ pub fn recorded_frames(rec: &Recording, camera: &str) -> Result<Vec<(f64, Image)
         .map(|(t, png)| {
             Image::from_png(camera, png)
                 .map(|i| (*t, i))
-                .map_err(|e| ReplayError::Render(format!("a recorded frame of `{camera}`: {e}")))
+                .map_err(|why| ReplayError::Frame {
+                    camera: camera.to_string(),
+                    why,
+                })
         })
         .collect()
 }

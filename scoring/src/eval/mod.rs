@@ -1,69 +1,37 @@
 //! Evaluation runs: seeded episodes of one task with one policy (made per episode by name
-//! through [`crate::policy::make`], or a model server through [`crate::remote`]), in one or more
+//! through [`crate::policy::PolicySpec::make`], or a model server through [`crate::remote`]), in one or more
 //! runs, on one or more worker threads, or one shard of them. Each finished episode is appended
 //! to the journal at once (so nothing finished is lost if the run dies); the run ends with a
 //! versioned results JSON. `merge` joins shards' records into one.
 //!
 //! It does not simulate (the runtime does) and does not render reports (the leaderboard does).
 
-mod merge;
-pub mod record;
-pub mod stats;
-
-pub use merge::merge;
-pub use record::{
-    Conditions, GIT_COMMIT, Manifest, ModelRecord, journal_path, manifest_path, results_path,
-    sha256_hex,
+pub use results::run::{
+    AcrossRuns, Aggregate, Conditions, EvalReport, EvalSummary, GIT_COMMIT, Manifest, ModelRecord,
+    RESULTS_SCHEMA_VERSION, RUN_SEED_STRIDE, RunError, RunSummary, Shard, aggregate, journal_path,
+    manifest_path, mean_sem, merge, plan, recording_path, results_path, sha256_hex, summarise,
+    wilson,
 };
-pub use stats::{
-    AcrossRuns, Aggregate, EvalSummary, RunSummary, aggregate, mean_sem, summarise, wilson,
-};
+pub use results::run::{record, stats};
 
-use crate::episode::{EpisodeOptions, EpisodeResult, run_episode};
+use crate::episode::{EpisodeError, EpisodeOptions, run_episode};
 use crate::policy::{self, PolicyError};
-use crate::profile::{Layout, ProfileError};
 use crate::remote::{Model, WireError};
 use compiler::Task;
 use record::RunRecord;
-use serde::{Deserialize, Serialize};
+use results::EpisodeResult;
+use results::profile::{Layout, ProfileError};
 use std::collections::{HashMap, HashSet};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, mpsc};
 use std::time::{Duration, Instant};
 
-/// 2: verdicts per stage with scores; `mean_score` in the summary. 3: each episode's `outcome`;
-/// the summary's Wilson 95% interval and counts per outcome. 4: the `server_fault` outcome,
-/// each episode's `run` and `policy_time_s`, per-run and across-run figures, the run's
-/// `conditions`, version, git commit and (for models) `model`.
-pub const RESULTS_SCHEMA_VERSION: u32 = 4;
-
-/// Run r's seeds start at `seed + r * RUN_SEED_STRIDE`, so that a run can be extended with more
-/// episodes without its seeds meeting the next run's.
-pub const RUN_SEED_STRIDE: u64 = 1 << 20;
-
+/// Why an evaluation run stopped (a failed episode does not stop it: it is a result).
 #[derive(Debug, thiserror::Error)]
 pub enum EvalError {
-    #[error("cannot {what} {path}: {source}")]
-    Io {
-        what: &'static str,
-        path: PathBuf,
-        source: std::io::Error,
-    },
-    #[error("{path} is not what autobio wrote: {why}")]
-    Format { path: PathBuf, why: String },
-    #[error("cannot resume the run in {dir}: {why}")]
-    Resume { dir: PathBuf, why: String },
-    #[error(
-        "{dir} already has a run of {task} (its journal {journal}); continue it with --resume, or use another --out",
-        dir = dir.display(),
-        journal = journal.display()
-    )]
-    Exists {
-        dir: PathBuf,
-        task: String,
-        journal: PathBuf,
-    },
+    #[error(transparent)]
+    Run(#[from] RunError),
     #[error(transparent)]
     Profile(#[from] ProfileError),
     #[error(transparent)]
@@ -74,67 +42,14 @@ pub enum EvalError {
     Scene {
         task: String,
         seed: u64,
-        why: String,
+        why: runtime::SceneError,
     },
     #[error("episode {seed} of {task} could not be run: {why}")]
     Episode {
         task: String,
         seed: u64,
-        why: String,
+        why: EpisodeError,
     },
-    #[error("cannot merge: {0}")]
-    Merge(String),
-    #[error("bad shard `{0}`: expected I/N with 0 <= I < N, e.g. 0/4")]
-    Shard(String),
-    #[error("{0} episodes per run is more than a run's {RUN_SEED_STRIDE} seeds; use --runs")]
-    TooManyEpisodes(usize),
-}
-
-impl EvalError {
-    pub(crate) fn io(what: &'static str, path: &Path, source: std::io::Error) -> EvalError {
-        EvalError::Io {
-            what,
-            path: path.to_path_buf(),
-            source,
-        }
-    }
-}
-
-/// One share of a run's episodes: those whose position in the run's plan is `index` modulo
-/// `count`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub struct Shard {
-    pub index: u32,
-    pub count: u32,
-}
-
-impl Shard {
-    /// Whether the plan's episode at `position` is this shard's.
-    pub fn takes(&self, position: usize) -> bool {
-        position as u64 % u64::from(self.count) == u64::from(self.index)
-    }
-}
-
-impl std::str::FromStr for Shard {
-    type Err = EvalError;
-    fn from_str(s: &str) -> Result<Shard, EvalError> {
-        let bad = || EvalError::Shard(s.to_string());
-        let (i, n) = s.split_once('/').ok_or_else(bad)?;
-        let (index, count): (u32, u32) = (
-            i.trim().parse().map_err(|_| bad())?,
-            n.trim().parse().map_err(|_| bad())?,
-        );
-        if count == 0 || index >= count {
-            return Err(bad());
-        }
-        Ok(Shard { index, count })
-    }
-}
-
-impl std::fmt::Display for Shard {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}/{}", self.index, self.count)
-    }
 }
 
 /// A model server to evaluate: where, what it speaks, and its profile.
@@ -142,7 +57,7 @@ impl std::fmt::Display for Shard {
 pub struct ModelSpec {
     pub url: String,
     pub wire: crate::remote::Wire,
-    pub profile: crate::profile::LoadedProfile,
+    pub profile: results::profile::LoadedProfile,
     /// Connection attempts per episode and the first retry's wait (doubled per retry).
     pub attempts: u32,
     pub backoff_s: f64,
@@ -157,8 +72,8 @@ impl ModelSpec {
 }
 
 pub struct EvalOptions {
-    /// The policy's name (see [`crate::policy::POLICIES`]); ignored when `model` is given.
-    pub policy: String,
+    /// The policy (see [`crate::policy::POLICIES`]); ignored when `model` is given.
+    pub policy: policy::PolicySpec,
     /// Episodes per run.
     pub episodes: usize,
     pub seed: u64,
@@ -166,6 +81,9 @@ pub struct EvalOptions {
     pub out: Option<PathBuf>,
     pub record: bool,
     pub image_every: u32,
+    /// Every camera at this size (`--size`); `None`: what a model's profile asks for, else the
+    /// task's own camera spec.
+    pub image_size: Option<[usize; 2]>,
     /// Continue the run whose journal is in `out`: only when its manifest's fingerprints match,
     /// and never rerunning a finished episode.
     pub resume: bool,
@@ -181,12 +99,13 @@ pub struct EvalOptions {
 impl Default for EvalOptions {
     fn default() -> EvalOptions {
         EvalOptions {
-            policy: "expert".into(),
+            policy: policy::PolicySpec::Expert,
             episodes: 1,
             seed: 0,
             out: None,
             record: false,
             image_every: 0,
+            image_size: None,
             resume: false,
             model: None,
             runs: 1,
@@ -194,47 +113,6 @@ impl Default for EvalOptions {
             shard: None,
         }
     }
-}
-
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct EvalReport {
-    pub schema_version: u32,
-    pub task_id: String,
-    /// The task's difficulty level (`easy`, `medium`, `hard`).
-    pub level: String,
-    pub protocol: String,
-    pub policy: String,
-    /// Run r's episode i uses seed `seed + r * 2^20 + i`.
-    pub seed: u64,
-    pub summary: EvalSummary,
-    pub conditions: Conditions,
-    pub model: Option<ModelRecord>,
-    pub autobio_version: String,
-    pub git_commit: String,
-    /// The shard this report covers, if it is one.
-    #[serde(default)]
-    pub shard: Option<Shard>,
-    /// In plan order (run, then seed).
-    pub episodes: Vec<EpisodeResult>,
-}
-
-/// The episodes of a run, in order: (run, seed) for each run's episodes, then only those of
-/// `shard`, if given (every N-th from I, so that each shard gets a share of every run).
-pub fn plan(seed: u64, episodes: usize, runs: u32, shard: Option<Shard>) -> Vec<(u32, u64)> {
-    (0..runs)
-        .flat_map(|r| {
-            (0..episodes as u64).map(move |i| {
-                (
-                    r,
-                    seed.wrapping_add(r as u64 * RUN_SEED_STRIDE)
-                        .wrapping_add(i),
-                )
-            })
-        })
-        .enumerate()
-        .filter(|(k, _)| shard.is_none_or(|s| s.takes(*k)))
-        .map(|(_, p)| p)
-        .collect()
 }
 
 /// Where a run stands after each finished episode.
@@ -290,7 +168,7 @@ pub fn evaluate(
         protocol_files: record::protocol_files(task),
         policy: match &opts.model {
             Some(_) => "model".to_string(),
-            None => opts.policy.clone(),
+            None => opts.policy.to_string(),
         },
         seed: opts.seed,
         episodes: opts.episodes,
@@ -300,10 +178,7 @@ pub fn evaluate(
         model: model_record.clone(),
     };
     if opts.episodes as u64 > RUN_SEED_STRIDE {
-        return Err(EvalError::TooManyEpisodes(opts.episodes));
-    }
-    if opts.model.is_none() && !policy::known(&opts.policy) {
-        return Err(PolicyError::Unknown(opts.policy.clone()).into());
+        return Err(RunError::TooManyEpisodes(opts.episodes).into());
     }
     let (mut record, finished) = match &opts.out {
         Some(dir) => {
@@ -396,7 +271,7 @@ pub fn evaluate(
     results.sort_by_key(|r| position.get(&r.seed).copied());
     let policy_name = match &opts.model {
         Some(m) => format!("model {} ({}, {})", m.url, m.wire, m.profile.profile.name),
-        None => opts.policy.clone(),
+        None => opts.policy.to_string(),
     };
     let report = EvalReport {
         schema_version: RESULTS_SCHEMA_VERSION,
@@ -438,7 +313,7 @@ impl Worker<'_> {
                 EvalError::Scene {
                     task: task.id.clone(),
                     seed,
-                    why: e.to_string(),
+                    why: e,
                 }
             })?;
         let eo = EpisodeOptions {
@@ -447,6 +322,7 @@ impl Worker<'_> {
                 _ => None,
             },
             image_every: opts.image_every,
+            image_size: opts.image_size,
         };
         // A policy that cannot be made for this episode fails this episode, not the run.
         let made = match (&opts.model, &self.layout) {
@@ -463,7 +339,7 @@ impl Worker<'_> {
                 crate::remote::ModelPolicy::start(m, layout.clone(), &info)
                     .map(|p| Box::new(p) as Box<dyn policy::Policy>)
             }
-            _ => policy::make(&opts.policy, task, scene, &instance),
+            _ => opts.policy.make(task, scene, &instance),
         };
         let mut r =
             match made {
@@ -478,36 +354,5 @@ impl Worker<'_> {
             };
         r.run = run;
         Ok(r)
-    }
-}
-
-pub fn recording_path(dir: &Path, task: &Task, seed: u64) -> PathBuf {
-    dir.join(format!("{}_seed{seed}.mcap", task.id))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn shards_split_the_plan_without_overlap_or_gaps() {
-        let all = plan(7, 5, 3, None);
-        assert_eq!(all.len(), 15);
-        assert_eq!(all[0], (0, 7));
-        assert_eq!(all[5], (1, 7 + RUN_SEED_STRIDE));
-        let mut joined: Vec<(u32, u64)> = (0..4)
-            .flat_map(|i| plan(7, 5, 3, Some(Shard { index: i, count: 4 })))
-            .collect();
-        joined.sort();
-        let mut want = all.clone();
-        want.sort();
-        assert_eq!(joined, want);
-        for bad in ["4/4", "1", "a/2", "0/0", "-1/3"] {
-            assert!(bad.parse::<Shard>().is_err(), "{bad}");
-        }
-        assert_eq!(
-            "2/5".parse::<Shard>().unwrap(),
-            Shard { index: 2, count: 5 }
-        );
     }
 }

@@ -27,36 +27,9 @@ use crate::profile::{ImageEncoding, Layout, LoadedProfile};
 use codec::Keys;
 pub use link::{Frame, Link, WireError};
 use rmpv::Value;
-use serde::{Deserialize, Serialize};
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
-/// The protocol a model server speaks.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Wire {
-    Openpi,
-    VlaEval,
-}
-
-impl std::str::FromStr for Wire {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Wire, String> {
-        match s {
-            "openpi" => Ok(Wire::Openpi),
-            "vla-eval" => Ok(Wire::VlaEval),
-            other => Err(format!("unknown wire `{other}`; known: openpi, vla-eval")),
-        }
-    }
-}
-
-impl std::fmt::Display for Wire {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Wire::Openpi => "openpi",
-            Wire::VlaEval => "vla-eval",
-        })
-    }
-}
+pub use results::run::Wire;
 
 /// How long a fresh openpi connection waits for the server's metadata frame before taking the
 /// server for one that sends none (a late one is still recognised).

@@ -15,8 +15,8 @@
 //! | `/verdict` | `autobio.Verdict` | once, at the end | success and every predicate's value, the error if any, the trajectory hash and control steps |
 //! | `/liquid/<name>` | `autobio.Liquid` | physics or control | volume (µL), surface normal and offset (container frame), the surface disk's world pose and radius |
 
-use crate::LabwareState;
-use crate::render::Image;
+use crate::image::Image;
+use labware::LabwareState;
 use serde::Serialize;
 use serde_json::json;
 use std::collections::BTreeMap;

@@ -1,13 +1,9 @@
-//! Build script of the `scoring` package: the MuJoCo rpath (as `rpath.rs` does for the other
-//! packages), and the source's git commit for run manifests (`AUTOBIO_GIT_COMMIT`: the commit,
-//! with `-dirty` when the work tree had changes, or `unknown` outside a git checkout).
+//! Build script of the `results` package: the source's git commit for run manifests
+//! (`AUTOBIO_GIT_COMMIT`: the commit, with `-dirty` when the work tree had changes, or `unknown`
+//! outside a git checkout). No MuJoCo: `results` links no simulator.
 use std::process::Command;
 
 fn main() {
-    println!("cargo:rerun-if-env-changed=MUJOCO_DYNAMIC_LINK_DIR");
-    if let Ok(dir) = std::env::var("MUJOCO_DYNAMIC_LINK_DIR") {
-        println!("cargo:rustc-link-arg=-Wl,-rpath,{dir}");
-    }
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let git = |args: &[&str]| {
         Command::new("git")
@@ -39,7 +35,9 @@ fn main() {
         "physics",
         "runtime",
         "scoring",
+        "results",
         "leaderboard",
+        "dataset",
         "profiles",
         "build",
         "Cargo.toml",

@@ -4,7 +4,7 @@
 //! (`profiles/*.toml`). Every field is written into the run's results, so a number always says
 //! what it was measured under.
 //!
-//! It does not speak any wire protocol (see [`crate::remote`]) and does not render.
+//! It does not speak any wire protocol (`scoring::remote` does) and does not render.
 
 use compiler::{CameraMount, Task};
 use serde::{Deserialize, Serialize};
@@ -130,7 +130,7 @@ impl LoadedProfile {
     }
 
     pub fn sha256(&self) -> String {
-        crate::eval::sha256_hex(self.text.as_bytes())
+        crate::run::sha256_hex(self.text.as_bytes())
     }
 }
 

@@ -7,8 +7,8 @@
 use compiler::params::{Bindings, render};
 use compiler::predicates::Check;
 use compiler::{Predicate, Scoring, Task};
+use labware::LabwareState;
 use labware::Measure;
-use runtime::LabwareState;
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -273,9 +273,11 @@ fn stage_verdict(
 
 /// Follows an episode through its stages: the current stage advances when all its predicates hold;
 /// the episode is over when the last stage completes or the current one runs out of time.
-pub struct Judge<'t> {
-    task: &'t Task,
-    params: &'t Bindings,
+///
+/// It keeps its own copy of the task and the drawn parameters, so an environment can own it.
+pub struct Judge {
+    task: Task,
+    params: Bindings,
     stage: usize,
     stage_start_s: f64,
     stage_start: Vec<LabwareState>,
@@ -283,12 +285,12 @@ pub struct Judge<'t> {
     last: Option<StageVerdict>,
 }
 
-impl<'t> Judge<'t> {
+impl Judge {
     /// A judge for one episode of `task` with its drawn parameters.
-    pub fn new(task: &'t Task, params: &'t Bindings, initial: &[LabwareState]) -> Self {
+    pub fn new(task: &Task, params: &Bindings, initial: &[LabwareState]) -> Self {
         Judge {
-            task,
-            params,
+            task: task.clone(),
+            params: params.clone(),
             stage: 0,
             stage_start_s: 0.0,
             stage_start: initial.to_vec(),
@@ -308,8 +310,8 @@ impl<'t> Judge<'t> {
         let time = (time * 1e6).round() / 1e6;
         while self.stage < self.task.stages.len() {
             let v = stage_verdict(
-                self.task,
-                self.params,
+                &self.task,
+                &self.params,
                 self.stage,
                 states,
                 &self.stage_start,

@@ -5,7 +5,7 @@
 //!
 //! It does not run episodes or compute statistics.
 
-use super::{EvalError, Shard};
+use super::{RunError, Shard};
 use crate::episode::EpisodeResult;
 use compiler::Task;
 use serde::{Deserialize, Serialize};
@@ -106,11 +106,39 @@ impl Conditions {
     }
 }
 
+/// The protocol a model server speaks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Wire {
+    Openpi,
+    VlaEval,
+}
+
+impl std::str::FromStr for Wire {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Wire, String> {
+        match s {
+            "openpi" => Ok(Wire::Openpi),
+            "vla-eval" => Ok(Wire::VlaEval),
+            other => Err(format!("unknown wire `{other}`; known: openpi, vla-eval")),
+        }
+    }
+}
+
+impl std::fmt::Display for Wire {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Wire::Openpi => "openpi",
+            Wire::VlaEval => "vla-eval",
+        })
+    }
+}
+
 /// The model part of a manifest and of results.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ModelRecord {
     pub url: String,
-    pub wire: crate::remote::Wire,
+    pub wire: Wire,
     /// `built-in pi0` or the profile file's path.
     pub profile_origin: String,
     pub profile_sha256: String,
@@ -206,23 +234,23 @@ impl Manifest {
             .collect()
     }
 
-    pub fn read(path: &Path) -> Result<Manifest, EvalError> {
-        let text = std::fs::read_to_string(path).map_err(|e| EvalError::io("read", path, e))?;
-        serde_json::from_str(&text).map_err(|e| EvalError::Format {
+    pub fn read(path: &Path) -> Result<Manifest, RunError> {
+        let text = std::fs::read_to_string(path).map_err(|e| RunError::io("read", path, e))?;
+        serde_json::from_str(&text).map_err(|e| RunError::Format {
             path: path.to_path_buf(),
             why: e.to_string(),
         })
     }
 
-    pub fn write(&self, path: &Path) -> Result<(), EvalError> {
+    pub fn write(&self, path: &Path) -> Result<(), RunError> {
         write_json(path, self)
     }
 }
 
 /// Writes JSON to `path` through [`write_atomic`].
-pub fn write_json(path: &Path, value: &impl Serialize) -> Result<(), EvalError> {
+pub fn write_json(path: &Path, value: &impl Serialize) -> Result<(), RunError> {
     let text = serde_json::to_string_pretty(value).expect("results serialise") + "\n";
-    write_atomic(path, text.as_bytes()).map_err(|e| EvalError::io("write", path, e))
+    write_atomic(path, text.as_bytes()).map_err(|e| RunError::io("write", path, e))
 }
 
 /// Writes `bytes` to `path` through a synced temporary file and a rename, so that a crash
@@ -242,30 +270,30 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 /// The finished episodes of a journal; a last line cut short by a crash is dropped from the file.
 /// A complete line that does not parse is an error: it is not a crash's trace, and nothing after
 /// it may be thrown away.
-pub fn read_journal(path: &Path) -> Result<Vec<EpisodeResult>, EvalError> {
+pub fn read_journal(path: &Path) -> Result<Vec<EpisodeResult>, RunError> {
     let (done, kept, len) = parse_journal(path)?;
     if kept < len {
         std::fs::OpenOptions::new()
             .write(true)
             .open(path)
             .and_then(|f| f.set_len(kept as u64))
-            .map_err(|e| EvalError::io("truncate", path, e))?;
+            .map_err(|e| RunError::io("truncate", path, e))?;
     }
     Ok(done)
 }
 
 /// The finished episodes of a journal, read only (a last line cut short is skipped, the file
 /// left as it is): for merging shards that may still be written.
-pub fn read_journal_only(path: &Path) -> Result<Vec<EpisodeResult>, EvalError> {
+pub fn read_journal_only(path: &Path) -> Result<Vec<EpisodeResult>, RunError> {
     parse_journal(path).map(|(done, _, _)| done)
 }
 
 /// The complete lines' episodes, the bytes they take, and the file's length.
-fn parse_journal(path: &Path) -> Result<(Vec<EpisodeResult>, usize, usize), EvalError> {
+fn parse_journal(path: &Path) -> Result<(Vec<EpisodeResult>, usize, usize), RunError> {
     let text = match std::fs::read_to_string(path) {
         Ok(t) => t,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok((Vec::new(), 0, 0)),
-        Err(e) => return Err(EvalError::io("read", path, e)),
+        Err(e) => return Err(RunError::io("read", path, e)),
     };
     let mut done = Vec::new();
     let mut kept = 0;
@@ -274,7 +302,7 @@ fn parse_journal(path: &Path) -> Result<(Vec<EpisodeResult>, usize, usize), Eval
             break; // cut short by a crash
         }
         let r = serde_json::from_str::<EpisodeResult>(line.trim_end()).map_err(|e| {
-            EvalError::Format {
+            RunError::Format {
                 path: path.to_path_buf(),
                 why: format!("line {} is not an episode result: {e}", number + 1),
             }
@@ -299,8 +327,8 @@ impl RunRecord {
         dir: &Path,
         here: &Manifest,
         resume: bool,
-    ) -> Result<(RunRecord, Vec<EpisodeResult>), EvalError> {
-        std::fs::create_dir_all(dir).map_err(|e| EvalError::io("create", dir, e))?;
+    ) -> Result<(RunRecord, Vec<EpisodeResult>), RunError> {
+        std::fs::create_dir_all(dir).map_err(|e| RunError::io("create", dir, e))?;
         let jp = journal_path(dir, &here.task_id);
         let mp = manifest_path(dir, &here.task_id);
         let started = std::fs::metadata(&jp).is_ok_and(|m| m.len() > 0);
@@ -309,7 +337,7 @@ impl RunRecord {
         // resumes the tasks it finished and starts the ones it never reached.
         let recorded = started || mp.exists();
         if resume && recorded {
-            let resume_err = |why: String| EvalError::Resume {
+            let resume_err = |why: String| RunError::Resume {
                 dir: dir.to_path_buf(),
                 why,
             };
@@ -326,7 +354,7 @@ impl RunRecord {
             }
             finished = read_journal(&jp)?;
         } else if started {
-            return Err(EvalError::Exists {
+            return Err(RunError::Exists {
                 dir: dir.to_path_buf(),
                 task: here.task_id.clone(),
                 journal: jp,
@@ -337,20 +365,20 @@ impl RunRecord {
             .create(true)
             .append(true)
             .open(&jp)
-            .map_err(|e| EvalError::io("open", &jp, e))?;
+            .map_err(|e| RunError::io("open", &jp, e))?;
         // The folder's entries for a new journal and manifest are on disk too.
         std::fs::File::open(dir)
             .and_then(|d| d.sync_all())
-            .map_err(|e| EvalError::io("sync", dir, e))?;
+            .map_err(|e| RunError::io("sync", dir, e))?;
         Ok((RunRecord { journal, path: jp }, finished))
     }
 
     /// Appends one finished episode, on disk before this returns.
-    pub fn append(&mut self, r: &EpisodeResult) -> Result<(), EvalError> {
+    pub fn append(&mut self, r: &EpisodeResult) -> Result<(), RunError> {
         let line = serde_json::to_string(r).expect("episode results serialise");
         writeln!(self.journal, "{line}")
             .and_then(|_| self.journal.flush())
             .and_then(|_| self.journal.sync_data())
-            .map_err(|e| EvalError::io("append to", &self.path, e))
+            .map_err(|e| RunError::io("append to", &self.path, e))
     }
 }

@@ -6,18 +6,18 @@
 //! It reads and writes run records only; it runs nothing.
 
 use super::record::{Manifest, RunRecord, read_journal_only, write_json};
-use super::{EvalError, EvalReport, RESULTS_SCHEMA_VERSION, plan, results_path, summarise};
+use super::{EvalReport, RESULTS_SCHEMA_VERSION, RunError, plan, results_path, summarise};
 use crate::episode::EpisodeResult;
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
 /// Merges every task found in the shard folders `dirs` into `out`; one report per task.
-pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Vec<EvalReport>, EvalError> {
+pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Vec<EvalReport>, RunError> {
     let mut by_task: BTreeMap<String, Vec<(PathBuf, Manifest)>> = BTreeMap::new();
     for dir in dirs {
-        let entries = std::fs::read_dir(dir).map_err(|e| EvalError::io("read", dir, e))?;
+        let entries = std::fs::read_dir(dir).map_err(|e| RunError::io("read", dir, e))?;
         for entry in entries {
-            let path = entry.map_err(|e| EvalError::io("read", dir, e))?.path();
+            let path = entry.map_err(|e| RunError::io("read", dir, e))?.path();
             let name = path
                 .file_name()
                 .and_then(|n| n.to_str())
@@ -32,7 +32,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Vec<EvalReport>, EvalError>
         }
     }
     if by_task.is_empty() {
-        return Err(EvalError::Merge(format!(
+        return Err(RunError::Merge(format!(
             "no run records (`<task>.manifest.json`) in {}",
             dirs.iter()
                 .map(|d| d.display().to_string())
@@ -49,7 +49,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Vec<EvalReport>, EvalError>
     for (manifest, _) in &merged {
         let journal = super::journal_path(out, &manifest.task_id);
         if std::fs::metadata(&journal).is_ok_and(|m| m.len() > 0) {
-            return Err(EvalError::Exists {
+            return Err(RunError::Exists {
                 dir: out.to_path_buf(),
                 task: manifest.task_id.clone(),
                 journal,
@@ -73,8 +73,8 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Vec<EvalReport>, EvalError>
 fn merge_task(
     task: &str,
     shards: &[(PathBuf, Manifest)],
-) -> Result<(Manifest, EvalReport), EvalError> {
-    let fail = |why: String| Err(EvalError::Merge(format!("{task}: {why}")));
+) -> Result<(Manifest, EvalReport), RunError> {
+    let fail = |why: String| Err(RunError::Merge(format!("{task}: {why}")));
     let (first_dir, first) = &shards[0];
     let Some(count) = first.shard.map(|s| s.count) else {
         return fail(format!("{} holds an unsharded run", first_dir.display()));

@@ -1,0 +1,20 @@
+//! What episodes and runs produce, readable without a simulator: the judge and its verdicts
+//! ([`verdict`]), an episode's result and the trajectory-hash rule ([`episode`]), run records,
+//! statistics and merging shards ([`run`]), model profiles ([`profile`]), camera frames
+//! ([`image`]) and MCAP recordings, written and read ([`recording`]).
+//!
+//! It links no simulator (no MuJoCo, no EGL): a leaderboard, a verifier's bookkeeping and CI for
+//! submissions build on it alone. It does not run episodes (the runtime and `scoring` do) and
+//! does not render reports (the leaderboard does).
+
+pub mod episode;
+pub mod image;
+pub mod profile;
+pub mod recording;
+pub mod run;
+pub mod verdict;
+
+pub use episode::{EpisodeResult, Outcome, TrajectoryHash};
+pub use image::Image;
+pub use run::{EvalReport, RESULTS_SCHEMA_VERSION, RunError};
+pub use verdict::{Judge, PredicateValue, StageVerdict, Verdict};

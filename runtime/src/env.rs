@@ -1,0 +1,323 @@
+//! The step-wise environment: `reset(seed)` and `step(action)` over one task, in the paper's order
+//! (observe, act, hold the action for the task's physics steps, poll the success checks), with
+//! gymnasium's vocabulary: a step reports a reward, `terminated` (the task succeeded) and
+//! `truncated` (a stage's or the task's time ran out).
+//!
+//! What watches an episode is an [`Observer`] handed to [`Env::step_with`]: the recorder, a
+//! dataset capture, a policy's history frames. The trajectory hash is the environment's own
+//! observer ([`results::TrajectoryHash`], the one rule for "the same trajectory"). Cameras are one
+//! set, sized by [`EnvOptions::image_size`] or else by the task's own camera spec, drawn at most
+//! once per control step whoever asks ([`Env::frames`]).
+//!
+//! It does not decide actions (policies do, in `scoring`) and does not write results; it reports
+//! state, frames and the judge's verdict.
+
+use crate::episode::{Episode, StepError};
+use crate::render::{Cameras, Image, RenderError};
+use crate::scene::{Scene, SceneError};
+use compiler::{SceneInstance, Task};
+use labware::LabwareState;
+use results::recording::RecordError;
+use results::{Judge, TrajectoryHash, Verdict};
+use std::sync::Arc;
+
+/// How an environment draws its cameras.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct EnvOptions {
+    /// Every camera at this size (width, height); `None`: the task's own camera spec.
+    pub image_size: Option<[usize; 2]>,
+}
+
+/// Why the environment could not go on.
+#[derive(Debug, thiserror::Error)]
+pub enum EnvError {
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// The action was refused or the simulation became invalid; the episode is over.
+    #[error(transparent)]
+    Step(#[from] StepError),
+    #[error(transparent)]
+    Render(#[from] RenderError),
+    #[error(transparent)]
+    Observe(#[from] ObserveError),
+    #[error("the episode is over (success or time limit); reset the environment to start another")]
+    Over,
+}
+
+/// Why an observer failed.
+#[derive(Debug, thiserror::Error)]
+pub enum ObserveError {
+    #[error(transparent)]
+    Render(#[from] RenderError),
+    /// A recording could not be written (a full disk is `RecordError::Write`).
+    #[error(transparent)]
+    Record(#[from] RecordError),
+    /// The observer's own failure (a dataset capture's video encoder).
+    #[error("{0}")]
+    Own(Box<dyn std::error::Error + Send + Sync>),
+}
+
+/// Watches an episode step by step. Observers see the state an action acts on and the state it
+/// left; they cannot change the episode.
+pub trait Observer {
+    /// Before the action of a control step is applied.
+    fn before_step(&mut self, _env: &mut Env, _action: &[f64]) -> Result<(), ObserveError> {
+        Ok(())
+    }
+    /// After the action was held for the task's physics steps and the checks were polled.
+    fn after_step(&mut self, _env: &Env) -> Result<(), ObserveError> {
+        Ok(())
+    }
+}
+
+impl Observer for TrajectoryHash {
+    fn after_step(&mut self, env: &Env) -> Result<(), ObserveError> {
+        self.step(env.episode.data.qpos());
+        Ok(())
+    }
+}
+
+/// One robot's privileged state: what the scripted expert and the controls read.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RobotState {
+    /// Arm joint angles (rad).
+    pub arm_q: Vec<f64>,
+    /// Current targets, in the robot's action layout.
+    pub ctrl: Vec<f64>,
+}
+
+/// What the environment shows at a control step, images aside ([`Env::frames`]).
+#[derive(Clone, Debug)]
+pub struct Observation {
+    pub time: f64,
+    /// Every robot's state, concatenated in task order (the robot models' layouts).
+    pub state: Vec<f64>,
+    /// The stage now running and its instruction (the task's, with the drawn parameters).
+    pub stage: usize,
+    pub instruction: String,
+    /// Privileged simulator state, for the scripted expert and the controls; never for models.
+    pub robots: Vec<RobotState>,
+    pub labware: Vec<LabwareState>,
+    /// MuJoCo's generalized positions.
+    pub qpos: Vec<f64>,
+}
+
+/// What one step did: gymnasium's `(reward, terminated, truncated)` and the time it reached.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Transition {
+    /// The task's score when the episode ends at this step; 0 before.
+    pub reward: f64,
+    /// Every stage's checks held.
+    pub terminated: bool,
+    /// A stage's or the task's time limit passed first.
+    pub truncated: bool,
+    pub time: f64,
+    pub control_steps: u64,
+}
+
+impl Transition {
+    pub fn done(&self) -> bool {
+        self.terminated || self.truncated
+    }
+}
+
+/// One task's episodes, stepped by hand or by the episode loop.
+pub struct Env {
+    task: Task,
+    opts: EnvOptions,
+    instance: SceneInstance,
+    /// The MuJoCo episode: readable by observers (robot and labware state, physics state).
+    pub episode: Episode,
+    judge: Judge,
+    hash: TrajectoryHash,
+    /// The judge said the episode is over (success, or a stage's time ran out).
+    over: bool,
+    /// Made on the first frame asked for; the control step its last frames show.
+    cameras: Option<Cameras>,
+    frames: Option<(u64, Vec<Image>)>,
+}
+
+impl Env {
+    /// An environment for `task` at the episode `seed` draws (its scene built for it).
+    pub fn make(task: &Task, seed: u64, opts: EnvOptions) -> Result<Env, EnvError> {
+        let instance = task.sample(seed);
+        let scene = Arc::new(Scene::build(task, &instance)?);
+        Ok(Env::new(scene, task, &instance, opts))
+    }
+
+    /// An environment at the start of `instance`'s episode, on a scene built for it.
+    pub fn new(scene: Arc<Scene>, task: &Task, instance: &SceneInstance, opts: EnvOptions) -> Env {
+        let episode = Episode::new(scene, task, instance);
+        let initial = episode.labware_state();
+        let mut judge = Judge::new(task, &instance.params, &initial);
+        let over = judge.update(episode.time(), &initial);
+        Env {
+            task: task.clone(),
+            opts,
+            instance: instance.clone(),
+            episode,
+            judge,
+            hash: TrajectoryHash::new(),
+            over,
+            cameras: None,
+            frames: None,
+        }
+    }
+
+    /// Starts the episode `seed` draws, on the same scene when its labware stands where it did.
+    pub fn reset(&mut self, seed: u64) -> Result<Observation, EnvError> {
+        let instance = self.task.sample(seed);
+        let mut slot = Some(self.episode.scene.clone());
+        let scene = Scene::reuse_or_build(&mut slot, &self.task, &instance)?;
+        let same = Arc::ptr_eq(&scene, &self.episode.scene);
+        let cameras = self.cameras.take().filter(|_| same);
+        let task = self.task.clone();
+        *self = Env::new(scene, &task, &instance, self.opts);
+        self.cameras = cameras;
+        Ok(self.observe())
+    }
+
+    pub fn task(&self) -> &Task {
+        &self.task
+    }
+
+    pub fn instance(&self) -> &SceneInstance {
+        &self.instance
+    }
+
+    pub fn scene(&self) -> &Arc<Scene> {
+        &self.episode.scene
+    }
+
+    pub fn time(&self) -> f64 {
+        self.episode.time()
+    }
+
+    /// Control steps taken since the reset.
+    pub fn control_steps(&self) -> u64 {
+        self.hash.steps()
+    }
+
+    /// The stage now running.
+    pub fn stage(&self) -> usize {
+        self.judge.stage()
+    }
+
+    /// The episode is over: success, a stage's time ran out, or the task's time limit passed.
+    pub fn done(&self) -> bool {
+        self.over || self.time() >= self.task.time_limit_s
+    }
+
+    /// The judge's verdict so far.
+    pub fn verdict(&self) -> Verdict {
+        self.judge.verdict()
+    }
+
+    /// The trajectory hash of the steps so far ([`TrajectoryHash`]).
+    pub fn trajectory_hash(&self) -> String {
+        self.hash.hex()
+    }
+
+    /// The instruction of the stage now running.
+    pub fn instruction(&self) -> &str {
+        self.instance
+            .stage_instructions
+            .get(self.stage())
+            .map(String::as_str)
+            .unwrap_or(&self.instance.instruction)
+    }
+
+    /// The state now, images aside.
+    pub fn observe(&self) -> Observation {
+        let ep = &self.episode;
+        Observation {
+            time: ep.time(),
+            state: ep.state(),
+            stage: self.stage(),
+            instruction: self.instruction().to_string(),
+            robots: (0..ep.scene.robots.len())
+                .map(|r| RobotState {
+                    arm_q: ep.arm_q(r),
+                    ctrl: ep.robot_ctrl(r),
+                })
+                .collect(),
+            labware: ep.labware_state(),
+            qpos: ep.qpos(),
+        }
+    }
+
+    /// The size every camera is drawn at.
+    pub fn image_size(&self) -> [usize; 2] {
+        self.opts.image_size.unwrap_or_else(|| {
+            self.task
+                .cameras
+                .first()
+                .map_or([224, 224], |c| [c.width as usize, c.height as usize])
+        })
+    }
+
+    /// Every task camera's frame of the state now, in task order; drawn once per control step
+    /// however many ask.
+    pub fn frames(&mut self) -> Result<&[Image], RenderError> {
+        let step = self.control_steps();
+        if self.frames.as_ref().is_none_or(|(k, _)| *k != step) {
+            if self.cameras.is_none() {
+                let [w, h] = self.image_size();
+                self.cameras = Some(Cameras::new(&self.episode.scene, w, h)?);
+            }
+            let names: Vec<String> = self.task.cameras.iter().map(|c| c.name.clone()).collect();
+            let cams = self.cameras.as_mut().expect("made above");
+            let images = cams.render(&self.episode.data, self.episode.logic(), &names)?;
+            self.frames = Some((step, images));
+        }
+        Ok(&self.frames.as_ref().expect("drawn above").1)
+    }
+
+    /// One control step with no observer but the trajectory hash.
+    pub fn step(&mut self, action: &[f64]) -> Result<Transition, EnvError> {
+        self.step_with(action, &mut [])
+    }
+
+    /// One control step: the observers see the state before the action, the action is held for
+    /// the task's physics steps, the checks are polled, and the observers see the result. A
+    /// refused action or an unstable simulation ends the episode with [`EnvError::Step`].
+    pub fn step_with(
+        &mut self,
+        action: &[f64],
+        observers: &mut [&mut dyn Observer],
+    ) -> Result<Transition, EnvError> {
+        if self.done() {
+            return Err(EnvError::Over);
+        }
+        for o in observers.iter_mut() {
+            o.before_step(self, action)?;
+        }
+        if let Err(e) = self
+            .episode
+            .apply(action)
+            .and_then(|_| self.episode.control_step())
+        {
+            self.over = true;
+            return Err(e.into());
+        }
+        let mut hash = std::mem::take(&mut self.hash);
+        hash.after_step(self)?;
+        self.hash = hash;
+        self.over = self
+            .judge
+            .update(self.time(), &self.episode.labware_state());
+        for o in observers.iter_mut() {
+            o.after_step(self)?;
+        }
+        let done = self.done();
+        let verdict = done.then(|| self.judge.verdict());
+        let success = verdict.as_ref().is_some_and(|v| v.success);
+        Ok(Transition {
+            reward: verdict.map_or(0.0, |v| v.score),
+            terminated: success,
+            truncated: done && !success,
+            time: self.time(),
+            control_steps: self.control_steps(),
+        })
+    }
+}

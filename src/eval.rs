@@ -1,0 +1,157 @@
+//! `autobio eval` (a policy or a model server on protocols: a progress line per task, then the
+//! results tables) and `autobio results merge` (shards' run records joined). The work is
+//! `scoring::evaluate` and `results::run::merge`; the tables are `leaderboard::table`'s.
+
+use crate::front::Front;
+use crate::progress;
+use anyhow::Result;
+use scoring::policy::PolicySpec;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Clone, Debug, clap::Args)]
+pub struct EvalArgs {
+    #[arg(long, required = true)]
+    protocol: Vec<PathBuf>,
+    /// The policy: `expert` (the scripted expert), `hold` (no motion: the control every task
+    /// must fail) or `replay:PATH` (the actions of a recording, or of `<task>_seed<seed>.mcap`
+    /// in a folder, for the same seed)
+    #[arg(long, default_value = "expert")]
+    policy: PolicySpec,
+    #[arg(long, default_value_t = 20)]
+    episodes: usize,
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Folder for results JSON, the episode journal and (with --record) recordings
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Write one MCAP recording per episode (with camera images)
+    #[arg(long)]
+    record: bool,
+    /// With --record: camera images every this many control steps (0: none)
+    #[arg(long, default_value_t = 5, requires = "record")]
+    image_every: u32,
+    /// Camera image size WxH (default: what the model's profile asks for, else the task's own)
+    #[arg(long, value_parser = crate::replay::parse_size)]
+    size: Option<[usize; 2]>,
+    /// Continue the run in --out: only if its manifest matches (task, protocol, policy, seed,
+    /// version), never rerunning a finished episode
+    #[arg(long, requires = "out")]
+    resume: bool,
+    /// Evaluate the model server at this address (`ws://HOST:PORT`) instead of --policy
+    #[arg(long, value_name = "URL", conflicts_with = "policy")]
+    model: Option<String>,
+    /// The protocol the model server speaks: `openpi` or `vla-eval`
+    #[arg(long, default_value = "openpi", requires = "model")]
+    wire: scoring::remote::Wire,
+    /// How observations and actions map onto the model: `pi0`, `rdt` or a profile file
+    #[arg(long, default_value = "pi0", requires = "model")]
+    profile: String,
+    /// Connection attempts per episode before it fails as a server fault (backoff from
+    /// 0.25 s, doubling)
+    #[arg(long, default_value_t = 4, requires = "model")]
+    connect_attempts: u32,
+    /// Repeat the evaluation K times on fresh seeds (run r starts at seed + r*2^20): per-run
+    /// figures and their mean ± SEM
+    #[arg(long, default_value_t = 1, value_name = "K", value_parser = clap::value_parser!(u32).range(1..))]
+    runs: u32,
+    /// Episodes run at once, each thread with its own scene, renderer and model connection
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=256))]
+    workers: u32,
+    /// Run only share I of N of the episodes (0-based), into its own --out; join the shards
+    /// with `autobio results merge`
+    #[arg(long, value_name = "I/N", requires = "out")]
+    shard: Option<scoring::eval::Shard>,
+}
+
+#[derive(Clone, Debug, clap::Subcommand)]
+pub enum ResultsCommand {
+    /// Join the run records of a run's shards (`eval --shard I/N`, one folder each) into one
+    Merge {
+        /// The shards' --out folders
+        #[arg(required = true)]
+        shards: Vec<PathBuf>,
+        /// The folder for the merged record (its journal, manifest and results)
+        #[arg(long)]
+        out: PathBuf,
+    },
+}
+
+pub fn eval(front: &Front, a: &EvalArgs) -> Result<ExitCode> {
+    let model = match &a.model {
+        Some(url) => Some(scoring::eval::ModelSpec {
+            url: url.clone(),
+            wire: a.wire,
+            profile: scoring::profile::LoadedProfile::load(&a.profile)?,
+            attempts: a.connect_attempts.max(1),
+            backoff_s: 0.25,
+        }),
+        None => None,
+    };
+    let mut rows = Vec::new();
+    for p in &a.protocol {
+        let task = front.load(p)?;
+        let opts = scoring::eval::EvalOptions {
+            policy: a.policy.clone(),
+            episodes: a.episodes,
+            seed: a.seed,
+            out: a.out.clone(),
+            record: a.record,
+            image_every: if a.record { a.image_every } else { 0 },
+            image_size: a.size,
+            resume: a.resume,
+            model: model.clone(),
+            runs: a.runs,
+            workers: a.workers as usize,
+            shard: a.shard,
+        };
+        errln!(
+            "evaluating {} ({} episodes{}{} from seed {}{})",
+            task.id,
+            a.episodes,
+            if a.runs > 1 {
+                format!(" x {} runs", a.runs)
+            } else {
+                String::new()
+            },
+            a.shard.map(|s| format!(", shard {s}")).unwrap_or_default(),
+            a.seed,
+            if a.workers > 1 {
+                format!(", {} workers", a.workers)
+            } else {
+                String::new()
+            },
+        );
+        if let Some(m) = &model {
+            errln!(
+                "  model {} over {} with profile {} ({})",
+                m.url,
+                m.wire,
+                m.profile.profile.name,
+                m.profile.origin
+            );
+        }
+        let mut view = progress::ProgressView::new(&task.id);
+        let report = scoring::evaluate(&task, &opts, |p| view.update(p));
+        view.finish();
+        rows.push(report?);
+    }
+    out!("{}", leaderboard::results_table(&rows));
+    out!("{}", leaderboard::runs_table(&rows));
+    if let Some(o) = &a.out {
+        outln!("results: {}/<task>.results.json", o.display());
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+pub fn results(c: &ResultsCommand) -> Result<ExitCode> {
+    match c {
+        ResultsCommand::Merge { shards, out } => {
+            let rows = scoring::eval::merge(shards, out)?;
+            out!("{}", leaderboard::results_table(&rows));
+            out!("{}", leaderboard::runs_table(&rows));
+            outln!("merged: {}/<task>.results.json", out.display());
+            Ok(ExitCode::SUCCESS)
+        }
+    }
+}
