@@ -3,10 +3,11 @@
 //! labware; their own initial states are ignored, because the proof carries the state over from
 //! the stage before.
 
-use crate::check::{self, Cx, Lowered};
+use crate::check::{self, Lowered};
 use crate::params::ParamSpec;
 use crate::physics;
 use crate::proof::{self, ProofScene, ProofStage};
+use crate::report::Cx;
 use crate::stage_files::{StageError, StageLoader};
 use crate::task::*;
 use dsl::ast::{Chain, Document, Protocol};

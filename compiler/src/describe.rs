@@ -284,6 +284,7 @@ mod tests {
         assert_eq!(line("tube_50ml").trim(), "tube_50ml");
         assert!(!line("thermal_mixer").contains("[no simulation model yet]"));
         assert!(!line("set_parameter(").contains("no expert motions"));
-        assert!(line("vortex_mixer").contains("[no simulation model yet]"));
+        assert!(!line("vortex_mixer").contains("[no simulation model yet]"));
+        assert!(line("pipette").contains("[no simulation model yet]"));
     }
 }

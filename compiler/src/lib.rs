@@ -18,6 +18,7 @@ pub mod params;
 pub mod predicates;
 pub mod primitives;
 mod proof;
+mod report;
 pub mod stage_files;
 mod task;
 pub mod world;
@@ -26,9 +27,9 @@ pub use describe::describe;
 pub use stage_files::{StageError, StageFiles, StageLoader};
 pub use task::*;
 
-use check::Cx;
 use dsl::Diagnostic;
 use dsl::ast::{Document, Protocol};
+use report::Cx;
 
 /// Checks and lowers one protocol to a one-stage task.
 pub fn compile(p: &Protocol, file: &str) -> (Option<Task>, Vec<Diagnostic>) {

@@ -3,10 +3,11 @@
 //! many), and reports each step whose precondition fails, each stage whose plan cannot reach its
 //! success condition, and success conditions that hold before anything happens.
 
-use crate::check::{CheckedPredicate, CheckedStep, Cx};
+use crate::check::{CheckedPredicate, CheckedStep};
 use crate::params::{Bindings, ParamSpec, proof_assignments, render};
 use crate::predicates;
 use crate::primitives::{self, BoundStep, Env};
+use crate::report::Cx;
 use crate::task::LabwareSpec;
 use crate::world::{Hand, Location, World};
 use dsl::{Code, Diagnostic, Dimension, Span};

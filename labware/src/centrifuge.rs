@@ -16,7 +16,9 @@
 
 use crate::frame::{Pose, Rot, Vec3, axis_angle, pose, translation, x_turn};
 use crate::mjcf::{Fragment, box_inertia, pose_attrs, rgba, v3};
-use crate::model::{Affordance, Instrument, LabwareState, Logic, Measure, Reset, Symmetry, set};
+use crate::model::{
+    Affordance, Effects, Instrument, LabwareState, Logic, Measure, Reset, Symmetry, set,
+};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -613,6 +615,7 @@ impl Instrument for Params {
             worldbody,
             equality,
             contact,
+            ..Default::default()
         }
     }
 
@@ -664,7 +667,7 @@ impl Instrument for Params {
         dt: f64,
         joints: &BTreeMap<String, f64>,
         logic: &mut Logic,
-        switches: &mut Vec<(&'static str, bool)>,
+        effects: &mut Effects,
     ) {
         let lid = joints.get("lid").copied().unwrap_or(self.lid_open);
         let pressed = joints
@@ -687,7 +690,7 @@ impl Instrument for Params {
         set(logic, "key_held_s", held);
         set(logic, "locked", f64::from(u8::from(locked)));
         set(logic, "armed", f64::from(u8::from(armed)));
-        switches.push(("lock", locked));
+        effects.switch("lock", locked);
     }
 
     fn joint_goal(&self, role: &str, goal: &str) -> Option<f64> {
@@ -789,14 +792,14 @@ mod tests {
         let p = Params::eppendorf_5430();
         let mut logic = p.reset(&BTreeMap::new()).logic;
         let mut run = |lid: f64| {
-            let mut sw = Vec::new();
+            let mut sw = Effects::default();
             p.step(
                 0.002,
                 &BTreeMap::from([("lid".to_string(), lid)]),
                 &mut logic,
                 &mut sw,
             );
-            sw[0].1
+            sw.switches[0].1
         };
         assert!(!run(p.lid_open));
         assert!(!run(p.lid_closed + 0.05));
@@ -809,10 +812,10 @@ mod tests {
         let dt = 0.002;
         let mut locked = false;
         for _ in 0..(seconds / dt).round() as usize {
-            let mut sw = Vec::new();
+            let mut sw = Effects::default();
             let joints = BTreeMap::from([("lid".to_string(), lid), ("open".to_string(), key)]);
             p.step(dt, &joints, logic, &mut sw);
-            locked = sw[0].1;
+            locked = sw.switches[0].1;
         }
         locked
     }

@@ -194,6 +194,7 @@ impl Instrument for Params {
             worldbody,
             equality: String::new(),
             contact,
+            ..Default::default()
         }
     }
 

@@ -16,17 +16,19 @@ pub mod display;
 pub mod frame;
 pub mod mjcf;
 pub mod model;
+pub mod process;
 pub mod rack;
 pub mod registry;
 pub mod thermal_cycler;
 pub mod thermal_mixer;
 pub mod tube;
+pub mod vortex_mixer;
 
 pub use catalogue::{
     Button, ButtonEffect, KINDS, LabwareKind, PanelParam, PartState, SlotLayout, Slots, kind,
 };
 pub use frame::{Pose, Rot, Vec3};
 pub use model::{
-    Affordance, Display, Instrument, LabwareState, Logic, Measure, Mechanism, Symmetry,
+    Affordance, Display, Effects, Instrument, LabwareState, Logic, Measure, Mechanism, Symmetry,
 };
 pub use registry::Model;

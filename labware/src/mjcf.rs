@@ -11,6 +11,8 @@ pub struct Fragment {
     pub worldbody: String,
     pub equality: String,
     pub contact: String,
+    /// The item's own actuators (a mixer's motor): `<actuator>` children.
+    pub actuator: String,
 }
 
 impl Fragment {
@@ -19,6 +21,7 @@ impl Fragment {
         self.worldbody += &other.worldbody;
         self.equality += &other.equality;
         self.contact += &other.contact;
+        self.actuator += &other.actuator;
     }
 }
 

@@ -4,8 +4,9 @@
 //! kind to its model). Pure: numbers and MJCF text, no MuJoCo API.
 //!
 //! What a model owns: its MJCF (through [`crate::mjcf`]), the mechanisms it asks the runtime for
-//! ([`Mechanism`]), its joints and equality switches by role, reset from declared part states, the
-//! per-step logic hook (latches, buttons), panel values and the displays that show them (drawn into
+//! ([`Mechanism`]), its joints, equality switches and actuators by role, reset from declared part
+//! states, the per-step logic hook (latches, buttons, a motor driven from its switch: [`Effects`]),
+//! processes with other items ([`crate::process`]), panel values and the displays that show them (drawn into
 //! textures the runtime uploads), the readout the judge scores ([`Instrument::measure`],
 //! [`Instrument::panel_value`], [`Instrument::readout`]), and affordances as functions of live
 //! state.
@@ -68,29 +69,38 @@ impl LabwareState {
     }
 }
 
-/// A lab mechanism a model asks the runtime for; the runtime turns it into a plugin instance.
+/// A lab mechanism a model asks the runtime for, defined once by the `physics` crate's own type;
+/// the runtime writes it as the plugin instance [`Mechanism::plugin_instance`] gives.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Mechanism {
-    /// `autobio.detent`: `notches` evenly spaced rest positions over `[lo, hi]` of a joint.
+    /// `autobio.detent`: evenly spaced rest positions over a joint's range.
     Detent {
         instance: String,
         joint: String,
-        lo: f64,
-        hi: f64,
-        notches: u32,
-        stiffness: f64,
-        damping: f64,
+        detent: physics::detent::Detent,
     },
     /// `autobio.thread`: one helical thread SDF (a bolt or a nut); the model's MJCF names the mesh
     /// and geom that use `instance` and the contact pair between bolt and nut.
     Thread {
         instance: String,
-        radius: f64,
-        gauge: f64,
-        pitch: f64,
-        low: f64,
-        high: f64,
+        thread: physics::thread::Thread,
     },
+}
+
+impl Mechanism {
+    /// The plugin it is an instance of, and the MJCF `<instance>` element.
+    pub fn plugin_instance(&self) -> (&'static str, String) {
+        match self {
+            Mechanism::Detent {
+                instance,
+                joint,
+                detent,
+            } => ("autobio.detent", detent.mjcf_instance(instance, joint)),
+            Mechanism::Thread { instance, thread } => {
+                ("autobio.thread", thread.mjcf_instance(instance))
+            }
+        }
+    }
 }
 
 /// A predicate's measured value against its target, and whether it holds.
@@ -132,6 +142,31 @@ pub struct Display {
     pub height: usize,
     /// The logic values it shows: the runtime redraws it when one of them changes.
     pub shows: Vec<String>,
+}
+
+/// What an item's logic asks of the simulation after a step, by role: equality constraints on or
+/// off, and commands for the item's own actuators.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Effects {
+    pub switches: Vec<(&'static str, bool)>,
+    pub drives: Vec<(&'static str, f64)>,
+}
+
+impl Effects {
+    /// Turns the equality constraint `role` on or off.
+    pub fn switch(&mut self, role: &'static str, on: bool) {
+        self.switches.push((role, on));
+    }
+
+    /// Commands the item's actuator `role` (its control value: a velocity motor's speed).
+    pub fn drive(&mut self, role: &'static str, value: f64) {
+        self.drives.push((role, value));
+    }
+
+    pub fn clear(&mut self) {
+        self.switches.clear();
+        self.drives.clear();
+    }
 }
 
 /// Joint values and logic state an item starts an episode with.
@@ -177,6 +212,18 @@ pub trait Instrument {
         Vec::new()
     }
 
+    /// The item's own actuators (a mixer's motor), by role, with their MuJoCo names: the logic
+    /// drives them ([`Effects::drive`]); robots never do.
+    fn actuators(&self, _name: &str) -> Vec<(&'static str, String)> {
+        Vec::new()
+    }
+
+    /// Processes between this item and others that the runtime runs after every physics step
+    /// (liquid drawn into a tip), each written in the item's own model.
+    fn processes(&self, _name: &str) -> Vec<Box<dyn crate::process::Process>> {
+        Vec::new()
+    }
+
     /// Why the model cannot start in the declared part states, if it cannot.
     fn unsupported_start(&self, _initial: &BTreeMap<String, String>) -> Option<String> {
         None
@@ -188,14 +235,15 @@ pub trait Instrument {
     }
 
     /// Instrument logic after each physics step of `dt` seconds: updates `logic` from the joints
-    /// and pushes each switch's wanted state onto `switches` (which the runtime empties and reuses,
-    /// so a step allocates nothing). Also called once right after reset, with `dt` 0.
+    /// and says what the simulation must do in `effects`: each switch's wanted state, each of its
+    /// actuators' command (the runtime empties and reuses it, so a step allocates nothing). Also
+    /// called once right after reset, with `dt` 0.
     fn step(
         &self,
         _dt: f64,
         _joints: &BTreeMap<String, f64>,
         _logic: &mut Logic,
-        _switches: &mut Vec<(&'static str, bool)>,
+        _effects: &mut Effects,
     ) {
     }
 

@@ -4,7 +4,7 @@
 //! self-contained); "has a simulation model" is [`Model::for_kind`] returning one.
 
 use crate::model::Instrument;
-use crate::{centrifuge, centrifuge_mini, rack, thermal_cycler, thermal_mixer, tube};
+use crate::{centrifuge, centrifuge_mini, rack, thermal_cycler, thermal_mixer, tube, vortex_mixer};
 use serde::{Deserialize, Serialize};
 
 macro_rules! registry {
@@ -50,6 +50,7 @@ registry! {
         "centrifuge_5910" => centrifuge::Params::eppendorf_5910(),
     },
     ThermalMixer(thermal_mixer::Params) { "thermal_mixer" => thermal_mixer::Params::default() },
+    VortexMixer(vortex_mixer::Params) { "vortex_mixer" => vortex_mixer::Params::default() },
     Rack(rack::Params) {
         "tube_rack" => rack::Params::tube_rack(),
         "microtube_rack" => rack::Params::microtube_rack(),
@@ -74,7 +75,8 @@ mod tests {
             .map(|k| k.name)
             .collect();
         assert!(simulated.contains(&"thermal_cycler") && simulated.contains(&"tube_50ml"));
-        assert!(!simulated.contains(&"vortex_mixer"));
+        assert!(simulated.contains(&"vortex_mixer"));
+        assert!(!simulated.contains(&"pipette"));
         for k in simulated {
             let m = Model::for_kind(k).unwrap();
             let back: Model = serde_json::from_value(serde_json::to_value(&m).unwrap()).unwrap();

@@ -10,7 +10,7 @@
 use crate::frame::{Pose, Rot, Vec3, pose, translation, x_turn};
 use crate::mjcf::{Fragment, box_inertia, pose_attrs, v3};
 use crate::model::{
-    Affordance, Instrument, LabwareState, Logic, Measure, Mechanism, Reset, Symmetry,
+    Affordance, Effects, Instrument, LabwareState, Logic, Measure, Mechanism, Reset, Symmetry,
 };
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -261,6 +261,7 @@ impl Instrument for Params {
             worldbody,
             equality,
             contact,
+            ..Default::default()
         }
     }
 
@@ -269,11 +270,13 @@ impl Instrument for Params {
         vec![Mechanism::Detent {
             instance: format!("{name}/lever_detent"),
             joint: Names::new(name).lever_joint,
-            lo: self.lever_pressed.min(self.lever_raised),
-            hi: self.lever_pressed.max(self.lever_raised),
-            notches: 2,
-            stiffness: self.detent_stiffness,
-            damping: self.detent_damping,
+            detent: physics::detent::Detent {
+                lo: self.lever_pressed.min(self.lever_raised),
+                hi: self.lever_pressed.max(self.lever_raised),
+                n: 2,
+                stiffness: self.detent_stiffness,
+                damping: self.detent_damping,
+            },
         }]
     }
 
@@ -305,14 +308,14 @@ impl Instrument for Params {
         _dt: f64,
         joints: &BTreeMap<String, f64>,
         logic: &mut Logic,
-        switches: &mut Vec<(&'static str, bool)>,
+        effects: &mut Effects,
     ) {
         let mut latch = Latch::from_logic(logic);
         let lid = joints.get("lid").copied().unwrap_or(self.lid_open);
         let lever = joints.get("lever").copied().unwrap_or(self.lever_raised);
         let locked = latch.update(self, lid, lever);
         latch.store(logic);
-        switches.push(("lock", locked));
+        effects.switch("lock", locked);
     }
 
     fn joint_goal(&self, role: &str, goal: &str) -> Option<f64> {

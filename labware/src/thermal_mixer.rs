@@ -18,7 +18,7 @@ use crate::display::{Canvas, Cell, Field, Rgb};
 use crate::frame::{Pose, Rot, Vec3, from_axes, pose, translation, x_turn};
 use crate::mjcf::{Fragment, pose_attrs, rgba, v3};
 use crate::model::{
-    Affordance, Display, Instrument, LabwareState, Logic, Measure, Reset, Symmetry, set,
+    Affordance, Display, Effects, Instrument, LabwareState, Logic, Measure, Reset, Symmetry, set,
 };
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -421,6 +421,7 @@ impl Instrument for Params {
             worldbody,
             equality: String::new(),
             contact,
+            ..Default::default()
         }
     }
 
@@ -449,7 +450,7 @@ impl Instrument for Params {
         dt: f64,
         joints: &BTreeMap<String, f64>,
         logic: &mut Logic,
-        _switches: &mut Vec<(&'static str, bool)>,
+        _effects: &mut Effects,
     ) {
         let travel = self.press_travel();
         for (button, setting, sign, _) in self.buttons() {
@@ -545,9 +546,9 @@ mod tests {
         let dt = 0.002;
         let pressed = BTreeMap::from([(button.to_string(), p.button_travel)]);
         for _ in 0..(seconds / dt).round() as usize {
-            p.step(dt, &pressed, logic, &mut Vec::new());
+            p.step(dt, &pressed, logic, &mut Effects::default());
         }
-        p.step(dt, &BTreeMap::new(), logic, &mut Vec::new());
+        p.step(dt, &BTreeMap::new(), logic, &mut Effects::default());
     }
 
     #[test]
@@ -564,7 +565,7 @@ mod tests {
         // A touch below the press force does not count.
         let light = BTreeMap::from([("time_up".to_string(), p.press_travel() * 0.9)]);
         for _ in 0..500 {
-            p.step(0.002, &light, &mut logic, &mut Vec::new());
+            p.step(0.002, &light, &mut logic, &mut Effects::default());
         }
         assert_eq!(logic["time"], 60.0);
         // Values stop at the catalogue's range.

@@ -135,11 +135,13 @@ impl Params {
     fn threads(&self, name: &str) -> [Mechanism; 2] {
         let thread = |part: &str, gauge: f64, low: f64, high: f64| Mechanism::Thread {
             instance: format!("{name}/{part}"),
-            radius: self.thread_radius,
-            gauge,
-            pitch: self.pitch,
-            low,
-            high,
+            thread: physics::thread::Thread {
+                radius: self.thread_radius,
+                gauge,
+                pitch: self.pitch,
+                low,
+                high,
+            },
         };
         [
             thread("bolt", 0.0009, -1.0, 1.2),
@@ -216,6 +218,7 @@ impl Instrument for Params {
             worldbody,
             equality: String::new(),
             contact,
+            ..Default::default()
         }
     }
 

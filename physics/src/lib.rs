@@ -5,15 +5,19 @@
 //! - [`liquid`]: quasi-static liquid (surface normal as a damped spherical pendulum, surface height
 //!   from the volume) with exact volume bookkeeping between containers.
 //!
-//! [`plugin`] is the only code in autobio that touches MuJoCo's plugin FFI; call [`register`]
-//! before compiling a model that names `autobio.*` plugins. This crate generates MJCF fragments and
-//! computes forces and geometry; it does not assemble scenes (runtime) or know about protocols.
+//! `plugin` (feature `plugin`, which the runtime turns on) is the only code in autobio that
+//! touches MuJoCo's plugin FFI; call `register` before compiling a model that names `autobio.*`
+//! plugins. Without it the crate is pure math and MJCF text, with no MuJoCo: `labware` builds its
+//! mechanisms and processes on it. This crate generates MJCF fragments and computes forces and
+//! geometry; it does not assemble scenes (runtime) or know about protocols.
 
 pub mod detent;
 pub mod eccentric;
 pub mod liquid;
+#[cfg(feature = "plugin")]
 pub mod plugin;
 pub mod scenes;
 pub mod thread;
 
+#[cfg(feature = "plugin")]
 pub use plugin::{PluginError, instance_errors, register};

@@ -7,9 +7,10 @@
 //! after each physics step (the only writer of `eq_active`), and its readings by role.
 
 use crate::scene::{LabwareIds, Scene};
-use compiler::params::render;
 use compiler::{SceneInstance, Task};
 use labware::frame::{from_wxyz, position, wxyz};
+use labware::model::Effects;
+use labware::process::Process;
 use labware::{Instrument, LabwareState, Logic, Pose};
 use mujoco_rs::prelude::*;
 use std::collections::BTreeMap;
@@ -53,7 +54,9 @@ pub struct Episode {
     /// Each item's logic state and its joints by role (kept between steps to avoid allocation).
     logic: Vec<Logic>,
     joints: Vec<BTreeMap<String, f64>>,
-    switches: Vec<(&'static str, bool)>,
+    effects: Effects,
+    /// Processes between items, from their models, run after each item's logic.
+    processes: Vec<Box<dyn Process>>,
     pub physics_steps: u64,
 }
 
@@ -72,35 +75,6 @@ fn instrument(task: &Task, i: usize) -> &dyn Instrument {
         .expect("Scene::build refuses labware without a model")
 }
 
-/// The seat of item `i`'s `at` slot, on the holder as placed in this instance.
-pub(crate) fn start_seat(task: &Task, instance: &SceneInstance, i: usize) -> Option<Pose> {
-    let at = task.labware[i].at.as_ref()?;
-    let at = render(at, &instance.params).ok()?;
-    let (holder, slot) = at.split_once('.')?;
-    let h = task.labware_index(holder)?;
-    // The holder's joints as reset puts them: its declared state, plus its drawn offsets (a
-    // rotor's turn).
-    let model = task.labware[h].params.instrument()?;
-    let mut joints: BTreeMap<String, f64> = model
-        .reset(&task.labware[h].initial)
-        .joints
-        .into_iter()
-        .map(|(role, v)| (role.to_string(), v))
-        .collect();
-    for (role, offset) in instance.labware_joints.get(holder).into_iter().flatten() {
-        *joints.entry(role.clone()).or_insert(0.0) += offset;
-    }
-    let holder_state = LabwareState {
-        name: holder.to_string(),
-        pose: instance.labware_placement[h],
-        joints,
-        parts: BTreeMap::new(),
-        logic: Logic::new(),
-        touched_by: Vec::new(),
-    };
-    model.slot_seat(slot, &holder_state)
-}
-
 impl Episode {
     pub fn new(scene: Arc<Scene>, task: &Task, instance: &SceneInstance) -> Episode {
         let data = MjData::new(scene.model.clone());
@@ -111,7 +85,8 @@ impl Episode {
             data,
             logic: vec![Logic::new(); n],
             joints: vec![BTreeMap::new(); n],
-            switches: Vec::new(),
+            effects: Effects::default(),
+            processes: Vec::new(),
             physics_steps: 0,
         };
         ep.reset(instance);
@@ -121,7 +96,7 @@ impl Episode {
     /// Where a movable item starts: the seat of its `at` slot (`Scene::build` refused the scene if
     /// there is none), else its own placement.
     fn start_pose(&self, i: usize, instance: &SceneInstance) -> Pose {
-        start_seat(&self.task, instance, i).unwrap_or(instance.labware_placement[i])
+        crate::scene::start_seat(&self.task, instance, i).unwrap_or(instance.labware_placement[i])
     }
 
     /// Resets physics to the instance: arm joints (and their position targets) from the sample,
@@ -164,6 +139,9 @@ impl Episode {
             }
         }
         self.apply_panel_start(instance);
+        self.processes = (0..self.task.labware.len())
+            .flat_map(|i| instrument(&self.task, i).processes(&self.task.labware[i].name))
+            .collect();
         self.run_logic(0.0);
         self.data.forward();
     }
@@ -180,24 +158,36 @@ impl Episode {
         }
     }
 
-    /// Every item's per-step logic after `dt` seconds of physics, and the switches it asks for.
+    /// Every item's per-step logic after `dt` seconds of physics, the switches and actuator
+    /// commands it asks for, then the processes between items.
     fn run_logic(&mut self, dt: f64) {
         let scene = self.scene.clone();
         for (i, ids) in scene.labware.iter().enumerate() {
             for (role, adr) in &ids.joints {
                 labware::model::set(&mut self.joints[i], role, self.data.qpos()[*adr]);
             }
-            self.switches.clear();
+            self.effects.clear();
             instrument(&self.task, i).step(
                 dt,
                 &self.joints[i],
                 &mut self.logic[i],
-                &mut self.switches,
+                &mut self.effects,
             );
-            for (role, on) in &self.switches {
+            for (role, on) in &self.effects.switches {
                 if let Some((_, eq)) = ids.switches.iter().find(|(r, _)| r == role) {
                     self.data.eq_active_mut()[*eq] = *on;
                 }
+            }
+            for (role, value) in &self.effects.drives {
+                if let Some((_, a)) = ids.actuators.iter().find(|(r, _)| r == role) {
+                    self.data.ctrl_mut()[*a] = *value;
+                }
+            }
+        }
+        if !self.processes.is_empty() {
+            let states = self.labware_state();
+            for p in &mut self.processes {
+                p.step(dt, &states, &mut self.logic);
             }
         }
     }

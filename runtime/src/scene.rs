@@ -8,11 +8,13 @@
 //! Nothing in this file knows an instrument kind or a robot's joint.
 
 use crate::deps;
+use compiler::params::render;
 use compiler::{CameraMount, SceneInstance, Task};
 use labware::mjcf::{Fragment, pose_attrs};
-use labware::{Mechanism, Pose};
+use labware::{LabwareState, Logic, Mechanism, Pose};
 use mujoco_rs::prelude::*;
 use robots::{Detail, RobotModel};
+use std::collections::BTreeMap;
 use std::sync::{Arc, OnceLock};
 
 #[derive(Debug, thiserror::Error)]
@@ -69,6 +71,8 @@ pub struct LabwareIds {
     pub joints: Vec<(&'static str, usize)>,
     /// Equality constraints the logic switches: role, equality id.
     pub switches: Vec<(&'static str, usize)>,
+    /// The item's own actuators its logic drives: role, actuator id.
+    pub actuators: Vec<(&'static str, usize)>,
     pub free: Vec<FreeJoint>,
     /// Loose parts: role, body id.
     pub parts: Vec<(&'static str, usize)>,
@@ -114,47 +118,6 @@ impl Scene {
 fn robot_model(task: &Task, index: usize) -> Result<&'static RobotModel, SceneError> {
     let r = &task.robots[index];
     robots::model(&r.model).ok_or_else(|| SceneError::UnknownRobot(r.name.clone(), r.model.clone()))
-}
-
-/// A mechanism as the plugin instance the physics crate writes, with the plugin it belongs to.
-fn plugin_instance(m: &Mechanism) -> (&'static str, String) {
-    match m {
-        Mechanism::Detent {
-            instance,
-            joint,
-            lo,
-            hi,
-            notches,
-            stiffness,
-            damping,
-        } => {
-            let d = physics::detent::Detent {
-                lo: *lo,
-                hi: *hi,
-                n: *notches,
-                stiffness: *stiffness,
-                damping: *damping,
-            };
-            ("autobio.detent", d.mjcf_instance(instance, joint))
-        }
-        Mechanism::Thread {
-            instance,
-            radius,
-            gauge,
-            pitch,
-            low,
-            high,
-        } => {
-            let t = physics::thread::Thread {
-                radius: *radius,
-                gauge: *gauge,
-                pitch: *pitch,
-                low: *low,
-                high: *high,
-            };
-            ("autobio.thread", t.mjcf_instance(instance))
-        }
-    }
 }
 
 /// The scene MJCF for a task with the given labware placements.
@@ -248,7 +211,12 @@ pub fn scene_xml(task: &Task, placements: &[Pose], detail: Detail) -> Result<Str
             .instrument()
             .ok_or_else(|| SceneError::Unmodelled(l.name.clone(), l.kind.clone()))?;
         labware.append(model.fragment(&l.name, placement));
-        plugins.extend(model.mechanisms(&l.name).iter().map(plugin_instance));
+        plugins.extend(
+            model
+                .mechanisms(&l.name)
+                .iter()
+                .map(Mechanism::plugin_instance),
+        );
     }
     let mut extension = String::new();
     for plugin in ["autobio.detent", "autobio.thread"] {
@@ -285,7 +253,7 @@ pub fn scene_xml(task: &Task, placements: &[Pose], detail: Detail) -> Result<Str
 {equality}  </equality>
   <contact>
 {contact}  </contact>
-</mujoco>
+{actuator}</mujoco>
 "#,
         id = task.id,
         room = ROOM,
@@ -297,6 +265,12 @@ pub fn scene_xml(task: &Task, placements: &[Pose], detail: Detail) -> Result<Str
         labware_world = labware.worldbody,
         equality = labware.equality,
         contact = labware.contact,
+        // Only items with their own motors add the section: other scenes stay as they were.
+        actuator = if labware.actuator.is_empty() {
+            String::new()
+        } else {
+            format!("  <actuator>\n{}  </actuator>\n", labware.actuator)
+        },
     ))
 }
 
@@ -362,6 +336,11 @@ fn labware_ids(m: &MjModel, l: &compiler::LabwareSpec) -> Result<LabwareIds, Sce
         .into_iter()
         .map(|(role, e)| Ok((role, id_of(m, MjtObjBase::mjOBJ_EQUALITY, "equality", &e)?)))
         .collect::<Result<Vec<_>, SceneError>>()?;
+    let actuators = model
+        .actuators(name)
+        .into_iter()
+        .map(|(role, a)| Ok((role, id_of(m, MjtObjBase::mjOBJ_ACTUATOR, "actuator", &a)?)))
+        .collect::<Result<Vec<_>, SceneError>>()?;
     let free = model
         .place(name, &Pose::identity())
         .into_iter()
@@ -389,6 +368,7 @@ fn labware_ids(m: &MjModel, l: &compiler::LabwareSpec) -> Result<LabwareIds, Sce
         displays,
         joints,
         switches,
+        actuators,
         free,
         parts,
     })
@@ -576,7 +556,7 @@ fn check_starts(task: &Task, instance: &SceneInstance) -> Result<(), SceneError>
         if let Some(why) = model.unsupported_start(&l.initial) {
             return Err(SceneError::Unsupported(l.name.clone(), why));
         }
-        if l.at.is_some() && crate::episode::start_seat(task, instance, i).is_none() {
+        if l.at.is_some() && start_seat(task, instance, i).is_none() {
             let at = l.at.clone().unwrap_or_default();
             let at = compiler::params::render(&at, &instance.params).unwrap_or(at);
             return Err(SceneError::NoSlot(l.name.clone(), at));
@@ -591,4 +571,33 @@ pub fn joint_qposadr(m: &MjModel, joint: usize) -> usize {
 
 pub fn joint_dofadr(m: &MjModel, joint: usize) -> usize {
     m.jnt_dofadr()[joint] as usize
+}
+
+/// The seat of item `i`'s `at` slot, on the holder as placed in this instance.
+pub(crate) fn start_seat(task: &Task, instance: &SceneInstance, i: usize) -> Option<Pose> {
+    let at = task.labware[i].at.as_ref()?;
+    let at = render(at, &instance.params).ok()?;
+    let (holder, slot) = at.split_once('.')?;
+    let h = task.labware_index(holder)?;
+    // The holder's joints as reset puts them: its declared state, plus its drawn offsets (a
+    // rotor's turn).
+    let model = task.labware[h].params.instrument()?;
+    let mut joints: BTreeMap<String, f64> = model
+        .reset(&task.labware[h].initial)
+        .joints
+        .into_iter()
+        .map(|(role, v)| (role.to_string(), v))
+        .collect();
+    for (role, offset) in instance.labware_joints.get(holder).into_iter().flatten() {
+        *joints.entry(role.clone()).or_insert(0.0) += offset;
+    }
+    let holder_state = LabwareState {
+        name: holder.to_string(),
+        pose: instance.labware_placement[h],
+        joints,
+        parts: BTreeMap::new(),
+        logic: Logic::new(),
+        touched_by: Vec::new(),
+    };
+    model.slot_seat(slot, &holder_state)
 }

@@ -176,7 +176,7 @@ pub(super) fn unknown_name(
         code: Code::E0013,
         arg: Some(arg),
         message,
-        hint: Some(crate::check::hint_for(given, names, what)),
+        hint: Some(crate::report::hint_for(given, names, what)),
     }
 }
 

@@ -1,0 +1,256 @@
+//! The vortex mixer (Scientific Industries Vortex-Genie 2 proportions): a weighted housing, a
+//! cup on the eccentric drive of `physics::eccentric` (the cup orbits at the throw without
+//! turning), and a sprung power switch on the front. The instrument acts: its logic drives its
+//! own motor, at the set speed while the power is on and at rest while it is off. A press of the
+//! switch (spring force over the threshold, held for the repeat time, as the thermal mixer's
+//! buttons) toggles the power once; the switch must be let go before it toggles again.
+//!
+//! Frame: origin at the centre of the footprint, +y the front (the switch's side), +z up.
+
+use crate::frame::{Pose, Vec3, pose, translation};
+use crate::mjcf::{Fragment, pose_attrs, v3};
+use crate::model::{Affordance, Effects, Instrument, LabwareState, Logic, Measure, Reset, set};
+use physics::eccentric::{Eccentric, rpm_to_rad_s};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Params {
+    /// Half extents of the housing.
+    pub housing_half: Vec3,
+    /// The switch: its face's centre on the front, travel (m), spring stiffness (N/m).
+    pub switch_at: Vec3,
+    pub switch_travel: f64,
+    pub switch_stiffness: f64,
+    /// The force (N) a press must exceed, held this long (s).
+    pub press_force: f64,
+    pub repeat_s: f64,
+    /// The motor's speed with the power on (rpm); the Vortex-Genie 2 reaches 3,200.
+    pub speed_rpm: f64,
+    /// The drive's throw (m) and the cup's radius and half height (m).
+    pub throw: f64,
+    pub cup_radius: f64,
+    pub cup_half_height: f64,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Params {
+            housing_half: [0.08, 0.1, 0.08],
+            switch_at: [0.05, 0.1, 0.04],
+            switch_travel: 0.004,
+            switch_stiffness: 400.0,
+            press_force: 0.5,
+            repeat_s: 0.25,
+            speed_rpm: 2500.0,
+            throw: 0.002,
+            cup_radius: 0.02,
+            cup_half_height: 0.01,
+        }
+    }
+}
+
+const POWER: &str = "power";
+const HELD: &str = "switch_held_s";
+const LATCHED: &str = "switch_latched";
+
+impl Params {
+    fn drive(&self) -> Eccentric {
+        Eccentric {
+            throw: self.throw,
+            cup_radius: self.cup_radius,
+            cup_half_height: self.cup_half_height,
+            ..Eccentric::default()
+        }
+    }
+
+    /// The cup's centre at rest, instrument frame.
+    fn cup_rest(&self) -> Vec3 {
+        [
+            self.throw,
+            0.0,
+            2.0 * self.housing_half[2] + self.cup_half_height + 0.002,
+        ]
+    }
+
+    /// The motor's command for a logic state (rad/s).
+    pub fn motor_speed(&self, logic: &Logic) -> f64 {
+        if logic.get(POWER).is_some_and(|v| *v != 0.0) {
+            rpm_to_rad_s(self.speed_rpm)
+        } else {
+            0.0
+        }
+    }
+}
+
+impl Instrument for Params {
+    fn fragment(&self, name: &str, placement: &Pose) -> Fragment {
+        let h = self.housing_half;
+        let drive = self
+            .drive()
+            .mjcf(&format!("{name}/vortex"), [0.0, 0.0, 2.0 * h[2]]);
+        let worldbody = format!(
+            r#"<body name="{name}/base" {placement}>
+  <geom name="{name}/housing" type="box" size="{hh}" pos="0 0 {hz}" mass="3" rgba="0.82 0.84 0.86 1"/>
+  <body name="{name}/switch" pos="{sw}">
+    <joint name="{name}/switch" type="slide" axis="0 -1 0" range="0 {travel}" stiffness="{k}" damping="2"/>
+    <geom name="{name}/switch" type="box" size="0.008 0.004 0.008" pos="0 0.004 0" mass="0.005" rgba="0.2 0.6 0.3 1"/>
+  </body>
+{drive}
+</body>
+"#,
+            placement = pose_attrs(placement),
+            hh = v3(h),
+            hz = h[2],
+            sw = v3(self.switch_at),
+            travel = self.switch_travel,
+            k = self.switch_stiffness,
+            drive = drive.body,
+        );
+        Fragment {
+            worldbody,
+            equality: format!("{}\n", drive.equality),
+            actuator: format!("{}\n", drive.actuator),
+            ..Default::default()
+        }
+    }
+
+    fn joints(&self, name: &str) -> Vec<(&'static str, String)> {
+        vec![
+            ("switch", format!("{name}/switch")),
+            ("drive", format!("{name}/vortex/pivot")),
+        ]
+    }
+
+    fn actuators(&self, name: &str) -> Vec<(&'static str, String)> {
+        vec![("motor", format!("{name}/vortex/motor"))]
+    }
+
+    fn reset(&self, initial: &BTreeMap<String, String>) -> Reset {
+        let on = initial.get(POWER).is_some_and(|s| s == "on");
+        let mut logic = Logic::new();
+        set(&mut logic, POWER, f64::from(u8::from(on)));
+        Reset {
+            joints: Vec::new(),
+            logic,
+        }
+    }
+
+    fn step(&self, dt: f64, joints: &BTreeMap<String, f64>, logic: &mut Logic, out: &mut Effects) {
+        let depth = joints.get("switch").copied().unwrap_or(0.0);
+        let pressed = self.switch_stiffness * depth > self.press_force;
+        let held = if pressed {
+            logic.get(HELD).copied().unwrap_or(0.0) + dt
+        } else {
+            0.0
+        };
+        let latched = logic.get(LATCHED).is_some_and(|v| *v != 0.0);
+        if held >= self.repeat_s && !latched {
+            let on = logic.get(POWER).is_some_and(|v| *v != 0.0);
+            set(logic, POWER, f64::from(u8::from(!on)));
+            set(logic, LATCHED, 1.0);
+        } else if !pressed {
+            set(logic, LATCHED, 0.0);
+        }
+        set(logic, HELD, held);
+        out.drive("motor", self.motor_speed(logic));
+    }
+
+    fn measure(
+        &self,
+        part: &str,
+        state: &str,
+        _tolerance: Option<f64>,
+        s: &LabwareState,
+    ) -> Option<Measure> {
+        if part != POWER || !matches!(state, "on" | "off") {
+            return None;
+        }
+        let value = f64::from(u8::from(s.flag(POWER)));
+        let target = f64::from(u8::from(state == "on"));
+        Some(Measure {
+            value,
+            target,
+            tolerance: 0.0,
+            holds: value == target,
+        })
+    }
+
+    fn readout(&self, s: &LabwareState) -> BTreeMap<String, String> {
+        let state = if s.flag(POWER) { "on" } else { "off" };
+        BTreeMap::from([(POWER.to_string(), state.to_string())])
+    }
+
+    fn affordance(&self, name: &str, s: &LabwareState) -> Option<Affordance> {
+        // The switch's face, pushed along -y by a fingertip coming from the front.
+        (name == "switch").then(|| {
+            let face = [
+                self.switch_at[0],
+                self.switch_at[1] + 0.008,
+                self.switch_at[2],
+            ];
+            let tool = crate::frame::from_axes([1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]);
+            Affordance {
+                pose: s.pose * pose(face, tool),
+                symmetry: crate::model::Symmetry::HalfTurn,
+                touch: true,
+            }
+        })
+    }
+
+    fn slot_seat(&self, slot: &str, s: &LabwareState) -> Option<Pose> {
+        (slot == "cup").then(|| {
+            let c = self.cup_rest();
+            s.pose * translation([c[0], c[1], c[2] + self.cup_half_height])
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Steps the logic with the switch at `depth` for `seconds`; the last motor command.
+    fn hold(p: &Params, logic: &mut Logic, depth: f64, seconds: f64) -> f64 {
+        let joints = BTreeMap::from([("switch".to_string(), depth)]);
+        let mut out = Effects::default();
+        for _ in 0..(seconds / 0.002).round() as usize {
+            out.clear();
+            p.step(0.002, &joints, logic, &mut out);
+        }
+        out.drives.last().map(|(_, v)| *v).unwrap_or(f64::NAN)
+    }
+
+    #[test]
+    fn a_held_press_toggles_the_power_once_and_the_motor_follows() {
+        let p = Params::default();
+        let mut logic = p.reset(&BTreeMap::new()).logic;
+        assert_eq!(hold(&p, &mut logic, 0.0, 0.1), 0.0, "off at rest");
+        // A tap shorter than the repeat time does nothing.
+        assert_eq!(hold(&p, &mut logic, p.switch_travel, 0.1), 0.0);
+        hold(&p, &mut logic, 0.0, 0.05);
+        let speed = hold(&p, &mut logic, p.switch_travel, 1.0);
+        assert_eq!(speed, rpm_to_rad_s(p.speed_rpm), "held: on, once");
+        assert_eq!(
+            hold(&p, &mut logic, 0.0, 0.1),
+            speed,
+            "stays on when let go"
+        );
+        assert_eq!(
+            hold(&p, &mut logic, p.switch_travel, 0.5),
+            0.0,
+            "pressed again: off"
+        );
+        // A touch too light to pass the force threshold is not a press.
+        hold(&p, &mut logic, 0.0, 0.05);
+        assert_eq!(
+            hold(
+                &p,
+                &mut logic,
+                0.5 * p.press_force / p.switch_stiffness,
+                1.0
+            ),
+            0.0
+        );
+    }
+}
