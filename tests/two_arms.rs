@@ -103,3 +103,77 @@ fn each_arm_does_its_own_step_and_both_are_recorded() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Both arms at once: with the tube's pick marked `together` with the lid's closing, the mover
+/// starts at the first control step beside the lidder (one motion lane per robot), the episode
+/// still succeeds, and it ends sooner than the same steps run one after another.
+#[test]
+fn steps_marked_together_move_both_arms_in_the_same_control_steps() {
+    let path = "protocols/two_arm/close_lid_and_transfer.toml";
+    let text = std::fs::read_to_string(path).unwrap();
+    let together = text.replace(
+        "do = \"pick\"\non = \"tube\"\nwith = \"mover\"",
+        "do = \"pick\"\non = \"tube\"\nwith = \"mover\"\ntogether = true",
+    );
+    assert_ne!(together, text, "the edit applies");
+    let compile = |t: &str| {
+        let (task, diags) = compiler::compile_source(t, path);
+        task.unwrap_or_else(|| panic!("{diags:#?}"))
+    };
+    let (sequential, parallel) = (compile(&text), compile(&together));
+    assert!(parallel.stages[0].plan[1].together && !sequential.stages[0].plan[1].together);
+    let run = |task: &compiler::Task| {
+        let instance = task.sample(4);
+        let scene = Arc::new(runtime::Scene::build(task, &instance).unwrap());
+        let mut expert = ExpertPolicy::new(task, &scene, &instance).unwrap();
+        let mut starts = Vec::new();
+        let mut env = runtime::Env::new(scene.clone(), task, &instance, Default::default());
+        while !env.done() {
+            let seen = env.observe();
+            let obs = scoring::Observation {
+                time: seen.time,
+                state: seen.state,
+                stage: seen.stage,
+                prompt: &seen.instruction,
+                images: &[],
+                previous: &[],
+                privileged: scoring::policy::Privileged {
+                    robots: seen.robots,
+                    labware: seen.labware,
+                    qpos: seen.qpos,
+                },
+            };
+            let chunk = scoring::Policy::act(&mut expert, &obs).unwrap();
+            for e in scoring::Policy::drain_events(&mut expert) {
+                if e.label.starts_with("step ") {
+                    starts.push((e.label, e.time));
+                }
+            }
+            for a in chunk {
+                if env.step(&a).unwrap().done() {
+                    break;
+                }
+            }
+        }
+        (env.verdict().success, env.time(), starts)
+    };
+    let (ok_seq, t_seq, starts_seq) = run(&sequential);
+    let (ok_par, t_par, starts_par) = run(&parallel);
+    assert!(ok_seq && ok_par, "{starts_seq:?} {starts_par:?}");
+    let started = |starts: &[(String, f64)], prefix: &str| {
+        starts
+            .iter()
+            .find(|(l, _)| l.starts_with(prefix))
+            .map(|(_, t)| *t)
+            .unwrap()
+    };
+    assert_eq!(
+        started(&starts_par, "step 1"),
+        started(&starts_par, "step 0")
+    );
+    assert!(started(&starts_seq, "step 1") > 2.0, "{starts_seq:?}");
+    assert!(
+        t_par < t_seq - 2.0,
+        "together {t_par} s, one after another {t_seq} s"
+    );
+}

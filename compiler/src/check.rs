@@ -855,7 +855,7 @@ fn check_steps<'a>(
     let prim_names: Vec<&str> = primitives::CATALOGUE.iter().map(|p| p.name).collect();
     let robot_names: Vec<&str> = robots.iter().map(String::as_str).collect();
     let mut out = Vec::new();
-    for step in &p.steps {
+    for (i, step) in p.steps.iter().enumerate() {
         let Some(prim_name) = &step.primitive else {
             continue;
         };
@@ -892,6 +892,31 @@ fn check_steps<'a>(
                 ok = false;
             }
             Some(_) => {}
+        }
+        let together = step.together.as_ref().is_some_and(|t| t.value);
+        if let Some(t) = step.together.as_ref().filter(|t| t.value) {
+            let before = i.checked_sub(1).map(|j| &p.steps[j]);
+            match before.map(|b| b.with.as_ref().map(|w| w.value.clone())) {
+                None => {
+                    cx.err(
+                        Code::E0021,
+                        t.span,
+                        "`together` starts a step with the step before it, and this is the first step".into(),
+                        Some("remove `together`; a stage's first step starts when the stage does".into()),
+                    );
+                    ok = false;
+                }
+                Some(Some(prev)) if step.with.as_ref().is_some_and(|w| w.value == prev) => {
+                    cx.err(
+                        Code::E0021,
+                        t.span,
+                        format!("`together` with the step before it, but both are `{prev}`'s: one robot does one step at a time"),
+                        Some("give one of the two steps to another robot, or remove `together`".into()),
+                    );
+                    ok = false;
+                }
+                Some(_) => {}
+            }
         }
         let arg_names: Vec<&str> = prim.args.iter().map(|a| a.name).collect();
         for (key, value) in &step.args {
@@ -945,6 +970,7 @@ fn check_steps<'a>(
                     .unwrap_or_default(),
                 labware: args.get("on").cloned(),
                 args,
+                together,
             },
         });
     }

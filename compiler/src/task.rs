@@ -138,6 +138,10 @@ pub struct PlannedStep {
     pub labware: Option<String>,
     /// Every argument as written (templates over the task's params), `on` included.
     pub args: BTreeMap<String, String>,
+    /// The step starts with the one before it (`together = true`), on another robot: the
+    /// expert runs one motion lane per robot, and the steps of a group move at once.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub together: bool,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -177,6 +177,9 @@ pub enum RandomItem {
 pub struct Step {
     pub primitive: Option<Spanned<String>>,
     pub with: Option<Spanned<String>>,
+    /// `together = true`: the step starts with the step before it, on another robot.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub together: Option<Spanned<bool>>,
     /// Every other key of the step (`on`, `to`, `volume`, ...), as written.
     pub args: Vec<(Spanned<String>, Spanned<Scalar>)>,
     pub span: Span,

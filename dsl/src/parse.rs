@@ -773,6 +773,7 @@ impl Parser {
             let mut s = Step {
                 primitive: None,
                 with: None,
+                together: None,
                 args: Vec::new(),
                 span,
             };
@@ -781,6 +782,11 @@ impl Parser {
                 match k {
                     "do" => s.primitive = self.string(value, "do"),
                     "with" => s.with = self.string(value, "with"),
+                    "together" => {
+                        s.together = self
+                            .boolean(value, "together")
+                            .map(|b| Spanned::new(b, span_of(value)))
+                    }
                     // Arguments are checked against the primitive's signature by the compiler.
                     _ => {
                         if let Some(v) = self.scalar(value, k) {

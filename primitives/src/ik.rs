@@ -43,6 +43,19 @@ pub fn pose_error(target: &Pose, current: &Pose) -> [f64; 6] {
     [p.x, p.y, p.z, r.x, r.y, r.z]
 }
 
+/// Solves for joint angles reaching `target` from `seed` with the method the robot model chooses:
+/// the one place an [`robots::IkMethod`] meets its solver (an analytic solver is one more arm).
+pub fn solve_with(
+    method: robots::IkMethod,
+    kin: &mut dyn Kinematics,
+    target: &Pose,
+    seed: &[f64],
+) -> Result<Vec<f64>, IkError> {
+    match method {
+        robots::IkMethod::Qp => solve_ik(kin, target, seed, &IkOptions::default()),
+    }
+}
+
 /// Solves for joint angles reaching `target`, starting from `seed`.
 pub fn solve_ik(
     kin: &mut dyn Kinematics,

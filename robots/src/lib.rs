@@ -59,11 +59,14 @@ pub enum IkMethod {
     Qp,
 }
 
-/// Joint-space speed limits of the scripted expert (rad/s, rad/s²).
+/// How the scripted expert moves this arm: joint-space speed limits (rad/s, rad/s²) and the
+/// spacing of collision checks along a free-space motion (rad of joint travel, Euclidean), which
+/// depends on the arm's reach: the tool must not skip past a thin obstacle between two checks.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ExpertLimits {
     pub vmax: f64,
     pub amax: f64,
+    pub check_step: f64,
 }
 
 #[derive(Debug)]

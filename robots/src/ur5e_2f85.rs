@@ -55,6 +55,9 @@ pub const MODEL: RobotModel = RobotModel {
     expert_limits: ExpertLimits {
         vmax: 1.5,
         amax: 1.0,
+        // At the UR5e's 0.9 m reach, 0.02 rad is about 2 cm of tool travel at worst, less than
+        // a rotor slot's width.
+        check_step: 0.02,
     },
     ik: IkMethod::Qp,
     prepare,

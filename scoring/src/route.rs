@@ -11,9 +11,6 @@ use crate::policy::PlanFailure;
 use planner::{Problem, distance, lerp, shortcut};
 use runtime::clearance::Clearance;
 
-/// Collision checks along a motion at least every this much joint travel (rad, Euclidean): at
-/// the UR5e's 0.9 m reach about 2 cm of tool travel at worst, less than a rotor slot's width.
-pub const STEP: f64 = 0.02;
 /// RRTConnect gives up after this many collision checks (about a second of checks).
 const MAX_CHECKS: u64 = 40_000;
 /// Random shortcuts tried on a planned path.
@@ -38,9 +35,9 @@ pub enum Route {
 
 /// The first collision along `waypoints` (joint configurations, as straight joint motions), as
 /// "moving body against obstacle" names.
-fn first_hit(clearance: &mut Clearance, waypoints: &[Vec<f64>]) -> Option<String> {
+fn first_hit(clearance: &mut Clearance, waypoints: &[Vec<f64>], step: f64) -> Option<String> {
     for w in waypoints.windows(2) {
-        let n = (distance(&w[0], &w[1]) / STEP).ceil().max(1.0) as usize;
+        let n = (distance(&w[0], &w[1]) / step).ceil().max(1.0) as usize;
         for i in 0..=n {
             let hits = clearance.collisions(&lerp(&w[0], &w[1], i as f64 / n as f64));
             if let Some(&(a, b)) = hits.first() {
@@ -55,15 +52,17 @@ fn first_hit(clearance: &mut Clearance, waypoints: &[Vec<f64>]) -> Option<String
     None
 }
 
-/// A collision-free joint path from `waypoints[0]` to its last configuration, within `limits`.
+/// A collision-free joint path from `waypoints[0]` to its last configuration, within `limits`,
+/// checked at least every `step` of joint travel (the arm's `ExpertLimits::check_step`).
 /// `clearance` must be synced to the scene as it is now.
 pub fn route(
     clearance: &mut Clearance,
     limits: &[(f64, f64)],
+    step: f64,
     waypoints: Vec<Vec<f64>>,
     seed: u64,
 ) -> Result<Route, PlanFailure> {
-    let Some(hits) = first_hit(clearance, &waypoints) else {
+    let Some(hits) = first_hit(clearance, &waypoints, step) else {
         return Ok(Route::Straight(waypoints));
     };
     // Already overlapping where the motion starts (the commanded start differs from where the
@@ -83,7 +82,7 @@ pub fn route(
         bounds,
         start,
         goal,
-        step: STEP,
+        step,
         range: 0.0,
         max_checks: MAX_CHECKS,
         seed,
@@ -96,7 +95,7 @@ pub fn route(
         }
     })?;
     // Counted before anything else checks: the count is part of the recorded event.
-    let short = shortcut(&raw, SHORTCUTS, STEP, seed, |q| clearance.is_clear(q));
+    let short = shortcut(&raw, SHORTCUTS, step, seed, |q| clearance.is_clear(q));
     let checks = clearance.checks - before;
     Ok(Route::Planned {
         path: resample(&short),

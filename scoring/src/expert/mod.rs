@@ -1,0 +1,265 @@
+//! The scripted expert: each planned step goes to the robot its `with` names, expands into the
+//! motions its primitive declares (`compiler::primitives`), and each motion is resolved against
+//! live labware state when it starts (`primitives::resolve`), solved by the IK method the robot's
+//! model chooses and followed along a TOPP-timed trajectory under the model's limits
+//! ([`motion`]).
+//!
+//! One motion lane per robot ([`Lane`]): steps run in plan order, one group at a time, and a
+//! group is a step with the steps after it marked `together` (on other robots), whose lanes move
+//! in the same control steps. A group starts when the one before it has finished and the judge
+//! has reached its stage. The robots with nothing to do hold their targets.
+
+mod motion;
+
+use crate::policy::{Observation, PlanFailure, Policy, PolicyError, StageEvent};
+use compiler::motion::{Motion, MotionStep};
+use compiler::params::{Bindings, render};
+use compiler::{SceneInstance, Task};
+use motion::{Active, Arm};
+use primitives::{Lab, StepFrame};
+use runtime::Scene;
+use runtime::clearance::Clearance;
+use runtime::kinematics::ArmKinematics;
+use std::collections::{BTreeMap, VecDeque};
+
+/// Pause after each path so the arm settles on its last waypoint (s).
+const SETTLE_S: f64 = 0.2;
+
+struct Queued {
+    /// Index into the plan, the group it runs in, and the stage it belongs to.
+    step: usize,
+    group: usize,
+    stage: usize,
+    motion: Motion,
+}
+
+/// One planned step, routed and expanded.
+struct Step {
+    /// The `on` item, rendered (what a `place` carries).
+    on: Option<String>,
+    label: String,
+    motions: Vec<Motion>,
+}
+
+/// One robot's motions: what is queued for it, what it does now, and the frame of the step it is
+/// in (how it holds what it carries).
+#[derive(Default)]
+struct Lane {
+    queue: VecDeque<Queued>,
+    active: Option<(usize, Active)>,
+    frame: Option<(usize, StepFrame)>,
+    /// Whether the current step has moved along a path yet (its grasp is then committed).
+    step_moved: bool,
+}
+
+impl Lane {
+    /// The group of the motion running or next, if any.
+    fn group(&self) -> Option<usize> {
+        self.active
+            .as_ref()
+            .map(|(g, _)| *g)
+            .or_else(|| self.queue.front().map(|q| q.group))
+    }
+}
+
+pub struct ExpertPolicy {
+    task: Task,
+    params: Bindings,
+    steps: Vec<Step>,
+    arms: Vec<Arm>,
+    lanes: Vec<Lane>,
+    started: bool,
+    control_dt: f64,
+    events: Vec<StageEvent>,
+    /// The episode's seed, and the free-space motions routed so far: each route's planner seed.
+    seed: u64,
+    routed: u64,
+}
+
+fn planning(context: String, failure: impl Into<PlanFailure>) -> PolicyError {
+    PolicyError::Planning {
+        context,
+        failure: failure.into(),
+    }
+}
+
+impl ExpertPolicy {
+    pub fn new(
+        task: &Task,
+        scene: &Scene,
+        instance: &SceneInstance,
+    ) -> Result<ExpertPolicy, PolicyError> {
+        let mut lanes: Vec<Lane> = scene.robots.iter().map(|_| Lane::default()).collect();
+        let mut steps = Vec::new();
+        let mut group = 0;
+        for (i, (stage, step)) in task.steps().enumerate() {
+            let context = || format!("step {i} `{}`", step.primitive);
+            let robot = task
+                .robot_index(&step.robot)
+                .ok_or_else(|| planning(context(), PlanFailure::NoRobot(step.robot.clone())))?;
+            let expand = compiler::primitives::primitive(&step.primitive)
+                .and_then(|p| p.motions)
+                .ok_or_else(|| {
+                    planning(context(), PlanFailure::NoMotions(step.primitive.clone()))
+                })?;
+            let args: BTreeMap<String, String> = step
+                .args
+                .iter()
+                .map(|(k, v)| {
+                    let v = render(v, &instance.params).unwrap_or_else(|_| v.clone());
+                    (k.clone(), v)
+                })
+                .collect();
+            let kind = args
+                .get("on")
+                .and_then(|on| task.labware.iter().find(|l| &l.name == on))
+                .and_then(|l| labware::kind(&l.kind));
+            let motions = expand(&MotionStep { args: &args, kind });
+            if i > 0 && !step.together {
+                group += 1;
+            }
+            lanes[robot]
+                .queue
+                .extend(motions.iter().map(|motion| Queued {
+                    step: i,
+                    group,
+                    stage,
+                    motion: motion.clone(),
+                }));
+            steps.push(Step {
+                on: args.get("on").cloned(),
+                label: format!(
+                    "step {i}: {} {} with {}",
+                    step.primitive,
+                    args.get("on").map(String::as_str).unwrap_or(""),
+                    step.robot
+                ),
+                motions,
+            });
+        }
+        let arms = scene
+            .robots
+            .iter()
+            .enumerate()
+            .map(|(r, ids)| Arm {
+                model: ids.model,
+                kin: ArmKinematics::new(scene, r),
+                clearance: Clearance::new(scene, r),
+                target: instance.robot_q[r].clone(),
+                gripper: ids.model.gripper.open,
+            })
+            .collect();
+        Ok(ExpertPolicy {
+            task: task.clone(),
+            params: instance.params.clone(),
+            steps,
+            arms,
+            lanes,
+            started: false,
+            control_dt: 1.0 / task.physics.control_hz(),
+            events: Vec::new(),
+            seed: instance.seed,
+            routed: 0,
+        })
+    }
+
+    /// Every robot's targets, concatenated.
+    fn action(&self) -> Vec<f64> {
+        self.arms
+            .iter()
+            .flat_map(|a| a.target.iter().copied().chain([a.gripper]))
+            .collect()
+    }
+
+    /// The group now running: the earliest group any lane still has.
+    fn current_group(&self) -> Option<usize> {
+        self.lanes.iter().filter_map(Lane::group).min()
+    }
+
+    /// Moves lane `r` on as far as it can this control step: ends finished motions and starts
+    /// the next of the current group while the judge's stage allows. Whether anything changed.
+    fn advance(&mut self, r: usize, obs: &Observation) -> Result<bool, PolicyError> {
+        let next_t = obs.time + self.control_dt;
+        let mut changed = false;
+        loop {
+            let group = self.current_group();
+            let lane = &mut self.lanes[r];
+            match &lane.active {
+                // A later stage's steps wait until the judge has moved on to that stage.
+                None => match lane.queue.front() {
+                    Some(q) if Some(q.group) == group && q.stage <= obs.stage => {
+                        let q = lane.queue.pop_front().expect("front exists");
+                        let g = q.group;
+                        let active = self.start(r, q, obs)?;
+                        self.lanes[r].active = Some((g, active));
+                        changed = true;
+                    }
+                    _ => return Ok(changed),
+                },
+                Some((_, active)) => {
+                    let done = match active {
+                        Active::Hold { until } => obs.time + 1e-9 >= *until,
+                        Active::Until {
+                            labware,
+                            param,
+                            value,
+                            deadline,
+                        } => {
+                            let lab = Lab::new(&self.task, &obs.privileged.labware, &self.params);
+                            let shows = lab
+                                .panel(labware, param, value)
+                                .is_some_and(|(shown, target)| (shown - target).abs() < 1e-9);
+                            shows || obs.time >= *deadline
+                        }
+                        Active::Path { traj, t0 } => {
+                            let t = next_t - t0;
+                            if t > traj.duration() + SETTLE_S {
+                                self.arms[r].target = traj.end();
+                                true
+                            } else {
+                                self.arms[r].target = traj.sample(t);
+                                false
+                            }
+                        }
+                    };
+                    if !done {
+                        return Ok(changed);
+                    }
+                    self.lanes[r].active = None;
+                    changed = true;
+                }
+            }
+        }
+    }
+}
+
+impl Policy for ExpertPolicy {
+    fn name(&self) -> String {
+        "expert".into()
+    }
+
+    fn act(&mut self, obs: &Observation) -> Result<Vec<Vec<f64>>, PolicyError> {
+        if !self.started {
+            for (arm, live) in self.arms.iter_mut().zip(&obs.privileged.robots) {
+                arm.target = live.arm_q.clone();
+                arm.gripper = live.ctrl.last().copied().unwrap_or(arm.model.gripper.open);
+            }
+            self.started = true;
+        }
+        // Until no lane moves on: a lane that finishes its group's last motion lets the next
+        // group start in this same control step, whichever robot it is on.
+        loop {
+            let mut changed = false;
+            for r in 0..self.lanes.len() {
+                changed |= self.advance(r, obs)?;
+            }
+            if !changed {
+                return Ok(vec![self.action()]);
+            }
+        }
+    }
+
+    fn drain_events(&mut self) -> Vec<StageEvent> {
+        std::mem::take(&mut self.events)
+    }
+}

@@ -1,0 +1,189 @@
+//! How the expert starts one motion on one robot's lane: the motions that move no pose (grasp and
+//! release at the gripper's values and settle time, a wait, holding until a panel shows a value)
+//! and the pose motions (resolved to tool poses, solved by the IK method the robot model chooses,
+//! routed around obstacles in free space, timed by TOPP under the model's limits). A new motion
+//! kind is a `compiler::motion::Motion` variant and its arm here (or in `primitives::resolve` for
+//! its poses).
+
+use super::{ExpertPolicy, Queued, planning};
+use crate::policy::{Observation, PlanFailure, PolicyError, StageEvent};
+use crate::route::{Route, route};
+use compiler::motion::Motion;
+use primitives::topp::{Limits, Trajectory, plan_trajectory};
+use primitives::{Kinematics, Lab, StepFrame, solve_with};
+use robots::RobotModel;
+use runtime::clearance::Clearance;
+use runtime::kinematics::ArmKinematics;
+
+/// What a lane is doing.
+pub(super) enum Active {
+    Path {
+        traj: Trajectory,
+        t0: f64,
+    },
+    Hold {
+        until: f64,
+    },
+    /// Still until a panel shows a value (or the deadline passes: the judge tells what came of it).
+    Until {
+        labware: String,
+        param: String,
+        value: String,
+        deadline: f64,
+    },
+}
+
+/// One robot as the expert drives it: its model, kinematics and collision check, and its targets.
+pub(super) struct Arm {
+    pub model: &'static RobotModel,
+    pub kin: ArmKinematics,
+    pub clearance: Clearance,
+    pub target: Vec<f64>,
+    pub gripper: f64,
+}
+
+impl ExpertPolicy {
+    /// Starts motion `q` on robot `r`'s lane.
+    pub(super) fn start(
+        &mut self,
+        r: usize,
+        q: Queued,
+        obs: &Observation,
+    ) -> Result<Active, PolicyError> {
+        let step = &self.steps[q.step];
+        let context = format!("{}, {}", step.label, q.motion.label());
+        let lab = Lab::new(&self.task, &obs.privileged.labware, &self.params);
+        let arm = &mut self.arms[r];
+        let lane = &mut self.lanes[r];
+        let tcp_now = arm.kin.tcp(&arm.target);
+        if lane.frame.as_ref().map(|(s, _)| *s) != Some(q.step) {
+            let reach = arm.model.gripper.finger_reach;
+            let frame = StepFrame::new(&step.motions, &lab, &tcp_now, step.on.as_deref(), reach)
+                .map_err(|e| planning(context.clone(), e))?;
+            lane.frame = Some((q.step, frame));
+            lane.step_moved = false;
+            self.events.push(StageEvent {
+                time: obs.time,
+                label: step.label.clone(),
+            });
+        }
+        self.events.push(StageEvent {
+            time: obs.time,
+            label: q.motion.label().to_string(),
+        });
+        let gripper = arm.model.gripper;
+        match q.motion {
+            Motion::Grasp | Motion::Release => {
+                arm.gripper = if matches!(q.motion, Motion::Grasp) {
+                    gripper.closed
+                } else {
+                    gripper.open
+                };
+                return Ok(Active::Hold {
+                    until: obs.time + gripper.settle_s,
+                });
+            }
+            Motion::Wait { seconds } => {
+                return Ok(Active::Hold {
+                    until: obs.time + seconds,
+                });
+            }
+            Motion::HoldUntil {
+                labware,
+                param,
+                value,
+                timeout_s,
+            } => {
+                return Ok(Active::Until {
+                    labware,
+                    param,
+                    value,
+                    deadline: obs.time + timeout_s,
+                });
+            }
+            _ => {}
+        }
+        let frame = &mut lane.frame.as_mut().expect("set above").1;
+        // The item may have turned in the fingers on the way: each seat motion aims with the
+        // grasp as it is now.
+        frame
+            .regrip(&lab, &tcp_now)
+            .map_err(|e| planning(context.clone(), e))?;
+        let frame = &*frame;
+        let poses = frame
+            .poses(&q.motion, &lab, &tcp_now)
+            .map_err(|e| planning(context.clone(), e))?;
+        // Before the step's first path, the other symmetric grasp is a second try.
+        let waypoints = match solve_path(arm, &poses) {
+            Ok(w) => w,
+            Err(first) => {
+                let other = (!lane.step_moved)
+                    .then(|| frame.other_grasp())
+                    .flatten()
+                    .ok_or_else(|| planning(context.clone(), first.clone()))?;
+                let poses = other
+                    .poses(&q.motion, &lab, &tcp_now)
+                    .map_err(|e| planning(context.clone(), e))?;
+                let w = solve_path(arm, &poses).map_err(|_| planning(context.clone(), first))?;
+                lane.frame = Some((q.step, other));
+                w
+            }
+        };
+        lane.step_moved = true;
+        // TOPP's grid: 200 intervals, and for a planned route (~100 waypoints) 8 per waypoint.
+        let mut grid = 200;
+        let limits = arm.model.expert_limits;
+        let waypoints = if q.motion.through_free_space() {
+            let frame = &lane.frame.as_ref().expect("set above").1;
+            let carried = frame
+                .carried()
+                .and_then(|item| self.task.labware.iter().position(|l| l.name == item));
+            arm.clearance.sync(&obs.privileged.qpos, carried);
+            let seed = planner::mix(self.seed, self.routed);
+            self.routed += 1;
+            let joint_limits = arm.kin.limits();
+            let routed = route(
+                &mut arm.clearance,
+                &joint_limits,
+                limits.check_step,
+                waypoints,
+                seed,
+            )
+            .map_err(|e| planning(context.clone(), e))?;
+            match routed {
+                Route::Straight(path) => path,
+                Route::Planned { path, hits, checks } => {
+                    grid = grid.max(8 * path.len());
+                    self.events.push(StageEvent {
+                        time: obs.time,
+                        label: format!("planned around {hits} ({checks} collision checks)"),
+                    });
+                    path
+                }
+            }
+        } else {
+            waypoints
+        };
+        let topp = Limits {
+            vmax: limits.vmax,
+            amax: limits.amax,
+        };
+        let traj = plan_trajectory(waypoints, &topp, grid);
+        Ok(Active::Path { traj, t0: obs.time })
+    }
+}
+
+/// Joint waypoints through `poses` (the first is where the arm's target is), each solved by the
+/// robot model's IK method from the last.
+fn solve_path(arm: &mut Arm, poses: &[labware::Pose]) -> Result<Vec<Vec<f64>>, PlanFailure> {
+    let mut waypoints = vec![arm.target.clone()];
+    let mut seed = arm.target.clone();
+    let of = poses.len().saturating_sub(1);
+    for (i, pose) in poses.iter().enumerate().skip(1) {
+        let qn = solve_with(arm.model.ik, &mut arm.kin, pose, &seed)
+            .map_err(|ik| PlanFailure::IkAt { at: i, of, ik })?;
+        waypoints.push(qn.clone());
+        seed = qn;
+    }
+    Ok(waypoints)
+}
