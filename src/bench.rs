@@ -154,7 +154,7 @@ fn scene_figures(task: &compiler::Task) -> Result<f64> {
 
     let n = 3;
     let opts = scoring::eval::EvalOptions {
-        policy: scoring::policy::PolicySpec::Expert,
+        policy: scoring::policies::PolicySpec::Expert,
         episodes: n,
         seed: 0,
         out: None,

@@ -5,7 +5,7 @@
 use crate::front::Front;
 use crate::progress;
 use anyhow::Result;
-use scoring::policy::PolicySpec;
+use scoring::policies::PolicySpec;
 use std::path::PathBuf;
 use std::process::ExitCode;
 

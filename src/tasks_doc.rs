@@ -8,7 +8,7 @@
 
 use anyhow::{Context, Result};
 use scoring::eval::{EvalOptions, EvalReport, evaluate};
-use scoring::policy::PolicySpec;
+use scoring::policies::PolicySpec;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;

@@ -57,7 +57,7 @@ fn near_measures_the_distance_from_the_live_pose() {
         ..Default::default()
     };
     let r = run_with(&recorded, 5, &opts, |t, s, i| {
-        scoring::policy::make("expert", t, s, i).unwrap()
+        scoring::policies::make("expert", t, s, i).unwrap()
     });
     assert!(r.success, "{:?}", r.error);
     let rec = runtime::record::read_recording(&path).unwrap();

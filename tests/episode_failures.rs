@@ -115,7 +115,7 @@ fn the_journal_has_each_episode_before_the_next_starts() {
     let t = task();
     let dir = common::scratch("journal").join("out");
     let opts = scoring::eval::EvalOptions {
-        policy: scoring::policy::PolicySpec::Hold,
+        policy: scoring::policies::PolicySpec::Hold,
         episodes: 3,
         seed: 40,
         out: Some(dir.clone()),

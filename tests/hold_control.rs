@@ -31,7 +31,7 @@ fn every_simulated_task_scores_zero_without_motion() {
             continue;
         }
         let opts = EvalOptions {
-            policy: scoring::policy::PolicySpec::Hold,
+            policy: scoring::policies::PolicySpec::Hold,
             episodes: 1,
             seed: 0,
             out: None,
@@ -96,12 +96,12 @@ fn policies_are_made_by_name() {
     let instance = task.sample(0);
     let scene = runtime::Scene::build(&task, &instance).unwrap();
     for name in ["expert", "hold"] {
-        let p = scoring::policy::make(name, &task, &scene, &instance).unwrap();
+        let p = scoring::policies::make(name, &task, &scene, &instance).unwrap();
         assert_eq!(p.name(), name);
     }
-    assert!(scoring::policy::known("replay:out/demo") && !scoring::policy::known("replay:"));
+    assert!(scoring::policies::known("replay:out/demo") && !scoring::policies::known("replay:"));
     // A replay needs its recording: its absence is that episode's policy error, named.
-    let err = scoring::policy::make("replay:no/such/folder", &task, &scene, &instance)
+    let err = scoring::policies::make("replay:no/such/folder", &task, &scene, &instance)
         .err()
         .unwrap()
         .to_string();
@@ -109,7 +109,7 @@ fn policies_are_made_by_name() {
         err.contains("replay of no/such/folder: cannot read the recording"),
         "{err}"
     );
-    let err = scoring::policy::make("random", &task, &scene, &instance)
+    let err = scoring::policies::make("random", &task, &scene, &instance)
         .err()
         .unwrap()
         .to_string();

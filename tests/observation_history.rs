@@ -47,7 +47,7 @@ fn queries(chunk: usize, history: u32) -> Vec<Frames> {
     // chunks here are exactly `chunk` long.
     let dir = common::scratch(&format!("history-{chunk}-{history}"));
     let recording = dir.join("expert.mcap");
-    let mut expert = scoring::policy::make("expert", &task, &scene, &instance).unwrap();
+    let mut expert = scoring::policies::make("expert", &task, &scene, &instance).unwrap();
     let opts = scoring::EpisodeOptions {
         record: Some(recording.clone()),
         image_every: 0,
@@ -55,7 +55,7 @@ fn queries(chunk: usize, history: u32) -> Vec<Frames> {
     };
     scoring::run_episode(&task, &scene, &instance, expert.as_mut(), &opts).unwrap();
     let mut p = Chunked {
-        inner: Box::new(scoring::policy::ReplayPolicy::new(&recording, &task, &instance).unwrap()),
+        inner: Box::new(scoring::policies::ReplayPolicy::new(&recording, &task, &instance).unwrap()),
         buffer: Vec::new(),
         chunk,
         history,

@@ -121,7 +121,7 @@ fn the_expert_goes_around_the_housing_into_the_rotor_with_rrt_connect() {
     };
     let r = run_with(&task, 53, &opts, |t, s, i| {
         Box::new(Watched {
-            expert: scoring::policy::make("expert", t, s, i).unwrap(),
+            expert: scoring::policies::make("expert", t, s, i).unwrap(),
             seen: watched,
         })
     });

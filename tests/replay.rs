@@ -34,7 +34,7 @@ fn record_and_replay(
     };
     let policy = if expert { "expert" } else { "hold" };
     let live = common::run_with(task, seed, &opts, |t, s, i| {
-        scoring::policy::make(policy, t, s, i).unwrap()
+        scoring::policies::make(policy, t, s, i).unwrap()
     });
     let rec = read_recording(&path).unwrap();
     let replayed: compiler::Task = serde_json::from_value(rec.task).unwrap();
@@ -160,7 +160,7 @@ fn replaying_recorded_actions_reproduces_the_episode_byte_for_byte() {
     assert_eq!(again.verdict, live.verdict);
     // Another seed's episode is not this recording's.
     let (instance, scene) = common::scene(&task, 8);
-    let err = match scoring::policy::make(&policy, &task, &scene, &instance) {
+    let err = match scoring::policies::make(&policy, &task, &scene, &instance) {
         Ok(_) => panic!("a seed-7 recording replayed for seed 8"),
         Err(e) => e.to_string(),
     };

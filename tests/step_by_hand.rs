@@ -68,7 +68,7 @@ fn stepping_by_hand_with_the_experts_actions_gives_evals_trajectory() {
     let task = common::compile(protocol);
     let seed = 3;
     let mut env = Env::make(&task, seed, EnvOptions::default()).unwrap();
-    let mut expert = scoring::policy::make("expert", &task, env.scene(), env.instance()).unwrap();
+    let mut expert = scoring::policies::make("expert", &task, env.scene(), env.instance()).unwrap();
     let end = run_to_end(&mut env, expert.as_mut());
     assert!(end.terminated && !end.truncated, "{end:?}");
     assert_eq!(end.reward, 1.0);
@@ -81,13 +81,13 @@ fn stepping_by_hand_with_the_experts_actions_gives_evals_trajectory() {
     let first = env.reset(seed).unwrap();
     assert_eq!(first.time, 0.0);
     assert_eq!(env.control_steps(), 0);
-    let mut expert = scoring::policy::make("expert", &task, env.scene(), env.instance()).unwrap();
+    let mut expert = scoring::policies::make("expert", &task, env.scene(), env.instance()).unwrap();
     run_to_end(&mut env, expert.as_mut());
     assert_eq!(env.trajectory_hash(), by_hand);
 
     // Another seed is another episode.
     env.reset(seed + 1).unwrap();
-    let mut expert = scoring::policy::make("expert", &task, env.scene(), env.instance()).unwrap();
+    let mut expert = scoring::policies::make("expert", &task, env.scene(), env.instance()).unwrap();
     run_to_end(&mut env, expert.as_mut());
     assert_ne!(env.trajectory_hash(), by_hand);
 }

@@ -397,7 +397,7 @@ fn a_replay_redraws_the_display_from_the_recorded_panel() {
         ..Default::default()
     };
     let live = common::run_with(&task, 44, &opts, |t, s, i| {
-        scoring::policy::make("expert", t, s, i).unwrap()
+        scoring::policies::make("expert", t, s, i).unwrap()
     });
     assert!(live.success, "{:?}", live.error);
     let again = dir.join("again.mcap");

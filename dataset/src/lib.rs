@@ -246,7 +246,7 @@ fn record(
         image_size: Some(capture.image_size()),
         ..Default::default()
     };
-    let result = match scoring::policy::make("expert", task, scene, &instance) {
+    let result = match scoring::policies::make("expert", task, scene, &instance) {
         Ok(mut policy) => scoring::episode::run_episode_with(
             task,
             scene,

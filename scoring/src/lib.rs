@@ -9,6 +9,7 @@
 pub mod episode;
 pub mod eval;
 pub mod expert;
+pub mod policies;
 pub mod policy;
 pub mod remote;
 pub mod replay;
@@ -19,5 +20,6 @@ pub use results::{profile, verdict};
 
 pub use episode::{EpisodeError, EpisodeOptions, EpisodeResult, Outcome, run_episode};
 pub use eval::{EvalError, EvalReport, EvalSummary, RESULTS_SCHEMA_VERSION, evaluate};
-pub use policy::{HoldPolicy, Observation, POLICIES, Policy, PolicyError, StageEvent};
+pub use policies::{HoldPolicy, POLICIES, PolicySpec};
+pub use policy::{Observation, Policy, PolicyError, StageEvent};
 pub use results::verdict::{Judge, PredicateValue, StageVerdict, Verdict};

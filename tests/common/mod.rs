@@ -48,7 +48,7 @@ pub fn run(task: &compiler::Task, seed: u64, policy: &str) -> scoring::EpisodeRe
         task,
         seed,
         &scoring::EpisodeOptions::default(),
-        |t, s, i| scoring::policy::make(policy, t, s, i).unwrap(),
+        |t, s, i| scoring::policies::make(policy, t, s, i).unwrap(),
     )
 }
 

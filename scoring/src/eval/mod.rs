@@ -1,5 +1,5 @@
 //! Evaluation runs: seeded episodes of one task with one policy (made per episode by name
-//! through [`crate::policy::PolicySpec::make`], or a model server through [`crate::remote`]), in one or more
+//! through [`crate::policies::PolicySpec::make`], or a model server through [`crate::remote`]), in one or more
 //! runs, on one or more worker threads, or one shard of them. Each finished episode is appended
 //! to the journal at once (so nothing finished is lost if the run dies); the run ends with a
 //! versioned results JSON. `merge` joins shards' records into one.
@@ -15,6 +15,7 @@ pub use results::run::{
 pub use results::run::{record, stats};
 
 use crate::episode::{EpisodeError, EpisodeOptions, run_episode};
+use crate::policies;
 use crate::policy::{self, PolicyError};
 use crate::remote::{Model, WireError};
 use compiler::Task;
@@ -72,8 +73,8 @@ impl ModelSpec {
 }
 
 pub struct EvalOptions {
-    /// The policy (see [`crate::policy::POLICIES`]); ignored when `model` is given.
-    pub policy: policy::PolicySpec,
+    /// The policy (see [`crate::policies::POLICIES`]); ignored when `model` is given.
+    pub policy: policies::PolicySpec,
     /// Episodes per run.
     pub episodes: usize,
     pub seed: u64,
@@ -99,7 +100,7 @@ pub struct EvalOptions {
 impl Default for EvalOptions {
     fn default() -> EvalOptions {
         EvalOptions {
-            policy: policy::PolicySpec::Expert,
+            policy: policies::PolicySpec::Expert,
             episodes: 1,
             seed: 0,
             out: None,
@@ -349,7 +350,7 @@ impl Worker<'_> {
                         seed,
                         why,
                     })?,
-                Err(e @ PolicyError::Unknown(_)) => return Err(e.into()),
+                Err(e @ PolicyError::Unknown { .. }) => return Err(e.into()),
                 Err(e) => crate::episode::policy_failed(task, scene, &instance, &e),
             };
         r.run = run;
