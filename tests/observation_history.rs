@@ -55,7 +55,9 @@ fn queries(chunk: usize, history: u32) -> Vec<Frames> {
     };
     scoring::run_episode(&task, &scene, &instance, expert.as_mut(), &opts).unwrap();
     let mut p = Chunked {
-        inner: Box::new(scoring::policies::ReplayPolicy::new(&recording, &task, &instance).unwrap()),
+        inner: Box::new(
+            scoring::policies::ReplayPolicy::new(&recording, &task, &instance).unwrap(),
+        ),
         buffer: Vec::new(),
         chunk,
         history,

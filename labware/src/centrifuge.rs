@@ -15,6 +15,7 @@
 //! about +z.
 
 use crate::frame::{Pose, Rot, Vec3, axis_angle, pose, translation, x_turn};
+use crate::lid::{Lid, LidNames};
 use crate::mjcf::{Fragment, box_inertia, pose_attrs, rgba, v3};
 use crate::model::{
     Affordance, Effects, Instrument, LabwareState, Logic, Measure, Reset, Symmetry, set,
@@ -196,7 +197,17 @@ impl Params {
 
     /// Orientation of the lid body at joint angle 0: the closed geometry turned open about +x.
     fn lid_rest(&self) -> Rot {
-        x_turn(self.lid_open - self.lid_closed)
+        self.lid().rest()
+    }
+
+    /// The lid this instrument composes ([`crate::lid`]), from its parameters.
+    pub fn lid(&self) -> Lid {
+        Lid {
+            open: self.lid_open,
+            closed: self.lid_closed,
+            open_tolerance: self.open_tolerance,
+            closed_tolerance: self.closed_tolerance,
+        }
     }
 
     /// The lid's frame at a lid angle (at the hinge; x along it, y towards the front edge, z the
@@ -288,7 +299,7 @@ impl Params {
     }
 
     pub fn lid_is_closed(&self, lid: f64) -> bool {
-        (lid - self.lid_closed).abs() < self.closed_tolerance
+        self.lid().is_closed(lid)
     }
 
     /// Where the hand pushes the lid shut: on its outer face, `push_x` off the centre line,
@@ -473,10 +484,7 @@ impl Params {
 
 struct Names {
     base: String,
-    lid_body: String,
-    lid_joint: String,
-    grip_site: String,
-    lock: String,
+    lid: LidNames,
     key: String,
 }
 
@@ -484,10 +492,7 @@ impl Names {
     fn new(prefix: &str) -> Names {
         Names {
             base: format!("{prefix}/base"),
-            lid_body: format!("{prefix}/lid"),
-            lid_joint: format!("{prefix}/lid_hinge"),
-            grip_site: format!("{prefix}/grip"),
-            lock: format!("{prefix}/lid_lock"),
+            lid: LidNames::new(prefix),
             key: format!("{prefix}/key_open"),
         }
     }
@@ -573,9 +578,9 @@ impl Instrument for Params {
             sx = b[0] - 0.01,
             sy = b[1] + 0.001,
             stz = 0.03,
-            lid = n.lid_body,
+            lid = n.lid.body,
             lidframe = pose_attrs(&pose(self.hinge_point(), self.lid_rest())),
-            lidj = n.lid_joint,
+            lidj = n.lid.joint,
             lidd = self.lid_damping,
             lidk = self.lid_stiffness,
             open = self.lid_open,
@@ -595,18 +600,18 @@ impl Instrument for Params {
             gr = self.grip_radius,
             gl = self.grip_half_length,
             barc = v3(bar_c),
-            grip = n.grip_site,
+            grip = n.lid.grip,
         );
         let equality = format!(
             r#"<joint name="{lock}" joint1="{lidj}" polycoef="{closed} 0 0 0 0" active="false" solref="0.01 1"/>
 "#,
-            lock = n.lock,
-            lidj = n.lid_joint,
+            lock = n.lid.lock,
+            lidj = n.lid.joint,
             closed = self.lid_closed,
         );
         let contact = format!(
             "<exclude body1=\"{base}\" body2=\"{}\"/>\n<exclude body1=\"{base}\" body2=\"{}\"/>\n",
-            n.lid_body,
+            n.lid.body,
             n.key,
             base = n.base
         );
@@ -622,7 +627,7 @@ impl Instrument for Params {
     fn joints(&self, name: &str) -> Vec<(&'static str, String)> {
         let n = Names::new(name);
         vec![
-            ("lid", n.lid_joint),
+            ("lid", n.lid.joint),
             ("rotor", format!("{name}/base/rotor_hinge")),
             // The role is the catalogue's name of the key.
             ("open", format!("{}/press", n.key)),
@@ -639,7 +644,7 @@ impl Instrument for Params {
     }
 
     fn switches(&self, name: &str) -> Vec<(&'static str, String)> {
-        vec![("lock", Names::new(name).lock)]
+        vec![("lock", Names::new(name).lid.lock)]
     }
 
     fn reset(&self, initial: &BTreeMap<String, String>) -> Reset {
@@ -716,41 +721,31 @@ impl Instrument for Params {
         if part != "lid" {
             return None;
         }
-        let lid = s.joint("lid");
-        let locked = s.flag("locked");
-        let (target, extra, default) = match state {
-            "closed" => (self.lid_closed, true, self.closed_tolerance),
-            "locked" => (self.lid_closed, locked, self.closed_tolerance),
-            "open" => (self.lid_open, true, self.open_tolerance),
-            "unlocked" => {
-                // Released: whatever the lid's angle.
-                return Some(Measure {
-                    value: f64::from(u8::from(locked)),
-                    target: 0.0,
-                    tolerance: 0.5,
-                    holds: !locked,
-                });
+        let lid = s.joint(crate::lid::JOINT);
+        let locked = s.flag(crate::lid::LOCKED);
+        match state {
+            "closed" | "open" => self.lid().measure(state, lid, tolerance),
+            // Latched: shut and held by the latch.
+            "locked" => {
+                let m = self.lid().measure("closed", lid, tolerance)?;
+                Some(Measure {
+                    holds: m.holds && locked,
+                    ..m
+                })
             }
-            _ => return None,
-        };
-        let tolerance = tolerance.unwrap_or(default);
-        Some(Measure {
-            value: lid,
-            target,
-            tolerance,
-            holds: (lid - target).abs() <= tolerance && extra,
-        })
+            // Released: whatever the lid's angle.
+            "unlocked" => Some(Measure {
+                value: f64::from(u8::from(locked)),
+                target: 0.0,
+                tolerance: 0.5,
+                holds: !locked,
+            }),
+            _ => None,
+        }
     }
 
     fn readout(&self, s: &LabwareState) -> BTreeMap<String, String> {
-        let state = if s.flag("locked") {
-            "locked"
-        } else if self.lid_is_closed(s.joint("lid")) {
-            "closed"
-        } else {
-            "open"
-        };
-        BTreeMap::from([("lid".to_string(), state.to_string())])
+        self.lid().readout(s)
     }
 
     /// `lid_close`: the lid is pushed shut (a touch on its face); `lid_open`: it is lifted by its

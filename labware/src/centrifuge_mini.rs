@@ -7,6 +7,7 @@
 //! +z up. Joint conventions: lid 0 = open (98° up, past upright), -1.712 rad = closed.
 
 use crate::frame::{Pose, Rot, Vec3, pose, translation, x_turn};
+use crate::lid::{Lid, LidNames};
 use crate::mjcf::{Fragment, box_inertia, pose_attrs, v3};
 use crate::model::{Affordance, Instrument, LabwareState, Logic, Measure, Reset, Symmetry};
 use serde::{Deserialize, Serialize};
@@ -59,18 +60,14 @@ impl Default for Params {
 
 struct Names {
     base: String,
-    lid_body: String,
-    lid_joint: String,
-    grip_site: String,
+    lid: LidNames,
 }
 
 impl Names {
     fn new(prefix: &str) -> Names {
         Names {
             base: format!("{prefix}/base"),
-            lid_body: format!("{prefix}/lid"),
-            lid_joint: format!("{prefix}/lid_hinge"),
-            grip_site: format!("{prefix}/grip"),
+            lid: LidNames::new(prefix),
         }
     }
 }
@@ -78,7 +75,17 @@ impl Names {
 impl Params {
     /// Orientation of the lid body at joint angle 0: the closed geometry turned open about +x.
     fn lid_rest(&self) -> Rot {
-        x_turn(self.lid_open - self.lid_closed)
+        self.lid().rest()
+    }
+
+    /// The lid this instrument composes ([`crate::lid`]), from its parameters.
+    pub fn lid(&self) -> Lid {
+        Lid {
+            open: self.lid_open,
+            closed: self.lid_closed,
+            open_tolerance: self.open_tolerance,
+            closed_tolerance: self.closed_tolerance,
+        }
     }
 
     /// The tab's centre for a lid angle, in the frame `placement` is given in. Axes: x along the
@@ -95,7 +102,7 @@ impl Params {
     }
 
     pub fn lid_is_closed(&self, lid: f64) -> bool {
-        (lid - self.lid_closed).abs() < self.closed_tolerance
+        self.lid().is_closed(lid)
     }
 
     /// TCP frame pinching the tab: approach along the tab towards the hinge (z = -tab y), the
@@ -174,9 +181,9 @@ impl Instrument for Params {
             pz = b[2],
             wy = b[1] + 0.004,
             wz = b[2] + 0.004,
-            lid = n.lid_body,
+            lid = n.lid.body,
             lidframe = pose_attrs(&pose(self.hinge, self.lid_rest())),
-            lidj = n.lid_joint,
+            lidj = n.lid.joint,
             lidd = self.lid_damping,
             lidc = v3(lid_c),
             lidm = self.lid_mass,
@@ -186,9 +193,9 @@ impl Instrument for Params {
             rimc = v3([0.0, self.lid_depth - 0.004, self.lid_half_thickness]),
             tabh = v3(tab_half),
             tabc = v3(tab_c),
-            grip = n.grip_site,
+            grip = n.lid.grip,
         );
-        let contact = format!("<exclude body1=\"{}\" body2=\"{}\"/>\n", n.base, n.lid_body);
+        let contact = format!("<exclude body1=\"{}\" body2=\"{}\"/>\n", n.base, n.lid.body);
         Fragment {
             asset: String::new(),
             worldbody,
@@ -199,7 +206,7 @@ impl Instrument for Params {
     }
 
     fn joints(&self, name: &str) -> Vec<(&'static str, String)> {
-        vec![("lid", Names::new(name).lid_joint)]
+        vec![("lid", Names::new(name).lid.joint)]
     }
 
     fn reset(&self, initial: &BTreeMap<String, String>) -> Reset {
@@ -214,9 +221,8 @@ impl Instrument for Params {
     }
 
     fn joint_goal(&self, role: &str, goal: &str) -> Option<f64> {
-        match (role, goal) {
-            ("lid", "open") => Some(self.lid_open),
-            ("lid", "closed") => Some(self.lid_closed),
+        match role {
+            crate::lid::JOINT => self.lid().goal(goal),
             _ => None,
         }
     }
@@ -228,31 +234,15 @@ impl Instrument for Params {
         tolerance: Option<f64>,
         s: &LabwareState,
     ) -> Option<Measure> {
-        if part != "lid" {
+        if part != crate::lid::JOINT {
             return None;
         }
-        let lid = s.joint("lid");
-        let (target, default) = match state {
-            "closed" => (self.lid_closed, self.closed_tolerance),
-            "open" => (self.lid_open, self.open_tolerance),
-            _ => return None,
-        };
-        let tolerance = tolerance.unwrap_or(default);
-        Some(Measure {
-            value: lid,
-            target,
-            tolerance,
-            holds: (lid - target).abs() <= tolerance,
-        })
+        self.lid()
+            .measure(state, s.joint(crate::lid::JOINT), tolerance)
     }
 
     fn readout(&self, s: &LabwareState) -> BTreeMap<String, String> {
-        let state = if self.lid_is_closed(s.joint("lid")) {
-            "closed"
-        } else {
-            "open"
-        };
-        BTreeMap::from([("lid".to_string(), state.to_string())])
+        self.lid().readout(s)
     }
 
     fn affordance(&self, name: &str, s: &LabwareState) -> Option<Affordance> {

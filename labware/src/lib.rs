@@ -14,6 +14,7 @@ pub mod centrifuge;
 pub mod centrifuge_mini;
 pub mod display;
 pub mod frame;
+pub mod lid;
 pub mod mjcf;
 pub mod model;
 pub mod process;

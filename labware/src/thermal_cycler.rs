@@ -8,6 +8,7 @@
 //! -1.9 rad = closed; lever 0 = raised, -0.94 rad = pressed.
 
 use crate::frame::{Pose, Rot, Vec3, pose, translation, x_turn};
+use crate::lid::{Lid, LidNames};
 use crate::mjcf::{Fragment, box_inertia, pose_attrs, v3};
 use crate::model::{
     Affordance, Effects, Instrument, LabwareState, Logic, Measure, Mechanism, Reset, Symmetry,
@@ -78,24 +79,18 @@ impl Default for Params {
 /// MuJoCo names of one placed instrument, all prefixed by its protocol name.
 struct Names {
     base: String,
-    lid_body: String,
+    lid: LidNames,
     lever_body: String,
-    lid_joint: String,
     lever_joint: String,
-    grip_site: String,
-    lock: String,
 }
 
 impl Names {
     fn new(prefix: &str) -> Names {
         Names {
             base: format!("{prefix}/base"),
-            lid_body: format!("{prefix}/lid"),
+            lid: LidNames::new(prefix),
             lever_body: format!("{prefix}/lever"),
-            lid_joint: format!("{prefix}/lid_hinge"),
             lever_joint: format!("{prefix}/lever_hinge"),
-            grip_site: format!("{prefix}/grip"),
-            lock: format!("{prefix}/lid_lock"),
         }
     }
 }
@@ -103,7 +98,17 @@ impl Names {
 impl Params {
     /// Orientation of the lid body at joint angle 0: the closed geometry turned open about +x.
     fn lid_rest(&self) -> Rot {
-        x_turn(self.lid_open - self.lid_closed)
+        self.lid().rest()
+    }
+
+    /// The lid this instrument composes ([`crate::lid`]), from its parameters.
+    pub fn lid(&self) -> Lid {
+        Lid {
+            open: self.lid_open,
+            closed: self.lid_closed,
+            open_tolerance: self.open_tolerance,
+            closed_tolerance: self.closed_tolerance,
+        }
     }
 
     /// Pose of the grip bar's centre for given joint angles, in the frame `placement` is given in.
@@ -124,7 +129,7 @@ impl Params {
     }
 
     pub fn lid_is_closed(&self, lid: f64) -> bool {
-        (lid - self.lid_closed).abs() < self.closed_tolerance
+        self.lid().is_closed(lid)
     }
 
     /// TCP frame gripping the bar: at the bar's centre, oriented as the bar frame would be with the
@@ -223,9 +228,9 @@ impl Instrument for Params {
             blocky = 0.02,
             blockz = 2.0 * b[2] + 0.004,
             panely = b[1] + 0.002,
-            lid = n.lid_body,
+            lid = n.lid.body,
             lidframe = pose_attrs(&pose(self.hinge, self.lid_rest())),
-            lidj = n.lid_joint,
+            lidj = n.lid.joint,
             lidd = self.lid_damping,
             lidc = v3(lid_rel_hinge),
             lidm = self.lid_mass,
@@ -243,13 +248,13 @@ impl Instrument for Params {
             gr = self.grip_radius,
             gl = self.grip_half_length,
             arm = self.lever_arm,
-            grip = n.grip_site,
+            grip = n.lid.grip,
         );
         let equality = format!(
             r#"<joint name="{lock}" joint1="{lidj}" polycoef="{closed} 0 0 0 0" active="false" solref="0.01 1"/>
 "#,
-            lock = n.lock,
-            lidj = n.lid_joint,
+            lock = n.lid.lock,
+            lidj = n.lid.joint,
             closed = self.lid_closed,
         );
         let contact = format!(
@@ -282,11 +287,11 @@ impl Instrument for Params {
 
     fn joints(&self, name: &str) -> Vec<(&'static str, String)> {
         let n = Names::new(name);
-        vec![("lid", n.lid_joint), ("lever", n.lever_joint)]
+        vec![("lid", n.lid.joint), ("lever", n.lever_joint)]
     }
 
     fn switches(&self, name: &str) -> Vec<(&'static str, String)> {
-        vec![("lock", Names::new(name).lock)]
+        vec![("lock", Names::new(name).lid.lock)]
     }
 
     fn reset(&self, initial: &BTreeMap<String, String>) -> Reset {
@@ -319,9 +324,10 @@ impl Instrument for Params {
     }
 
     fn joint_goal(&self, role: &str, goal: &str) -> Option<f64> {
+        if role == crate::lid::JOINT {
+            return self.lid().goal(goal);
+        }
         Some(match (role, goal) {
-            ("lid", "open") => self.lid_open,
-            ("lid", "closed") => self.lid_closed,
             ("lever", "raised") => self.lever_raised,
             ("lever", "pressed") => self.lever_pressed,
             // Pushed nine tenths of the way: the detent carries it into the notch.
@@ -340,12 +346,12 @@ impl Instrument for Params {
         if part != "lid" {
             return None;
         }
-        let (lid, lever) = (s.joint("lid"), s.joint("lever"));
-        let locked = s.flag("locked");
+        let (lid, lever) = (s.joint(crate::lid::JOINT), s.joint("lever"));
+        let locked = s.flag(crate::lid::LOCKED);
+        // Open and closed are the lid's; the latch is read on the lever.
         let (value, target, extra, default) = match state {
-            "closed" => (lid, self.lid_closed, true, self.closed_tolerance),
+            "closed" | "open" => return self.lid().measure(state, lid, tolerance),
             "locked" => (lever, self.lever_pressed, locked, self.locked_tolerance),
-            "open" => (lid, self.lid_open, true, self.open_tolerance),
             "unlocked" => (lever, self.lever_raised, !locked, self.unlocked_tolerance),
             _ => return None,
         };
@@ -359,14 +365,7 @@ impl Instrument for Params {
     }
 
     fn readout(&self, s: &LabwareState) -> BTreeMap<String, String> {
-        let state = if s.flag("locked") {
-            "locked"
-        } else if self.lid_is_closed(s.joint("lid")) {
-            "closed"
-        } else {
-            "open"
-        };
-        BTreeMap::from([("lid".to_string(), state.to_string())])
+        self.lid().readout(s)
     }
 
     fn affordance(&self, name: &str, s: &LabwareState) -> Option<Affordance> {

@@ -120,4 +120,3 @@ pub trait Policy {
         Vec::new()
     }
 }
-
