@@ -190,37 +190,35 @@ fn describe_explain_and_json_check_as_processes() {
 
 #[test]
 fn unmodelled_labware_is_refused_by_the_runtime_with_a_reason() {
-    // The vortex mixer is in the catalogue but has no simulation model yet.
+    // The pipette is in the catalogue but has no simulation model yet.
     let source = r#"
 format = 1
 
 [protocol]
-id = "vortex.switch_on"
-instruction = "switch the vortex mixer on"
+id = "pipette.pick"
+instruction = "pick up the pipette"
 time_limit = "10 s"
 
 [robots.arm]
 model = "ur5e_2f85"
 base = { pos_m = [0.0, 0.5, 0.824] }
 
-[labware.vortex]
-kind = "vortex_mixer"
-pose = { pos_m = [0.0, 0.0, 0.824] }
-state = { power = "off" }
+[labware.pipette]
+kind = "pipette"
+pose = { pos_m = [0.0, 0.0, 0.83] }
 
 [[steps]]
-do = "press"
-on = "vortex"
-button = "switch"
+do = "pick"
+on = "pipette"
 with = "arm"
 
 [success]
-all = ["vortex.power is on"]
+all = ["arm touches pipette"]
 "#;
-    let (task, diags) = compiler::compile_source(source, "vortex.toml");
+    let (task, diags) = compiler::compile_source(source, "pipette.toml");
     let task = task.unwrap_or_else(|| panic!("{diags:#?}"));
     let err = runtime::Scene::build(&task, &task.sample(0))
         .err()
-        .expect("no model of the vortex mixer yet");
+        .expect("no model of the pipette yet");
     assert!(err.to_string().contains("no simulation model yet"), "{err}");
 }

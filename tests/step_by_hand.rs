@@ -75,7 +75,7 @@ fn stepping_by_hand_with_the_experts_actions_gives_evals_trajectory() {
     assert!(env.verdict().success);
     let by_hand = env.trajectory_hash();
     assert_eq!(by_hand, eval_hash(protocol, seed));
-    assert!(matches!(env.step(&vec![0.0; 7]), Err(EnvError::Over)));
+    assert!(matches!(env.step(&[0.0; 7]), Err(EnvError::Over)));
 
     // reset(seed) starts the same episode again: the same actions, the same trajectory.
     let first = env.reset(seed).unwrap();
