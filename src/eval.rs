@@ -31,8 +31,8 @@ pub struct EvalArgs {
     /// With --record: camera images every this many control steps (0: none)
     #[arg(long, default_value_t = 5, requires = "record")]
     image_every: u32,
-    /// Camera image size WxH (default: what the model's profile asks for, else the task's own)
-    #[arg(long, value_parser = crate::replay::parse_size)]
+    /// Camera image size WxH (default: the task's own; a model gets its profile's size)
+    #[arg(long, value_parser = crate::replay::parse_size, conflicts_with = "model")]
     size: Option<[usize; 2]>,
     /// Continue the run in --out: only if its manifest matches (task, protocol, policy, seed,
     /// version), never rerunning a finished episode

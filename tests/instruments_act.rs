@@ -43,14 +43,14 @@ all = ["vortex.power is {goal}"]
 fn spin(power: &str, seconds: f64) -> (f64, f64) {
     let task = vortex_protocol(power);
     let mut env = Env::make(&task, 0, EnvOptions::default()).unwrap();
-    let hold = env.episode.ctrl();
+    let hold = env.episode().ctrl();
     let period = task.physics.timestep_s * task.physics.substeps as f64;
     for _ in 0..(seconds / period).round() as usize {
         env.step(&hold).unwrap();
     }
-    let state = env.episode.labware_state();
+    let state = env.episode().labware_state();
     let motor = env.scene().labware[0].actuators[0].1;
-    (state[0].joint("drive"), env.episode.data.ctrl()[motor])
+    (state[0].joint("drive"), env.episode().data.ctrl()[motor])
 }
 
 #[test]

@@ -122,6 +122,8 @@ fn steps_marked_together_move_both_arms_in_the_same_control_steps() {
     };
     let (sequential, parallel) = (compile(&text), compile(&together));
     assert!(parallel.stages[0].plan[1].together && !sequential.stages[0].plan[1].together);
+    assert!(compiler::describe(&parallel).contains("with mover, together with step 1"));
+    assert!(!compiler::describe(&sequential).contains("together"));
     let run = |task: &compiler::Task| {
         let instance = task.sample(4);
         let scene = Arc::new(runtime::Scene::build(task, &instance).unwrap());

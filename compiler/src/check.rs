@@ -895,9 +895,23 @@ fn check_steps<'a>(
         }
         let together = step.together.as_ref().is_some_and(|t| t.value);
         if let Some(t) = step.together.as_ref().filter(|t| t.value) {
-            let before = i.checked_sub(1).map(|j| &p.steps[j]);
-            match before.map(|b| b.with.as_ref().map(|w| w.value.clone())) {
-                None => {
+            // The robots of the group this step joins: the step before it and, while those were
+            // marked `together` too, the steps before them.
+            let mut group: Vec<&str> = Vec::new();
+            for j in (0..i).rev() {
+                if let Some(w) = &p.steps[j].with {
+                    group.push(&w.value);
+                }
+                if !p.steps[j].together.as_ref().is_some_and(|t| t.value) {
+                    break;
+                }
+            }
+            let same = step
+                .with
+                .as_ref()
+                .and_then(|w| group.iter().find(|g| **g == w.value));
+            match (i, same) {
+                (0, _) => {
                     cx.err(
                         Code::E0021,
                         t.span,
@@ -906,16 +920,16 @@ fn check_steps<'a>(
                     );
                     ok = false;
                 }
-                Some(Some(prev)) if step.with.as_ref().is_some_and(|w| w.value == prev) => {
+                (_, Some(robot)) => {
                     cx.err(
                         Code::E0021,
                         t.span,
-                        format!("`together` with the step before it, but both are `{prev}`'s: one robot does one step at a time"),
+                        format!("`together` joins a step of `{robot}`'s to a group where `{robot}` already has one: one robot does one step at a time"),
                         Some("give one of the two steps to another robot, or remove `together`".into()),
                     );
                     ok = false;
                 }
-                Some(_) => {}
+                _ => {}
             }
         }
         let arg_names: Vec<&str> = prim.args.iter().map(|a| a.name).collect();

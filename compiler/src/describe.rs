@@ -144,11 +144,16 @@ pub fn describe(task: &Task) -> String {
                 .collect();
             let _ = writeln!(
                 w,
-                "    {}. {}({}) with {}",
+                "    {}. {}({}) with {}{}",
                 k + 1,
                 step.primitive,
                 args.join(", "),
-                step.robot
+                step.robot,
+                if step.together {
+                    format!(", together with step {k}")
+                } else {
+                    String::new()
+                }
             );
         }
         let _ = writeln!(w, "  checks:");

@@ -95,7 +95,7 @@ impl Capture {
 /// A capture watches an episode: every control step's state, action and frames.
 impl Observer for Capture {
     fn before_step(&mut self, env: &mut Env, action: &[f64]) -> Result<(), ObserveError> {
-        let state = env.episode.state();
+        let state = env.episode().state();
         let frames = env.frames()?;
         if let Err(e) = self.push(&state, action, frames) {
             let why = e.to_string();

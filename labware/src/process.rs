@@ -6,7 +6,9 @@
 //! (so recordings carry them and the judge can read them).
 //!
 //! [`LiquidDraw`] is the first: it moves liquid through `physics::liquid`, whose bookkeeping in
-//! whole nanolitres conserves the total exactly. Pure: no MuJoCo here.
+//! whole nanolitres conserves the total exactly. The items' logic holds the volumes between steps
+//! (so a replay that restores the logic restores them, and processes sharing an item agree);
+//! what a process keeps of its own (a liquid's surface) follows from them. Pure: no MuJoCo here.
 
 use crate::frame::Pose;
 use crate::model::{LabwareState, Logic, set};
@@ -96,23 +98,36 @@ impl Process for LiquidDraw {
         let (Some(source), Some(tip)) = (states.get(self.source), states.get(self.tip)) else {
             return;
         };
+        // The items' logic holds the volumes (a restored state, another process's transfer):
+        // this process's liquids follow it.
+        for (item, liquid) in [
+            (self.source, &mut self.source_liquid),
+            (self.tip, &mut self.tip_liquid),
+        ] {
+            if let Some(ul) = logic[item].get(VOLUME_UL) {
+                liquid.volume = Nanolitres::from_microlitres(*ul);
+            }
+        }
         let rate = logic[self.tip].get(DRAW_UL_S).copied().unwrap_or(0.0);
         let opening = tip.pose * nalgebra::Point3::from(self.opening);
         if rate > 0.0 && self.submerged(&source.pose, opening) {
-            self.owed += rate * dt * 1e3;
-            let whole = self.owed.floor();
-            let movable = (whole as u64)
-                .min(self.source_liquid.volume.0)
-                .min(self.tip_liquid.room().0);
-            if movable > 0
-                && transfer(
-                    &mut self.source_liquid,
-                    &mut self.tip_liquid,
-                    Nanolitres(movable),
-                )
-                .is_ok()
-            {
-                self.owed -= movable as f64;
+            let limit = self.source_liquid.volume.0.min(self.tip_liquid.room().0);
+            if limit == 0 {
+                // Nothing left to draw, or no room: a thumb held open draws nothing more.
+                self.owed = 0.0;
+            } else {
+                self.owed += rate * dt * 1e3;
+                let movable = (self.owed.floor() as u64).min(limit);
+                if movable > 0
+                    && transfer(
+                        &mut self.source_liquid,
+                        &mut self.tip_liquid,
+                        Nanolitres(movable),
+                    )
+                    .is_ok()
+                {
+                    self.owed -= movable as f64;
+                }
             }
         } else {
             self.owed = 0.0;
@@ -195,6 +210,22 @@ mod tests {
         logic[1].insert(DRAW_UL_S.into(), 0.0);
         run(&mut draw, &states, &mut logic, 0.5);
         assert_eq!(draw.volumes_ul(), (1000.0, 0.0));
+    }
+
+    #[test]
+    fn a_slow_draw_moves_and_the_items_logic_holds_the_volumes() {
+        let (mut draw, states, mut logic) = scene(0.035);
+        // 0.1 µL/s: 0.2 nL a step, whole nanolitres as they add up.
+        logic[1].insert(DRAW_UL_S.into(), 0.1);
+        run(&mut draw, &states, &mut logic, 1.0);
+        let (_, tip) = draw.volumes_ul();
+        assert!((tip - 0.1).abs() < 0.0015, "{tip} µL");
+        // A restored state (a replay) sets the volumes through the logic.
+        logic[0].insert(VOLUME_UL.into(), 400.0);
+        logic[1].insert(VOLUME_UL.into(), 20.0);
+        logic[1].insert(DRAW_UL_S.into(), 0.0);
+        run(&mut draw, &states, &mut logic, 0.01);
+        assert_eq!(draw.volumes_ul(), (400.0, 20.0));
     }
 
     #[test]

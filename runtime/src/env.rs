@@ -58,7 +58,7 @@ pub enum ObserveError {
 }
 
 /// Watches an episode step by step. Observers see the state an action acts on and the state it
-/// left; they cannot change the episode.
+/// left; they cannot change the episode (the `&mut` is for [`Env::frames`]' cache).
 pub trait Observer {
     /// Before the action of a control step is applied.
     fn before_step(&mut self, _env: &mut Env, _action: &[f64]) -> Result<(), ObserveError> {
@@ -126,8 +126,7 @@ pub struct Env {
     task: Task,
     opts: EnvOptions,
     instance: SceneInstance,
-    /// The MuJoCo episode: readable by observers (robot and labware state, physics state).
-    pub episode: Episode,
+    episode: Episode,
     judge: Judge,
     hash: TrajectoryHash,
     /// The judge said the episode is over (success, or a stage's time ran out).
@@ -175,6 +174,12 @@ impl Env {
         *self = Env::new(scene, &task, &instance, self.opts);
         self.cameras = cameras;
         Ok(self.observe())
+    }
+
+    /// The MuJoCo episode, to read (robot and labware state, MuJoCo's state); stepping it goes
+    /// through [`Env::step`] only, so the hash, the judge and the frames always see every step.
+    pub fn episode(&self) -> &Episode {
+        &self.episode
     }
 
     pub fn task(&self) -> &Task {

@@ -22,7 +22,8 @@ pub struct EpisodeOptions {
     pub record: Option<PathBuf>,
     /// Render and record camera images every this many control steps (0 = no images).
     pub image_every: u32,
-    /// Every camera at this size; `None`: what the policy needs, else the task's camera spec.
+    /// Every camera at this size, unless the policy needs another (a model's profile: what it
+    /// is sent wins); `None`: the task's camera spec.
     pub image_size: Option<[usize; 2]>,
 }
 
@@ -128,7 +129,7 @@ impl Recording {
         verdict: &results::Verdict,
     ) -> Result<(), EpisodeError> {
         let t = env.time();
-        let ep = &env.episode;
+        let ep = env.episode();
         let end = serde_json::json!({
             "verdict": verdict, "error": error,
             "trajectory_hash": env.trajectory_hash(), "control_steps": env.control_steps(),
@@ -149,7 +150,7 @@ impl Recording {
 impl Observer for Recording {
     fn before_step(&mut self, env: &mut Env, action: &[f64]) -> Result<(), ObserveError> {
         let t = env.time();
-        let ep = &env.episode;
+        let ep = env.episode();
         let mut rest = action;
         for (k, ids) in ep.scene.robots.iter().enumerate() {
             let (mine, others) = rest.split_at(ids.model.action_len().min(rest.len()));

@@ -123,7 +123,10 @@ impl std::str::FromStr for PolicySpec {
                 Some(path) if !path.is_empty() => Ok(PolicySpec::Replay(path.into())),
                 _ => Err(PolicyError::Unknown {
                     name: other.to_string(),
-                    known: POLICIES.join(", "),
+                    known: format!(
+                        "{} (a model server is `--model ws://HOST:PORT`)",
+                        POLICIES.join(", ")
+                    ),
                 }),
             },
         }

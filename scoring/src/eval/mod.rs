@@ -82,7 +82,7 @@ pub struct EvalOptions {
     pub out: Option<PathBuf>,
     pub record: bool,
     pub image_every: u32,
-    /// Every camera at this size (`--size`); `None`: what a model's profile asks for, else the
+    /// Every camera at this size (`--size`); a model's profile's size wins over it; `None`: the
     /// task's own camera spec.
     pub image_size: Option<[usize; 2]>,
     /// Continue the run whose journal is in `out`: only when its manifest's fingerprints match,
