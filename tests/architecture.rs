@@ -1,8 +1,26 @@
 //! What ARCHITECTURE.md promises that a machine can check: every crate and module starts with a
 //! `//!` doc saying what it does; the robots and labware models the docs list are the registries'
-//! (`robots::MODELS`, `labware::registry::MODELLED`), not hand-kept copies that drift.
+//! (`robots::MODELS`, `labware::registry::MODELLED`), not hand-kept copies that drift; and no
+//! module reaches itself through its `crate::`/`super::` imports (an import cycle).
 
 use std::path::{Path, PathBuf};
+
+/// Every crate's sources: the CLI's and each workspace member's.
+const CRATES: [&str; 13] = [
+    "src",
+    "dsl/src",
+    "compiler/src",
+    "primitives/src",
+    "planner/src",
+    "labware/src",
+    "robots/src",
+    "physics/src",
+    "runtime/src",
+    "results/src",
+    "scoring/src",
+    "dataset/src",
+    "leaderboard/src",
+];
 
 /// Every `.rs` file under `dir`, recursively.
 fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
@@ -19,21 +37,7 @@ fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
 #[test]
 fn every_crate_and_module_says_what_it_does() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let crates = [
-        "src",
-        "dsl/src",
-        "compiler/src",
-        "primitives/src",
-        "planner/src",
-        "labware/src",
-        "robots/src",
-        "physics/src",
-        "runtime/src",
-        "results/src",
-        "scoring/src",
-        "dataset/src",
-        "leaderboard/src",
-    ];
+    let crates = CRATES;
     let mut files = Vec::new();
     for c in crates {
         rust_files(&root.join(c), &mut files);
@@ -109,4 +113,133 @@ fn the_docs_name_every_registered_robot_and_labware_model() {
             "ARCHITECTURE.md does not map `{module}.rs`"
         );
     }
+}
+
+/// A crate's modules (file path -> `a::b` module path), the crate root left out (it only
+/// declares and re-exports).
+fn modules(src: &Path) -> Vec<(String, PathBuf)> {
+    let mut files = Vec::new();
+    rust_files(src, &mut files);
+    files
+        .into_iter()
+        .filter_map(|f| {
+            let rel = f.strip_prefix(src).unwrap().with_extension("");
+            let mut parts: Vec<String> = rel
+                .components()
+                .map(|c| c.as_os_str().to_string_lossy().into_owned())
+                .collect();
+            if parts.last().is_some_and(|p| p == "mod") {
+                parts.pop();
+            }
+            (parts != ["lib"] && parts != ["main"]).then(|| (parts.join("::"), f))
+        })
+        .collect()
+}
+
+/// The modules each module of `src` uses through `crate::` paths and `super::` (code only, not
+/// comments), its own ancestors and descendants aside.
+fn module_graph(src: &Path) -> std::collections::BTreeMap<String, Vec<String>> {
+    let mods = modules(src);
+    let names: Vec<&str> = mods.iter().map(|(m, _)| m.as_str()).collect();
+    let related = |a: &str, b: &str| {
+        a == b || a.starts_with(&format!("{b}::")) || b.starts_with(&format!("{a}::"))
+    };
+    let mut graph = std::collections::BTreeMap::new();
+    for (m, file) in &mods {
+        let code: String = std::fs::read_to_string(file)
+            .unwrap()
+            .lines()
+            .map(|l| l.split("//").next().unwrap_or(""))
+            .collect::<Vec<_>>()
+            .join("\n");
+        let mut uses = std::collections::BTreeSet::new();
+        for (i, _) in code.match_indices("crate::") {
+            if i > 0 && code[..i].ends_with(|c: char| c.is_alphanumeric() || c == '_') {
+                continue;
+            }
+            let path: String = code[i + 7..]
+                .chars()
+                .take_while(|c| {
+                    c.is_ascii_lowercase() || c.is_ascii_digit() || *c == '_' || *c == ':'
+                })
+                .collect();
+            let parts: Vec<&str> = path.split("::").filter(|p| !p.is_empty()).collect();
+            let target = (1..=parts.len())
+                .rev()
+                .map(|k| parts[..k].join("::"))
+                .find(|t| names.contains(&t.as_str()));
+            if let Some(t) = target.filter(|t| !related(m, t)) {
+                uses.insert(t);
+            }
+        }
+        if code.contains("super::")
+            && let Some((parent, _)) = m.rsplit_once("::")
+            && names.contains(&parent)
+        {
+            uses.insert(parent.to_string());
+        }
+        graph.insert(m.clone(), uses.into_iter().collect());
+    }
+    graph
+}
+
+/// A cycle in the graph, if there is one (depth-first search).
+fn find_cycle(graph: &std::collections::BTreeMap<String, Vec<String>>) -> Option<Vec<String>> {
+    fn visit(
+        v: &str,
+        graph: &std::collections::BTreeMap<String, Vec<String>>,
+        state: &mut std::collections::BTreeMap<String, u8>,
+        path: &mut Vec<String>,
+    ) -> Option<Vec<String>> {
+        state.insert(v.to_string(), 1);
+        path.push(v.to_string());
+        for w in graph.get(v).into_iter().flatten() {
+            match state.get(w.as_str()).copied().unwrap_or(0) {
+                1 => {
+                    let start = path.iter().position(|p| p == w).unwrap();
+                    let mut cycle = path[start..].to_vec();
+                    cycle.push(w.clone());
+                    return Some(cycle);
+                }
+                0 => {
+                    if let Some(c) = visit(w, graph, state, path) {
+                        return Some(c);
+                    }
+                }
+                _ => {}
+            }
+        }
+        path.pop();
+        state.insert(v.to_string(), 2);
+        None
+    }
+    let mut state = std::collections::BTreeMap::new();
+    for v in graph.keys() {
+        if state.get(v.as_str()).copied().unwrap_or(0) == 0
+            && let Some(c) = visit(v, graph, &mut state, &mut Vec::new())
+        {
+            return Some(c);
+        }
+    }
+    None
+}
+
+#[test]
+fn no_module_reaches_itself_through_its_imports() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut checked = 0;
+    for c in CRATES {
+        let graph = module_graph(&root.join(c));
+        checked += graph.len();
+        if let Some(cycle) = find_cycle(&graph) {
+            panic!("{c}: an import cycle: {}", cycle.join(" -> "));
+        }
+    }
+    assert!(checked > 80, "{checked} modules: the walk found them");
+    // The check can fail: two modules that use each other are a cycle.
+    let graph = std::collections::BTreeMap::from([
+        ("check".to_string(), vec!["primitives".to_string()]),
+        ("primitives".to_string(), vec!["check".to_string()]),
+    ]);
+    assert!(find_cycle(&graph).is_some());
 }

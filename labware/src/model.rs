@@ -144,6 +144,14 @@ pub struct Display {
     pub shows: Vec<String>,
 }
 
+/// A process between items (liquid drawn into a tip), run after every physics step; the ones
+/// there are live in [`crate::process`].
+pub trait Process: std::fmt::Debug + Send {
+    /// After `dt` seconds of physics: `states` is every item's live state and `logic` every
+    /// item's logic state, both in task order; a process moves quantities by writing `logic`.
+    fn step(&mut self, dt: f64, states: &[LabwareState], logic: &mut [Logic]);
+}
+
 /// What an item's logic asks of the simulation after a step, by role: equality constraints on or
 /// off, and commands for the item's own actuators.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -220,7 +228,7 @@ pub trait Instrument {
 
     /// Processes between this item and others that the runtime runs after every physics step
     /// (liquid drawn into a tip), each written in the item's own model.
-    fn processes(&self, _name: &str) -> Vec<Box<dyn crate::process::Process>> {
+    fn processes(&self, _name: &str) -> Vec<Box<dyn Process>> {
         Vec::new()
     }
 

@@ -11,6 +11,7 @@
 //! what a process keeps of its own (a liquid's surface) follows from them. Pure: no MuJoCo here.
 
 use crate::frame::Pose;
+pub use crate::model::Process;
 use crate::model::{LabwareState, Logic, set};
 use physics::liquid::{Container, Liquid, Nanolitres, transfer};
 
@@ -20,13 +21,6 @@ pub const VOLUME_UL: &str = "volume_ul";
 /// The logic key a tip's draw command is kept under (µL/s; 0 or absent: not drawing). The
 /// pipette's logic sets it from its plunger; a process only reads it.
 pub const DRAW_UL_S: &str = "draw_ul_s";
-
-/// A process between items, run after every physics step.
-pub trait Process: std::fmt::Debug + Send {
-    /// After `dt` seconds of physics: `states` is every item's live state and `logic` every
-    /// item's logic state, both in task order; a process moves quantities by writing `logic`.
-    fn step(&mut self, dt: f64, states: &[LabwareState], logic: &mut [Logic]);
-}
 
 /// Liquid drawn from a container into a tip: while the tip asks to draw ([`DRAW_UL_S`] in its
 /// logic) and its opening is below the source's liquid surface, the asked rate flows from the

@@ -39,7 +39,7 @@ impl ReplayPolicy {
         instance: &SceneInstance,
     ) -> Result<Self, PolicyError> {
         let file = if path.is_dir() {
-            crate::eval::recording_path(path, task, instance.seed)
+            results::run::recording_path(path, task, instance.seed)
         } else {
             path.to_path_buf()
         };

@@ -90,7 +90,7 @@ pub enum PolicyError {
     Failed(String),
     /// The model server failed: no connection, closed, silent, an error frame, garbage.
     #[error("model server fault: {0}")]
-    Server(crate::remote::WireError),
+    Server(crate::remote::link::WireError),
     /// The model answered, but not with actions this task can run.
     #[error("the model's actions are unusable: {0}")]
     BadActions(String),
