@@ -279,5 +279,6 @@ fn a_server_whose_metadata_frame_comes_late() {
         &["--recordings", &rec, "--metadata-delay", "1.0"],
     );
     let (eps, _) = run(&server.url, "openpi", &profile(&dir), &dir);
+    assert_eq!(eps.len(), 3, "{eps:#?}");
     assert!(eps.iter().all(|e| e["outcome"] == "success"), "{eps:#?}");
 }

@@ -274,7 +274,9 @@ fn rdt_profile_sends_the_unified_state_and_a_real_earlier_frame() {
     std::fs::write(&path, rdt).unwrap();
     let out = eval_model(&server, "openpi", path.to_str().unwrap(), &[CLOSE], 2, &dir);
     assert!(out.status.success(), "{}", text(&out.stderr));
-    for e in journal(&dir, "thermal_cycler.close_lid") {
+    let eps = journal(&dir, "thermal_cycler.close_lid");
+    assert_eq!(eps.len(), 2, "{eps:#?}");
+    for e in eps {
         let x = expert("thermal_cycler.close_lid", e["seed"].as_u64().unwrap());
         assert_eq!(e["outcome"], "success", "{e}");
         assert_eq!(e["trajectory_hash"], x["trajectory_hash"]);
@@ -293,4 +295,29 @@ fn rdt_profile_sends_the_unified_state_and_a_real_earlier_frame() {
         queries.iter().any(|q| q["history_differs"] == true),
         "the earlier frame must be a real earlier frame while the arm moves: {queries:?}"
     );
+}
+
+/// A server that never says where it listens fails the test at the deadline, not by hanging it.
+#[test]
+fn a_server_that_never_comes_up_fails_within_its_deadline() {
+    let mut cmd = std::process::Command::new(common::python());
+    cmd.args(["-c", "import time; time.sleep(60)"]);
+    let started = std::time::Instant::now();
+    let err = match Server::spawn(cmd, "silent", std::time::Duration::from_millis(500)) {
+        Ok(_) => panic!("a silent server came up"),
+        Err(e) => e,
+    };
+    assert!(
+        err.contains("did not say where it listens within 0.5 s"),
+        "{err}"
+    );
+    assert!(started.elapsed() < std::time::Duration::from_secs(10));
+    // And one that says something else is reported with what it said.
+    let mut cmd = std::process::Command::new(common::python());
+    cmd.args(["-c", "print('hello')"]);
+    let err = match Server::spawn(cmd, "chatty", std::time::Duration::from_secs(30)) {
+        Ok(_) => panic!("a server that never listened came up"),
+        Err(e) => e,
+    };
+    assert!(err.contains("chatty did not start: \"hello\\n\""), "{err}");
 }

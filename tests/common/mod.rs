@@ -82,6 +82,10 @@ pub fn journal(dir: &std::path::Path, task_id: &str) -> Vec<serde_json::Value> {
         .collect()
 }
 
+/// How long a reference model server may take to come up (Python and numpy importing on a
+/// loaded 2-core machine take a few seconds).
+pub const SERVER_START_DEADLINE: std::time::Duration = std::time::Duration::from_secs(60);
+
 /// A reference model server (`tests/servers/<script>`) running on loopback in the servers'
 /// Python environment; killed when dropped.
 pub struct Server {
@@ -91,32 +95,71 @@ pub struct Server {
 
 impl Server {
     pub fn start(script: &str, args: &[&str]) -> Server {
-        use std::io::BufRead;
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-        let python = root.join(".deps/servers/bin/python");
-        assert!(
-            python.exists(),
-            "{} is missing: run `make setup`",
-            python.display()
-        );
-        let mut child = Command::new(python)
-            .arg(root.join("tests/servers").join(script))
-            .args(args)
+        let mut cmd = Command::new(python());
+        cmd.arg(root.join("tests/servers").join(script)).args(args);
+        Server::spawn(cmd, script, SERVER_START_DEADLINE).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// Starts `cmd` and waits at most `deadline` for its first line, `listening on <url>`; a
+    /// server that says nothing by then is killed and reported.
+    pub fn spawn(
+        mut cmd: Command,
+        name: &str,
+        deadline: std::time::Duration,
+    ) -> Result<Server, String> {
+        use std::io::BufRead;
+        let mut child = cmd
             .stdout(std::process::Stdio::piped())
             .stderr(std::process::Stdio::inherit())
             .spawn()
-            .unwrap();
-        let mut line = String::new();
-        std::io::BufReader::new(child.stdout.take().unwrap())
-            .read_line(&mut line)
-            .unwrap();
-        let url = line
-            .trim()
-            .strip_prefix("listening on ")
-            .unwrap_or_else(|| panic!("{script} did not start: {line:?}"))
-            .to_string();
-        Server { child, url }
+            .map_err(|e| format!("{name}: cannot start: {e}"))?;
+        let stdout = child.stdout.take().unwrap();
+        let (tx, rx) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let mut line = String::new();
+            let read = std::io::BufReader::new(stdout).read_line(&mut line);
+            let _ = tx.send(read.map(|_| line));
+        });
+        let line = match rx.recv_timeout(deadline) {
+            Ok(Ok(line)) => line,
+            Ok(Err(e)) => {
+                let _ = child.kill();
+                return Err(format!("{name}: cannot read its first line: {e}"));
+            }
+            Err(_) => {
+                let _ = child.kill();
+                let _ = child.wait();
+                return Err(format!(
+                    "{name} did not say where it listens within {:.1} s",
+                    deadline.as_secs_f64()
+                ));
+            }
+        };
+        match line.trim().strip_prefix("listening on ") {
+            Some(url) => Ok(Server {
+                child,
+                url: url.to_string(),
+            }),
+            None => {
+                let _ = child.kill();
+                let _ = child.wait();
+                Err(format!("{name} did not start: {line:?}"))
+            }
+        }
     }
+}
+
+/// The servers' Python (`make setup` makes it).
+pub fn python() -> std::path::PathBuf {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let python = root.join(".deps/servers/bin/python");
+    assert!(
+        python.exists(),
+        "{} is missing: run `make setup`",
+        python.display()
+    );
+    python
 }
 
 impl Drop for Server {
