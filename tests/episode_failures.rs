@@ -159,3 +159,65 @@ fn the_journal_has_each_episode_before_the_next_starts() {
     assert!((ci[1].as_f64().unwrap() - 0.5615).abs() < 1e-3, "{ci}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// An unstable simulation through the real episode loop and evaluation run: a task stepped at a
+/// timestep its contacts and actuators cannot take (50 ms: the arm's position servos overshoot
+/// and the accelerations blow up) ends each episode as `unstable` with the time it happened, in
+/// the journal and the results, and the run goes on to its next episode.
+#[test]
+fn an_unstable_simulation_is_an_unstable_episode_in_the_results() {
+    let mut t = task();
+    t.physics.timestep_s = 0.05;
+    t.physics.substeps = 1;
+    let dir = common::scratch("unstable").join("out");
+    let opts = scoring::eval::EvalOptions {
+        policy: scoring::policies::PolicySpec::Expert,
+        episodes: 2,
+        seed: 0,
+        out: Some(dir.clone()),
+        ..Default::default()
+    };
+    let report = scoring::evaluate(&t, &opts, |_| {}).unwrap();
+    assert_eq!(report.episodes.len(), 2);
+    for e in &report.episodes {
+        assert_eq!(e.outcome, scoring::Outcome::Unstable, "{e:?}");
+        assert!(!e.success && e.verdict.score == 0.0);
+        let error = e.error.as_deref().unwrap();
+        assert!(
+            error.contains("simulation became unstable at t="),
+            "{error}"
+        );
+        // MuJoCo does not silently reset the state and carry on: the episode ends where it
+        // blew up, and says when.
+        assert!(e.control_steps > 0, "{e:?}");
+        let ran = e.control_steps as f64 * t.physics.timestep_s * t.physics.substeps as f64;
+        assert!(
+            (e.sim_time_s - ran).abs() < 0.051,
+            "{} s after {ran} s of steps",
+            e.sim_time_s
+        );
+        let at: f64 = error
+            .split("at t=")
+            .nth(1)
+            .and_then(|s| s.split(' ').next())
+            .and_then(|s| s.parse().ok())
+            .unwrap();
+        assert!(
+            (at - e.sim_time_s).abs() < 0.051,
+            "{at} vs {}",
+            e.sim_time_s
+        );
+    }
+    let results: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join(format!("{}.results.json", t.id))).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(
+        results["summary"]["outcomes"],
+        serde_json::json!({"unstable": 2})
+    );
+    let journal = common::journal(&dir, &t.id);
+    assert_eq!(journal.len(), 2);
+    assert!(journal.iter().all(|e| e["outcome"] == "unstable"));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -233,7 +233,7 @@ pub fn scene_xml(task: &Task, placements: &[Pose], detail: Detail) -> Result<Str
         r#"<mujoco model="autobio:{id}">
   <compiler angle="radian" autolimits="true"/>
   <option timestep="{dt}" integrator="implicitfast" cone="elliptic" impratio="10" noslip_iterations="2" sdf_iterations="3" sdf_initpoints="8">
-    <flag multiccd="enable"/>
+    <flag multiccd="enable" autoreset="disable"/>
   </option>
   <visual>
     <global offwidth="640" offheight="480"/>
