@@ -632,6 +632,41 @@ fn lower_params(
             // Reported by the parser.
             ParamDomain::Choice(values) if values.is_empty() => continue,
             ParamDomain::Choice(values) => {
+                // One type per domain: numbers (integers and decimals) or strings or booleans.
+                // The first value sets it; a value of another type is the mistake, reported
+                // where it is written, not where the parameter is later used.
+                let class = |v: &Scalar| match v {
+                    Scalar::Int(_) | Scalar::Float(_) => ("a number", "numbers"),
+                    Scalar::Str(_) => ("a string", "strings"),
+                    Scalar::Bool(_) => ("a boolean", "booleans"),
+                };
+                let first = class(&values[0].value);
+                let mut mixed = false;
+                for v in &values[1..] {
+                    let this = class(&v.value);
+                    if this != first {
+                        cx.err(
+                            Code::E0004,
+                            v.span,
+                            format!(
+                                "`{}`'s choices are {}, but `{}` is {}",
+                                param.name.value,
+                                first.1,
+                                v.value.text(),
+                                this.0
+                            ),
+                            Some(format!(
+                                "every value of one `choice` has the same type: write `{}` as {}, or quote every value",
+                                v.value.text(),
+                                first.0
+                            )),
+                        );
+                        mixed = true;
+                    }
+                }
+                if mixed {
+                    continue;
+                }
                 let mut seen = BTreeSet::new();
                 for v in values {
                     if !seen.insert(v.value.text()) {
