@@ -172,32 +172,70 @@ fn fixed_camera(cx: &mut Cx, c: &dsl::ast::Camera) -> Option<CameraMount> {
 const ROOM: f64 = 5.0;
 /// Longest randomisation offset in the plane that still keeps an item on a bench, in metres.
 const BENCH_OFFSET: f64 = 1.0;
+/// How far past the bench's edge an item may stand and still count as on it (m): a rack
+/// overhanging the edge, an instrument's footprint.
+const ITEM_MARGIN: f64 = 0.3;
 /// Longest time limit that is not a unit slip, in seconds: a day.
 const LONGEST_TIME_LIMIT: f64 = 86_400.0;
 
 /// Warnings for values that parse and type-check but are almost certainly mistakes.
 fn implausible(cx: &mut Cx, p: &Protocol) {
+    // Where each robot stands and how far it reaches, for the labware poses below.
+    let arms: Vec<([f64; 3], f64)> = p
+        .robots
+        .iter()
+        .filter_map(|r| {
+            let model = robots::model(&r.model.as_ref()?.value)?;
+            Some((r.base.pos.as_ref()?.value, model.reach))
+        })
+        .collect();
+    let within_reach = |q: [f64; 3]| {
+        arms.iter().any(|(b, reach)| {
+            ((q[0] - b[0]).powi(2) + (q[1] - b[1]).powi(2) + (q[2] - b[2]).powi(2)).sqrt() <= *reach
+        })
+    };
+    let in_room =
+        |[x, y, z]: [f64; 3]| x.abs() <= ROOM && y.abs() <= ROOM && (-1.0..=ROOM).contains(&z);
     let poses = p
         .robots
         .iter()
-        .map(|r| (&r.name, &r.base))
-        .chain(p.labware.iter().map(|l| (&l.name, &l.pose)));
-    for (name, pose) in poses {
+        .map(|r| (&r.name, &r.base, true))
+        .chain(p.labware.iter().map(|l| (&l.name, &l.pose, false)));
+    for (name, pose, robot) in poses {
         let Some(pos) = &pose.pos else { continue };
         let [x, y, z] = pos.value;
-        if x.abs() > ROOM || y.abs() > ROOM || !(-1.0..=ROOM).contains(&z) {
-            cx.push(
-                Diagnostic::new(
-                    Code::W0003,
-                    pos.span,
-                    format!(
-                        "`{}` is placed at ({x}, {y}, {z}) m, metres away from the bench",
-                        name.value
-                    ),
-                )
-                .with_hint("`pos_m` is in metres; write millimetres as `pos_mm = [..]`"),
-            );
+        // A robot may stand anywhere in the room; an item must stand where a task can use it:
+        // over the bench, or within a robot's reach (on a riser beside it).
+        let usable = in_room(pos.value)
+            && (robot
+                || crate::bench::over_bench(x, y, ITEM_MARGIN)
+                || arms.is_empty()
+                || within_reach(pos.value));
+        if usable {
+            continue;
         }
+        let metres = [x / 1000.0, y / 1000.0, z / 1000.0];
+        let hint = if !in_room(pos.value) && in_room(metres) {
+            format!(
+                "`pos_m` is in metres; this reads as millimetres: write `pos_mm = [{x}, {y}, {z}]` or `pos_m = [{}, {}, {}]`",
+                metres[0], metres[1], metres[2]
+            )
+        } else {
+            "`pos_m` is in metres; place it over the bench (1.8 x 1.3 m about the origin, its top at 0.824 m) or within a robot's reach".to_string()
+        };
+        let what = if in_room(pos.value) {
+            "off the bench and out of every robot's reach"
+        } else {
+            "metres away from the bench"
+        };
+        cx.push(
+            Diagnostic::new(
+                Code::E0024,
+                pos.span,
+                format!("`{}` is placed at ({x}, {y}, {z}) m, {what}", name.value),
+            )
+            .with_hint(hint),
+        );
     }
     for r in &p.randomise {
         for item in &r.items {

@@ -10,6 +10,7 @@
 //! [`check_file`] is given and a chain's stage files, through [`stage_files`] (whose rules confine
 //! a chain to its protocol root) or a loader the caller passes.
 
+pub mod bench;
 mod chain;
 mod check;
 pub mod describe;

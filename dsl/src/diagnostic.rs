@@ -74,6 +74,8 @@ pub enum Code {
     E0022,
     /// An unknown placeholder.
     E0023,
+    /// A pose off the bench and out of every robot's reach.
+    E0024,
     /// A success predicate that cannot be read.
     E0030,
     /// A step whose precondition does not hold.
@@ -124,6 +126,7 @@ impl Code {
             Code::E0021 => "E0021",
             Code::E0022 => "E0022",
             Code::E0023 => "E0023",
+            Code::E0024 => "E0024",
             Code::E0030 => "E0030",
             Code::E0031 => "E0031",
             Code::E0032 => "E0032",
@@ -139,7 +142,7 @@ impl Code {
         }
     }
 
-    pub const ALL: [Code; 33] = [
+    pub const ALL: [Code; 34] = [
         Code::E0001,
         Code::E0002,
         Code::E0003,
@@ -161,6 +164,7 @@ impl Code {
         Code::E0021,
         Code::E0022,
         Code::E0023,
+        Code::E0024,
         Code::E0030,
         Code::E0031,
         Code::E0032,
@@ -205,6 +209,7 @@ impl Code {
             Code::E0021 => "a value outside its allowed range",
             Code::E0022 => "a parameter with no usable domain",
             Code::E0023 => "an unknown placeholder",
+            Code::E0024 => "a pose off the bench and out of every robot's reach",
             Code::E0030 => "a success predicate that cannot be read",
             Code::E0031 => "a step whose precondition does not hold",
             Code::E0032 => "a missing or unknown primitive argument",
@@ -284,6 +289,9 @@ impl Code {
             Code::E0023 => {
                 "A `{name}` placeholder in an instruction, step argument, location or predicate names no\nparameter declared under `[params]` (or one declared after the parameter that uses it)."
             }
+            Code::E0024 => {
+                "A labware pose that is neither over the bench nor within any robot's reach, or any pose\nhundreds of metres away: no task can use it, and it is almost always millimetres written\nunder `pos_m` (write `pos_mm = [..]`, or the value in metres). Over the bench, or within\na robot's reach (an item on a riser beside its arm), a pose is fine."
+            }
             Code::E0030 => {
                 "A success predicate must be one of the forms in docs/protocol-language.md, e.g.\n\"cycler.lid is closed\", \"tube in rack.{slot}\", \"tube.volume = 200 µL\",\n\"mixer.speed = {rpm} rpm\", \"arm touches tube\", \"cycler.lid in [-1.95, -1.85] rad\"; the names,\nparts and states must exist for the labware kind."
             }
@@ -309,7 +317,7 @@ impl Code {
                 "The parameters have too many combinations to trace them all; the proof traced a deterministic\nsample of them. Narrow the domains for an exhaustive proof."
             }
             Code::W0003 => {
-                "A pose lies metres away from the bench (the world origin is the bench's centre). Usually\nmillimetres written under a metre key: `pos_m = [300, 0, 824]` means 300 m. Write `pos_mm`, or\nthe value in metres."
+                "A randomisation moves an item metres across the bench (`xy` over 1 m; the world origin is\nthe bench's centre). Usually millimetres written under a metre key: `xy_m = 20` means 20 m.\nWrite `xy_mm`, or the value in metres. A pose itself that far away is an error, E0024."
             }
             Code::W0004 => {
                 "A time limit shorter than one control period (20 ms) ends every episode before the robot\nacts; one longer than a day is almost always a unit slip (`ms` for `s`, `min` for `s`)."

@@ -85,6 +85,9 @@ pub struct RobotModel {
     /// The root body to attach under the mount.
     pub root_body: &'static str,
     pub home: &'static [f64],
+    /// How far from its base the arm's tool can reach (m): a pose farther than this from every
+    /// robot, and off the bench, is a unit mistake, not a place to work.
+    pub reach: f64,
     pub expert_limits: ExpertLimits,
     pub ik: IkMethod,
     /// Writes the robot's MJCF from the installed packages under `deps` (idempotent) and returns

@@ -51,6 +51,8 @@ pub const MODEL: RobotModel = RobotModel {
     home: &[
         0.0, -FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2,
     ],
+    // The UR5e's rated reach (850 mm) plus the 2F-85's length to its fingertips.
+    reach: 1.0,
     // As the upstream thermal-cycler expert.
     expert_limits: ExpertLimits {
         vmax: 1.5,

@@ -136,11 +136,7 @@ const ROOM: &str = r#"    <light name="ceiling" pos="0 0 3" dir="0 0 -1" directi
     <geom name="room/ceiling_panel" type="box" size="0.6 0.3 0.01" pos="0 -0.4 2.95" rgba="1 1 0.97 1" contype="0" conaffinity="0"/>
 "#;
 
-/// The bench's top (its half extents and height): everything of a task stands on it. A 1.8 m lab
-/// bench, so that the 5910 (0.73 m a side) stands on it wherever its tasks place it (upstream's
-/// 0.82 m table left half of it in the air).
-const BENCH_HALF: [f64; 2] = [0.9, 0.652];
-const BENCH_TOP: f64 = 0.824;
+use compiler::bench::{BENCH_HALF, BENCH_TOP};
 /// A robot base this far above what it stands over gets a pedestal (m).
 const PEDESTAL_FROM: f64 = 0.01;
 const PEDESTAL_RADIUS: f64 = 0.09;
