@@ -202,3 +202,27 @@ fn a_labware_joint_offset_takes_its_own_unit_and_is_refused_where_it_cannot_appl
         assert!(codes.iter().any(|c| c == code), "{line}: {codes:?}");
     }
 }
+
+/// The slots of a lidded instrument are reachable only while its lid is open: taking a tube out
+/// of a locked centrifuge's rotor is E0031 at the step (tests/corpus/faulty has it), and the same
+/// plan with `unlock` and `open_lid` first proves clean.
+#[test]
+fn opening_the_lid_first_makes_the_rotor_reachable() {
+    let faulty = "tests/corpus/faulty/pick_from_a_locked_centrifuge.toml";
+    let text = std::fs::read_to_string(faulty).unwrap();
+    let (task, diags) = compiler::compile_source(&text, faulty);
+    assert!(task.is_none());
+    let d = diags.iter().find(|d| d.code == dsl::Code::E0031).unwrap();
+    assert!(d.message.contains("whose lid is locked"), "{}", d.message);
+    let opened = text.replacen(
+        "[[steps]]\ndo = \"pick\"\non = \"placed\"",
+        "[[steps]]\ndo = \"unlock\"\non = \"centrifuge\"\nwith = \"arm\"\n\n[[steps]]\ndo = \"open_lid\"\non = \"centrifuge\"\nwith = \"arm\"\n\n[[steps]]\ndo = \"pick\"\non = \"placed\"",
+        1,
+    );
+    assert_ne!(opened, text);
+    let (task, diags) = compiler::compile_source(&opened, faulty);
+    assert!(
+        task.is_some() && !diags.iter().any(|d| d.is_error()),
+        "{diags:#?}"
+    );
+}

@@ -313,7 +313,53 @@ pub(super) fn stabilised(w: &World, tube: &str, robot: &str) -> bool {
 
 /// Runs one step on the world: checks its preconditions and applies its effects.
 pub fn apply(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
+    slots_reachable(w, env, step)?;
     (step.primitive.effect)(w, env, step)
+}
+
+/// The slots of an instrument with a lid (a centrifuge's rotor) can be reached only while the lid
+/// is open: a step that takes its `on` item out of such a slot, or puts something into one
+/// (`to`), needs that lid open. For every primitive and every lidded kind, so no primitive can
+/// forget it.
+fn slots_reachable(w: &World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
+    let mut reached: Vec<(String, &'static str)> = Vec::new();
+    if let Some(on) = step.args.get("on")
+        && let Some(Location::Slot { holder, .. }) = w.locations.get(on)
+    {
+        reached.push((holder.clone(), "on"));
+    }
+    if let Some(to) = step.args.get("to")
+        && let Ok((holder, _, _)) = resolve_location(env, to)
+    {
+        reached.push((holder, "to"));
+    }
+    for (holder, arg) in reached {
+        let Some(kind) = env.kinds.get(holder.as_str()) else {
+            continue;
+        };
+        if !kind.parts.iter().any(|p| p.part == "lid") {
+            continue;
+        }
+        let state = w.part(&holder, "lid").unwrap_or("closed");
+        if state == "open" {
+            continue;
+        }
+        let opens = if state == "locked" {
+            format!("add `unlock` and then `open_lid` on `{holder}` before this step")
+        } else {
+            format!("add an `open_lid` step on `{holder}` before this step")
+        };
+        return Err(Violation {
+            code: Code::E0031,
+            arg: Some(arg),
+            message: format!(
+                "`{}` reaches into a slot of `{holder}`, whose lid is {state}: its slots can be reached only while the lid is open",
+                step.primitive.name
+            ),
+            hint: Some(opens),
+        });
+    }
+    Ok(())
 }
 
 /// The dimension of a panel value from its unit symbol.
