@@ -97,6 +97,11 @@ pub(crate) fn lower<'a>(cx: &mut Cx, p: &'a Protocol, file: &str) -> Option<Lowe
         plan: steps.iter().map(|s| s.planned.clone()).collect(),
         success: predicates.iter().map(|p| p.predicate.clone()).collect(),
         scoring,
+        settle_s: p
+            .success
+            .settle
+            .as_ref()
+            .map_or(DEFAULT_SETTLE_S, |s| s.value),
     };
     Some(Lowered {
         id,

@@ -156,7 +156,11 @@ pub fn describe(task: &Task) -> String {
                 }
             );
         }
-        let _ = writeln!(w, "  checks:");
+        let _ = writeln!(
+            w,
+            "  checks (every one held for {} s):",
+            format_number(s.settle_s)
+        );
         for p in &s.success {
             let tol = match &p.check {
                 Check::State {

@@ -44,7 +44,17 @@ pub struct Stage {
     pub plan: Vec<PlannedStep>,
     pub success: Vec<Predicate>,
     pub scoring: Scoring,
+    /// How long every predicate must go on holding before the stage counts as done (s):
+    /// success is a state, not a moment (a lid flung through "open" and falling back is not
+    /// open). Tasks compiled before it existed read as 0.
+    #[serde(default)]
+    pub settle_s: f64,
 }
+
+/// The settle time a protocol gets when its `[success]` names none (s): a lid or a tube that
+/// only passes through its target (a swing through the band lasts under 0.2 s at the speeds
+/// seen) does not count, and an episode that succeeds lasts 25 control steps longer.
+pub const DEFAULT_SETTLE_S: f64 = 0.5;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]

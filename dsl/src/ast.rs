@@ -202,6 +202,9 @@ pub struct Success {
     pub scoring: Option<Spanned<String>>,
     /// One weight per predicate, for progress scoring.
     pub weights: Option<Spanned<Vec<f64>>>,
+    /// How long every predicate must go on holding before the stage counts as done (s).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub settle: Option<Spanned<f64>>,
     pub span: Span,
 }
 

@@ -102,7 +102,7 @@ const ROBOT_KEYS: &[&str] = &["model", "base"];
 const LABWARE_KEYS: &[&str] = &["kind", "pose", "at", "state"];
 const POSE_KEYS: &[&str] = &["pos", "yaw"];
 const RANDOM_KEYS: &[&str] = &["joints", "xy", "yaw"];
-const SUCCESS_KEYS: &[&str] = &["all", "scoring", "weights"];
+const SUCCESS_KEYS: &[&str] = &["all", "scoring", "weights", "settle"];
 const CAMERA_KEYS: &[&str] = &["pos", "look_at", "fovy"];
 const SCORINGS: &[&str] = &["binary", "progress"];
 const LEVELS: &[&str] = &["easy", "medium", "hard"];
@@ -1246,7 +1246,21 @@ impl Parser {
             return out;
         };
         for (key, value) in self.settings(t) {
-            match key.get_ref().as_ref() {
+            let k = key.get_ref().as_ref();
+            match split_unit(k).0 {
+                "settle" => {
+                    out.settle = self.quantity(k, value, Dimension::Time);
+                    if let Some(s) = &out.settle
+                        && !(0.0..=60.0).contains(&s.value)
+                    {
+                        self.err(
+                            Code::E0021,
+                            s.span,
+                            format!("`settle` of {} s: it must be between 0 and 60 s", s.value),
+                            Some("how long the checks must go on holding: \"0.5 s\"".into()),
+                        );
+                    }
+                }
                 "all" => match value.get_ref() {
                     DeValue::Array(items) => {
                         for item in items.iter() {

@@ -271,6 +271,19 @@ fn stage_verdict(
     }
 }
 
+/// A stage verdict whose predicates may hold but have not held for the settle time yet: not a
+/// success, and under binary scoring worth nothing yet.
+fn unsettled(mut v: StageVerdict, scoring: Scoring) -> StageVerdict {
+    if v.success {
+        v.success = false;
+        v.completed_at_s = None;
+        if scoring == Scoring::Binary {
+            v.score = 0.0;
+        }
+    }
+    v
+}
+
 /// Follows an episode through its stages: the current stage advances when all its predicates hold;
 /// the episode is over when the last stage completes or the current one runs out of time.
 ///
@@ -281,6 +294,8 @@ pub struct Judge {
     stage: usize,
     stage_start_s: f64,
     stage_start: Vec<LabwareState>,
+    /// Since when every predicate of the current stage has held, while it settles.
+    holding_since: Option<f64>,
     done: Vec<StageVerdict>,
     last: Option<StageVerdict>,
 }
@@ -294,6 +309,7 @@ impl Judge {
             stage: 0,
             stage_start_s: 0.0,
             stage_start: initial.to_vec(),
+            holding_since: None,
             done: Vec::new(),
             last: None,
         }
@@ -304,7 +320,9 @@ impl Judge {
         self.stage
     }
 
-    /// Feeds the state at `time`; returns true when the episode is over.
+    /// Feeds the state at `time`; returns true when the episode is over. A stage is done when
+    /// every predicate has gone on holding for its settle time (`Stage::settle_s`); until then
+    /// it is not a success, and a predicate that stops holding starts the wait again.
     pub fn update(&mut self, time: f64, states: &[LabwareState]) -> bool {
         // Whole microseconds: a recording stores nanosecond timestamps, and a replay must agree.
         let time = (time * 1e6).round() / 1e6;
@@ -317,11 +335,20 @@ impl Judge {
                 &self.stage_start,
                 Some(time),
             );
-            if !v.success {
+            let settle = self.task.stages[self.stage].settle_s;
+            let settled = v.success && {
+                let since = *self.holding_since.get_or_insert(time);
+                time - since >= settle - 1e-9
+            };
+            if !settled {
+                if !v.success {
+                    self.holding_since = None;
+                }
                 let limit = self.task.stages[self.stage].time_limit_s;
-                self.last = Some(v);
+                self.last = Some(unsettled(v, self.task.stages[self.stage].scoring));
                 return time - self.stage_start_s >= limit - 1e-9;
             }
+            self.holding_since = None;
             self.done.push(v);
             self.last = None;
             self.stage += 1;
