@@ -47,7 +47,9 @@ fn judged_with_lid(lid: f64) -> (bool, f64) {
     ep.data.forward();
     let states = ep.labware_state();
     let mut judge = Judge::new(&task, &instance.params, &states);
+    // Held there for the stage's settle time: success is a state, not a moment.
     judge.update(ep.time(), &states);
+    judge.update(ep.time() + task.stages[0].settle_s, &states);
     let v = judge.verdict();
     (v.success, v.predicates()[0].value)
 }

@@ -98,7 +98,9 @@ fn judged(path: &str, lid: f64, locked: bool) -> (bool, Vec<bool>) {
         .logic
         .insert("locked".into(), f64::from(u8::from(locked)));
     let mut judge = Judge::new(&task, &instance.params, &start);
+    // Held there for the stage's settle time: success is a state, not a moment.
     judge.update(0.02, &now);
+    judge.update(0.02 + task.stages[0].settle_s, &now);
     let v = judge.verdict();
     (v.success, v.predicates().iter().map(|p| p.holds).collect())
 }
@@ -238,7 +240,9 @@ fn tube_judged(slot: &str, above: f64) -> bool {
     let mut now = start.clone();
     now[tube].pose = labware::frame::translated_local(&seat, [0.0, 0.0, above]);
     let mut judge = Judge::new(&task, &instance.params, &start);
+    // Held there for the stage's settle time: success is a state, not a moment.
     judge.update(0.02, &now);
+    judge.update(0.02 + task.stages[0].settle_s, &now);
     judge.verdict().success
 }
 

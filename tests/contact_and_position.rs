@@ -71,13 +71,16 @@ fn near_measures_the_distance_from_the_live_pose() {
     );
     let params = recorded.sample(5).params;
     let judge = |point: nalgebra::Vector3<f64>| {
-        let task = transfer(
+        let mut task = transfer(
             &format!(
                 "tube near [{:.5}, {:.5}, {:.5}] m",
                 point.x, point.y, point.z
             ),
             false,
         );
+        // The moment it is near counts here: the recording ends as soon as the tube has
+        // settled in its slot, before it has stood still a settle time near its last pose.
+        task.stages[0].settle_s = 0.0;
         scoring::Judge::replay(&task, &params, &rec.labware_series)
     };
     // Near where it ends: not at the start, only once carried there.

@@ -78,7 +78,9 @@ fn every_tube_kind_stands_capped_in_its_rack() {
         assert_eq!(tube_model.readout(&end[ti])["cap"], "on", "{tube}");
         // The judge: not in A2, where the task wants it; in B1, where it stands.
         let mut judge = scoring::Judge::new(&task, &instance.params, &start);
-        judge.update(ep.time(), &end);
+        // The end state judged as a state: reached at once and held for the settle time.
+        judge.update(0.02, &end);
+        judge.update(0.02 + task.stages[0].settle_s, &end);
         let v = judge.verdict();
         let p = &v.predicates()[0];
         assert!(!v.success && !p.holds && p.value > 0.01, "{tube}: {p:?}");
@@ -90,8 +92,12 @@ fn every_tube_kind_stands_capped_in_its_rack() {
         }
         let mut judge = scoring::Judge::new(&at_b1, &instance.params, &start);
         assert!(
-            judge.update(ep.time(), &end),
-            "{tube}: the B1 check ends the stage"
+            !judge.update(0.02, &end),
+            "{tube}: a moment in B1 is not yet a success"
+        );
+        assert!(
+            judge.update(0.02 + at_b1.stages[0].settle_s, &end),
+            "{tube}: the B1 check held for the settle time ends the stage"
         );
         assert!(judge.verdict().success, "{tube}: {:?}", judge.verdict());
     }

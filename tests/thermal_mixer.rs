@@ -44,8 +44,10 @@ fn judged(seed: u64, shown: [f64; 3]) -> scoring::Verdict {
     for (param, v) in ["speed", "temperature", "time"].iter().zip(shown) {
         now[0].logic.insert(param.to_string(), v);
     }
+    // Shown for the stage's settle time: success is a state, not a moment.
     let mut judge = Judge::new(&task, &instance.params, &start);
     judge.update(0.02, &now);
+    judge.update(0.02 + task.stages[0].settle_s, &now);
     judge.verdict()
 }
 
