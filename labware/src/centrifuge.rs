@@ -14,7 +14,7 @@
 //! side), +z up. Joint conventions: lid 0 = open, `lid_closed` (negative) = closed; rotor angle
 //! about +z.
 
-use crate::frame::{Pose, Rot, Vec3, axis_angle, pose, translation, x_turn};
+use crate::frame::{Pose, Vec3, axis_angle, pose, translation, x_turn};
 use crate::lid::{Lid, LidNames};
 use crate::mjcf::{Fragment, box_inertia, pose_attrs, rgba, v3};
 use crate::model::{
@@ -196,24 +196,20 @@ impl Params {
     }
 
     /// Orientation of the lid body at joint angle 0: the closed geometry turned open about +x.
-    fn lid_rest(&self) -> Rot {
-        self.lid().rest()
-    }
-
     /// The lid this instrument composes ([`crate::lid`]), from its parameters.
     pub fn lid(&self) -> Lid {
-        Lid {
-            open: self.lid_open,
-            closed: self.lid_closed,
-            open_tolerance: self.open_tolerance,
-            closed_tolerance: self.closed_tolerance,
-        }
+        Lid::new(
+            self.lid_open,
+            self.lid_closed,
+            self.open_tolerance,
+            self.closed_tolerance,
+        )
     }
 
     /// The lid's frame at a lid angle (at the hinge; x along it, y towards the front edge, z the
     /// lid's outward normal), in the frame `placement` is given in.
     fn lid_frame(&self, placement: &Pose, lid: f64) -> Pose {
-        placement * pose(self.hinge_point(), self.lid_rest() * x_turn(lid))
+        placement * pose(self.hinge_point(), self.lid().rest() * x_turn(lid))
     }
 
     /// The grip bar's centre for a lid angle, in the frame `placement` is given in.
@@ -579,7 +575,7 @@ impl Instrument for Params {
             sy = b[1] + 0.001,
             stz = 0.03,
             lid = n.lid.body,
-            lidframe = pose_attrs(&pose(self.hinge_point(), self.lid_rest())),
+            lidframe = pose_attrs(&pose(self.hinge_point(), self.lid().rest())),
             lidj = n.lid.joint,
             lidd = self.lid_damping,
             lidk = self.lid_stiffness,

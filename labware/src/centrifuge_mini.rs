@@ -6,7 +6,7 @@
 //! Frame of the instrument: origin at the centre of the footprint, +y the front (the tab's side),
 //! +z up. Joint conventions: lid 0 = open (98° up, past upright), -1.712 rad = closed.
 
-use crate::frame::{Pose, Rot, Vec3, pose, translation, x_turn};
+use crate::frame::{Pose, Vec3, pose, translation, x_turn};
 use crate::lid::{Lid, LidNames};
 use crate::mjcf::{Fragment, box_inertia, pose_attrs, v3};
 use crate::model::{Affordance, Instrument, LabwareState, Logic, Measure, Reset, Symmetry};
@@ -74,24 +74,20 @@ impl Names {
 
 impl Params {
     /// Orientation of the lid body at joint angle 0: the closed geometry turned open about +x.
-    fn lid_rest(&self) -> Rot {
-        self.lid().rest()
-    }
-
     /// The lid this instrument composes ([`crate::lid`]), from its parameters.
     pub fn lid(&self) -> Lid {
-        Lid {
-            open: self.lid_open,
-            closed: self.lid_closed,
-            open_tolerance: self.open_tolerance,
-            closed_tolerance: self.closed_tolerance,
-        }
+        Lid::new(
+            self.lid_open,
+            self.lid_closed,
+            self.open_tolerance,
+            self.closed_tolerance,
+        )
     }
 
     /// The tab's centre for a lid angle, in the frame `placement` is given in. Axes: x along the
     /// hinge, y away from the hinge, z the lid's outward normal.
     pub fn tab_pose(&self, placement: &Pose, lid: f64) -> Pose {
-        let lid_frame = pose(self.hinge, self.lid_rest() * x_turn(lid));
+        let lid_frame = pose(self.hinge, self.lid().rest() * x_turn(lid));
         placement
             * lid_frame
             * translation([
@@ -182,7 +178,7 @@ impl Instrument for Params {
             wy = b[1] + 0.004,
             wz = b[2] + 0.004,
             lid = n.lid.body,
-            lidframe = pose_attrs(&pose(self.hinge, self.lid_rest())),
+            lidframe = pose_attrs(&pose(self.hinge, self.lid().rest())),
             lidj = n.lid.joint,
             lidd = self.lid_damping,
             lidc = v3(lid_c),

@@ -48,6 +48,15 @@ pub struct Lid {
 }
 
 impl Lid {
+    pub const fn new(open: f64, closed: f64, open_tolerance: f64, closed_tolerance: f64) -> Lid {
+        Lid {
+            open,
+            closed,
+            open_tolerance,
+            closed_tolerance,
+        }
+    }
+
     /// The lid body's orientation at joint angle 0: the closed geometry turned open about +x.
     pub fn rest(&self) -> Rot {
         x_turn(self.open - self.closed)

@@ -7,7 +7,7 @@
 //! the lid opens from), +z up. Joint conventions follow the upstream task: lid 0 = open,
 //! -1.9 rad = closed; lever 0 = raised, -0.94 rad = pressed.
 
-use crate::frame::{Pose, Rot, Vec3, pose, translation, x_turn};
+use crate::frame::{Pose, Vec3, pose, translation, x_turn};
 use crate::lid::{Lid, LidNames};
 use crate::mjcf::{Fragment, box_inertia, pose_attrs, v3};
 use crate::model::{
@@ -97,24 +97,20 @@ impl Names {
 
 impl Params {
     /// Orientation of the lid body at joint angle 0: the closed geometry turned open about +x.
-    fn lid_rest(&self) -> Rot {
-        self.lid().rest()
-    }
-
     /// The lid this instrument composes ([`crate::lid`]), from its parameters.
     pub fn lid(&self) -> Lid {
-        Lid {
-            open: self.lid_open,
-            closed: self.lid_closed,
-            open_tolerance: self.open_tolerance,
-            closed_tolerance: self.closed_tolerance,
-        }
+        Lid::new(
+            self.lid_open,
+            self.lid_closed,
+            self.open_tolerance,
+            self.closed_tolerance,
+        )
     }
 
     /// Pose of the grip bar's centre for given joint angles, in the frame `placement` is given in.
     /// Axes: x along the bar, y pointing away from the lever pivot, z = x × y.
     pub fn grip_pose(&self, placement: &Pose, lid: f64, lever: f64) -> Pose {
-        let lid_frame = pose(self.hinge, self.lid_rest() * x_turn(lid));
+        let lid_frame = pose(self.hinge, self.lid().rest() * x_turn(lid));
         let lever_frame = pose([0.0, self.lid_depth, 0.0], x_turn(lever));
         placement * lid_frame * lever_frame * translation([0.0, self.lever_arm, 0.0])
     }
@@ -229,7 +225,7 @@ impl Instrument for Params {
             blockz = 2.0 * b[2] + 0.004,
             panely = b[1] + 0.002,
             lid = n.lid.body,
-            lidframe = pose_attrs(&pose(self.hinge, self.lid_rest())),
+            lidframe = pose_attrs(&pose(self.hinge, self.lid().rest())),
             lidj = n.lid.joint,
             lidd = self.lid_damping,
             lidc = v3(lid_rel_hinge),
