@@ -176,3 +176,42 @@ fn an_episode_whose_policy_cannot_be_made_fails_alone() {
     assert_eq!(report.summary.episodes, 2);
     assert_eq!(report.summary.success_rate, 0.5);
 }
+
+/// A journal whose last line a crash cut short resumes from the last whole line (the fragment is
+/// dropped and its episode run again); a whole line that does not parse is not silently dropped:
+/// resuming refuses, naming the line, and leaves the journal as it was.
+#[test]
+fn a_cut_short_journal_resumes_and_a_garbled_one_is_refused() {
+    let dir = scratch("cut-journal");
+    let journal = dir.join("thermal_cycler.close_lid.journal.jsonl");
+    let task = common::compile(CLOSE);
+    scoring::evaluate(&task, &opts(&dir, "hold", 3, false), |_| {}).unwrap();
+    let whole = std::fs::read_to_string(&journal).unwrap();
+    let lines: Vec<&str> = whole.lines().collect();
+    assert_eq!(lines.len(), 3);
+    // Two whole lines and half of the third, as a crash mid-write leaves it.
+    let cut = format!(
+        "{}\n{}\n{}",
+        lines[0],
+        lines[1],
+        &lines[2][..lines[2].len() / 2]
+    );
+    std::fs::write(&journal, &cut).unwrap();
+    let report = scoring::evaluate(&task, &opts(&dir, "hold", 3, true), |_| {}).unwrap();
+    assert_eq!(report.episodes.len(), 3);
+    assert_eq!(journal_seeds(&dir), [30, 31, 32]);
+    let resumed = std::fs::read_to_string(&journal).unwrap();
+    assert!(resumed.starts_with(&format!("{}\n{}\n", lines[0], lines[1])));
+    assert_eq!(resumed.lines().count(), 3);
+    assert!(resumed.ends_with('\n'));
+
+    // A whole line that is not an episode result.
+    let garbled = format!("{}\n{{\"not\": \"an episode\"}}\n", lines[0]);
+    std::fs::write(&journal, &garbled).unwrap();
+    let err = match scoring::evaluate(&task, &opts(&dir, "hold", 3, true), |_| {}) {
+        Ok(_) => panic!("a garbled journal was resumed"),
+        Err(e) => e.to_string(),
+    };
+    assert!(err.contains("line 2 is not an episode result"), "{err}");
+    assert_eq!(std::fs::read_to_string(&journal).unwrap(), garbled);
+}
