@@ -136,6 +136,10 @@ struct Orbit {
     /// Largest height change (m) and largest turn of the cup's own heading (rad).
     dz: f64,
     max_turn: f64,
+    /// Diameter of the path a point on the cup's rim travels (m): what a tube held at the rim
+    /// feels. The coupling decides it: a translating cup moves every point on a circle of the
+    /// throw's radius (2t); a cup carried round by the pivot sweeps its rim about the axis.
+    rim_stroke: f64,
 }
 
 fn orbit(drive: &Eccentric, coupled: bool) -> Orbit {
@@ -156,8 +160,9 @@ fn orbit(drive: &Eccentric, coupled: bool) -> Orbit {
         phase_error: 0.0,
         dz: 0.0,
         max_turn: 0.0,
+        rim_stroke: 0.0,
     };
-    let (mut z0, mut phase0) = (None, None);
+    let (mut z0, mut phase0, mut rim0) = (None, None, None);
     let wrap = |a: f64| {
         (a + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI
     };
@@ -181,6 +186,16 @@ fn orbit(drive: &Eccentric, coupled: bool) -> Orbit {
         // The cup's heading: its x axis in the world.
         let xm = data.xmat()[cup];
         o.max_turn = o.max_turn.max(xm[3].atan2(xm[0]).abs());
+        // A point on the rim, on the cup's own x axis; its path's diameter is the largest
+        // distance from where it was when measuring began.
+        let rim = [
+            x + xm[0] * drive.cup_radius,
+            y + xm[3] * drive.cup_radius,
+            z + xm[6] * drive.cup_radius,
+        ];
+        let start = *rim0.get_or_insert(rim);
+        let d = (0..3).map(|i| (rim[i] - start[i]).powi(2)).sum::<f64>().sqrt();
+        o.rim_stroke = o.rim_stroke.max(d);
         o.turns = data.qpos()[0] / std::f64::consts::TAU;
     }
     assert!(data.qpos().iter().all(|q| q.is_finite()));
@@ -195,8 +210,8 @@ fn the_vortex_cup_orbits_without_turning_at_2500_rpm() {
     let o = orbit(&drive, true);
     eprintln!(
         "eccentric: {:.1} rad/s, {:.0} turns, orbit radius {:.7}..{:.7} m, phase error {:.2e} rad, \
-         height change {:.2e} m, cup turned at most {:.2e} rad",
-        o.speed, o.turns, o.r_min, o.r_max, o.phase_error, o.dz, o.max_turn
+         height change {:.2e} m, cup turned at most {:.2e} rad, rim stroke {:.7} m",
+        o.speed, o.turns, o.r_min, o.r_max, o.phase_error, o.dz, o.max_turn, o.rim_stroke
     );
     assert!(
         (o.speed - omega).abs() / omega < 0.02,
@@ -222,16 +237,37 @@ fn the_vortex_cup_orbits_without_turning_at_2500_rpm() {
     );
     assert!(o.dz < um, "the cup moved {} m along the axis", o.dz);
     assert!(o.max_turn < 1e-8, "the cup turned by {} rad", o.max_turn);
+    // What the coupling controls (the figures above follow from the joint layout and hold
+    // uncoupled too): every point of the cup, its rim included, strokes twice the throw.
+    assert!(
+        (o.rim_stroke - 2.0 * drive.throw).abs() < um,
+        "a rim point's path is {} m across, not twice the throw {}",
+        o.rim_stroke,
+        drive.throw
+    );
 }
 
 #[test]
 fn without_the_joint_equality_the_cup_turns_with_the_pivot() {
     // The same check fails on the mechanism it guards: uncoupled, the orbit hinge is free and
     // the cup is carried round by the pivot (a spin, not an orbit).
-    let o = orbit(&Eccentric::default(), false);
+    let drive = Eccentric::default();
+    let o = orbit(&drive, false);
+    eprintln!(
+        "uncoupled: orbit radius {:.7}..{:.7} m, phase error {:.2e} rad, height change {:.2e} m, \
+         cup turned at most {:.2e} rad, rim stroke {:.7} m",
+        o.r_min, o.r_max, o.phase_error, o.dz, o.max_turn, o.rim_stroke
+    );
     assert!(
         o.max_turn > 1.0,
         "the uncoupled cup turned only {} rad",
         o.max_turn
+    );
+    // Its rim is swept round the drive axis: the path is the rim's circle about the axis, not
+    // the throw's.
+    assert!(
+        o.rim_stroke > 2.0 * (drive.cup_radius - drive.throw),
+        "the uncoupled rim's path is only {} m across",
+        o.rim_stroke
     );
 }
