@@ -192,12 +192,13 @@ fn volume_holds_while_the_tube_tilts_and_shakes() {
         disk_checked > 100,
         "{disk_checked} steps with the surface on the wall"
     );
+    // docs/physics.md: the centre 0.11 mm off the axis, the radius R/n_z to 0.014%.
     assert!(
-        worst_centre < 3e-4,
+        worst_centre < 1.5e-4,
         "disk centre {worst_centre} m off the axis"
     );
     assert!(
-        worst_radius < 0.002,
+        worst_radius < 2e-4,
         "disk radius off by {:.3}%",
         100.0 * worst_radius
     );
@@ -225,9 +226,13 @@ fn volume_holds_while_the_tube_tilts_and_shakes() {
         worst_centre,
         100.0 * worst_radius
     );
-    assert!(worst < 0.005, "volume error up to {:.3}%", 100.0 * worst);
+    // docs/physics.md's figure: under 0.03% (measured 0.024%).
+    assert!(worst < 3e-4, "volume error up to {:.4}%", 100.0 * worst);
     assert!(
-        read_recording(&path).is_err(),
+        matches!(
+            read_recording(&path),
+            Err(RecordError::Missing("/labware/state"))
+        ),
         "no labware channel to re-score"
     );
     std::fs::remove_dir_all(&dir).unwrap();

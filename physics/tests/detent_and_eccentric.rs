@@ -194,7 +194,10 @@ fn orbit(drive: &Eccentric, coupled: bool) -> Orbit {
             z + xm[6] * drive.cup_radius,
         ];
         let start = *rim0.get_or_insert(rim);
-        let d = (0..3).map(|i| (rim[i] - start[i]).powi(2)).sum::<f64>().sqrt();
+        let d = (0..3)
+            .map(|i| (rim[i] - start[i]).powi(2))
+            .sum::<f64>()
+            .sqrt();
         o.rim_stroke = o.rim_stroke.max(d);
         o.turns = data.qpos()[0] / std::f64::consts::TAU;
     }
