@@ -1,6 +1,7 @@
 //! Level of detail: the simplified model draws the same scene from far fewer faces, with the same
 //! bodies and geoms, while the simulation keeps the full meshes; frames of the same state at the
-//! two levels are close (PSNR) but not the same; and the image size picks the level.
+//! two levels are close (PSNR) but not the same, over a whole expert episode, at the figures
+//! docs/rendering.md gives; and the image size picks the level.
 
 mod common;
 
@@ -76,6 +77,88 @@ fn simplified_meshes_draw_the_same_scene_from_a_fraction_of_the_faces() {
     }
     // Drawing is repeatable: the same state, the same bytes.
     assert_eq!(lo.render(&ep.data, ep.logic(), &names).unwrap(), b);
+}
+
+/// Mean squared error of two frames' bytes.
+fn mse(a: &[u8], b: &[u8]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (f64::from(*x) - f64::from(*y)).powi(2))
+        .sum::<f64>()
+        / a.len() as f64
+}
+
+fn db(mse: f64) -> f64 {
+    10.0 * (255.0f64 * 255.0 / mse.max(1e-12)).log10()
+}
+
+/// docs/rendering.md's figure: one recorded thermal-cycler expert episode (seed 0), every control
+/// step drawn from the same recorded state at both levels; per camera, PSNR of the mean squared
+/// error over the episode and of the worst frame.
+#[test]
+fn over_an_expert_episode_the_levels_differ_by_the_documented_psnr() {
+    use scoring::replay::{FrameOptions, Recording, frames};
+    let task = compile("protocols/thermal_cycler/close_lid.toml");
+    let dir = common::scratch("lod-episode");
+    let path = dir.join("close_lid.mcap");
+    let opts = scoring::EpisodeOptions {
+        record: Some(path.clone()),
+        ..Default::default()
+    };
+    let result = common::run_with(&task, 0, &opts, |t, s, i| {
+        scoring::policies::make("expert", t, s, i).unwrap()
+    });
+    assert!(result.success, "{:?}", result.error);
+    let rec = Recording::open(&path).unwrap();
+    let draw = |detail| {
+        let mut all = Vec::new();
+        let opts = FrameOptions {
+            size: Some([224, 224]),
+            detail: Some(detail),
+            every: Some(1),
+        };
+        frames(&rec, &opts, |_, _, images| {
+            all.push(images);
+            Ok(())
+        })
+        .unwrap();
+        all
+    };
+    let (full, simple) = (draw(Detail::Full), draw(Detail::Simplified));
+    assert_eq!(full.len(), rec.steps());
+    assert!(full.len() > 200, "{} steps", full.len());
+    // (camera, mean over the episode at least, worst frame at least): measured 35.13 / 33.16 dB
+    // and 30.04 / 27.44 dB over 580 frames (docs/rendering.md).
+    for (c, (camera, mean_db, worst_db)) in [("table_front", 34.8, 33.0), ("arm/wrist", 29.8, 27.3)]
+        .into_iter()
+        .enumerate()
+    {
+        let errors: Vec<f64> = full
+            .iter()
+            .zip(&simple)
+            .map(|(a, b)| {
+                assert_eq!(
+                    (a[c].camera.as_str(), b[c].camera.as_str()),
+                    (camera, camera)
+                );
+                mse(&a[c].rgb, &b[c].rgb)
+            })
+            .collect();
+        let mean = db(errors.iter().sum::<f64>() / errors.len() as f64);
+        let worst = db(errors.iter().copied().fold(0.0, f64::max));
+        let identical = errors.iter().filter(|&&e| e == 0.0).count();
+        eprintln!(
+            "{camera}: PSNR {mean:.2} dB over {} frames, {worst:.2} dB at worst, {identical} identical",
+            errors.len()
+        );
+        assert!(mean >= mean_db, "{camera}: {mean:.2} dB on average");
+        assert!(worst >= worst_db, "{camera}: {worst:.2} dB at worst");
+        assert!(
+            identical < errors.len() / 10,
+            "{camera}: {identical} frames identical at both levels"
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
