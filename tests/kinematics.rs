@@ -2,7 +2,8 @@
 //! the Jacobian the IK uses agrees with finite differences of the TCP pose; and inverse kinematics
 //! round trips over a grid of reachable poses, each solution checked by forward kinematics computed
 //! apart from the solver (a fresh `MjData`, `mj_forward`, the TCP site), within the solver's stated
-//! tolerances (0.2 mm and 2 mrad).
+//! tolerances (0.2 mm and 2 mrad), in position and in orientation (targets turned 0.3 rad about
+//! each of the TCP's axes).
 
 mod common;
 
@@ -18,8 +19,12 @@ fn setup() -> (compiler::Task, std::sync::Arc<runtime::Scene>, Vec<f64>) {
     (task, scene, home)
 }
 
-/// The TCP site's world position at arm angles `q`, by `mj_forward` on a fresh `MjData`.
-fn forward(scene: &runtime::Scene, q: &[f64]) -> nalgebra::Vector3<f64> {
+/// The TCP site's world position and orientation at arm angles `q`, by `mj_forward` on a fresh
+/// `MjData`.
+fn forward_pose(
+    scene: &runtime::Scene,
+    q: &[f64],
+) -> (nalgebra::Vector3<f64>, nalgebra::Rotation3<f64>) {
     let ids = &scene.robots[0];
     let mut data = MjData::new(scene.model.clone());
     for (k, &adr) in ids.qpos.iter().enumerate() {
@@ -27,7 +32,16 @@ fn forward(scene: &runtime::Scene, q: &[f64]) -> nalgebra::Vector3<f64> {
     }
     data.forward();
     let p = data.site_xpos()[ids.tcp_site];
-    nalgebra::Vector3::new(p[0], p[1], p[2])
+    let m = data.site_xmat()[ids.tcp_site];
+    (
+        nalgebra::Vector3::new(p[0], p[1], p[2]),
+        nalgebra::Rotation3::from_matrix_unchecked(nalgebra::Matrix3::from_row_slice(&m)),
+    )
+}
+
+/// The TCP site's world position at arm angles `q`.
+fn forward(scene: &runtime::Scene, q: &[f64]) -> nalgebra::Vector3<f64> {
+    forward_pose(scene, q).0
 }
 
 #[test]
@@ -77,20 +91,45 @@ fn ik_round_trips_over_a_grid_of_reachable_poses() {
     let mut kin = ArmKinematics::new(&scene, 0);
     let start = kin.tcp(&home);
     let opts = IkOptions::default();
-    let (mut worst, mut n) = (0.0f64, 0);
+    // The home orientation, and turned 0.3 rad either way about each of the TCP's own axes.
+    let mut turns = vec![nalgebra::UnitQuaternion::identity()];
+    for axis in [
+        nalgebra::Vector3::x_axis(),
+        nalgebra::Vector3::y_axis(),
+        nalgebra::Vector3::z_axis(),
+    ] {
+        for angle in [-0.3, 0.3] {
+            turns.push(nalgebra::UnitQuaternion::from_axis_angle(&axis, angle));
+        }
+    }
+    let (mut worst, mut worst_rot, mut n) = (0.0f64, 0.0f64, 0);
     for dx in [-0.15, 0.0, 0.15] {
         for dy in [-0.15, 0.0, 0.15] {
             for dz in [-0.2, -0.1, 0.0, 0.1] {
-                let mut target = start;
-                target.translation.vector += nalgebra::Vector3::new(dx, dy, dz);
-                let q = solve_ik(&mut kin, &target, &home, &opts)
-                    .unwrap_or_else(|e| panic!("({dx}, {dy}, {dz}): {e}"));
-                let reached = forward(&scene, &q);
-                worst = worst.max((reached - target.translation.vector).norm());
-                n += 1;
+                for (t, turn) in turns.iter().enumerate() {
+                    // Turned targets on a grid two thirds the size: a tool pitched 0.3 rad at
+                    // the grid's far top corner is past the arm's reach.
+                    let scale = if t == 0 { 1.0 } else { 2.0 / 3.0 };
+                    let mut target = start;
+                    target.translation.vector += scale * nalgebra::Vector3::new(dx, dy, dz);
+                    target.rotation *= turn;
+                    let q = solve_ik(&mut kin, &target, &home, &opts).unwrap_or_else(|e| {
+                        panic!("({dx}, {dy}, {dz}) turned {:?}: {e}", turn.scaled_axis())
+                    });
+                    let (reached, rot) = forward_pose(&scene, &q);
+                    worst = worst.max((reached - target.translation.vector).norm());
+                    let off = target.rotation.to_rotation_matrix() * rot.transpose();
+                    worst_rot = worst_rot.max(off.angle());
+                    n += 1;
+                }
             }
         }
     }
-    eprintln!("ik: {n} targets, worst position error {worst:.2e} m by mj_forward");
+    eprintln!(
+        "ik: {n} targets, worst position error {worst:.2e} m, orientation {worst_rot:.2e} rad \
+         by mj_forward"
+    );
+    assert_eq!(n, 36 * 7);
     assert!(worst < opts.pos_tol, "{worst} m");
+    assert!(worst_rot < opts.rot_tol, "{worst_rot} rad");
 }
