@@ -60,6 +60,10 @@ fn the_closed_check_needs_the_lid_shut() {
     assert_eq!(judged_with_lid(closed), (true, closed));
     let (ok, value) = judged_with_lid(closed + 0.05);
     assert!(!ok, "a lid 0.05 rad short passed as closed ({value})");
+    // At the edge of upstream's tolerance (0.01 rad, written out here, not read from the model):
+    // 9 mrad short is closed, 11 mrad short is not.
+    assert!(judged_with_lid(closed + 0.009).0, "9 mrad short");
+    assert!(!judged_with_lid(closed + 0.011).0, "11 mrad short");
     // A close cut off half way by the time limit fails, with the lid measured still open.
     let task = compile_edited(CLOSE, |s| {
         s.replace("time_limit = \"30 s\"", "time_limit = \"4 s\"")

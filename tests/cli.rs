@@ -208,6 +208,12 @@ fn diagnostics_render_plain_as_their_goldens() {
             stale.push(format!("{}:\n{text}", golden.display()));
         }
     }
+    // A run that rewrote the goldens compared nothing: it never passes.
+    assert!(
+        !update,
+        "UPDATE_GOLDEN: {} goldens written; review `git diff tests/golden/diagnostics`, then run again without it",
+        cases.len()
+    );
     assert!(
         stale.is_empty(),
         "rendered diagnostics changed:\n{}",

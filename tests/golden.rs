@@ -65,11 +65,13 @@ fn shipped_protocols_match_their_golden_outputs() {
     let protocols = shipped();
     assert!(protocols.len() >= 9, "{protocols:?}");
     let mut stale = Vec::new();
+    let mut produced = std::collections::BTreeSet::new();
     for path in protocols {
         let stem = path.with_extension("");
         let golden_base = Path::new("tests/golden").join(stem.strip_prefix("protocols").unwrap());
         for (ext, text) in outputs(&path) {
             let golden = PathBuf::from(format!("{}.{ext}", golden_base.display()));
+            produced.insert(golden.clone());
             if update {
                 std::fs::create_dir_all(golden.parent().unwrap()).unwrap();
                 std::fs::write(&golden, &text).unwrap();
@@ -83,9 +85,37 @@ fn shipped_protocols_match_their_golden_outputs() {
             }
         }
     }
+    // A run that rewrote the goldens compared nothing: it never passes.
+    assert!(
+        !update,
+        "UPDATE_GOLDEN: {} goldens written; review `git diff tests/golden`, then run again without it",
+        produced.len()
+    );
     assert!(stale.is_empty(), "outputs differ from: {stale:#?}");
+    // Every golden is some shipped protocol's (the diagnostics' are tests/cli.rs's): a golden
+    // left behind by a removed or renamed protocol is an error, not dead weight.
+    let mut orphans = Vec::new();
+    let mut walk = vec![PathBuf::from("tests/golden")];
+    while let Some(dir) = walk.pop() {
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                if path != Path::new("tests/golden/diagnostics") {
+                    walk.push(path);
+                }
+            } else if !produced.contains(&path) {
+                orphans.push(path.display().to_string());
+            }
+        }
+    }
+    assert!(
+        orphans.is_empty(),
+        "goldens no shipped protocol produces: {orphans:#?}"
+    );
 }
 
+/// Within one process: a hash map's iteration order differs between two maps, so output that
+/// depended on one would differ here (the goldens pin the bytes across processes).
 #[test]
 fn compiling_twice_gives_identical_bytes() {
     for path in shipped() {

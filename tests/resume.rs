@@ -25,6 +25,28 @@ fn opts(out: &Path, policy: &str, episodes: usize, resume: bool) -> EvalOptions 
     }
 }
 
+/// A result or summary with its measured times (wall clock, policy latency) removed: what a
+/// resumed run must share with a run that was never interrupted.
+fn timeless(mut v: serde_json::Value) -> serde_json::Value {
+    match &mut v {
+        serde_json::Value::Object(map) => {
+            map.retain(|k, _| {
+                !k.contains("wall") && !k.contains("policy_time") && !k.contains("latency")
+            });
+            for x in map.values_mut() {
+                *x = timeless(x.take());
+            }
+        }
+        serde_json::Value::Array(xs) => {
+            for x in xs {
+                *x = timeless(x.take());
+            }
+        }
+        _ => {}
+    }
+    v
+}
+
 /// Seeds in the journal, in order.
 fn journal_seeds(dir: &Path) -> Vec<u64> {
     common::journal(dir, "thermal_cycler.close_lid")
@@ -90,6 +112,23 @@ fn a_run_resumes_only_with_matching_fingerprints_and_never_reruns_an_episode() {
     assert_eq!(ran, [32, 33]);
     assert_eq!(report.episodes.len(), 4);
     assert_eq!(journal_seeds(&dir), [30, 31, 32, 33]);
+    // The resumed run is the run that was never interrupted, episode for episode (trajectory
+    // hashes included) and in its summary, all but the measured times.
+    let whole = scoring::evaluate(
+        &task,
+        &opts(&scratch("resume-whole"), "hold", 4, false),
+        |_| {},
+    )
+    .unwrap();
+    let json = |x: serde_json::Result<serde_json::Value>| timeless(x.unwrap());
+    assert_eq!(
+        json(serde_json::to_value(&report.episodes)),
+        json(serde_json::to_value(&whole.episodes))
+    );
+    assert_eq!(
+        json(serde_json::to_value(&report.summary)),
+        json(serde_json::to_value(&whole.summary))
+    );
 }
 
 #[test]
@@ -144,11 +183,31 @@ fn a_killed_run_resumes_with_nothing_lost_or_repeated() {
         &before[..],
         "finished lines kept as they were"
     );
-    let results: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(dir.join("thermal_cycler.close_lid.results.json")).unwrap(),
-    )
-    .unwrap();
+    let read = |dir: &Path| -> serde_json::Value {
+        serde_json::from_str(
+            &std::fs::read_to_string(dir.join("thermal_cycler.close_lid.results.json")).unwrap(),
+        )
+        .unwrap()
+    };
+    let results = read(&dir);
     assert_eq!(results["summary"]["episodes"], 12);
+    // The same run never killed: the same episodes (hashes included) and summary, but for the
+    // measured times.
+    let whole = scratch("killed-whole");
+    let mut uninterrupted = args.to_vec();
+    let w = whole.to_str().unwrap();
+    *uninterrupted.last_mut().unwrap() = w;
+    let out = autobio(&uninterrupted);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let whole = read(&whole);
+    assert_eq!(
+        timeless(results["episodes"].clone()),
+        timeless(whole["episodes"].clone())
+    );
+    assert_eq!(
+        timeless(results["summary"].clone()),
+        timeless(whole["summary"].clone())
+    );
 }
 
 #[test]
@@ -204,6 +263,9 @@ fn a_cut_short_journal_resumes_and_a_garbled_one_is_refused() {
     assert!(resumed.starts_with(&format!("{}\n{}\n", lines[0], lines[1])));
     assert_eq!(resumed.lines().count(), 3);
     assert!(resumed.ends_with('\n'));
+    // The episode run again is the one the crash cut short, to its trajectory hash.
+    let parse = |line: &str| timeless(serde_json::from_str(line).unwrap());
+    assert_eq!(parse(resumed.lines().nth(2).unwrap()), parse(lines[2]));
 
     // A whole line that is not an episode result.
     let garbled = format!("{}\n{{\"not\": \"an episode\"}}\n", lines[0]);

@@ -383,7 +383,11 @@ mod tests {
             spec(
                 "col",
                 Domain::Choice {
-                    values: (0..500).map(|i| i.to_string()).collect(),
+                    // The row letters too, so the `{row}` exclusion has something to exclude.
+                    values: (0..500)
+                        .map(|i| i.to_string())
+                        .chain(["A", "B", "C"].map(String::from))
+                        .collect(),
                 },
                 &["3", "7", "{row}"],
             ),
@@ -416,14 +420,28 @@ mod tests {
         };
         let (mut a, mut b) = (ChaCha8Rng::seed_from_u64(7), ChaCha8Rng::seed_from_u64(7));
         let drawer = Drawer::new(&ps);
-        for _ in 0..200 {
+        let mut first = Vec::new();
+        let mut letters = 0;
+        for _ in 0..2000 {
             let (x, y) = (drawer.draw(&mut a), one_by_one(&mut b));
             assert_eq!(x, y);
             let x = x.unwrap();
             assert_ne!(x["row"], "B");
             assert!(!["3", "7"].contains(&x["col"].as_str()));
+            assert_ne!(x["col"], x["row"], "the {{row}} exclusion");
+            letters += usize::from(x["col"].parse::<u32>().is_err());
             assert_ne!(x["n"], "4");
+            let far: f64 = x["far"].parse().unwrap();
+            assert!((0.0..1.0).contains(&far), "far {far}");
+            if first.len() < 3 {
+                first.push([x["row"].clone(), x["col"].clone(), x["n"].clone()]);
+            }
         }
+        // A letter column was drawn (the exclusion had work), and the first draws are pinned:
+        // a change to the generator or the draw order fails here, not only in the goldens.
+        assert!(letters > 0);
+        let pinned = [["C", "496", "12"], ["A", "240", "24"], ["C", "277", "34"]];
+        assert_eq!(first, pinned.map(|d| d.map(String::from)));
     }
 
     #[test]
@@ -471,14 +489,31 @@ mod tests {
         assert!(complete);
         assert_eq!(all.len(), 4);
         assert!(all.iter().all(|b| b["temp"] != "25"));
-        assert!(
-            all.iter()
-                .all(|b| opposite(&b["first"], 30).as_ref() == Some(&b["second"]))
-        );
+        // Written out, not recomputed: slot k's opposite on a 30-slot ring is k + 15.
+        let got: std::collections::BTreeSet<[&str; 3]> = all
+            .iter()
+            .map(|b| [&*b["first"], &*b["second"], &*b["temp"]])
+            .collect();
+        let want: std::collections::BTreeSet<[&str; 3]> = [
+            ["1", "16", "24"],
+            ["1", "16", "26"],
+            ["2", "17", "24"],
+            ["2", "17", "26"],
+        ]
+        .into();
+        assert_eq!(got, want);
+        assert_eq!(opposite("15", 30).as_deref(), Some("30"));
+        assert_eq!(opposite("30", 30).as_deref(), Some("15"));
+        assert_eq!(opposite("3", 6).as_deref(), Some("6"));
+        assert_eq!(opposite("0", 30), None);
+        assert_eq!(opposite("31", 30), None);
+        assert_eq!(opposite("x", 30), None);
         let mut rng = ChaCha8Rng::seed_from_u64(3);
         for _ in 0..50 {
             let b = draw_all(&ps, &mut rng).unwrap();
             assert_ne!(b["temp"], "25");
+            let pair = (b["first"].as_str(), b["second"].as_str());
+            assert!(pair == ("1", "16") || pair == ("2", "17"), "{pair:?}");
         }
     }
 

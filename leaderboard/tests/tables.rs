@@ -27,6 +27,11 @@ fn the_results_tables_are_what_eval_prints() {
     let golden = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/tables.txt");
     if std::env::var_os("UPDATE_GOLDEN").is_some() {
         std::fs::write(&golden, &text).unwrap();
+        // A run that rewrote the golden compared nothing: it never passes.
+        panic!(
+            "UPDATE_GOLDEN: {} written; review its diff, then run again without it",
+            golden.display()
+        );
     }
     assert_eq!(text, std::fs::read_to_string(&golden).unwrap());
     // One task of one run has no aggregate lines.
