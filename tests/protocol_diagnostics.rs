@@ -72,15 +72,40 @@ fn hints_suggest_the_closest_name() {
     );
 }
 
+/// Every prefix of a good file, and every single-byte corruption of it, either compiles or is
+/// refused with an error whose span lies inside the text (so it can be shown at file:line:col):
+/// never a panic, never a silent "no task and no error".
 #[test]
-fn truncated_and_mangled_files_never_panic() {
+fn truncated_and_mangled_files_compile_or_say_why() {
     let good = std::fs::read_to_string(
         Path::new(env!("CARGO_MANIFEST_DIR")).join("protocols/thermal_cycler/close_lid.toml"),
     )
     .unwrap();
-    // Every prefix, and every single-byte corruption on char boundaries, parses and checks.
+    let (mut compiled, mut refused) = (0, 0);
+    let mut judge = |src: &str, name: &str| {
+        let (task, diags) = compiler::compile_source(src, name);
+        for d in &diags {
+            assert!(
+                d.file.is_some() || (d.span.start <= d.span.end && d.span.end <= src.len()),
+                "{name}: {} at {:?} outside {} bytes",
+                d.code,
+                d.span,
+                src.len()
+            );
+        }
+        match task {
+            Some(_) => compiled += 1,
+            None => {
+                assert!(
+                    diags.iter().any(|d| d.is_error()),
+                    "{name}: no task and no error for {src:?}"
+                );
+                refused += 1;
+            }
+        }
+    };
     for end in (0..good.len()).filter(|&i| good.is_char_boundary(i)) {
-        let _ = compiler::compile_source(&good[..end], "prefix.toml");
+        judge(&good[..end], "prefix.toml");
     }
     for i in (0..good.len())
         .step_by(3)
@@ -88,9 +113,14 @@ fn truncated_and_mangled_files_never_panic() {
     {
         for c in ["\"", "[", "=", "\n", "x", "0", "]"] {
             let mangled = format!("{}{}{}", &good[..i], c, &good[i + 1..]);
-            let _ = compiler::compile_source(&mangled, "mangled.toml");
+            judge(&mangled, "mangled.toml");
         }
     }
+    // Both outcomes happen: the whole file compiles, the empty prefix does not.
+    assert!(
+        compiled > 0 && refused > 0,
+        "{compiled} compiled, {refused} refused"
+    );
 }
 
 fn autobio(args: &[&std::ffi::OsStr]) -> std::process::Output {

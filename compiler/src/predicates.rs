@@ -465,16 +465,24 @@ mod tests {
 
     #[test]
     fn rejects_malformed_forms() {
-        for t in [
-            "cycler lid closed",
-            "cycler.lid is",
-            "cycler.lid in [1] rad",
-            "cycler.lid in [2, 1] rad",
-            "tube near [1, 2] m",
-            "tube.volume = ",
-            "cycler.lid is closed within 3 parsecs",
+        // Each refused for its own reason, not just refused.
+        let verb = "expected `is`, `in`, `=`, `>=`, `<=`, `touches` or `near`";
+        for (t, why) in [
+            ("cycler lid closed", verb),
+            ("cycler.lid is", verb),
+            ("cycler.lid in [1] rad", "`[1]` must hold 2 numbers"),
+            ("cycler.lid in [2, 1] rad", "the range [2, 1] is empty"),
+            ("tube near [1, 2] m", "`[1, 2]` must hold 3 numbers"),
+            ("tube.volume = ", "a comparison needs a value with a unit"),
+            (
+                "cycler.lid is closed within 3 parsecs",
+                "unknown unit `parsecs` in `3 parsecs`",
+            ),
         ] {
-            assert!(parse(t).is_err(), "{t} should not parse");
+            match parse(t) {
+                Ok(p) => panic!("{t} parsed as {p:?}"),
+                Err(e) => assert!(e.contains(why), "{t}: {e}"),
+            }
         }
     }
 }

@@ -1411,7 +1411,7 @@ all = ["cycler.lid is closed"]
     }
 
     #[test]
-    fn garbage_never_panics() {
+    fn garbage_is_refused_with_an_error_inside_the_text() {
         for src in [
             "",
             "[[[",
@@ -1421,7 +1421,15 @@ all = ["cycler.lid is closed"]
             "[protocol]\nid = 3",
             "[randomise.x]\njoints = 1",
         ] {
-            let _ = parse(src);
+            let (_, d) = parse(src);
+            assert!(
+                d.iter().any(|d| d.is_error()),
+                "{src:?} parsed clean: {d:?}"
+            );
+            assert!(
+                d.iter().all(|d| d.span.end <= src.len()),
+                "{src:?}: a span past the text: {d:?}"
+            );
         }
     }
 }

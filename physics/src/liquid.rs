@@ -626,7 +626,11 @@ mod tests {
         let (v, _) = b.container.volume_below(b.surface.normal(), d);
         assert!((v - b.volume.cubic_metres()).abs() <= 1e-6 * b.container.capacity());
         let too_much = Nanolitres(b.volume.0 + 1);
-        assert!(transfer(&mut b, &mut a, too_much).is_err());
-        assert_eq!(a.volume.0 + b.volume.0, total);
+        let (before_a, before_b) = (a.volume, b.volume);
+        assert!(matches!(
+            transfer(&mut b, &mut a, too_much),
+            Err(LiquidError::NotEnough { .. })
+        ));
+        assert_eq!((a.volume, b.volume), (before_a, before_b), "nothing moved");
     }
 }
