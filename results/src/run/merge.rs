@@ -3,7 +3,8 @@
 //! only when their manifests agree on everything but the shard, every planned episode is there
 //! exactly once, and no shard is missing.
 //!
-//! It reads and writes run records only; it runs nothing.
+//! It reads the shards' records and never writes them (the merged record goes to another
+//! folder); it runs nothing.
 
 use super::record::{Manifest, RunRecord, read_journal_only, write_json};
 use super::{EvalReport, RESULTS_SCHEMA_VERSION, RunError, plan, results_path, summarise};
@@ -13,6 +14,18 @@ use std::path::{Path, PathBuf};
 
 /// Merges every task found in the shard folders `dirs` into `out`; one report per task.
 pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Vec<EvalReport>, RunError> {
+    // The shards are inputs, read and never written: the merged record goes to a folder of
+    // its own (into a shard's folder it would rewrite that shard's manifest and journal).
+    if let Ok(target) = out.canonicalize()
+        && let Some(shard) = dirs
+            .iter()
+            .find(|d| d.canonicalize().is_ok_and(|d| d == target))
+    {
+        return Err(RunError::Merge(format!(
+            "{} is one of the shards being merged; write the merged record to a new folder",
+            shard.display()
+        )));
+    }
     let mut by_task: BTreeMap<String, Vec<(PathBuf, Manifest)>> = BTreeMap::new();
     for dir in dirs {
         let entries = std::fs::read_dir(dir).map_err(|e| RunError::io("read", dir, e))?;
