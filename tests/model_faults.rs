@@ -1,14 +1,21 @@
 //! A misbehaving model server on loopback (tests/servers/openpi_server.py `--fault`, and the
 //! vla-eval package's own error frames): each fault ends only the episode it happens in, with its
 //! outcome class and reason; the episodes before and after it finish normally and every one is
-//! in the journal.
+//! in the journal. No fault stretches a reply past its timeout (pings, a reply trickled in
+//! fragments, error frames for other requests), and a kept connection the server has closed
+//! between episodes is replaced, not failed on. Every run is under a watchdog: a hang fails.
 
 mod common;
 
-use common::{Server, autobio, journal, scratch, text};
+use common::{Server, autobio, autobio_within, journal, scratch, text};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
+use std::time::{Duration, Instant};
+
+/// Longer than any run here takes (three episodes, faults at a 2 s timeout), far shorter than a
+/// hang.
+const WATCHDOG: Duration = Duration::from_secs(120);
 
 const CLOSE: &str = "protocols/thermal_cycler/close_lid.toml";
 const TASK: &str = "thermal_cycler.close_lid";
@@ -60,25 +67,28 @@ fn run_n(
     dir: &Path,
     episodes: &str,
 ) -> (Vec<Value>, String) {
-    let out = autobio(&[
-        "eval",
-        "--model",
-        url,
-        "--wire",
-        wire,
-        "--profile",
-        profile.to_str().unwrap(),
-        "--protocol",
-        CLOSE,
-        "--episodes",
-        episodes,
-        "--seed",
-        "0",
-        "--connect-attempts",
-        "2",
-        "--out",
-        dir.to_str().unwrap(),
-    ]);
+    let out = autobio_within(
+        &[
+            "eval",
+            "--model",
+            url,
+            "--wire",
+            wire,
+            "--profile",
+            profile.to_str().unwrap(),
+            "--protocol",
+            CLOSE,
+            "--episodes",
+            episodes,
+            "--seed",
+            "0",
+            "--connect-attempts",
+            "2",
+            "--out",
+            dir.to_str().unwrap(),
+        ],
+        WATCHDOG,
+    );
     let stderr = text(&out.stderr);
     assert!(
         out.status.success(),
@@ -89,21 +99,25 @@ fn run_n(
 
 /// The server misbehaves in episode 1 only: episodes 0 and 2 succeed.
 fn fault(mode: &str, outcome: &str, reason: &str) {
-    let dir = scratch(&format!("fault-{mode}"));
+    fault_with(mode, &[], outcome, reason);
+}
+
+/// [`fault`], with more of the server's arguments.
+fn fault_with(mode: &str, extra: &[&str], outcome: &str, reason: &str) {
+    let dir = scratch(&format!("fault-{mode}{}", extra.join("")));
     let rec = recordings().to_str().unwrap().to_string();
-    let server = Server::start(
-        "openpi_server.py",
-        &[
-            "--recordings",
-            &rec,
-            "--fault",
-            mode,
-            "--fault-episode",
-            "1",
-            "--fault-at",
-            "2",
-        ],
-    );
+    let mut args = vec![
+        "--recordings",
+        &rec,
+        "--fault",
+        mode,
+        "--fault-episode",
+        "1",
+        "--fault-at",
+        "2",
+    ];
+    args.extend(extra);
+    let server = Server::start("openpi_server.py", &args);
     let (eps, stderr) = run(&server.url, "openpi", &profile(&dir), &dir);
     let got: Vec<(&str, u64)> = eps
         .iter()
@@ -131,6 +145,121 @@ fn a_server_that_closes_mid_episode() {
 #[test]
 fn a_server_that_stalls_past_the_timeout() {
     fault("stall", "server_fault", "no reply within 2 s");
+}
+
+#[test]
+fn a_server_that_pings_while_it_stalls_does_not_stretch_the_timeout() {
+    // websockets' keepalive every 0.2 s: each ping is read (and answered) within the timeout.
+    fault_with(
+        "stall",
+        &["--ping-interval", "0.2"],
+        "server_fault",
+        "no reply within 2 s",
+    );
+}
+
+#[test]
+fn a_server_that_trickles_its_reply_does_not_stretch_the_timeout() {
+    // The reply in 16-byte fragments 0.05 s apart takes seconds; a timeout per read would never
+    // fire (and the episode would succeed), the one deadline per reply does.
+    fault("trickle", "server_fault", "no reply within 2 s");
+}
+
+#[test]
+fn a_server_that_answers_more_actions_than_the_chunk() {
+    fault(
+        "long",
+        "policy_error",
+        "a chunk of 51 actions; the profile allows at most 50",
+    );
+}
+
+/// The server ends the kept connection after episode 0's last reply (`mode`: with a close frame,
+/// or dropped with none): every episode succeeds, the later ones on a second connection.
+fn stale_connection(mode: &str) {
+    let dir = scratch(&format!("stale-{mode}"));
+    let rec = recordings().to_str().unwrap().to_string();
+    let log = dir.join("queries.jsonl");
+    let server = Server::start(
+        "openpi_server.py",
+        &[
+            "--recordings",
+            &rec,
+            "--fault",
+            mode,
+            "--fault-episode",
+            "0",
+            "--log",
+            log.to_str().unwrap(),
+        ],
+    );
+    let (eps, _) = run(&server.url, "openpi", &profile(&dir), &dir);
+    assert_eq!(eps.len(), 3, "{eps:#?}");
+    assert!(eps.iter().all(|e| e["outcome"] == "success"), "{eps:#?}");
+    let connections: Vec<(u64, u64)> = std::fs::read_to_string(&log)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str::<Value>(l).unwrap())
+        .map(|q| {
+            (
+                q["seed"].as_u64().unwrap(),
+                q["connection"].as_u64().unwrap(),
+            )
+        })
+        .collect::<std::collections::BTreeSet<_>>()
+        .into_iter()
+        .collect();
+    assert_eq!(connections, [(0, 1), (1, 2), (2, 2)], "{mode}");
+}
+
+#[test]
+fn a_kept_connection_the_server_closed_between_episodes_is_replaced() {
+    stale_connection("close-after");
+}
+
+#[test]
+fn a_kept_connection_the_server_dropped_between_episodes_is_replaced() {
+    stale_connection("abort-after");
+}
+
+#[test]
+fn a_vla_eval_reply_for_an_earlier_request_fails_only_its_episode() {
+    // Seed 1's third observation is answered twice: the copy carries that observation's seq and
+    // arrives as the "reply" to the fourth. It is refused as stale, and the next episode runs on
+    // a fresh connection.
+    let dir = scratch("fault-vla-eval-stale");
+    let rec = recordings().to_str().unwrap().to_string();
+    let server = Server::start(
+        "vla_eval_server.py",
+        &["--recordings", &rec, "--duplicate-seed", "1"],
+    );
+    let text = std::fs::read_to_string("profiles/pi0.toml").unwrap();
+    let path = dir.join("pi0.toml");
+    std::fs::write(&path, text.replace("timeout_s = 30.0", "timeout_s = 10.0")).unwrap();
+    let (eps, _) = run(&server.url, "vla-eval", &path, &dir);
+    let got: Vec<&str> = eps.iter().map(|e| e["outcome"].as_str().unwrap()).collect();
+    assert_eq!(got, ["success", "server_fault", "success"], "{eps:#?}");
+    let error = eps[1]["error"].as_str().unwrap();
+    assert!(
+        error.contains("carries seq") && error.contains("replies must echo their request's seq"),
+        "{error}"
+    );
+}
+
+#[test]
+fn error_frames_for_other_requests_do_not_stretch_a_vla_eval_timeout() {
+    // The server sends an `error` frame for another seq every 0.5 s and never answers: the
+    // episode fails at its 2 s timeout, not after the server's minute of noise.
+    let dir = scratch("fault-vla-eval-noise");
+    let server = Server::start("vla_eval_noise_server.py", &[]);
+    let start = Instant::now();
+    let (eps, _) = run_n(&server.url, "vla-eval", &profile(&dir), &dir, "1");
+    let took = start.elapsed();
+    assert_eq!(eps.len(), 1);
+    assert_eq!(eps[0]["outcome"], "server_fault", "{eps:#?}");
+    let error = eps[0]["error"].as_str().unwrap();
+    assert!(error.contains("no reply within 2 s"), "{error}");
+    assert!(took < Duration::from_secs(30), "took {took:?}");
 }
 
 #[test]

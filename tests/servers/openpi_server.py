@@ -15,12 +15,19 @@ the pi0 layout and the recorded instruction, so a client that sends the wrong th
   range    answers an arm target of 100 rad
   error    raises, so the client gets a text frame and close 1011
   garbage  answers bytes that are not msgpack
+  trickle  sends its reply in 16-byte fragments 0.05 s apart (seconds for the whole reply, each
+           fragment well inside any timeout)
+  long     answers one action more than `--chunk`
+  close-after / abort-after
+           after the last reply of episode `--fault-episode` (the chunk holding its last recorded
+           action), closes the connection with a close frame / drops it with no close frame, so
+           the client holds a stale connection when the next episode starts
 
 `--layout rdt` expects RDT's layout (a 128-d state, each camera's frame and an earlier one) and
 answers 128-d actions.
 
-`--log FILE` appends each query's task, seed and prompt, so a test can see the instruction switch
-between a chain's stages.
+`--log FILE` appends each query's task, seed, prompt and connection number, so a test can see the
+instruction switch between a chain's stages and count connections.
 
 Prints `listening on ws://HOST:PORT` once ready (port 0 picks a free one)."""
 
@@ -76,7 +83,16 @@ def check_observation(obs, episode, args):
     return moved
 
 
+async def trickle(data):
+    """The reply as 16-byte fragments of one message, 0.05 s apart."""
+    for i in range(0, len(data), 16):
+        yield data[i:i + 16]
+        await asyncio.sleep(0.05)
+
+
 async def handler(ws, library, args, counters):
+    counters["connections"] += 1
+    connection = counters["connections"]
     packer = msgpack_numpy.Packer()
     if args.metadata_delay:
         await asyncio.sleep(args.metadata_delay)
@@ -99,15 +115,25 @@ async def handler(ws, library, args, counters):
                 moved = check_observation(obs, episode, args)
                 if args.log:
                     with open(args.log, "a") as log:
-                        line = {"task": task["id"], "seed": task["seed"], "query": query, "prompt": obs["prompt"], "history_differs": moved}
+                        line = {"task": task["id"], "seed": task["seed"], "query": query, "prompt": obs["prompt"],
+                                "history_differs": moved, "connection": connection}
                         log.write(json.dumps(line) + "\n")
                 chunk = np.asarray(episode.chunk(query * args.execute, args.chunk), dtype=np.float64)
                 if args.layout == "rdt":
                     wide = np.zeros((chunk.shape[0], 128))
                     wide[:, RDT_INDICES[: chunk.shape[1]]] = chunk
                     chunk = wide
-                faulty = args.fault and counters["episodes"] - 1 == args.fault_episode and query == args.fault_at
+                in_fault_episode = counters["episodes"] - 1 == args.fault_episode
+                faulty = args.fault and in_fault_episode and query == args.fault_at
+                last_reply = query * args.execute + args.chunk >= len(episode.actions)
                 query += 1
+                if args.fault in ("close-after", "abort-after") and in_fault_episode and last_reply:
+                    await ws.send(packer.pack({"actions": chunk}))
+                    if args.fault == "close-after":
+                        await ws.close(1001, "idle")
+                    else:
+                        ws.transport.abort()
+                    return
                 if faulty:
                     if args.fault == "close":
                         await ws.close()
@@ -124,6 +150,11 @@ async def handler(ws, library, args, counters):
                         raise RuntimeError("the model ran out of memory (a fault on request)")
                     if args.fault == "garbage":
                         await ws.send(b"\xc1 this is not msgpack")
+                        continue
+                    if args.fault == "long":
+                        chunk = np.concatenate([chunk, chunk[-1:]], axis=0)
+                    if args.fault == "trickle":
+                        await ws.send(trickle(packer.pack({"actions": chunk})))
                         continue
                 await ws.send(packer.pack({"actions": chunk, "server_timing": {"infer_ms": 0.0}}))
             except Exception:
@@ -148,13 +179,14 @@ async def main():
                    help="websocket keepalive pings (the websockets default: 20 s)")
     p.add_argument("--layout", choices=["pi0", "rdt"], default="pi0",
                    help="the observation and action layout to expect and answer in")
-    p.add_argument("--fault", choices=["close", "stall", "shape", "nan", "range", "error", "garbage"])
+    p.add_argument("--fault", choices=["close", "stall", "shape", "nan", "range", "error", "garbage",
+                                       "trickle", "long", "close-after", "abort-after"])
     p.add_argument("--fault-episode", type=int, default=1)
     p.add_argument("--fault-at", type=int, default=1)
     p.add_argument("--log", help="append each query's task, seed and prompt here (JSON lines)")
     args = p.parse_args()
     library = Library(args.recordings)
-    counters = {"episodes": 0}
+    counters = {"episodes": 0, "connections": 0}
     async with serve(
         lambda ws: handler(ws, library, args, counters),
         args.host,

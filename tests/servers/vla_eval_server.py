@@ -5,7 +5,10 @@ expert's recorded action for that step (see expert_actions.py). The episode is n
 description, so a client that sends the wrong thing gets an `error` frame.
 
 `--log FILE` records each `episode_start`'s session, so a test can see connections kept;
-`--fail-start-seed S` raises in `on_episode_start` for seed S (vla-eval answers an `error` frame).
+`--fail-start-seed S` raises in `on_episode_start` for seed S (vla-eval answers an `error` frame);
+`--duplicate-seed S` answers the third observation of seed S's episode twice (through the package's
+own `send_action`, so the second copy carries that observation's seq and is read as the reply to
+the next one: a stale reply).
 
 Prints `listening on ws://HOST:PORT` once ready (port 0 picks a free one)."""
 
@@ -22,8 +25,11 @@ from expert_actions import Library
 
 
 class ExpertServer(PredictModelServer):
-    def __init__(self, library, log=None, fail_start_seed=None):
+    def __init__(self, library, log=None, fail_start_seed=None, duplicate_seed=None):
         super().__init__(chunk_size=None)
+        self.duplicate_seed = duplicate_seed
+        self.seeds = {}
+        self.observations = {}
         self.library = library
         self.episodes = {}
         self.log = log
@@ -43,7 +49,16 @@ class ExpertServer(PredictModelServer):
         if task["seed"] == self.fail_start_seed:
             raise RuntimeError(f"no checkpoint for seed {task['seed']} (a fault on request)")
         self.episodes[ctx.session_id] = self.library.episode(task["id"], task["seed"])
+        self.seeds[ctx.session_id] = task["seed"]
+        self.observations[ctx.session_id] = 0
         await super().on_episode_start(config, ctx)
+
+    async def on_observation(self, obs, ctx):
+        await super().on_observation(obs, ctx)
+        self.observations[ctx.session_id] += 1
+        if self.seeds.get(ctx.session_id) == self.duplicate_seed and self.observations[ctx.session_id] == 3:
+            episode = self.episodes[ctx.session_id]
+            await ctx.send_action({"actions": np.asarray(episode.chunk(0, 1)[0], dtype=np.float64)})
 
     def predict(self, obs, ctx):
         episode = self.episodes[ctx.session_id]
@@ -62,7 +77,7 @@ class ExpertServer(PredictModelServer):
 
 
 async def main(args):
-    server = ExpertServer(Library(args.recordings), args.log, args.fail_start_seed)
+    server = ExpertServer(Library(args.recordings), args.log, args.fail_start_seed, args.duplicate_seed)
     async with anyio.create_task_group() as tg:
         port = await tg.start(serve_async, server, args.host, args.port)
         print(f"listening on ws://{args.host}:{port}", flush=True)
@@ -75,4 +90,5 @@ if __name__ == "__main__":
     p.add_argument("--port", type=int, default=0)
     p.add_argument("--log", help="append each episode_start's session id and seed here (JSON lines)")
     p.add_argument("--fail-start-seed", type=int, help="raise in on_episode_start for this seed")
+    p.add_argument("--duplicate-seed", type=int, help="answer this seed's third observation twice")
     anyio.run(main, p.parse_args())

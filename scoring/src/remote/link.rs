@@ -1,6 +1,7 @@
 //! One websocket connection to a model server (`ws://HOST:PORT[/PATH]`, plain TCP): connecting
-//! with retries and exponential backoff, binary frames out, frames in under a timeout, and every
-//! way that goes wrong as a [`WireError`]. A failed connection is dropped, so the next episode
+//! with retries and exponential backoff, binary frames out and frames in by a deadline (one per
+//! exchange: what the server sends meanwhile never extends it), and every way that goes wrong as
+//! a [`WireError`]. A failed connection is dropped, so the next episode
 //! connects afresh.
 //!
 //! It does not know any message format (see `openpi` and `vla_eval`).
@@ -53,8 +54,9 @@ pub struct Link {
 /// The longest wait between connection attempts.
 const MAX_BACKOFF: Duration = Duration::from_secs(30);
 
-/// A TCP stream whose reads end at a deadline: every read waits at most the time left, so a
-/// server that pings, or trickles a frame byte by byte, cannot stretch a reply's timeout.
+/// A TCP stream whose reads and writes end at a deadline: every read or write waits at most the
+/// time left, so a server that pings, trickles a frame byte by byte, or reads a request slowly
+/// cannot stretch an exchange past its timeout.
 #[derive(Debug)]
 struct Timed {
     stream: TcpStream,
@@ -76,6 +78,13 @@ impl Read for Timed {
 
 impl Write for Timed {
     fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        if let Some(d) = self.deadline {
+            let left = d.saturating_duration_since(Instant::now());
+            if left.is_zero() {
+                return Err(ErrorKind::TimedOut.into());
+            }
+            self.stream.set_write_timeout(Some(left))?;
+        }
         self.stream.write(buf)
     }
     fn flush(&mut self) -> std::io::Result<()> {
@@ -161,9 +170,6 @@ impl Link {
             match TcpStream::connect_timeout(&a, self.timeout) {
                 Ok(stream) => {
                     stream.set_nodelay(true).ok();
-                    stream
-                        .set_write_timeout(Some(self.timeout))
-                        .map_err(|e| e.to_string())?;
                     let timed = Timed {
                         stream,
                         deadline: Some(Instant::now() + self.timeout),
@@ -195,14 +201,30 @@ impl Link {
         Err(e)
     }
 
+    /// The deadline of an exchange starting now: the request out and its whole reply in, within
+    /// the reply timeout.
+    pub fn deadline(&self) -> Instant {
+        Instant::now() + self.timeout
+    }
+
+    /// Sends one binary frame within its own timeout.
     pub fn send(&mut self, bytes: Vec<u8>) -> Result<(), WireError> {
+        self.send_by(bytes, self.deadline())
+    }
+
+    /// Sends one binary frame, giving up at `deadline`.
+    pub fn send_by(&mut self, bytes: Vec<u8>, deadline: Instant) -> Result<(), WireError> {
+        let timeout_s = self.timeout.as_secs_f64();
         let Some(ws) = self.socket.as_mut() else {
             return Err(WireError::Closed(" before the request".into()));
         };
-        match ws.send(Message::binary(bytes)) {
+        ws.get_mut().deadline = Some(deadline);
+        let sent = ws.send(Message::binary(bytes));
+        ws.get_mut().deadline = None;
+        match sent {
             Ok(()) => Ok(()),
             Err(e) => {
-                let e = classify(e, self.timeout.as_secs_f64());
+                let e = classify(e, timeout_s);
                 self.fail(e)
             }
         }
@@ -210,29 +232,29 @@ impl Link {
 
     /// The next data frame if one comes within `wait`; `None` (the connection kept) if none does.
     pub fn try_recv(&mut self, wait: Duration) -> Result<Option<Frame>, WireError> {
-        match self.recv_inner(wait) {
+        match self.recv_inner(Instant::now() + wait, wait.as_secs_f64()) {
             Ok(f) => Ok(Some(f)),
             Err(WireError::Timeout(_)) => Ok(None),
             Err(e) => self.fail(e),
         }
     }
 
-    /// The next data frame, waiting at most `wait` (the reply timeout when `None`). Pings are
-    /// answered; a close frame is [`WireError::Closed`].
-    pub fn recv(&mut self, wait: Option<Duration>) -> Result<Frame, WireError> {
-        let wait = wait.unwrap_or(self.timeout);
-        match self.recv_inner(wait) {
+    /// The next data frame, by `deadline` (an exchange's, from [`Link::deadline`]: a reply read
+    /// as several frames shares one). Pings are answered; a close frame is
+    /// [`WireError::Closed`]; a missed deadline is [`WireError::Timeout`] with the timeout.
+    pub fn recv_by(&mut self, deadline: Instant) -> Result<Frame, WireError> {
+        match self.recv_inner(deadline, self.timeout.as_secs_f64()) {
             Ok(f) => Ok(f),
             Err(e) => self.fail(e),
         }
     }
 
-    fn recv_inner(&mut self, wait: Duration) -> Result<Frame, WireError> {
+    fn recv_inner(&mut self, deadline: Instant, timeout_s: f64) -> Result<Frame, WireError> {
         let Some(ws) = self.socket.as_mut() else {
             return Err(WireError::Closed(" before the reply".into()));
         };
         // One deadline for the whole reply: pings and partial frames do not extend it.
-        ws.get_mut().deadline = Some(Instant::now() + wait);
+        ws.get_mut().deadline = Some(deadline);
         let result = loop {
             match ws.read() {
                 Ok(Message::Binary(b)) => break Ok(Frame::Binary(b.to_vec())),
@@ -247,7 +269,7 @@ impl Link {
                     }));
                 }
                 Ok(_) => continue,
-                Err(e) => break Err(classify(e, wait.as_secs_f64())),
+                Err(e) => break Err(classify(e, timeout_s)),
             }
         };
         ws.get_mut().deadline = None;

@@ -27,7 +27,7 @@ use crate::profile::{ImageEncoding, Layout, LoadedProfile};
 use codec::Keys;
 pub use link::{Frame, Link, WireError};
 use rmpv::Value;
-use std::time::{Duration, SystemTime, UNIX_EPOCH};
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 pub use results::run::Wire;
 
@@ -103,8 +103,9 @@ impl Model {
                     ("protocol_version", Value::from(1u64)),
                     ("benchmark", codec::str("autobio")),
                 ]);
-                let seq = self.send_frame("hello", payload)?;
-                let (kind, payload) = self.recv_frame(seq)?;
+                let deadline = self.link.deadline();
+                let seq = self.send_frame("hello", payload, deadline)?;
+                let (kind, payload) = self.recv_frame(seq, deadline)?;
                 if kind != "hello" {
                     self.link.drop_connection();
                     return Err(WireError::Malformed(format!(
@@ -145,7 +146,12 @@ impl Model {
         Err(WireError::ErrorFrame(first))
     }
 
-    fn send_frame(&mut self, kind: &str, payload: Value) -> Result<u64, WireError> {
+    fn send_frame(
+        &mut self,
+        kind: &str,
+        payload: Value,
+        deadline: Instant,
+    ) -> Result<u64, WireError> {
         self.seq += 1;
         let now = SystemTime::now()
             .duration_since(UNIX_EPOCH)
@@ -157,18 +163,19 @@ impl Model {
             ("seq", Value::from(self.seq)),
             ("timestamp", Value::F64(now)),
         ]);
-        self.link.send(codec::encode(&msg))?;
+        self.link.send_by(codec::encode(&msg), deadline)?;
         Ok(self.seq)
     }
 
     /// A vla-eval frame answering `seq`: its type and payload; an `error` frame is an error. An
     /// error answering an earlier frame (vla-eval answers a failed `episode_start` so) is
     /// remembered and reported once the reply to `seq` has been read, so that it fails the
-    /// episode it belongs to and leaves no stale reply behind.
-    fn recv_frame(&mut self, seq: u64) -> Result<(String, Value), WireError> {
+    /// episode it belongs to and leaves no stale reply behind. Every frame read on the way
+    /// counts against the exchange's one `deadline`.
+    fn recv_frame(&mut self, seq: u64, deadline: Instant) -> Result<(String, Value), WireError> {
         let mut earlier: Option<String> = None;
         loop {
-            let bytes = match self.link.recv(None)? {
+            let bytes = match self.link.recv_by(deadline)? {
                 Frame::Binary(b) => b,
                 Frame::Text(t) => return self.error_frame(t),
             };
@@ -220,9 +227,11 @@ impl Model {
                 self.link.send(codec::encode(&msg))
             }
             Wire::Openpi => Ok(()),
-            Wire::VlaEval => self
-                .send_frame("episode_start", codec::map(vec![("task", task)]))
-                .map(|_| ()),
+            Wire::VlaEval => {
+                let deadline = self.link.deadline();
+                self.send_frame("episode_start", codec::map(vec![("task", task)]), deadline)
+                    .map(|_| ())
+            }
         }
     }
 
@@ -256,7 +265,8 @@ impl Model {
                 ),
                 ("steps", Value::from(steps)),
             ]);
-            self.send_frame("episode_end", payload).ok();
+            let deadline = self.link.deadline();
+            self.send_frame("episode_end", payload, deadline).ok();
         }
     }
 
@@ -267,10 +277,13 @@ impl Model {
         let reply = match self.wire {
             Wire::Openpi => self.openpi_reply(obs).map_err(PolicyError::Server)?,
             Wire::VlaEval => {
+                let deadline = self.link.deadline();
                 let seq = self
-                    .send_frame("observation", obs)
+                    .send_frame("observation", obs, deadline)
                     .map_err(PolicyError::Server)?;
-                let (kind, payload) = self.recv_frame(seq).map_err(PolicyError::Server)?;
+                let (kind, payload) = self
+                    .recv_frame(seq, deadline)
+                    .map_err(PolicyError::Server)?;
                 if kind != "action" {
                     return Err(PolicyError::Server(
                         self.malformed(format!("expected an `action` frame, got `{kind}`")),
@@ -289,12 +302,14 @@ impl Model {
         codec::actions(actions).map_err(PolicyError::BadActions)
     }
 
-    /// openpi: the observation out, its reply back (a metadata frame met on the way is kept).
+    /// openpi: the observation out, its reply back (a metadata frame met on the way is kept),
+    /// all within one timeout.
     fn openpi_reply(&mut self, obs: Value) -> Result<Value, WireError> {
-        self.link.send(codec::encode(&obs))?;
+        let deadline = self.link.deadline();
+        self.link.send_by(codec::encode(&obs), deadline)?;
         let mut took_metadata = false;
         loop {
-            let frame = match self.link.recv(None) {
+            let frame = match self.link.recv_by(deadline) {
                 // We took a reply without actions for a late metadata frame: it was the reply.
                 Err(WireError::Timeout(_)) if took_metadata => {
                     return Err(WireError::Malformed(
