@@ -35,7 +35,8 @@ pub struct DemoArgs {
     /// Camera image size WxH (default: the task's own camera size)
     #[arg(long, value_parser = crate::replay::parse_size)]
     size: Option<[usize; 2]>,
-    /// Continue the dataset in --out (episodes already in it are not recorded again)
+    /// Continue the recordings or dataset in --out (episodes already finished there are not
+    /// recorded again; one cut short by a killed run is recorded again)
     #[arg(long)]
     resume: bool,
     /// Episodes recorded at once, each thread with its own scene and renderer
@@ -93,6 +94,7 @@ fn mcap(tasks: &[compiler::Task], a: &DemoArgs) -> Result<ExitCode> {
             image_every: 5,
             image_size: a.size,
             workers: a.workers as usize,
+            resume: a.resume,
             ..Default::default()
         };
         let report = scoring::evaluate(task, &opts, |p| {

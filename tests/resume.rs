@@ -277,3 +277,82 @@ fn a_cut_short_journal_resumes_and_a_garbled_one_is_refused() {
     assert!(err.contains("line 2 is not an episode result"), "{err}");
     assert_eq!(std::fs::read_to_string(&journal).unwrap(), garbled);
 }
+
+/// `autobio demo` killed in the middle of an episode's recording, then resumed: the finished
+/// recordings are kept, the cut one never carried a recording's name (only `.partial`), and the
+/// resumed run records it again; every recording then replays to its recorded success.
+#[test]
+fn a_demo_killed_mid_episode_resumes_with_whole_recordings() {
+    let dir = scratch("killed-demo");
+    let d = dir.to_str().unwrap();
+    let args = [
+        "demo",
+        "--protocol",
+        CLOSE,
+        "--episodes",
+        "3",
+        "--seed",
+        "0",
+        "--out",
+        d,
+    ];
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_autobio"))
+        .args(args)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let recording = |seed: u64| dir.join(format!("thermal_cycler.close_lid_seed{seed}.mcap"));
+    let partial = dir.join("thermal_cycler.close_lid_seed1.mcap.partial");
+    // Killed while seed 1 is being recorded: seed 0 finished, seed 1's partial file started.
+    let deadline = Instant::now() + Duration::from_secs(120);
+    while journal_seeds(&dir).is_empty() || !partial.exists() {
+        assert!(Instant::now() < deadline, "seed 1 did not start in 120 s");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    std::thread::sleep(Duration::from_millis(200));
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert_eq!(journal_seeds(&dir), [0], "killed during seed 1");
+    assert!(recording(0).exists());
+    assert!(
+        !recording(1).exists(),
+        "a cut-short recording carries a recording's name"
+    );
+    let first = common::journal(&dir, "thermal_cycler.close_lid")[0].clone();
+
+    // Without --resume: refused, and told how to continue.
+    let out = autobio(&args);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        text(&out.stderr).contains("continue it with --resume"),
+        "{}",
+        text(&out.stderr)
+    );
+    let mut resumed: Vec<&str> = args.to_vec();
+    resumed.push("--resume");
+    let out = autobio(&resumed);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert_eq!(journal_seeds(&dir), [0, 1, 2], "each seed once, in order");
+    assert_eq!(common::journal(&dir, "thermal_cycler.close_lid")[0], first);
+    let partials: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "partial"))
+        .collect();
+    assert!(partials.is_empty(), "{partials:?}");
+    for seed in 0..3 {
+        let out = autobio(&["replay", recording(seed).to_str().unwrap()]);
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "seed {seed}: {}",
+            text(&out.stdout)
+        );
+        assert!(
+            text(&out.stdout).contains("re-scored: success"),
+            "seed {seed}: {}",
+            text(&out.stdout)
+        );
+    }
+}

@@ -14,6 +14,10 @@
 //! | `/stage` | `autobio.StageEvent` | on event | expert motion / lab-step starts |
 //! | `/verdict` | `autobio.Verdict` | once, at the end | success and every predicate's value, the error if any, the trajectory hash and control steps |
 //! | `/liquid/<name>` | `autobio.Liquid` | physics or control | volume (µL), surface normal and offset (container frame), the surface disk's world pose and radius |
+//!
+//! A recording is written as `<path>.partial` and renamed to its path by [`Recorder::finish`]:
+//! a file under a recording's name is whole, and an episode cut short (a killed process, a
+//! failed write) leaves only the `.partial`, which the next recording of that episode replaces.
 
 use crate::image::Image;
 use labware::LabwareState;
@@ -21,8 +25,8 @@ use serde::Serialize;
 use serde_json::json;
 use std::collections::BTreeMap;
 use std::fs::File;
-use std::io::BufWriter;
-use std::path::Path;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
 
 pub mod proto;
 
@@ -63,6 +67,9 @@ const STATE: &str = "autobio.PhysicsState";
 
 pub struct Recorder {
     w: mcap::Writer<BufWriter<File>>,
+    /// Where the finished recording goes, and where it is written until then.
+    path: PathBuf,
+    partial: PathBuf,
     channels: BTreeMap<String, u16>,
     schemas: BTreeMap<&'static str, u16>,
     seq: u32,
@@ -73,14 +80,18 @@ fn ns(t: f64) -> u64 {
 }
 
 impl Recorder {
+    /// Starts a recording for `path`, written as [`partial_path`] until [`Recorder::finish`].
     pub fn create(path: &Path) -> Result<Recorder, RecordError> {
-        let file = BufWriter::new(File::create(path).map_err(RecordError::Write)?);
+        let partial = partial_path(path);
+        let file = BufWriter::new(File::create(&partial).map_err(RecordError::Write)?);
         let w = mcap::WriteOptions::new()
             .compression(Some(mcap::Compression::Zstd))
             .profile("autobio")
             .create(file)?;
         Ok(Recorder {
             w,
+            path: path.to_path_buf(),
+            partial,
             channels: BTreeMap::new(),
             schemas: BTreeMap::new(),
             seq: 0,
@@ -248,10 +259,24 @@ impl Recorder {
         )
     }
 
+    /// Writes the summary and footer and gives the recording its name.
     pub fn finish(mut self) -> Result<(), RecordError> {
         self.w.finish()?;
-        Ok(())
+        let mut file = self
+            .w
+            .into_inner()
+            .into_inner()
+            .map_err(|e| RecordError::Write(e.into_error()))?;
+        file.flush().map_err(RecordError::Write)?;
+        std::fs::rename(&self.partial, &self.path).map_err(RecordError::Write)
     }
+}
+
+/// Where the recording for `path` is written until it is finished: `<path>.partial`.
+pub fn partial_path(path: &Path) -> PathBuf {
+    let mut name = path.as_os_str().to_owned();
+    name.push(".partial");
+    PathBuf::from(name)
 }
 
 /// What offline re-scoring needs from a recording.
