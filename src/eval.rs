@@ -11,8 +11,12 @@ use std::process::ExitCode;
 
 #[derive(Clone, Debug, clap::Args)]
 pub struct EvalArgs {
-    #[arg(long, required = true)]
+    #[arg(long, required_unless_present = "suite")]
     protocol: Vec<PathBuf>,
+    /// Run a whole suite (`suites/*.toml`: its tasks, episodes, seed and runs, which the flags
+    /// may not change) into --out, recording what a leaderboard submission needs
+    #[arg(long, value_name = "FILE", requires = "out", conflicts_with_all = ["protocol", "episodes", "seed", "runs", "shard"])]
+    suite: Option<PathBuf>,
     /// The policy: `expert` (the scripted expert), `hold` (no motion: the control every task
     /// must fail) or `replay:PATH` (the actions of a recording, or of `<task>_seed<seed>.mcap`
     /// in a folder, for the same seed)
@@ -25,7 +29,9 @@ pub struct EvalArgs {
     /// Folder for results JSON, the episode journal and (with --record) recordings
     #[arg(long)]
     out: Option<PathBuf>,
-    /// Write one MCAP recording per episode (with camera images)
+    /// Write one MCAP recording per episode, with camera images. A model's or a suite's run
+    /// records every episode anyway, without images (its actions and states: what a
+    /// leaderboard's verifier re-simulates)
     #[arg(long)]
     record: bool,
     /// With --record: camera images every this many control steps (0: none)
@@ -88,34 +94,42 @@ pub fn eval(front: &Front, a: &EvalArgs) -> Result<ExitCode> {
         }),
         None => None,
     };
+    let suite = match (&a.suite, &a.out) {
+        (Some(file), Some(out)) => Some(suite_run(file, out)?),
+        _ => None,
+    };
+    let (protocols, episodes, seed, runs) = match &suite {
+        Some(s) => (s.protocols(), s.suite.episodes, s.suite.seed, s.suite.runs),
+        None => (a.protocol.clone(), a.episodes, a.seed, a.runs),
+    };
     let mut rows = Vec::new();
-    for p in &a.protocol {
+    for p in &protocols {
         let task = front.load(p)?;
         let opts = scoring::eval::EvalOptions {
             policy: a.policy.clone(),
-            episodes: a.episodes,
-            seed: a.seed,
+            episodes,
+            seed,
             out: a.out.clone(),
-            record: a.record,
+            record: a.record || a.model.is_some() || suite.is_some(),
             image_every: if a.record { a.image_every } else { 0 },
             image_size: a.size,
             resume: a.resume,
             model: model.clone(),
-            runs: a.runs,
+            runs,
             workers: a.workers as usize,
             shard: a.shard,
         };
         errln!(
             "evaluating {} ({} episodes{}{} from seed {}{})",
             task.id,
-            a.episodes,
-            if a.runs > 1 {
-                format!(" x {} runs", a.runs)
+            episodes,
+            if runs > 1 {
+                format!(" x {runs} runs")
             } else {
                 String::new()
             },
             a.shard.map(|s| format!(", shard {s}")).unwrap_or_default(),
-            a.seed,
+            seed,
             if a.workers > 1 {
                 format!(", {} workers", a.workers)
             } else {
@@ -142,6 +156,36 @@ pub fn eval(front: &Front, a: &EvalArgs) -> Result<ExitCode> {
         outln!("results: {}/<task>.results.json", o.display());
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Reads the suite and leaves its copy in `out` (a run continued into `out` must be of the same
+/// suite, byte for byte).
+fn suite_run(file: &std::path::Path, out: &std::path::Path) -> Result<results::suite::LoadedSuite> {
+    use anyhow::Context;
+    let suite = results::suite::LoadedSuite::read(file)?;
+    let bytes = std::fs::read(file).with_context(|| format!("reading {}", file.display()))?;
+    let copy = out.join(results::suite::SUITE_FILE);
+    match std::fs::read(&copy) {
+        Ok(there) if there != bytes => anyhow::bail!(
+            "{} holds a run of another suite ({}); use another --out",
+            out.display(),
+            copy.display()
+        ),
+        Ok(_) => {}
+        Err(_) => {
+            std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+            std::fs::write(&copy, &bytes).with_context(|| format!("writing {}", copy.display()))?;
+        }
+    }
+    errln!(
+        "suite {} ({} tasks, {} episodes x {} runs from seed {})",
+        suite.suite.name,
+        suite.suite.tasks.len(),
+        suite.suite.episodes,
+        suite.suite.runs,
+        suite.suite.seed
+    );
+    Ok(suite)
 }
 
 pub fn results(c: &ResultsCommand) -> Result<ExitCode> {

@@ -14,6 +14,7 @@ mod eval;
 mod front;
 mod progress;
 mod replay;
+mod submissions;
 mod tasks_doc;
 
 use anyhow::{Result, bail};
@@ -65,6 +66,11 @@ enum Command {
         #[command(subcommand)]
         command: eval::ResultsCommand,
     },
+    /// Leaderboard submissions: pack finished suite runs into a bundle, verify a bundle offline
+    Leaderboard {
+        #[command(subcommand)]
+        command: submissions::LeaderboardCommand,
+    },
     /// Re-score a recording offline; re-simulate it from its recorded state (--simulate) or redraw
     /// its cameras at any size (--render)
     Replay(replay::ReplayArgs),
@@ -105,6 +111,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Dataset { command } => datasets::dataset_cli(command),
         Command::Eval(a) => eval::eval(&front, a),
         Command::Results { command } => eval::results(command),
+        Command::Leaderboard { command } => submissions::run(command),
         Command::Replay(a) => replay::run(a),
         Command::Tasks(a) => tasks_doc::run_cli(a),
         Command::Bench(a) => bench::run_cli(&front, a),

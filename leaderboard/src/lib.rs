@@ -1,10 +1,14 @@
 //! The leaderboard: evaluation results (`results::EvalReport`, results schema
-//! [`results::RESULTS_SCHEMA_VERSION`]) turned into reports. Today that is the results tables
-//! `autobio eval` and `autobio results merge` print ([`table`]); submissions, their offline
-//! verification and the site come next.
+//! [`results::RESULTS_SCHEMA_VERSION`]) turned into reports and submissions. The results tables
+//! `autobio eval` and `autobio results merge` print ([`table`]); submission bundles packed from
+//! suite runs and unpacked from strangers' files under limits ([`bundle`]); and their offline
+//! verification ([`verify`]), which re-enacts every episode from its seed and actions through a
+//! simulator the caller hands in.
 //!
-//! It links no simulator: it reads what runs wrote, through `results`, and runs nothing.
+//! It links no simulator: it reads what runs wrote, through `results`, and runs nothing itself.
 
+pub mod bundle;
 pub mod table;
+pub mod verify;
 
 pub use table::{results_table, runs_table};

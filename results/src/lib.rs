@@ -1,7 +1,7 @@
 //! What episodes and runs produce, readable without a simulator: the judge and its verdicts
 //! ([`verdict`]), an episode's result and the trajectory-hash rule ([`episode`]), run records,
 //! statistics and merging shards ([`run`]), model profiles ([`profile`]), camera frames
-//! ([`image`]) and MCAP recordings, written and read ([`recording`]).
+//! ([`image`]), MCAP recordings, written and read ([`recording`]), and suites ([`suite`]).
 //!
 //! It links no simulator (no MuJoCo, no EGL): a leaderboard, a verifier's bookkeeping and CI for
 //! submissions build on it alone. It does not run episodes (the runtime and `scoring` do) and
@@ -12,6 +12,7 @@ pub mod image;
 pub mod profile;
 pub mod recording;
 pub mod run;
+pub mod suite;
 pub mod verdict;
 
 pub use episode::{EpisodeResult, Outcome, TrajectoryHash};

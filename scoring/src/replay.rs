@@ -6,6 +6,10 @@
 //!   with no simulation (the frames an episode recorded come back byte for byte), for a new
 //!   recording ([`render`]), PNG files, or a dataset (`dataset::export`).
 //!
+//! - [`reenact`]: a verifier's replay, trusting nothing a recording states but its actions: the
+//!   scene the seed draws for the caller's own task, the actions applied one control step each,
+//!   the trajectory hash and verdict as the episode then comes out.
+//!
 //! Offline re-scoring from the labware series alone is [`crate::Judge::replay`].
 
 use crate::verdict::{Judge, Verdict};
@@ -202,6 +206,52 @@ pub fn resimulate(rec: &Recording, from_step: usize) -> Result<Resimulation, Rep
         recorded_hash: rec.recorded_hash().map(str::to_string),
         first_divergence,
         verdict: judge.verdict(),
+    })
+}
+
+/// An episode re-enacted from its seed and actions.
+#[derive(Clone, Debug)]
+pub struct Reenacted {
+    /// The trajectory hash over the control steps the actions drove.
+    pub hash: String,
+    pub verdict: Verdict,
+    pub control_steps: u64,
+    /// The episode ended (success or time limit) with the last action.
+    pub finished: bool,
+    /// Actions left over once the episode had ended (a claimed episode that ran on after its
+    /// end), and why the simulation refused an action, if it did.
+    pub unused_actions: usize,
+    pub refused: Option<String>,
+}
+
+/// Re-enacts an episode of `task` (the verifier's own, not a recording's) from the scene `seed`
+/// draws and `actions` (one per control step, every robot's part in task order). Trusts
+/// nothing recorded but the actions.
+pub fn reenact(
+    task: &Task,
+    seed: u64,
+    actions: &[Vec<f64>],
+) -> Result<Reenacted, runtime::env::EnvError> {
+    let mut env = runtime::Env::make(task, seed, runtime::env::EnvOptions::default())?;
+    let mut refused = None;
+    let mut used = 0;
+    for a in actions {
+        if env.done() {
+            break;
+        }
+        used += 1;
+        if let Err(e) = env.step(a) {
+            refused = Some(e.to_string());
+            break;
+        }
+    }
+    Ok(Reenacted {
+        hash: env.trajectory_hash(),
+        verdict: env.verdict(),
+        control_steps: env.control_steps(),
+        finished: env.done() && refused.is_none(),
+        unused_actions: actions.len() - used,
+        refused,
     })
 }
 

@@ -23,6 +23,18 @@ pub fn protocol_files(task: &Task) -> std::collections::BTreeMap<String, Option<
         .collect()
 }
 
+/// SHA-256 of the compiled task as JSON with the files it was read from left out (`source`):
+/// the same task compiled from another path, or on another machine, has the same hash. A
+/// verifier compares a submission's with the shipped protocol's.
+pub fn task_content_sha256(task: &compiler::Task) -> String {
+    let mut task = task.clone();
+    task.source.clear();
+    for s in &mut task.stages {
+        s.source.clear();
+    }
+    sha256_hex(&serde_json::to_vec(&task).unwrap_or_default())
+}
+
 /// Lower-case hex SHA-256.
 pub fn sha256_hex(bytes: &[u8]) -> String {
     use sha2::{Digest, Sha256};
@@ -163,6 +175,10 @@ pub struct Manifest {
     pub task_sha256: String,
     /// SHA-256 of the protocol file as read, when it could be read.
     pub protocol_sha256: Option<String>,
+    /// [`task_content_sha256`]: the compiled task whatever path it was read from (absent in
+    /// records made before submissions were verified).
+    #[serde(default)]
+    pub task_content_sha256: Option<String>,
     /// SHA-256 of every protocol file the task was compiled from (a chain's stages too), by
     /// path; null for one that could not be read.
     #[serde(default)]

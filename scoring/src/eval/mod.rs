@@ -166,6 +166,7 @@ pub fn evaluate(
         protocol: task.source.clone(),
         task_sha256: sha256_hex(&serde_json::to_vec(task).unwrap_or_default()),
         protocol_sha256: std::fs::read(&task.source).ok().map(|b| sha256_hex(&b)),
+        task_content_sha256: Some(record::task_content_sha256(task)),
         protocol_files: record::protocol_files(task),
         policy: match &opts.model {
             Some(_) => "model".to_string(),

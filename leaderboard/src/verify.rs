@@ -1,0 +1,357 @@
+//! Offline verification of a submission bundle, trusting nothing the submitter wrote but the
+//! actions. A bundle is accepted only if:
+//! - every member's SHA-256 is the index's, and every member is in the index;
+//! - its suite is a shipped one, byte for byte (`suites/<name>.toml`);
+//! - every task's compiled content is the shipped protocol's ([`task_content_sha256`]): a result
+//!   for a modified task is refused;
+//! - the journals hold every episode the suite plans, each once, and no other;
+//! - every episode, re-enacted from the scene its seed builds for the shipped task and the
+//!   recorded actions alone, reproduces the journal's trajectory hash, success, score and length.
+//!
+//! Each failure is named; verification goes on past the first so one run lists them all. The
+//! re-enactment itself is the caller's ([`Reenact`]): this crate links no simulator.
+
+use crate::bundle::{INDEX, Unpacked};
+use compiler::Task;
+use results::EpisodeResult;
+use results::run::record::{sha256_hex, task_content_sha256};
+use results::suite::{LoadedSuite, SUITE_FILE};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// What re-enacting an episode from its seed and actions gave.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Reenacted {
+    pub hash: String,
+    pub success: bool,
+    pub score: f64,
+    pub control_steps: u64,
+    /// The episode ended (success or time limit) exactly with the last action.
+    pub finished: bool,
+    pub unused_actions: usize,
+    /// Why the simulation refused an action, if it did.
+    pub refused: Option<String>,
+}
+
+/// Re-enacts an episode of the (shipped) task from its seed and actions, in a simulator.
+pub type Reenact<'a> = dyn Fn(&Task, u64, &[Vec<f64>]) -> Result<Reenacted, String> + Sync + 'a;
+
+#[derive(Clone, Debug)]
+pub struct VerifyOptions {
+    /// Where the shipped suites are (`suites/`).
+    pub suites: PathBuf,
+    /// Episodes re-enacted at once.
+    pub workers: usize,
+}
+
+/// What verification found.
+#[derive(Clone, Debug, Default)]
+pub struct Verification {
+    /// Each reason the bundle is refused; empty: accepted.
+    pub failures: Vec<String>,
+    pub tasks: usize,
+    pub episodes: usize,
+    /// Episodes re-enacted, and the wall time it took (s).
+    pub reenacted: usize,
+    pub reenact_wall_s: f64,
+}
+
+impl Verification {
+    pub fn accepted(&self) -> bool {
+        self.failures.is_empty()
+    }
+}
+
+/// One claimed episode to re-enact.
+struct Claim {
+    task: usize,
+    run_dir: PathBuf,
+    claimed: EpisodeResult,
+}
+
+/// Verifies an unpacked bundle (see the module doc).
+pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Verification {
+    let mut v = Verification::default();
+    let root = &bundle.root;
+    // Members against the index.
+    for member in &bundle.members {
+        if member == INDEX {
+            continue;
+        }
+        match bundle.index.files.get(member) {
+            None => v.failures.push(format!("{member} is not in the index")),
+            Some(want) => match std::fs::read(root.join(member)) {
+                Ok(bytes) if sha256_hex(&bytes) == *want => {}
+                Ok(_) => v
+                    .failures
+                    .push(format!("{member}: its SHA-256 is not the index's")),
+                Err(e) => v.failures.push(format!("{member}: {e}")),
+            },
+        }
+    }
+    for listed in bundle.index.files.keys() {
+        if !bundle.members.contains(listed) {
+            v.failures
+                .push(format!("{listed} is in the index but not in the archive"));
+        }
+    }
+    // The suite: a shipped one, byte for byte.
+    let name = &bundle.index.suite.name;
+    let shipped_path = opts.suites.join(format!("{name}.toml"));
+    let shipped = match LoadedSuite::read(&shipped_path) {
+        Ok(s) => s,
+        Err(e) => {
+            v.failures
+                .push(format!("suite `{name}` is not a shipped suite: {e}"));
+            return v;
+        }
+    };
+    if shipped.sha256 != bundle.index.suite_sha256 {
+        v.failures.push(format!(
+            "suite `{name}` differs from the shipped {}",
+            shipped_path.display()
+        ));
+    }
+    let run_dirs: Vec<PathBuf> = run_dirs(bundle);
+    for dir in &run_dirs {
+        match std::fs::read(dir.join(SUITE_FILE)) {
+            Ok(bytes) if sha256_hex(&bytes) == shipped.sha256 => {}
+            _ => v.failures.push(format!(
+                "{}: its {SUITE_FILE} is not the shipped suite `{name}`",
+                rel(root, dir)
+            )),
+        }
+    }
+    let suite = &shipped.suite;
+    let planned = results::run::plan(suite.seed, suite.episodes, suite.runs, None);
+    // Every task: the shipped protocol compiled, the manifests' task and the journals' seeds.
+    let mut tasks: Vec<Task> = Vec::new();
+    let mut claims: Vec<Claim> = Vec::new();
+    for protocol in shipped.protocols() {
+        let task = match compiler::check_file(&protocol, None) {
+            Ok(c) => match c.task {
+                Some(t) => t,
+                None => {
+                    v.failures.push(format!(
+                        "the shipped {} does not compile",
+                        protocol.display()
+                    ));
+                    continue;
+                }
+            },
+            Err(e) => {
+                v.failures.push(e.to_string());
+                continue;
+            }
+        };
+        let content = task_content_sha256(&task);
+        let mut seen: BTreeMap<(u32, u64), usize> = BTreeMap::new();
+        let mut manifests = 0;
+        for dir in &run_dirs {
+            let manifest_path = results::run::manifest_path(dir, &task.id);
+            if !manifest_path.exists() {
+                continue;
+            }
+            manifests += 1;
+            match results::run::record::Manifest::read(&manifest_path) {
+                Ok(m) => {
+                    if m.task_content_sha256.as_deref() != Some(content.as_str()) {
+                        v.failures.push(format!(
+                            "{}: the results are for a modified task (its compiled content \
+                             differs from the shipped {})",
+                            rel(root, &manifest_path),
+                            protocol.display()
+                        ));
+                    }
+                    if (m.seed, m.episodes, m.runs) != (suite.seed, suite.episodes, suite.runs) {
+                        v.failures.push(format!(
+                            "{}: seed {}, {} episodes x {} runs; the suite says seed {}, {} x {}",
+                            rel(root, &manifest_path),
+                            m.seed,
+                            m.episodes,
+                            m.runs,
+                            suite.seed,
+                            suite.episodes,
+                            suite.runs
+                        ));
+                    }
+                }
+                Err(e) => v
+                    .failures
+                    .push(format!("{}: {e}", rel(root, &manifest_path))),
+            }
+            let journal = results::run::journal_path(dir, &task.id);
+            let episodes = match results::run::record::read_journal_only(&journal) {
+                Ok(e) => e,
+                Err(e) => {
+                    v.failures.push(format!("{}: {e}", rel(root, &journal)));
+                    continue;
+                }
+            };
+            for e in episodes {
+                *seen.entry((e.run, e.seed)).or_default() += 1;
+                claims.push(Claim {
+                    task: tasks.len(),
+                    run_dir: dir.clone(),
+                    claimed: e,
+                });
+            }
+        }
+        if manifests == 0 {
+            v.failures.push(format!(
+                "{}: no run of this suite task in the bundle",
+                task.id
+            ));
+        }
+        for key in &planned {
+            match seen.get(key) {
+                None => v.failures.push(format!(
+                    "{}: seed {} (run {}) is missing",
+                    task.id, key.1, key.0
+                )),
+                Some(&n) if n > 1 => v.failures.push(format!(
+                    "{}: seed {} (run {}) is in the journals {n} times",
+                    task.id, key.1, key.0
+                )),
+                Some(_) => {}
+            }
+        }
+        for (run, seed) in seen.keys() {
+            if !planned.contains(&(*run, *seed)) {
+                v.failures.push(format!(
+                    "{}: seed {seed} (run {run}) is not one the suite plans",
+                    task.id
+                ));
+            }
+        }
+        v.tasks += 1;
+        tasks.push(task);
+    }
+    v.episodes = claims.len();
+    // Every claimed episode re-enacted from its seed and recorded actions.
+    let start = std::time::Instant::now();
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let found = std::sync::Mutex::new(Vec::new());
+    std::thread::scope(|s| {
+        for _ in 0..opts.workers.max(1) {
+            s.spawn(|| {
+                loop {
+                    let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    let Some(c) = claims.get(k) else { break };
+                    let problem = check_claim(&tasks[c.task], c, root, reenact);
+                    found.lock().unwrap().push((k, problem));
+                }
+            });
+        }
+    });
+    let mut found = found.into_inner().unwrap();
+    found.sort_by_key(|(k, _)| *k);
+    v.reenacted = found.len();
+    v.reenact_wall_s = start.elapsed().as_secs_f64();
+    v.failures
+        .extend(found.into_iter().filter_map(|(_, problem)| problem));
+    v
+}
+
+/// The run folders in the bundle (`runs/<k>/`), in order.
+fn run_dirs(bundle: &Unpacked) -> Vec<PathBuf> {
+    let mut dirs: Vec<PathBuf> = bundle
+        .members
+        .iter()
+        .filter_map(|m| {
+            let mut parts = m.split('/');
+            match (parts.next(), parts.next(), parts.next()) {
+                (Some("runs"), Some(k), Some(_)) => Some(bundle.root.join("runs").join(k)),
+                _ => None,
+            }
+        })
+        .collect();
+    dirs.sort();
+    dirs.dedup();
+    dirs
+}
+
+fn rel(root: &Path, path: &Path) -> String {
+    path.strip_prefix(root)
+        .unwrap_or(path)
+        .display()
+        .to_string()
+}
+
+/// Re-enacts one claimed episode; what differs from the claim, if anything.
+fn check_claim(task: &Task, c: &Claim, root: &Path, reenact: &Reenact) -> Option<String> {
+    let e = &c.claimed;
+    let what = format!("{} seed {} (run {})", task.id, e.seed, e.run);
+    let path = c.run_dir.join(format!("{}_seed{}.mcap", task.id, e.seed));
+    let summary = match results::recording::read_recording(&path) {
+        Ok(s) => s,
+        Err(err) => {
+            return Some(format!(
+                "{what}: its recording {} does not read: {err}",
+                rel(root, &path)
+            ));
+        }
+    };
+    // The actions, in the shipped task's robot order; nothing else of the recording is used.
+    let steps = summary.actions.values().map(Vec::len).max().unwrap_or(0);
+    let mut actions = vec![Vec::new(); steps];
+    for r in &task.robots {
+        let Some(mine) = summary.actions.get(&r.name).filter(|a| a.len() == steps) else {
+            return Some(format!(
+                "{what}: the recording has no complete action series for robot `{}`",
+                r.name
+            ));
+        };
+        for (k, a) in actions.iter_mut().enumerate() {
+            a.extend_from_slice(&mine[k]);
+        }
+    }
+    let got = match reenact(task, e.seed, &actions) {
+        Ok(g) => g,
+        Err(why) => return Some(format!("{what}: cannot be re-enacted: {why}")),
+    };
+    let ended_by_error = e.error.is_some();
+    let mut differs = Vec::new();
+    if got.hash != e.trajectory_hash {
+        differs.push(format!(
+            "trajectory hash {} (claimed {})",
+            short(&got.hash),
+            short(&e.trajectory_hash)
+        ));
+    }
+    if got.success != e.success {
+        differs.push(format!("success {} (claimed {})", got.success, e.success));
+    }
+    if got.score != e.verdict.score {
+        differs.push(format!("score {} (claimed {})", got.score, e.verdict.score));
+    }
+    if got.control_steps != e.control_steps {
+        differs.push(format!(
+            "{} control steps (claimed {})",
+            got.control_steps, e.control_steps
+        ));
+    }
+    if !ended_by_error && !got.finished {
+        differs.push(match &got.refused {
+            Some(why) => format!("the simulation refused an action: {why}"),
+            None => "the actions run out before the episode ends".into(),
+        });
+    }
+    if got.unused_actions > 0 {
+        differs.push(format!(
+            "{} actions recorded after the episode ended",
+            got.unused_actions
+        ));
+    }
+    if differs.is_empty() {
+        return None;
+    }
+    Some(format!(
+        "{what}: re-enacted from its seed and recorded actions, {}",
+        differs.join(", ")
+    ))
+}
+
+fn short(hash: &str) -> &str {
+    &hash[..hash.len().min(12)]
+}
