@@ -296,12 +296,14 @@ fn check_claim(task: &Task, c: &Claim, root: &Path, reenact: &Reenact) -> Option
     let steps = summary.actions.values().map(Vec::len).max().unwrap_or(0);
     let mut actions = vec![Vec::new(); steps];
     for r in &task.robots {
-        let Some(mine) = summary.actions.get(&r.name).filter(|a| a.len() == steps) else {
+        let mine = summary.actions.get(&r.name).map_or(&[][..], Vec::as_slice);
+        if mine.len() != steps {
             return Some(format!(
-                "{what}: the recording has no complete action series for robot `{}`",
+                "{what}: the recording has {} actions for robot `{}` and {steps} for another",
+                mine.len(),
                 r.name
             ));
-        };
+        }
         for (k, a) in actions.iter_mut().enumerate() {
             a.extend_from_slice(&mine[k]);
         }

@@ -1,0 +1,586 @@
+//! Leaderboard submissions with real files: a suite run by `autobio eval --suite` (the scripted
+//! expert, and a model server on loopback), packed by `autobio leaderboard submit`, verifies;
+//! each way a submitter or a stranger's file can lie is refused by `verify` with its own message:
+//! a flipped verdict, an edited journal (with and without its index hash updated), a recording
+//! whose states were forged so that plain replay scores it a success, an action changed by 1e-9,
+//! a changed protocol, a missing or duplicated seed, and archives with a path that climbs out,
+//! a link, a truncated end, a decompression bomb or an unknown schema.
+
+mod common;
+
+use common::{Server, autobio, scratch, text};
+use serde_json::Value;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+const TASK: &str = "thermal_cycler.close_lid";
+
+fn repo(path: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join(path)
+        .display()
+        .to_string()
+}
+
+/// A folder of shipped suites holding `mini`: `protocol`, 2 episodes from seed 0, 1 run.
+fn suites(name: &str, protocol: &str) -> PathBuf {
+    let dir = scratch(name);
+    std::fs::write(
+        dir.join("mini.toml"),
+        format!(
+            "format = 1\n[suite]\nname = \"mini\"\nepisodes = 2\nseed = 0\nruns = 1\ntasks = [\"{protocol}\"]\n"
+        ),
+    )
+    .unwrap();
+    dir
+}
+
+fn run_ok(args: &[&str]) -> String {
+    let out = autobio(args);
+    assert!(
+        out.status.success(),
+        "autobio {args:?}: {}{}",
+        text(&out.stdout),
+        text(&out.stderr)
+    );
+    text(&out.stdout)
+}
+
+/// The shipped suites, an expert run of them, its bundle; made once.
+struct Fixture {
+    suites: PathBuf,
+    run: PathBuf,
+    hold: PathBuf,
+    bundle: PathBuf,
+}
+
+fn fixture() -> &'static Fixture {
+    static F: OnceLock<Fixture> = OnceLock::new();
+    F.get_or_init(|| {
+        let suites = suites(
+            "lb-suites",
+            &repo("protocols/thermal_cycler/close_lid.toml"),
+        );
+        let suite = suites.join("mini.toml");
+        let root = scratch("lb-runs");
+        let (run, hold) = (root.join("expert"), root.join("hold"));
+        for (dir, policy) in [(&run, "expert"), (&hold, "hold")] {
+            run_ok(&[
+                "eval",
+                "--suite",
+                suite.to_str().unwrap(),
+                "--policy",
+                policy,
+                "--out",
+                dir.to_str().unwrap(),
+            ]);
+        }
+        let bundle = root.join("expert.tar.zst");
+        let said = run_ok(&[
+            "leaderboard",
+            "submit",
+            run.to_str().unwrap(),
+            "--model-name",
+            "scripted expert",
+            "--training",
+            "none",
+            "--out",
+            bundle.to_str().unwrap(),
+        ]);
+        assert!(said.contains("for suite mini"), "{said}");
+        Fixture {
+            suites,
+            run,
+            hold,
+            bundle,
+        }
+    })
+}
+
+/// `verify`'s exit code and output.
+fn verify(bundle: &Path, suites: &Path) -> (i32, String) {
+    let out = autobio(&[
+        "leaderboard",
+        "verify",
+        bundle.to_str().unwrap(),
+        "--suites",
+        suites.to_str().unwrap(),
+    ]);
+    (
+        out.status.code().unwrap(),
+        text(&out.stdout) + &text(&out.stderr),
+    )
+}
+
+fn refused(bundle: &Path, suites: &Path, reason: &str) -> String {
+    let (code, said) = verify(bundle, suites);
+    assert_eq!(code, 1, "{said}");
+    assert!(said.contains(reason), "wanted `{reason}` in:\n{said}");
+    assert!(!said.contains("\naccepted"), "{said}");
+    said
+}
+
+/// Every member of a bundle, by name.
+fn members(bundle: &Path) -> BTreeMap<String, Vec<u8>> {
+    let file = std::fs::File::open(bundle).unwrap();
+    let mut archive = tar::Archive::new(zstd::Decoder::new(file).unwrap());
+    let mut out = BTreeMap::new();
+    for e in archive.entries().unwrap() {
+        let mut e = e.unwrap();
+        let name = e.path().unwrap().display().to_string();
+        let mut bytes = Vec::new();
+        std::io::Read::read_to_end(&mut e, &mut bytes).unwrap();
+        out.insert(name, bytes);
+    }
+    out
+}
+
+fn sha256(bytes: &[u8]) -> String {
+    results::run::record::sha256_hex(bytes)
+}
+
+/// Writes `members` as a bundle; with `rehash`, the index lists each member's SHA-256 as a
+/// forger would.
+fn pack(members: &BTreeMap<String, Vec<u8>>, out: &Path, rehash: bool) {
+    let mut members = members.clone();
+    if rehash {
+        let mut index: Value = serde_json::from_slice(&members["index.json"]).unwrap();
+        let files: serde_json::Map<String, Value> = members
+            .iter()
+            .filter(|(k, _)| *k != "index.json")
+            .map(|(k, v)| (k.clone(), Value::from(sha256(v))))
+            .collect();
+        index["files"] = Value::Object(files);
+        members.insert("index.json".into(), serde_json::to_vec(&index).unwrap());
+    }
+    let file = std::fs::File::create(out).unwrap();
+    let mut tar = tar::Builder::new(zstd::Encoder::new(file, 1).unwrap().auto_finish());
+    for (name, bytes) in &members {
+        let mut h = tar::Header::new_gnu();
+        h.set_size(bytes.len() as u64);
+        h.set_mode(0o644);
+        tar.append_data(&mut h, name, &bytes[..]).unwrap();
+    }
+    tar.into_inner().unwrap();
+}
+
+fn journal_member() -> String {
+    format!("runs/0/{TASK}.journal.jsonl")
+}
+
+/// The journal with `edit` applied to its lines.
+fn edit_journal(m: &mut BTreeMap<String, Vec<u8>>, edit: impl FnOnce(Vec<String>) -> Vec<String>) {
+    let key = journal_member();
+    let lines: Vec<String> = text(&m[&key]).lines().map(str::to_string).collect();
+    let edited = edit(lines).join("\n") + "\n";
+    m.insert(key, edited.into_bytes());
+}
+
+/// A copy of recording `src` with each message's data passed through `edit(topic, data)`.
+fn rewrite(src: &Path, dst: &Path, mut edit: impl FnMut(&str, &[u8]) -> Option<Vec<u8>>) {
+    let mut w = results::recording::Recorder::create(dst).unwrap();
+    results::recording::for_each_message(src, |m| match edit(&m.channel.topic, &m.data) {
+        Some(data) => w.pass(&mcap::Message {
+            data: std::borrow::Cow::Owned(data),
+            ..m.clone()
+        }),
+        None => w.pass(m),
+    })
+    .unwrap();
+    w.finish().unwrap();
+}
+
+#[test]
+fn an_honest_bundle_verifies() {
+    let f = fixture();
+    let (code, said) = verify(&f.bundle, &f.suites);
+    assert_eq!(code, 0, "{said}");
+    assert!(said.contains("accepted"), "{said}");
+    assert!(
+        said.contains("(1 tasks, 2 episodes); 2 episodes re-enacted"),
+        "{said}"
+    );
+    // The index lists every file with its hash, the model and the suite.
+    let m = members(&f.bundle);
+    let index: Value = serde_json::from_slice(&m["index.json"]).unwrap();
+    assert_eq!(index["schema_version"], 1);
+    assert_eq!(index["model"]["name"], "scripted expert");
+    assert_eq!(index["model"]["training"], "none");
+    assert_eq!(index["suite"]["name"], "mini");
+    for (name, bytes) in &m {
+        if name != "index.json" {
+            assert_eq!(index["files"][name], sha256(bytes), "{name}");
+        }
+    }
+    assert!(m.contains_key(&format!("runs/0/{TASK}_seed1.mcap")));
+    // Packing the same runs again gives the same bytes.
+    let again = scratch("lb-again").join("b.tar.zst");
+    run_ok(&[
+        "leaderboard",
+        "submit",
+        f.run.to_str().unwrap(),
+        "--model-name",
+        "scripted expert",
+        "--training",
+        "none",
+        "--out",
+        again.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        std::fs::read(&again).unwrap(),
+        std::fs::read(&f.bundle).unwrap()
+    );
+}
+
+#[test]
+fn a_flipped_verdict_is_refused() {
+    let f = fixture();
+    let mut m = members(&f.bundle);
+    edit_journal(&mut m, |mut lines| {
+        let mut e: Value = serde_json::from_str(&lines[0]).unwrap();
+        e["success"] = Value::Bool(false);
+        e["outcome"] = Value::from("time_limit");
+        lines[0] = e.to_string();
+        lines
+    });
+    let out = scratch("lb-flipped").join("b.tar.zst");
+    pack(&m, &out, true);
+    refused(
+        &out,
+        &f.suites,
+        "seed 0 (run 0): re-enacted from its seed and recorded actions, success true (claimed false)",
+    );
+}
+
+#[test]
+fn an_edited_journal_is_refused_with_or_without_its_hash_updated() {
+    let f = fixture();
+    let mut m = members(&f.bundle);
+    edit_journal(&mut m, |mut lines| {
+        lines[1] = lines[1].replace("\"control_steps\":", "\"control_steps\":1");
+        lines
+    });
+    let dir = scratch("lb-edited");
+    pack(&m, &dir.join("a.tar.zst"), false);
+    refused(
+        &dir.join("a.tar.zst"),
+        &f.suites,
+        &format!("{}: its SHA-256 is not the index's", journal_member()),
+    );
+    pack(&m, &dir.join("b.tar.zst"), true);
+    refused(
+        &dir.join("b.tar.zst"),
+        &f.suites,
+        "seed 1 (run 0): re-enacted",
+    );
+}
+
+#[test]
+fn forged_recorded_states_do_not_pass_where_plain_replay_is_fooled() {
+    // Seed 1's recording keeps the expert's states (the lid shut, the episode a success) but its
+    // actions are the no-motion run's: replay re-scores it a success from the states; the
+    // verifier re-enacts the actions and finds the lid never moved.
+    let f = fixture();
+    let dir = scratch("lb-forged");
+    let expert = f.run.join(format!("{TASK}_seed1.mcap"));
+    let hold = f.hold.join(format!("{TASK}_seed1.mcap"));
+    let mut hold_actions = Vec::new();
+    results::recording::for_each_message(&hold, |m| {
+        if m.channel.topic.ends_with("/action") {
+            hold_actions.push(m.data.to_vec());
+        }
+        Ok(())
+    })
+    .unwrap();
+    let forged = dir.join(format!("{TASK}_seed1.mcap"));
+    let mut k = 0;
+    rewrite(&expert, &forged, |topic, _| {
+        topic.ends_with("/action").then(|| {
+            k += 1;
+            hold_actions[k - 1].clone()
+        })
+    });
+    let replay = text(&autobio(&["replay", forged.to_str().unwrap()]).stdout);
+    assert!(
+        replay.contains("re-scored: success"),
+        "plain replay: {replay}"
+    );
+    let mut m = members(&f.bundle);
+    m.insert(
+        format!("runs/0/{TASK}_seed1.mcap"),
+        std::fs::read(&forged).unwrap(),
+    );
+    let out = dir.join("b.tar.zst");
+    pack(&m, &out, true);
+    let said = refused(
+        &out,
+        &f.suites,
+        "seed 1 (run 0): re-enacted from its seed and recorded actions, trajectory hash",
+    );
+    assert!(said.contains("success false (claimed true)"), "{said}");
+}
+
+#[test]
+fn an_action_changed_by_a_nanoradian_is_refused() {
+    let f = fixture();
+    let dir = scratch("lb-nudged");
+    let src = f.run.join(format!("{TASK}_seed0.mcap"));
+    let nudged = dir.join("nudged.mcap");
+    let mut k = 0;
+    rewrite(&src, &nudged, |topic, data| {
+        if !topic.ends_with("/action") {
+            return None;
+        }
+        k += 1;
+        (k == 40).then(|| {
+            let mut v: Value = serde_json::from_slice(data).unwrap();
+            let a = v["action"][0].as_f64().unwrap();
+            v["action"][0] = Value::from(a + 1e-9);
+            serde_json::to_vec(&v).unwrap()
+        })
+    });
+    let mut m = members(&f.bundle);
+    m.insert(
+        format!("runs/0/{TASK}_seed0.mcap"),
+        std::fs::read(&nudged).unwrap(),
+    );
+    let out = dir.join("b.tar.zst");
+    pack(&m, &out, true);
+    refused(
+        &out,
+        &f.suites,
+        "seed 0 (run 0): re-enacted from its seed and recorded actions, trajectory hash",
+    );
+}
+
+#[test]
+fn results_for_a_changed_protocol_are_refused() {
+    // The submitter ran the suite with the protocol edited in place (a longer time limit), then
+    // put it back: the suite file is the shipped one, the compiled task is not.
+    let dir = scratch("lb-changed");
+    let protocol = dir.join("close_lid.toml");
+    let original = std::fs::read_to_string("protocols/thermal_cycler/close_lid.toml").unwrap();
+    std::fs::write(&protocol, original.replace("\"31.5 s\"", "\"60 s\"")).unwrap();
+    let suites = suites("lb-changed-suites", protocol.to_str().unwrap());
+    let run = dir.join("run");
+    run_ok(&[
+        "eval",
+        "--suite",
+        suites.join("mini.toml").to_str().unwrap(),
+        "--out",
+        run.to_str().unwrap(),
+    ]);
+    std::fs::write(&protocol, &original).unwrap();
+    let bundle = dir.join("b.tar");
+    run_ok(&[
+        "leaderboard",
+        "submit",
+        run.to_str().unwrap(),
+        "--model-name",
+        "x",
+        "--out",
+        bundle.to_str().unwrap(),
+    ]);
+    refused(&bundle, &suites, "the results are for a modified task");
+}
+
+#[test]
+fn a_missing_or_duplicated_seed_is_refused() {
+    let f = fixture();
+    let dir = scratch("lb-seeds");
+    let mut m = members(&f.bundle);
+    edit_journal(&mut m, |lines| vec![lines[0].clone()]);
+    pack(&m, &dir.join("missing.tar.zst"), true);
+    refused(
+        &dir.join("missing.tar.zst"),
+        &f.suites,
+        &format!("{TASK}: seed 1 (run 0) is missing"),
+    );
+    let mut m = members(&f.bundle);
+    edit_journal(&mut m, |lines| {
+        vec![lines[0].clone(), lines[1].clone(), lines[1].clone()]
+    });
+    pack(&m, &dir.join("twice.tar.zst"), true);
+    refused(
+        &dir.join("twice.tar.zst"),
+        &f.suites,
+        &format!("{TASK}: seed 1 (run 0) is in the journals 2 times"),
+    );
+}
+
+/// A plain tar with `build` adding its members.
+fn raw_tar(out: &Path, build: impl FnOnce(&mut tar::Builder<std::fs::File>)) {
+    let mut tar = tar::Builder::new(std::fs::File::create(out).unwrap());
+    build(&mut tar);
+    tar.into_inner().unwrap();
+}
+
+fn header(size: u64) -> tar::Header {
+    let mut h = tar::Header::new_gnu();
+    h.set_size(size);
+    h.set_mode(0o644);
+    h
+}
+
+#[test]
+fn hostile_archives_are_refused_and_write_nothing_outside() {
+    let f = fixture();
+    let dir = scratch("lb-hostile");
+    let index = members(&f.bundle)["index.json"].clone();
+    let work = dir.join("work");
+    let verify_in = |bundle: &Path| {
+        let _ = std::fs::remove_dir_all(&work);
+        let out = autobio(&[
+            "leaderboard",
+            "verify",
+            bundle.to_str().unwrap(),
+            "--suites",
+            f.suites.to_str().unwrap(),
+            "--work",
+            work.to_str().unwrap(),
+        ]);
+        (out.status.code().unwrap(), text(&out.stdout))
+    };
+
+    // A member whose path climbs out of the work folder (written raw: the tar crate refuses to).
+    let climbing = dir.join("climbing.tar");
+    raw_tar(&climbing, |t| {
+        t.append_data(&mut header(index.len() as u64), "index.json", &index[..])
+            .unwrap();
+        let mut h = header(5);
+        h.as_gnu_mut().unwrap().name[..13].copy_from_slice(b"../escaped.tx");
+        h.set_cksum();
+        t.append(&h, &b"owned"[..]).unwrap();
+    });
+    let (code, said) = verify_in(&climbing);
+    assert_eq!(code, 1, "{said}");
+    assert!(
+        said.contains("`../escaped.tx` is refused: its path climbs out with `..`"),
+        "{said}"
+    );
+    assert!(
+        !dir.join("escaped.tx").exists(),
+        "a file was written outside the work folder"
+    );
+
+    // A symbolic link.
+    let linked = dir.join("linked.tar");
+    raw_tar(&linked, |t| {
+        let mut h = header(0);
+        h.set_entry_type(tar::EntryType::Symlink);
+        t.append_link(&mut h, "runs/0/link", "/etc/passwd").unwrap();
+    });
+    let (code, said) = verify_in(&linked);
+    assert_eq!(code, 1, "{said}");
+    assert!(
+        said.contains("`runs/0/link` is refused: it is a link"),
+        "{said}"
+    );
+
+    // Cut short.
+    let bytes = std::fs::read(&f.bundle).unwrap();
+    let cut = dir.join("cut.tar.zst");
+    std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+    let (code, said) = verify_in(&cut);
+    assert_eq!(code, 1, "{said}");
+    assert!(
+        said.contains("the archive is truncated or corrupt"),
+        "{said}"
+    );
+
+    // A decompression bomb: 256 MiB of zeros in a few hundred kilobytes.
+    let bomb = dir.join("bomb.tar.zst");
+    {
+        let file = std::fs::File::create(&bomb).unwrap();
+        let mut t = tar::Builder::new(zstd::Encoder::new(file, 3).unwrap().auto_finish());
+        let size = 256u64 << 20;
+        t.append_data(
+            &mut header(size),
+            "runs/0/zeros.mcap",
+            std::io::Read::take(std::io::repeat(0), size),
+        )
+        .unwrap();
+        t.into_inner().unwrap();
+    }
+    assert!(std::fs::metadata(&bomb).unwrap().len() < 1 << 20);
+    let (code, said) = verify_in(&bomb);
+    assert_eq!(code, 1, "{said}");
+    assert!(said.contains("a decompression bomb"), "{said}");
+
+    // Two members of one name, and an index of an unknown schema.
+    let twice = dir.join("twice.tar");
+    raw_tar(&twice, |t| {
+        for _ in 0..2 {
+            t.append_data(&mut header(index.len() as u64), "index.json", &index[..])
+                .unwrap();
+        }
+    });
+    let (code, said) = verify_in(&twice);
+    assert_eq!(code, 1, "{said}");
+    assert!(said.contains("two members of that name"), "{said}");
+    let future = dir.join("future.tar");
+    let mut v: Value = serde_json::from_slice(&index).unwrap();
+    v["schema_version"] = Value::from(9);
+    let v = serde_json::to_vec(&v).unwrap();
+    raw_tar(&future, |t| {
+        t.append_data(&mut header(v.len() as u64), "index.json", &v[..])
+            .unwrap();
+    });
+    let (code, said) = verify_in(&future);
+    assert_eq!(code, 1, "{said}");
+    assert!(said.contains("schema version 9"), "{said}");
+}
+
+#[test]
+fn a_model_servers_suite_run_verifies() {
+    // The reference openpi server answering with the expert's recorded actions, through
+    // `eval --suite --model`: recorded by default, packed, verified.
+    let f = fixture();
+    let server = Server::start(
+        "openpi_server.py",
+        &["--recordings", f.run.to_str().unwrap()],
+    );
+    let dir = scratch("lb-model");
+    let run = dir.join("run");
+    // pi0's layout with a reset frame per episode (how the reference server tells episodes).
+    let profile = dir.join("pi0.toml");
+    let pi0 = std::fs::read_to_string("profiles/pi0.toml").unwrap();
+    std::fs::write(
+        &profile,
+        pi0.replace("reset_frame = false", "reset_frame = true"),
+    )
+    .unwrap();
+    run_ok(&[
+        "eval",
+        "--suite",
+        f.suites.join("mini.toml").to_str().unwrap(),
+        "--model",
+        &server.url,
+        "--profile",
+        profile.to_str().unwrap(),
+        "--out",
+        run.to_str().unwrap(),
+    ]);
+    let outcomes: Vec<Value> = common::journal(&run, TASK)
+        .iter()
+        .map(|e| e["outcome"].clone())
+        .collect();
+    assert_eq!(outcomes, ["success", "success"]);
+    let bundle = dir.join("pi0.tar.zst");
+    run_ok(&[
+        "leaderboard",
+        "submit",
+        run.to_str().unwrap(),
+        "--model-name",
+        "reference server",
+        "--out",
+        bundle.to_str().unwrap(),
+    ]);
+    let index: Value = serde_json::from_slice(&members(&bundle)["index.json"]).unwrap();
+    assert_eq!(index["model"]["wire"], "openpi");
+    assert_eq!(index["model"]["profile"], "pi0");
+    let (code, said) = verify(&bundle, &f.suites);
+    assert_eq!(code, 0, "{said}");
+    assert!(said.contains("accepted"), "{said}");
+}
