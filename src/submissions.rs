@@ -40,6 +40,34 @@ pub enum LeaderboardCommand {
         #[arg(long)]
         work: Option<PathBuf>,
     },
+    /// Audit a bundle against the submitter's live model server: its success rate on fresh seeds,
+    /// per suite task, tested against the bundle's claim (one-sided Fisher exact test). Exit 0:
+    /// consistent; 1: inconsistent
+    Audit {
+        bundle: PathBuf,
+        /// The model server (`ws://HOST:PORT`)
+        #[arg(long, value_name = "URL")]
+        model: String,
+        /// The protocol the model server speaks: `openpi` or `vla-eval`
+        #[arg(long, default_value = "openpi")]
+        wire: scoring::remote::Wire,
+        /// The model's profile (`pi0`, `rdt` or a file): use the one the bundle's runs used
+        #[arg(long, default_value = "pi0")]
+        profile: String,
+        /// Fresh episodes per task
+        #[arg(long, default_value_t = 20)]
+        episodes: usize,
+        /// The audit's first seed (default: drawn from the operating system's randomness and
+        /// printed, above any seed a suite plans); give it to repeat an audit
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Where the shipped suites are
+        #[arg(long, default_value = "suites")]
+        suites: PathBuf,
+        /// Episodes run at once
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=256))]
+        workers: u32,
+    },
 }
 
 pub fn run(c: &LeaderboardCommand) -> Result<ExitCode> {
@@ -71,6 +99,121 @@ pub fn run(c: &LeaderboardCommand) -> Result<ExitCode> {
             workers,
             work,
         } => verify(bundle, suites, *workers as usize, work.as_deref()),
+        LeaderboardCommand::Audit { .. } => audit(c),
+    }
+}
+
+/// A first seed nobody could have known: 2^40 plus 40 random bits from the operating system
+/// (through the standard library's randomly keyed hasher), far above the seeds suites plan.
+fn fresh_seed() -> u64 {
+    use std::hash::{BuildHasher, Hasher};
+    let mut h = std::collections::hash_map::RandomState::new().build_hasher();
+    h.write_u64(std::process::id() as u64);
+    (1 << 40) + (h.finish() >> 24)
+}
+
+fn audit(c: &LeaderboardCommand) -> Result<ExitCode> {
+    use anyhow::Context;
+    let LeaderboardCommand::Audit {
+        bundle,
+        model,
+        wire,
+        profile,
+        episodes,
+        seed,
+        suites,
+        workers,
+    } = c
+    else {
+        unreachable!("called for audit only")
+    };
+    let temp = std::env::temp_dir().join(format!("autobio-audit-{}", std::process::id()));
+    let unpacked = leaderboard::bundle::unpack(bundle, &temp, &Default::default());
+    let claimed = unpacked
+        .as_ref()
+        .map_err(|e| anyhow::anyhow!("{e}"))
+        .and_then(|u| Ok((u.index.suite.name.clone(), leaderboard::audit::claimed(u)?)));
+    let _ = std::fs::remove_dir_all(&temp);
+    let (suite_name, claimed) = claimed.with_context(|| format!("reading {}", bundle.display()))?;
+    let suite = results::suite::LoadedSuite::read(&suites.join(format!("{suite_name}.toml")))?;
+    let seed = seed.unwrap_or_else(fresh_seed);
+    errln!(
+        "auditing {} against {model}: {episodes} episodes per task from seed {seed}",
+        bundle.display()
+    );
+    let spec = scoring::eval::ModelSpec {
+        url: model.clone(),
+        wire: *wire,
+        profile: scoring::profile::LoadedProfile::load(profile)?,
+        attempts: 4,
+        backoff_s: 0.25,
+    };
+    let mut rows = Vec::new();
+    for protocol in suite.protocols() {
+        let checked = compiler::check_file(&protocol, None)?;
+        let task = checked
+            .task
+            .with_context(|| format!("the shipped {} does not compile", protocol.display()))?;
+        let opts = scoring::eval::EvalOptions {
+            episodes: *episodes,
+            seed,
+            model: Some(spec.clone()),
+            workers: *workers as usize,
+            ..Default::default()
+        };
+        let report = scoring::evaluate(&task, &opts, |_| {})?;
+        let audited = leaderboard::audit::Count {
+            successes: report.summary.successes as u64,
+            episodes: report.summary.episodes as u64,
+        };
+        let claim = claimed
+            .get(&task.id)
+            .copied()
+            .unwrap_or(leaderboard::audit::Count {
+                successes: 0,
+                episodes: 0,
+            });
+        rows.push((task.id.clone(), claim, audited));
+    }
+    let a = leaderboard::audit::audit(rows);
+    outln!(
+        "{:<34} {:>14} {:>14} {:>10}",
+        "task",
+        "claimed",
+        "audited",
+        "p"
+    );
+    for t in &a.tasks {
+        outln!(
+            "{:<34} {:>5}/{:<4} {:>3.0}% {:>5}/{:<4} {:>3.0}% {:>10.3e}",
+            t.task,
+            t.claimed.successes,
+            t.claimed.episodes,
+            100.0 * t.claimed.rate(),
+            t.audited.successes,
+            t.audited.episodes,
+            100.0 * t.audited.rate(),
+            t.p_value
+        );
+    }
+    outln!(
+        "{:<34} {:>5}/{:<4} {:>3.0}% {:>5}/{:<4} {:>3.0}% {:>10.3e}",
+        "pooled",
+        a.pooled_claimed.successes,
+        a.pooled_claimed.episodes,
+        100.0 * a.pooled_claimed.rate(),
+        a.pooled_audited.successes,
+        a.pooled_audited.episodes,
+        100.0 * a.pooled_audited.rate(),
+        a.pooled_p_value
+    );
+    outln!("rule: {}", a.rule);
+    if a.consistent {
+        outln!("audited: consistent with the bundle's claim (seed {seed})");
+        Ok(ExitCode::SUCCESS)
+    } else {
+        outln!("audit failed: the live model scores below the bundle's claim (seed {seed})");
+        Ok(ExitCode::from(1))
     }
 }
 

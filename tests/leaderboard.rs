@@ -584,3 +584,113 @@ fn a_model_servers_suite_run_verifies() {
     assert_eq!(code, 0, "{said}");
     assert!(said.contains("accepted"), "{said}");
 }
+
+#[test]
+fn an_audit_passes_the_model_that_made_the_bundle_and_flags_one_far_below_its_claim() {
+    // An 8-episode suite run by the expert and packed; two live servers on the audit's seeds
+    // (1000-1007): one replaying the expert (consistent), one replaying the no-motion control
+    // (0 of 8 against a claimed 8 of 8: p = 1/C(16, 8)).
+    let suites = scratch("lb-audit-suites");
+    std::fs::write(
+        suites.join("mini.toml"),
+        format!(
+            "format = 1\n[suite]\nname = \"mini\"\nepisodes = 8\nseed = 0\nruns = 1\ntasks = [\"{}\"]\n",
+            repo("protocols/thermal_cycler/close_lid.toml")
+        ),
+    )
+    .unwrap();
+    let dir = scratch("lb-audit");
+    let run = dir.join("run");
+    run_ok(&[
+        "eval",
+        "--suite",
+        suites.join("mini.toml").to_str().unwrap(),
+        "--out",
+        run.to_str().unwrap(),
+    ]);
+    let bundle = dir.join("expert.tar.zst");
+    run_ok(&[
+        "leaderboard",
+        "submit",
+        run.to_str().unwrap(),
+        "--model-name",
+        "expert",
+        "--out",
+        bundle.to_str().unwrap(),
+    ]);
+    let profile = dir.join("pi0.toml");
+    let pi0 = std::fs::read_to_string("profiles/pi0.toml").unwrap();
+    std::fs::write(
+        &profile,
+        pi0.replace("reset_frame = false", "reset_frame = true"),
+    )
+    .unwrap();
+    let audit = |policy: &str| {
+        let recordings = dir.join(format!("{policy}-recordings"));
+        run_ok(&[
+            "eval",
+            "--protocol",
+            "protocols/thermal_cycler/close_lid.toml",
+            "--policy",
+            policy,
+            "--episodes",
+            "8",
+            "--seed",
+            "1000",
+            "--record",
+            "--image-every",
+            "0",
+            "--out",
+            recordings.to_str().unwrap(),
+        ]);
+        let server = Server::start(
+            "openpi_server.py",
+            &["--recordings", recordings.to_str().unwrap()],
+        );
+        let out = autobio(&[
+            "leaderboard",
+            "audit",
+            bundle.to_str().unwrap(),
+            "--model",
+            &server.url,
+            "--profile",
+            profile.to_str().unwrap(),
+            "--episodes",
+            "8",
+            "--seed",
+            "1000",
+            "--suites",
+            suites.to_str().unwrap(),
+        ]);
+        (
+            out.status.code().unwrap(),
+            text(&out.stdout) + &text(&out.stderr),
+        )
+    };
+    let (code, said) = audit("expert");
+    assert_eq!(code, 0, "{said}");
+    assert!(said.contains("audited: consistent"), "{said}");
+    let row = |said: &str| -> Vec<String> {
+        said.lines()
+            .find(|l| l.starts_with(TASK))
+            .unwrap_or_else(|| panic!("no row for the task: {said}"))
+            .split_whitespace()
+            .map(str::to_string)
+            .collect()
+    };
+    assert_eq!(
+        row(&said)[1..],
+        ["8/8", "100%", "8/8", "100%", "1.000e0"],
+        "{said}"
+    );
+    let (code, said) = audit("hold");
+    assert_eq!(code, 1, "{said}");
+    assert!(said.contains("audit failed"), "{said}");
+    // p = 1/12870 = 7.770e-5, shown with the rule.
+    assert_eq!(
+        row(&said)[1..],
+        ["8/8", "100%", "0/8", "0%", "7.770e-5"],
+        "{said}"
+    );
+    assert!(said.contains("rule: one-sided Fisher exact test"), "{said}");
+}

@@ -3,10 +3,11 @@
 //! `autobio eval` and `autobio results merge` print ([`table`]); submission bundles packed from
 //! suite runs and unpacked from strangers' files under limits ([`bundle`]); and their offline
 //! verification ([`verify`]), which re-enacts every episode from its seed and actions through a
-//! simulator the caller hands in.
+//! simulator the caller hands in; and the online audit's statistics ([`audit`]).
 //!
 //! It links no simulator: it reads what runs wrote, through `results`, and runs nothing itself.
 
+pub mod audit;
 pub mod bundle;
 pub mod table;
 pub mod verify;
