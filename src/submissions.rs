@@ -68,6 +68,13 @@ pub enum LeaderboardCommand {
         #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=256))]
         workers: u32,
     },
+    /// Build the static leaderboard site from every bundle in DIR (with the verification and
+    /// audit records `verify` and `audit` left beside each), plus the paper's reference entry
+    Build {
+        dir: PathBuf,
+        #[arg(long, value_name = "SITE")]
+        out: PathBuf,
+    },
 }
 
 pub fn run(c: &LeaderboardCommand) -> Result<ExitCode> {
@@ -100,6 +107,21 @@ pub fn run(c: &LeaderboardCommand) -> Result<ExitCode> {
             work,
         } => verify(bundle, suites, *workers as usize, work.as_deref()),
         LeaderboardCommand::Audit { .. } => audit(c),
+        LeaderboardCommand::Build { dir, out } => {
+            let work = std::env::temp_dir().join(format!("autobio-site-{}", std::process::id()));
+            let subs = leaderboard::site::load(dir, &work);
+            let _ = std::fs::remove_dir_all(&work);
+            let subs = subs?;
+            let files = leaderboard::site::build(&subs, out)?;
+            outln!(
+                "built {} ({} submissions, {} files); open {}",
+                out.display(),
+                subs.len(),
+                files.len(),
+                out.join("index.html").display()
+            );
+            Ok(ExitCode::SUCCESS)
+        }
     }
 }
 
@@ -208,6 +230,23 @@ fn audit(c: &LeaderboardCommand) -> Result<ExitCode> {
         a.pooled_p_value
     );
     outln!("rule: {}", a.rule);
+    let reasons: Vec<String> = a
+        .tasks
+        .iter()
+        .filter(|t| t.p_value < leaderboard::audit::ALPHA)
+        .map(|t| {
+            format!(
+                "audit (seed {seed}): {} scored {}/{} live against {}/{} claimed (p = {:.2e})",
+                t.task,
+                t.audited.successes,
+                t.audited.episodes,
+                t.claimed.successes,
+                t.claimed.episodes,
+                t.p_value
+            )
+        })
+        .collect();
+    leaderboard::site::write_record(bundle, "audit", a.consistent, &reasons)?;
     if a.consistent {
         outln!("audited: consistent with the bundle's claim (seed {seed})");
         Ok(ExitCode::SUCCESS)
@@ -232,6 +271,7 @@ fn verify(
             if work.is_none() {
                 let _ = std::fs::remove_dir_all(&temp);
             }
+            leaderboard::site::write_record(bundle, "verification", false, &[e.to_string()])?;
             outln!("refused: {}: {e}", bundle.display());
             return Ok(ExitCode::from(1));
         }
@@ -257,6 +297,8 @@ fn verify(
     if work.is_none() {
         let _ = std::fs::remove_dir_all(&temp);
     }
+    // The record the site reads: this verification, of these exact bytes.
+    leaderboard::site::write_record(bundle, "verification", v.accepted(), &v.failures)?;
     let i = &unpacked.index;
     outln!(
         "{}: {} on suite {} ({} tasks, {} episodes); {} episodes re-enacted in {:.1} s ({:.1}/s, {} workers)",

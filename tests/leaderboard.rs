@@ -694,3 +694,130 @@ fn an_audit_passes_the_model_that_made_the_bundle_and_flags_one_far_below_its_cl
     );
     assert!(said.contains("rule: one-sided Fisher exact test"), "{said}");
 }
+
+#[test]
+fn the_site_ranks_verified_bundles_beside_the_paper_and_is_the_same_twice() {
+    // Three bundles: the expert's (verified here), the no-motion run's (not verified: reported)
+    // and a truncated one (refused with its reason, never ranked).
+    let f = fixture();
+    let dir = scratch("lb-site");
+    let bundles = dir.join("bundles");
+    std::fs::create_dir_all(&bundles).unwrap();
+    let expert = bundles.join("expert.tar.zst");
+    std::fs::copy(&f.bundle, &expert).unwrap();
+    let (code, said) = verify(&expert, &f.suites);
+    assert_eq!(code, 0, "{said}");
+    let hold = bundles.join("hold.tar.zst");
+    run_ok(&[
+        "leaderboard",
+        "submit",
+        f.hold.to_str().unwrap(),
+        "--model-name",
+        "no motion",
+        "--out",
+        hold.to_str().unwrap(),
+    ]);
+    let bytes = std::fs::read(&f.bundle).unwrap();
+    std::fs::write(bundles.join("cut.tar.zst"), &bytes[..bytes.len() / 3]).unwrap();
+    let build = |out: &Path| {
+        run_ok(&[
+            "leaderboard",
+            "build",
+            bundles.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    let site = dir.join("site");
+    let said = build(&site);
+    assert!(said.contains("3 submissions"), "{said}");
+    let read = |rel: &str| std::fs::read_to_string(site.join(rel)).unwrap();
+
+    let ranking = read("ranking.md");
+    let rows: Vec<&str> = ranking
+        .lines()
+        .filter(|l| l.starts_with("| 1 ") || l.starts_with("| 2 "))
+        .collect();
+    assert_eq!(
+        rows,
+        [
+            "| 1 | scripted expert | none | verified | 100.0 | 0.0 | 100.0 | – | – | 1.000 |",
+            "| 2 | no motion |  | reported | 0.0 | 0.0 | 0.0 | – | – | 0.000 |",
+        ],
+        "{ranking}"
+    );
+    let index = read("index.html");
+    assert!(
+        index.contains("Reference: reported by the paper, not re-run"),
+        "{index}"
+    );
+    assert!(
+        index.contains("<td>99.7 ± 0.3</td>"),
+        "the paper's pi0 at 100 demos"
+    );
+    assert!(index.contains("class=refused>cut.tar.zst"), "{index}");
+    assert!(
+        index.contains("the archive is truncated or corrupt"),
+        "{index}"
+    );
+    assert!(index.contains("<svg"), "a chart");
+
+    // The task page: Wilson intervals, the paired test on the same seeds, the paper's row.
+    let task = read("tasks/thermal-cycler-close-lid.html");
+    assert!(
+        task.contains("<td>100.0</td><td>[34.2, 100.0]</td>"),
+        "2 of 2: Wilson [34.2, 100]"
+    );
+    assert!(
+        task.contains("<td>2</td><td>2</td><td>0</td><td>5.000e-1</td><td>not significant</td>"),
+        "expert vs no motion on seeds 0 and 1: {task}"
+    );
+    assert!(task.contains("<td>99.7 ± 0.3</td>"));
+    let json: Value = serde_json::from_str(&read("tasks/thermal-cycler-close-lid.json")).unwrap();
+    assert_eq!(json["rows"][0]["summary"]["successes"], 2);
+    // A submission's page lists every episode.
+    let page = read("submissions/scripted-expert-none.html");
+    assert!(page.contains("standing: <b>verified</b>"));
+    assert_eq!(page.matches("<td class=l>success</td>").count(), 2);
+
+    // No page asks the network for anything.
+    for file in [
+        "index.html",
+        "tasks/thermal-cycler-close-lid.html",
+        "submissions/scripted-expert-none.html",
+    ] {
+        let text = read(file);
+        for pattern in [
+            "src=\"http",
+            "href=\"http",
+            "url(",
+            "@import",
+            "<script",
+            "<link",
+        ] {
+            assert!(!text.contains(pattern), "{file} has {pattern}");
+        }
+    }
+    // The same inputs build the same bytes.
+    let again = dir.join("again");
+    build(&again);
+    let files = |root: &Path| -> BTreeMap<PathBuf, Vec<u8>> {
+        let mut out = BTreeMap::new();
+        let mut walk = vec![root.to_path_buf()];
+        while let Some(d) = walk.pop() {
+            for e in std::fs::read_dir(&d).unwrap() {
+                let p = e.unwrap().path();
+                if p.is_dir() {
+                    walk.push(p);
+                } else {
+                    out.insert(
+                        p.strip_prefix(root).unwrap().to_path_buf(),
+                        std::fs::read(&p).unwrap(),
+                    );
+                }
+            }
+        }
+        out
+    };
+    assert!(files(&site) == files(&again), "two builds differ");
+}

@@ -9,6 +9,7 @@
 
 pub mod audit;
 pub mod bundle;
+pub mod site;
 pub mod table;
 pub mod verify;
 
