@@ -14,7 +14,8 @@ build: setup
 # lid opened with its key, the 5430's rotor balanced and the thermal mixer's panel (20 seeded
 # episodes each) and on the two-arm task (5): a results table, results JSON and one MCAP recording per episode under
 # out/demo/. Then a model server in the loop: the reference openpi server answering with those
-# recordings, through `eval --model` (scripts/demo-model.sh). Last, the no-motion control
+# recordings, through `eval --suite suites/demo.toml --model`, its run packed as a leaderboard
+# bundle, verified, and built into the site out/demo/site/index.html (scripts/demo-model.sh). Last, the no-motion control
 # (`--policy hold`), which must score 0 everywhere.
 demo: build
 	rm -rf out/demo
