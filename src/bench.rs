@@ -12,7 +12,9 @@
 //!   actions), the harness's time per control step beyond the same episodes run in-process:
 //!   rendering, encoding and the round trip, for a query every 50 steps (pi0's chunks) and every
 //!   step (as vla-eval servers are driven); recorded frames/s of dataset generation with one
-//!   worker and two.
+//!   worker and two;
+//! - leaderboard (`crate::bench_leaderboard`): verification's episodes/s with one worker and two,
+//!   and the site's build time from 50 submissions x 16 tasks x 100 episodes.
 
 use anyhow::Result;
 use mujoco_rs::prelude::*;
@@ -34,6 +36,8 @@ pub enum Section {
     Scenes,
     /// The lab mechanisms and the liquid.
     Physics,
+    /// Verifying a bundle and building the leaderboard site.
+    Leaderboard,
 }
 
 #[derive(Clone, Debug, clap::Args)]
@@ -71,6 +75,11 @@ pub fn run(tasks: &[compiler::Task], only: &[Section]) -> Result<()> {
         && let Some(first) = tasks.first()
     {
         harness_figures(first)?;
+    }
+    if wants(Section::Leaderboard)
+        && let Some(first) = tasks.first()
+    {
+        crate::bench_leaderboard::figures(first)?;
     }
     let mut first_step_s = None;
     if wants(Section::Scenes) {

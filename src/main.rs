@@ -5,6 +5,7 @@
 #[macro_use]
 mod output;
 mod bench;
+mod bench_leaderboard;
 mod check;
 mod datasets;
 mod demo;
