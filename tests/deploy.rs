@@ -141,3 +141,103 @@ fn kubernetes_manifests_are_indexed_jobs_that_agree_on_the_shard_count() {
         "the merge reads the volume the shards wrote"
     );
 }
+
+#[test]
+fn a_job_array_verifies_one_bundle_per_task_and_records_each() {
+    // Two bundles of a 1-episode suite (the expert's, and one with a flipped journal line), each
+    // verified by its own array task under Slurm's and Kubernetes' variables; each record says
+    // how its bundle stands, and a refused bundle is a finished task.
+    let root = scratch("deploy-verify");
+    let suites = root.join("suites");
+    std::fs::create_dir_all(&suites).unwrap();
+    let protocol =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("protocols/thermal_cycler/close_lid.toml");
+    std::fs::write(
+        suites.join("one.toml"),
+        format!(
+            "format = 1\n[suite]\nname = \"one\"\nepisodes = 1\nseed = 0\nruns = 1\ntasks = [{:?}]\n",
+            protocol.display().to_string()
+        ),
+    )
+    .unwrap();
+    let run = root.join("run");
+    let out = autobio(&[
+        "eval",
+        "--suite",
+        suites.join("one.toml").to_str().unwrap(),
+        "--out",
+        run.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let bundles = root.join("bundles");
+    std::fs::create_dir_all(&bundles).unwrap();
+    let submit = |name: &str| {
+        let out = autobio(&[
+            "leaderboard",
+            "submit",
+            run.to_str().unwrap(),
+            "--model-name",
+            name,
+            "--out",
+            bundles.join(format!("{name}.tar")).to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{}", text(&out.stderr));
+    };
+    submit("a-honest");
+    // The second bundle claims the episode failed.
+    let journal = run.join("thermal_cycler.close_lid.journal.jsonl");
+    let line = std::fs::read_to_string(&journal).unwrap();
+    std::fs::write(
+        &journal,
+        line.replace("\"success\":true", "\"success\":false"),
+    )
+    .unwrap();
+    submit("b-flipped");
+    let s = suites.to_str().unwrap();
+    let b = bundles.to_str().unwrap();
+    script(
+        "deploy/verify-bundle.sh",
+        &[b, "--suites", s],
+        &[
+            ("SLURM_ARRAY_TASK_ID", "7"),
+            ("SLURM_ARRAY_TASK_MIN", "7"),
+            ("SLURM_CPUS_PER_TASK", "1"),
+        ],
+    );
+    script(
+        "deploy/verify-bundle.sh",
+        &[b, "--suites", s],
+        &[("JOB_COMPLETION_INDEX", "1")],
+    );
+    let record = |name: &str| -> Value {
+        serde_json::from_str(
+            &std::fs::read_to_string(bundles.join(format!("{name}.tar.verification.json")))
+                .unwrap(),
+        )
+        .unwrap()
+    };
+    assert_eq!(record("a-honest")["passed"], true);
+    let flipped = record("b-flipped");
+    assert_eq!(flipped["passed"], false);
+    assert!(
+        flipped["reasons"][0]
+            .as_str()
+            .unwrap()
+            .contains("success true (claimed false)"),
+        "{flipped}"
+    );
+    // An index past the bundles is an error, not a silent success.
+    let out = Command::new("deploy/verify-bundle.sh")
+        .args([b])
+        .env_remove("SLURM_ARRAY_TASK_ID")
+        .env("JOB_COMPLETION_INDEX", "2")
+        .env("AUTOBIO", env!("CARGO_BIN_EXE_autobio"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        text(&out.stderr).contains("holds 2 bundles"),
+        "{}",
+        text(&out.stderr)
+    );
+}

@@ -462,7 +462,7 @@ fn esc(s: &str) -> String {
 }
 
 const STYLE: &str = "body{font-family:system-ui,sans-serif;margin:2rem auto;max-width:72rem;\
-padding:0 1rem;color:#222}table{border-collapse:collapse;margin:1rem 0}th,td{border-bottom:1px \
+padding:0 1rem;color:#222}table{border-collapse:collapse;margin:1rem 0;display:block;overflow-x:auto}th,td{border-bottom:1px \
 solid #ddd;padding:.3rem .6rem;text-align:right}th:first-child,td:first-child,td.l{text-align:left}\
 .audited{color:#075}.verified{color:#047}.reported{color:#777}.refused{color:#a00}small{color:#666}";
 
@@ -481,13 +481,13 @@ fn chart(bars: &[(String, f64, f64, f64)]) -> String {
     use plotters::prelude::*;
     let mut svg = String::new();
     {
-        let height = 60 + 28 * bars.len() as u32;
+        let height = 70 + 36 * bars.len() as u32;
         let root = SVGBackend::with_string(&mut svg, (640, height)).into_drawing_area();
         let _ = root.fill(&WHITE);
         let n = bars.len().max(1) as i32;
         if let Ok(mut c) = ChartBuilder::on(&root)
             .margin(10)
-            .x_label_area_size(30)
+            .x_label_area_size(55)
             .y_label_area_size(200)
             .build_cartesian_2d(0f64..100f64, (0..n).into_segmented())
         {
@@ -495,6 +495,8 @@ fn chart(bars: &[(String, f64, f64, f64)]) -> String {
             let _ = c
                 .configure_mesh()
                 .disable_y_mesh()
+                .x_labels(6)
+                .x_label_formatter(&|v| format!("{v:.0}"))
                 .label_style(("sans-serif", 20))
                 .axis_desc_style(("sans-serif", 20))
                 .x_desc("success, % (bars: 95% interval)")
