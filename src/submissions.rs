@@ -108,10 +108,9 @@ pub fn run(c: &LeaderboardCommand) -> Result<ExitCode> {
         } => verify(bundle, suites, *workers as usize, work.as_deref()),
         LeaderboardCommand::Audit { .. } => audit(c),
         LeaderboardCommand::Build { dir, out } => {
-            let work = std::env::temp_dir().join(format!("autobio-site-{}", std::process::id()));
-            let subs = leaderboard::site::load(dir, &work);
-            let _ = std::fs::remove_dir_all(&work);
-            let subs = subs?;
+            // A fresh private folder, removed when dropped.
+            let work = tempfile::Builder::new().prefix("autobio-site-").tempdir()?;
+            let subs = leaderboard::site::load(dir, work.path())?;
             let files = leaderboard::site::build(&subs, out)?;
             outln!(
                 "built {} ({} submissions, {} files); open {}",
@@ -149,15 +148,22 @@ fn audit(c: &LeaderboardCommand) -> Result<ExitCode> {
     else {
         unreachable!("called for audit only")
     };
-    let temp = std::env::temp_dir().join(format!("autobio-audit-{}", std::process::id()));
-    let unpacked = leaderboard::bundle::unpack(bundle, &temp, &Default::default());
-    let claimed = unpacked
-        .as_ref()
-        .map_err(|e| anyhow::anyhow!("{e}"))
-        .and_then(|u| Ok((u.index.suite.name.clone(), leaderboard::audit::claimed(u)?)));
-    let _ = std::fs::remove_dir_all(&temp);
-    let (suite_name, claimed) = claimed.with_context(|| format!("reading {}", bundle.display()))?;
-    let suite = results::suite::LoadedSuite::read(&suites.join(format!("{suite_name}.toml")))?;
+    let temp = tempfile::Builder::new()
+        .prefix("autobio-audit-")
+        .tempdir()?;
+    let unpacked = leaderboard::bundle::unpack(bundle, temp.path(), &Default::default())
+        .with_context(|| format!("reading {}", bundle.display()))?;
+    let claimed = leaderboard::audit::claimed(&unpacked)?;
+    // The shipped suite the bundle ran, found by its file's hash (its name is never a path).
+    let suite = leaderboard::verify::shipped_suite(suites, &unpacked.index.suite_sha256)
+        .with_context(|| {
+            format!(
+                "{}'s suite `{}` is not a shipped suite in {}",
+                bundle.display(),
+                unpacked.index.suite.name,
+                suites.display()
+            )
+        })?;
     let seed = seed.unwrap_or_else(fresh_seed);
     errln!(
         "auditing {} against {model}: {episodes} episodes per task from seed {seed}",
@@ -262,15 +268,15 @@ fn verify(
     workers: usize,
     work: Option<&std::path::Path>,
 ) -> Result<ExitCode> {
-    let temp = std::env::temp_dir().join(format!("autobio-verify-{}", std::process::id()));
-    let dir = work.unwrap_or(&temp);
+    // A fresh private folder (removed when dropped) unless --work names one.
+    let temp = tempfile::Builder::new()
+        .prefix("autobio-verify-")
+        .tempdir()?;
+    let dir = work.unwrap_or(temp.path());
     let unpacked = leaderboard::bundle::unpack(bundle, dir, &Default::default());
     let unpacked = match unpacked {
         Ok(u) => u,
         Err(e) => {
-            if work.is_none() {
-                let _ = std::fs::remove_dir_all(&temp);
-            }
             leaderboard::site::write_record(bundle, "verification", false, &[e.to_string()])?;
             outln!("refused: {}: {e}", bundle.display());
             return Ok(ExitCode::from(1));
@@ -294,9 +300,7 @@ fn verify(
             .map_err(|e| e.to_string())
     };
     let v = leaderboard::verify::verify(&unpacked, &opts, &reenact);
-    if work.is_none() {
-        let _ = std::fs::remove_dir_all(&temp);
-    }
+    drop(temp);
     // The record the site reads: this verification, of these exact bytes.
     leaderboard::site::write_record(bundle, "verification", v.accepted(), &v.failures)?;
     let i = &unpacked.index;

@@ -821,3 +821,49 @@ fn the_site_ranks_verified_bundles_beside_the_paper_and_is_the_same_twice() {
     };
     assert!(files(&site) == files(&again), "two builds differ");
 }
+
+#[test]
+fn claims_the_checks_do_not_cover_are_refused() {
+    // What a forger could add beside the checked files, or point the verifier at.
+    let f = fixture();
+    let dir = scratch("lb-stray");
+    // A journal outside the run folders, which a site would otherwise count.
+    let mut m = members(&f.bundle);
+    m.insert(
+        format!("extra/{TASK}.journal.jsonl"),
+        m[&journal_member()].clone(),
+    );
+    pack(&m, &dir.join("stray.tar.zst"), true);
+    refused(
+        &dir.join("stray.tar.zst"),
+        &f.suites,
+        &format!("extra/{TASK}.journal.jsonl is not a file of a suite run"),
+    );
+    // A manifest claiming another level (the per-level columns).
+    let mut m = members(&f.bundle);
+    let key = format!("runs/0/{TASK}.manifest.json");
+    let mut manifest: Value = serde_json::from_slice(&m[&key]).unwrap();
+    manifest["level"] = "hard".into();
+    m.insert(key, serde_json::to_vec(&manifest).unwrap());
+    pack(&m, &dir.join("level.tar.zst"), true);
+    refused(
+        &dir.join("level.tar.zst"),
+        &f.suites,
+        "at level hard; the shipped task",
+    );
+    // A suite of the bundle's own, named as a path to it: the verifier finds shipped suites by
+    // their hash, never by the bundle's name for them.
+    let mut m = members(&f.bundle);
+    let own = "format = 1\n[suite]\nname = \"mini\"\nepisodes = 1\nseed = 0\nruns = 1\ntasks = [\"x.toml\"]\n";
+    let mut index: Value = serde_json::from_slice(&m["index.json"]).unwrap();
+    index["suite"]["name"] = "../../runs/0/suite".into();
+    index["suite_sha256"] = sha256(own.as_bytes()).into();
+    m.insert("index.json".into(), serde_json::to_vec(&index).unwrap());
+    m.insert("runs/0/suite.toml".into(), own.as_bytes().to_vec());
+    pack(&m, &dir.join("own-suite.tar.zst"), true);
+    refused(
+        &dir.join("own-suite.tar.zst"),
+        &f.suites,
+        "suite `../../runs/0/suite` is not a shipped suite",
+    );
+}

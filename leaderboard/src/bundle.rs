@@ -66,6 +66,8 @@ pub enum BundleError {
     Runs(String),
     #[error("the archive is truncated or corrupt: {0}")]
     Archive(String),
+    #[error("the archive is refused: {0}")]
+    Limit(String),
     #[error("the archive member `{member}` is refused: {why}")]
     Member { member: String, why: String },
     #[error("the archive has no {INDEX}")]
@@ -270,6 +272,45 @@ impl<R: Read> Read for Counted<R> {
     }
 }
 
+/// The unpacked stream under the total and ratio limits: every byte the archive reader gets
+/// (headers, long names, padding, members) counts, and the first byte past a limit is an
+/// error whose reason is kept in `tripped`.
+struct Limited<R> {
+    inner: R,
+    unpacked: u64,
+    read: std::rc::Rc<std::cell::Cell<u64>>,
+    limits: Limits,
+    tripped: std::rc::Rc<std::cell::RefCell<Option<String>>>,
+}
+
+impl<R: Read> Read for Limited<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.unpacked += n as u64;
+        let why = if self.unpacked > self.limits.max_total {
+            Some(format!(
+                "it unpacks to more than {} bytes",
+                self.limits.max_total
+            ))
+        } else if self.unpacked > self.limits.ratio_after
+            && self.unpacked > self.limits.max_ratio * self.read.get().max(1)
+        {
+            Some(format!(
+                "a decompression bomb: {} bytes unpacked from {} read",
+                self.unpacked,
+                self.read.get()
+            ))
+        } else {
+            None
+        };
+        if let Some(why) = why {
+            *self.tripped.borrow_mut() = Some(why.clone());
+            return Err(std::io::Error::other(why));
+        }
+        Ok(n)
+    }
+}
+
 /// A bundle unpacked into its work folder.
 #[derive(Debug)]
 pub struct Unpacked {
@@ -311,10 +352,23 @@ pub fn unpack(bundle: &Path, work: &Path, limits: &Limits) -> Result<Unpacked, B
         inner: std::io::BufReader::new(file),
         read: read.clone(),
     };
-    let source: Box<dyn Read> = if n == 4 && magic == [0x28, 0xb5, 0x2f, 0xfd] {
+    let decoded: Box<dyn Read> = if n == 4 && magic == [0x28, 0xb5, 0x2f, 0xfd] {
         Box::new(zstd::Decoder::new(counted).map_err(|e| BundleError::Archive(e.to_string()))?)
     } else {
         Box::new(counted)
+    };
+    let tripped = std::rc::Rc::new(std::cell::RefCell::new(None));
+    let source = Limited {
+        inner: decoded,
+        unpacked: 0,
+        read: read.clone(),
+        limits: *limits,
+        tripped: tripped.clone(),
+    };
+    // An error after a limit tripped is the limit's, whatever the reader made of it.
+    let archive_error = |e: std::io::Error| match tripped.borrow().clone() {
+        Some(why) => BundleError::Limit(why),
+        None => BundleError::Archive(e.to_string()),
     };
     if work.exists()
         && std::fs::read_dir(work)
@@ -330,14 +384,11 @@ pub fn unpack(bundle: &Path, work: &Path, limits: &Limits) -> Result<Unpacked, B
     }
     std::fs::create_dir_all(work).map_err(io("create", work))?;
     let mut archive = tar::Archive::new(source);
-    let entries = archive
-        .entries()
-        .map_err(|e| BundleError::Archive(e.to_string()))?;
+    let entries = archive.entries().map_err(archive_error)?;
     let mut members = Vec::new();
     let mut seen = std::collections::BTreeSet::new();
-    let mut total = 0u64;
     for entry in entries {
-        let mut entry = entry.map_err(|e| BundleError::Archive(e.to_string()))?;
+        let mut entry = entry.map_err(archive_error)?;
         let raw = entry.path_bytes().into_owned();
         let shown = String::from_utf8_lossy(&raw).into_owned();
         let refuse = |why: String| BundleError::Member {
@@ -367,40 +418,41 @@ pub fn unpack(bundle: &Path, work: &Path, limits: &Limits) -> Result<Unpacked, B
                 limits.max_members
             )));
         }
-        let declared = entry.header().size().unwrap_or(u64::MAX);
+        // The size the reader will deliver (a PAX record may override the header's).
+        let declared = entry.size();
         if declared > limits.max_member {
             return Err(refuse(format!(
                 "it is {declared} bytes; a member may be at most {}",
                 limits.max_member
             )));
         }
+        // Errors name the member, not the work folder (the same bundle, the same message).
         let dest = work.join(&name);
+        let write_err = |e: std::io::Error| refuse(format!("it cannot be written: {e}"));
         if let Some(parent) = dest.parent() {
-            std::fs::create_dir_all(parent).map_err(io("create", parent))?;
+            std::fs::create_dir_all(parent).map_err(write_err)?;
         }
-        let mut out = std::fs::File::create(&dest).map_err(io("create", &dest))?;
+        let mut out = std::fs::File::create(&dest).map_err(write_err)?;
         let mut buf = vec![0u8; 1 << 16];
+        let mut this = 0u64;
         loop {
             let n = entry
                 .read(&mut buf)
-                .map_err(|e| BundleError::Archive(format!("reading `{shown}`: {e}")))?;
+                .map_err(|e| match tripped.borrow().clone() {
+                    Some(why) => BundleError::Limit(why),
+                    None => BundleError::Archive(format!("reading `{shown}`: {e}")),
+                })?;
             if n == 0 {
                 break;
             }
-            total += n as u64;
-            if total > limits.max_total {
+            this += n as u64;
+            if this > limits.max_member {
                 return Err(refuse(format!(
-                    "the archive unpacks to more than {} bytes",
-                    limits.max_total
+                    "it is over {} bytes, a member's limit",
+                    limits.max_member
                 )));
             }
-            if total > limits.ratio_after && total > limits.max_ratio * read.get().max(1) {
-                return Err(refuse(format!(
-                    "a decompression bomb: {total} bytes unpacked from {} read",
-                    read.get()
-                )));
-            }
-            out.write_all(&buf[..n]).map_err(io("write", &dest))?;
+            out.write_all(&buf[..n]).map_err(write_err)?;
         }
         members.push(key);
     }

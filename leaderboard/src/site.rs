@@ -184,7 +184,8 @@ pub fn load(dir: &Path, work: &Path) -> Result<Vec<Submission>, SiteError> {
         let mut by_task: BTreeMap<String, (String, Vec<EpisodeResult>)> = BTreeMap::new();
         let mut conditions = BTreeMap::new();
         let mut profile = String::from("no model profile");
-        for member in &unpacked.members {
+        // Only run folders' files: what verification checks (a verified bundle has no others).
+        for member in unpacked.members.iter().filter(|m| m.starts_with("runs/")) {
             let path = here.join(member);
             if let Some(task) = member.strip_suffix(".manifest.json") {
                 let task = task.rsplit('/').next().unwrap_or(task).to_string();
@@ -454,6 +455,14 @@ fn paired(a: &Submission, ta: &TaskResult, b: &Submission, tb: &TaskResult) -> O
     })
 }
 
+/// Text for a Markdown table cell: no cell breaks, no line breaks, no raw HTML.
+fn md_cell(s: &str) -> String {
+    s.replace('|', "\\|")
+        .replace(['\n', '\r'], " ")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
+
 fn esc(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
@@ -557,7 +566,8 @@ pub fn build(subs: &[Submission], out: &Path) -> Result<Vec<PathBuf>, SiteError>
         );
         let _ = write!(
             md,
-            "\n## {group}\n\n| # | model | training | standing | success % | ± SEM | easy | medium | hard | mean score |\n|---|---|---|---|---|---|---|---|---|---|\n"
+            "\n## {}\n\n| # | model | training | standing | success % | ± SEM | easy | medium | hard | mean score |\n|---|---|---|---|---|---|---|---|---|---|\n",
+            md_cell(group)
         );
         for r in rows {
             let lvl = |l: &str| {
@@ -586,8 +596,8 @@ pub fn build(subs: &[Submission], out: &Path) -> Result<Vec<PathBuf>, SiteError>
                 md,
                 "| {} | {} | {} | {} | {:.1} | {:.1} | {} | {} | {} | {:.3} |",
                 r.rank,
-                r.model,
-                r.training,
+                md_cell(&r.model),
+                md_cell(&r.training),
                 r.standing,
                 r.success,
                 r.sem,
@@ -743,8 +753,8 @@ pub fn build(subs: &[Submission], out: &Path) -> Result<Vec<PathBuf>, SiteError>
             let _ = writeln!(
                 md,
                 "| {} | {} | {} | {:.1} | [{:.1}, {:.1}] | {:.3} | {} |",
-                s.index.model.name,
-                s.group,
+                md_cell(&s.index.model.name),
+                md_cell(&s.group),
                 s.standing.label(),
                 100.0 * m.success_rate,
                 100.0 * m.wilson_95[0],

@@ -74,14 +74,15 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
     let mut v = Verification::default();
     let root = &bundle.root;
     // Members against the index.
+    let members: std::collections::BTreeSet<&String> = bundle.members.iter().collect();
     for member in &bundle.members {
         if member == INDEX {
             continue;
         }
         match bundle.index.files.get(member) {
             None => v.failures.push(format!("{member} is not in the index")),
-            Some(want) => match std::fs::read(root.join(member)) {
-                Ok(bytes) if sha256_hex(&bytes) == *want => {}
+            Some(want) => match file_sha256(&root.join(member)) {
+                Ok(got) if got == *want => {}
                 Ok(_) => v
                     .failures
                     .push(format!("{member}: its SHA-256 is not the index's")),
@@ -90,26 +91,24 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
         }
     }
     for listed in bundle.index.files.keys() {
-        if !bundle.members.contains(listed) {
+        if !members.contains(listed) {
             v.failures
                 .push(format!("{listed} is in the index but not in the archive"));
         }
     }
-    // The suite: a shipped one, byte for byte.
+    // The suite: a shipped one, byte for byte, found by its hash among the shipped files (the
+    // bundle's name for it is never made into a path).
     let name = &bundle.index.suite.name;
-    let shipped_path = opts.suites.join(format!("{name}.toml"));
-    let shipped = match LoadedSuite::read(&shipped_path) {
-        Ok(s) => s,
-        Err(e) => {
-            v.failures
-                .push(format!("suite `{name}` is not a shipped suite: {e}"));
-            return v;
-        }
-    };
-    if shipped.sha256 != bundle.index.suite_sha256 {
+    let Some(shipped) = shipped_suite(&opts.suites, &bundle.index.suite_sha256) else {
         v.failures.push(format!(
-            "suite `{name}` differs from the shipped {}",
-            shipped_path.display()
+            "suite `{name}` is not a shipped suite: no file in {} has its SHA-256",
+            opts.suites.display()
+        ));
+        return v;
+    };
+    if shipped.suite != bundle.index.suite {
+        v.failures.push(format!(
+            "the index's suite `{name}` is not the suite file it names"
         ));
     }
     let run_dirs: Vec<PathBuf> = run_dirs(bundle);
@@ -124,6 +123,7 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
     }
     let suite = &shipped.suite;
     let planned = results::run::plan(suite.seed, suite.episodes, suite.runs, None);
+    let planned_set: std::collections::BTreeSet<(u32, u64)> = planned.iter().copied().collect();
     // Every task: the shipped protocol compiled, the manifests' task and the journals' seeds.
     let mut tasks: Vec<Task> = Vec::new();
     let mut claims: Vec<Claim> = Vec::new();
@@ -155,6 +155,25 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
             manifests += 1;
             match results::run::record::Manifest::read(&manifest_path) {
                 Ok(m) => {
+                    if m.task_id != task.id || m.level != task.level {
+                        v.failures.push(format!(
+                            "{}: task `{}` at level {}; the shipped task is `{}` at level {}",
+                            rel(root, &manifest_path),
+                            m.task_id,
+                            m.level,
+                            task.id,
+                            task.level
+                        ));
+                    }
+                    if m.autobio_version != bundle.index.autobio_version
+                        || m.model.as_ref().map(|x| &x.profile_sha256)
+                            != bundle.index.model.profile_sha256.as_ref()
+                    {
+                        v.failures.push(format!(
+                            "{}: its autobio version or model profile is not the index's",
+                            rel(root, &manifest_path)
+                        ));
+                    }
                     if m.task_content_sha256.as_deref() != Some(content.as_str()) {
                         v.failures.push(format!(
                             "{}: the results are for a modified task (its compiled content \
@@ -189,12 +208,17 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
                 }
             };
             for e in episodes {
-                *seen.entry((e.run, e.seed)).or_default() += 1;
-                claims.push(Claim {
-                    task: tasks.len(),
-                    run_dir: dir.clone(),
-                    claimed: e,
-                });
+                let n = seen.entry((e.run, e.seed)).or_default();
+                *n += 1;
+                // Only a planned episode's first claim is re-enacted; the rest are refused below
+                // without costing a simulation.
+                if *n == 1 && planned_set.contains(&(e.run, e.seed)) {
+                    claims.push(Claim {
+                        task: tasks.len(),
+                        run_dir: dir.clone(),
+                        claimed: e,
+                    });
+                }
             }
         }
         if manifests == 0 {
@@ -217,7 +241,7 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
             }
         }
         for (run, seed) in seen.keys() {
-            if !planned.contains(&(*run, *seed)) {
+            if !planned_set.contains(&(*run, *seed)) {
                 v.failures.push(format!(
                     "{}: seed {seed} (run {run}) is not one the suite plans",
                     task.id
@@ -226,6 +250,29 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
         }
         v.tasks += 1;
         tasks.push(task);
+    }
+    // Nothing else may ride along: every member is the index, or a run folder's suite file, or
+    // a suite task's manifest, journal, results or recording (what the site and an audit read
+    // is exactly what was checked here).
+    let ids: Vec<&str> = tasks.iter().map(|t| t.id.as_str()).collect();
+    for member in &bundle.members {
+        if member != INDEX && !is_run_file(member, &ids) {
+            v.failures.push(format!(
+                "{member} is not a file of a suite run (runs/<k>/ with {SUITE_FILE} and each suite \
+                 task's manifest, journal, results and recordings)"
+            ));
+        }
+    }
+    for dir in &run_dirs {
+        for id in &ids {
+            let journal = results::run::journal_path(dir, id);
+            if journal.exists() && !results::run::manifest_path(dir, id).exists() {
+                v.failures.push(format!(
+                    "{}: a journal without its manifest",
+                    rel(root, &journal)
+                ));
+            }
+        }
     }
     v.episodes = claims.len();
     // Every claimed episode re-enacted from its seed and recorded actions.
@@ -251,6 +298,61 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
     v.failures
         .extend(found.into_iter().filter_map(|(_, problem)| problem));
     v
+}
+
+/// The shipped suite whose file has this SHA-256, if one has.
+pub fn shipped_suite(dir: &Path, sha256: &str) -> Option<LoadedSuite> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .ok()?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    files.sort();
+    files
+        .iter()
+        .filter_map(|f| LoadedSuite::read(f).ok())
+        .find(|s| s.sha256 == sha256)
+}
+
+/// Whether `member` is a file a suite run of these tasks leaves: `runs/<k>/<file>`.
+fn is_run_file(member: &str, tasks: &[&str]) -> bool {
+    let mut parts = member.split('/');
+    let (Some("runs"), Some(k), Some(file), None) =
+        (parts.next(), parts.next(), parts.next(), parts.next())
+    else {
+        return false;
+    };
+    if k.is_empty() || !k.bytes().all(|b| b.is_ascii_digit()) {
+        return false;
+    }
+    file == SUITE_FILE
+        || tasks.iter().any(|t| {
+            [".manifest.json", ".journal.jsonl", ".results.json"]
+                .iter()
+                .any(|ext| file.strip_prefix(t) == Some(ext))
+                || file
+                    .strip_prefix(t)
+                    .and_then(|r| r.strip_prefix("_seed"))
+                    .and_then(|r| r.strip_suffix(".mcap"))
+                    .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
+        })
+}
+
+/// A file's SHA-256, read in blocks.
+fn file_sha256(path: &Path) -> std::io::Result<String> {
+    use sha2::{Digest, Sha256};
+    use std::io::Read;
+    let mut f = std::fs::File::open(path)?;
+    let mut h = Sha256::new();
+    let mut buf = vec![0u8; 1 << 16];
+    loop {
+        let n = f.read(&mut buf)?;
+        if n == 0 {
+            break;
+        }
+        h.update(&buf[..n]);
+    }
+    Ok(h.finalize().iter().map(|b| format!("{b:02x}")).collect())
 }
 
 /// The run folders in the bundle (`runs/<k>/`), in order.
