@@ -867,3 +867,57 @@ fn claims_the_checks_do_not_cover_are_refused() {
         "suite `../../runs/0/suite` is not a shipped suite",
     );
 }
+
+#[test]
+fn a_chain_task_page_shows_each_stage_as_the_paper_does() {
+    let suites = suites(
+        "lb-chain-suites",
+        &repo("protocols/thermal_cycler/close_then_open.toml"),
+    );
+    let dir = scratch("lb-chain");
+    let bundles = dir.join("bundles");
+    std::fs::create_dir_all(&bundles).unwrap();
+    for policy in ["expert", "hold"] {
+        let run = dir.join(policy);
+        run_ok(&[
+            "eval",
+            "--suite",
+            suites.join("mini.toml").to_str().unwrap(),
+            "--policy",
+            policy,
+            "--out",
+            run.to_str().unwrap(),
+        ]);
+        run_ok(&[
+            "leaderboard",
+            "submit",
+            run.to_str().unwrap(),
+            "--model-name",
+            policy,
+            "--out",
+            bundles.join(format!("{policy}.tar")).to_str().unwrap(),
+        ]);
+    }
+    let site = dir.join("site");
+    run_ok(&[
+        "leaderboard",
+        "build",
+        bundles.to_str().unwrap(),
+        "--out",
+        site.to_str().unwrap(),
+    ]);
+    let page =
+        std::fs::read_to_string(site.join("tasks/thermal-cycler-close-then-open.html")).unwrap();
+    assert!(
+        page.contains("<th>thermal_cycler.close_lid</th><th>thermal_cycler.open_lid</th>"),
+        "{page}"
+    );
+    assert!(
+        page.contains("<td class=l>expert</td><td>100.0</td><td>100.0</td>"),
+        "{page}"
+    );
+    assert!(
+        page.contains("<td class=l>hold</td><td>0.0</td><td>0.0</td>"),
+        "{page}"
+    );
+}

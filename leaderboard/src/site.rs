@@ -775,6 +775,42 @@ pub fn build(subs: &[Submission], out: &Path) -> Result<Vec<PathBuf>, SiteError>
         }
         body.push_str("</table>");
         body.push_str(&chart(&bars));
+        // A chain's stages, as the paper's concatenation table: the share of episodes that got
+        // through each stage.
+        let stage_ids: Vec<String> = entries
+            .iter()
+            .flat_map(|(_, t)| t.episodes.first())
+            .flat_map(|e| e.verdict.stages.iter().map(|st| st.id.clone()))
+            .fold(Vec::new(), |mut ids, id| {
+                if !ids.contains(&id) {
+                    ids.push(id);
+                }
+                ids
+            });
+        if stage_ids.len() > 1 {
+            body.push_str("<h2>Stage by stage</h2><table><tr><th>model</th>");
+            for id in &stage_ids {
+                let _ = write!(body, "<th>{}</th>", esc(id));
+            }
+            body.push_str("</tr>");
+            for (s, t) in &entries {
+                let _ = write!(body, "<tr><td class=l>{}</td>", esc(&s.index.model.name));
+                for id in &stage_ids {
+                    let done = t
+                        .episodes
+                        .iter()
+                        .filter(|e| e.verdict.stages.iter().any(|st| &st.id == id && st.success))
+                        .count();
+                    let _ = write!(
+                        body,
+                        "<td>{:.1}</td>",
+                        100.0 * done as f64 / t.episodes.len().max(1) as f64
+                    );
+                }
+                body.push_str("</tr>");
+            }
+            body.push_str("</table>");
+        }
         // Paired comparisons between submissions of one group on the same seeds.
         let mut pairs = Vec::new();
         for (i, (a, ta)) in entries.iter().enumerate() {
