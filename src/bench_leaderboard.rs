@@ -144,7 +144,7 @@ fn site_figure(dir: &Path, template: &results::EpisodeResult) -> Result<()> {
     let t = Instant::now();
     let work = dir.join("site-work");
     let loaded = leaderboard::site::load(&bundles, &work)?;
-    let files = leaderboard::site::build(&loaded, &dir.join("site"))?;
+    let files = leaderboard::site::build(&loaded, &dir.join("site"), None)?;
     let took = t.elapsed().as_secs_f64();
     outln!(
         "site     build          {took:>10.2} s for {subs} submissions x {tasks} tasks x {episodes} episodes ({} files; target under 10 s)",

@@ -111,7 +111,7 @@ pub fn run(c: &LeaderboardCommand) -> Result<ExitCode> {
             // A fresh private folder, removed when dropped.
             let work = tempfile::Builder::new().prefix("autobio-site-").tempdir()?;
             let subs = leaderboard::site::load(dir, work.path())?;
-            let files = leaderboard::site::build(&subs, out)?;
+            let files = leaderboard::site::build(&subs, out, Some(&draw_frames))?;
             outln!(
                 "built {} ({} submissions, {} files); open {}",
                 out.display(),
@@ -122,6 +122,33 @@ pub fn run(c: &LeaderboardCommand) -> Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
     }
+}
+
+/// Three frames (start, middle, end) of a recording's first camera at 224x224, drawn from its
+/// recorded states: the submission page's look at an episode.
+fn draw_frames(path: &std::path::Path) -> Result<Vec<Vec<u8>>, String> {
+    let rec = scoring::replay::Recording::open(path).map_err(|e| e.to_string())?;
+    // Steps 0, about half way and about the end: three frames drawn, not the whole episode.
+    let every = (rec.steps().saturating_sub(1) / 2).max(1);
+    let opts = scoring::replay::FrameOptions {
+        size: Some([224, 224]),
+        detail: None,
+        every: Some(every),
+    };
+    let mut pngs = Vec::new();
+    scoring::replay::frames(&rec, &opts, |_, _, images| {
+        if let Some(first) = images.first()
+            && pngs.len() < 3
+        {
+            let png = first
+                .to_png()
+                .map_err(|e| scoring::replay::ReplayError::Consumer(Box::new(e)))?;
+            pngs.push(png);
+        }
+        Ok(())
+    })
+    .map_err(|e| e.to_string())?;
+    Ok(pngs)
 }
 
 /// A first seed nobody could have known: 2^40 plus 40 random bits from the operating system

@@ -778,6 +778,17 @@ fn the_site_ranks_verified_bundles_beside_the_paper_and_is_the_same_twice() {
     // A submission's page lists every episode.
     let page = read("submissions/scripted-expert-none.html");
     assert!(page.contains("standing: <b>verified</b>"));
+    // Frames of its best episode, drawn from its recording, beside the page.
+    assert!(
+        page.contains("best episode: run 0, seed 0, score 1.000"),
+        "{page}"
+    );
+    for k in 0..3 {
+        let png = format!("scripted-expert-none/thermal-cycler-close-lid-best-{k}.png");
+        assert!(page.contains(&format!("<img src=\"{png}\"")), "{page}");
+        let bytes = std::fs::read(site.join("submissions").join(&png)).unwrap();
+        assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+    }
     assert_eq!(page.matches("<td class=l>success</td>").count(), 2);
 
     // No page asks the network for anything.

@@ -87,7 +87,14 @@ pub struct TaskResult {
     pub summary: EvalSummary,
     #[serde(skip)]
     pub episodes: Vec<EpisodeResult>,
+    /// Each episode's recording in the unpacked bundle, by (run, seed), where there is one.
+    #[serde(skip)]
+    pub recordings: BTreeMap<(u32, u64), PathBuf>,
 }
+
+/// Draws a few frames (PNG) of a recording, for a submission's page; the caller's, as this
+/// crate links no renderer.
+pub type DrawFrames<'a> = dyn Fn(&Path) -> Result<Vec<Vec<u8>>, String> + 'a;
 
 /// One bundle as the site shows it.
 #[derive(Clone, Debug, Serialize)]
@@ -182,6 +189,7 @@ pub fn load(dir: &Path, work: &Path) -> Result<Vec<Submission>, SiteError> {
             (None, _) => Standing::Reported,
         };
         let mut by_task: BTreeMap<String, (String, Vec<EpisodeResult>)> = BTreeMap::new();
+        let mut recordings: BTreeMap<String, BTreeMap<(u32, u64), PathBuf>> = BTreeMap::new();
         let mut conditions = BTreeMap::new();
         let mut profile = String::from("no model profile");
         // Only run folders' files: what verification checks (a verified bundle has no others).
@@ -196,27 +204,39 @@ pub fn load(dir: &Path, work: &Path) -> Result<Vec<Submission>, SiteError> {
                         serde_json::to_value(&m.conditions).unwrap_or_default(),
                     );
                     if let Some(model) = &m.model {
+                        let sha = &model.profile_sha256;
                         profile = format!(
                             "profile {} ({})",
                             model.profile.name,
-                            &model.profile_sha256[..12]
+                            sha.get(..12).unwrap_or(sha)
                         );
                     }
                 }
             } else if let Some(task) = member.strip_suffix(".journal.jsonl") {
                 let task = task.rsplit('/').next().unwrap_or(task).to_string();
                 if let Ok(eps) = results::run::record::read_journal_only(&path) {
+                    let run_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+                    for e in &eps {
+                        let rec = run_dir.join(format!("{task}_seed{}.mcap", e.seed));
+                        if rec.is_file() {
+                            recordings
+                                .entry(task.clone())
+                                .or_default()
+                                .insert((e.run, e.seed), rec);
+                        }
+                    }
                     by_task.entry(task).or_default().1.extend(eps);
                 }
             }
         }
-        let _ = std::fs::remove_dir_all(&here);
+        // The unpacked files stay until the caller drops `work`: pages draw from recordings.
         let tasks = by_task
             .into_iter()
             .map(|(task, (level, mut episodes))| {
                 episodes.sort_by_key(|e| (e.run, e.seed));
                 TaskResult {
                     summary: summarise(&episodes, 0.0),
+                    recordings: recordings.remove(&task).unwrap_or_default(),
                     task,
                     level,
                     episodes,
@@ -540,15 +560,20 @@ fn chart(bars: &[(String, f64, f64, f64)]) -> String {
     svg
 }
 
-/// Writes the site for `subs` into `out` (made if missing); returns the files written.
-pub fn build(subs: &[Submission], out: &Path) -> Result<Vec<PathBuf>, SiteError> {
+/// Writes the site for `subs` into `out` (made if missing); with `frames`, each submission's
+/// page shows frames of its best and worst episode of every task. Returns the files written.
+pub fn build(
+    subs: &[Submission],
+    out: &Path,
+    frames: Option<&DrawFrames>,
+) -> Result<Vec<PathBuf>, SiteError> {
     let mut written = Vec::new();
-    let mut write = |rel: &str, text: &str| -> Result<(), SiteError> {
+    let mut write = |rel: &str, bytes: &[u8]| -> Result<(), SiteError> {
         let path = out.join(rel);
         if let Some(p) = path.parent() {
             std::fs::create_dir_all(p).map_err(io("create", p))?;
         }
-        std::fs::write(&path, text).map_err(io("write", &path))?;
+        std::fs::write(&path, bytes).map_err(io("write", &path))?;
         written.push(path);
         Ok(())
     };
@@ -702,15 +727,18 @@ pub fn build(subs: &[Submission], out: &Path) -> Result<Vec<PathBuf>, SiteError>
         }
         body.push_str("</ul>");
     }
-    write("index.html", &page("autobio leaderboard", 0, &body))?;
-    write("ranking.md", &md)?;
+    write(
+        "index.html",
+        page("autobio leaderboard", 0, &body).as_bytes(),
+    )?;
+    write("ranking.md", md.as_bytes())?;
     write(
         "ranking.json",
-        &(serde_json::to_string_pretty(&ranks).unwrap_or_default() + "\n"),
+        (serde_json::to_string_pretty(&ranks).unwrap_or_default() + "\n").as_bytes(),
     )?;
     write(
         "reference.json",
-        &(serde_json::to_string_pretty(&reference).unwrap_or_default() + "\n"),
+        (serde_json::to_string_pretty(&reference).unwrap_or_default() + "\n").as_bytes(),
     )?;
     // A page per task.
     for (id, level) in &task_ids {
@@ -865,15 +893,16 @@ pub fn build(subs: &[Submission], out: &Path) -> Result<Vec<PathBuf>, SiteError>
             body.push_str("</table>");
         }
         let file = slug(id);
-        write(&format!("tasks/{file}.html"), &page(id, 1, &body))?;
-        write(&format!("tasks/{file}.md"), &md)?;
+        write(&format!("tasks/{file}.html"), page(id, 1, &body).as_bytes())?;
+        write(&format!("tasks/{file}.md"), md.as_bytes())?;
         write(
             &format!("tasks/{file}.json"),
-            &(serde_json::to_string_pretty(
+            (serde_json::to_string_pretty(
                 &serde_json::json!({"task": id, "rows": rows_json, "paired": pairs}),
             )
             .unwrap_or_default()
-                + "\n"),
+                + "\n")
+                .as_bytes(),
         )?;
     }
     // A page per submission.
@@ -915,6 +944,9 @@ pub fn build(subs: &[Submission], out: &Path) -> Result<Vec<PathBuf>, SiteError>
             body.push_str("</ul>");
         }
         for t in &s.tasks {
+            if let Some(draw) = frames {
+                body.push_str(&episode_frames(s, t, draw, &mut write)?);
+            }
             let _ = write!(
                 body,
                 "<h2>{}</h2><p><small>conditions: {}</small></p><table><tr><th>run</th><th>seed</th><th>outcome</th><th>score</th><th>steps</th></tr>",
@@ -940,10 +972,74 @@ pub fn build(subs: &[Submission], out: &Path) -> Result<Vec<PathBuf>, SiteError>
         }
         write(
             &format!("submissions/{}.html", s.slug),
-            &page(&s.index.model.name, 1, &body),
+            page(&s.index.model.name, 1, &body).as_bytes(),
         )?;
     }
     Ok(written)
+}
+
+/// The best and the worst episode of a task (highest and lowest score, the first in plan order
+/// on a tie), drawn from their recordings: an HTML fragment, the PNGs written beside the page.
+fn episode_frames(
+    s: &Submission,
+    t: &TaskResult,
+    draw: &DrawFrames,
+    write: &mut dyn FnMut(&str, &[u8]) -> Result<(), SiteError>,
+) -> Result<String, SiteError> {
+    let drawn: Vec<&EpisodeResult> = t
+        .episodes
+        .iter()
+        .filter(|e| t.recordings.contains_key(&(e.run, e.seed)))
+        .collect();
+    let best = drawn.iter().copied().reduce(|a, b| {
+        if b.verdict.score > a.verdict.score {
+            b
+        } else {
+            a
+        }
+    });
+    let worst = drawn.iter().copied().reduce(|a, b| {
+        if b.verdict.score < a.verdict.score {
+            b
+        } else {
+            a
+        }
+    });
+    let mut html = String::new();
+    let mut shown = Vec::new();
+    for (label, e) in [("best", best), ("worst", worst)] {
+        let Some(e) = e else { continue };
+        if shown.contains(&(e.run, e.seed)) {
+            continue;
+        }
+        shown.push((e.run, e.seed));
+        let _ = write!(
+            html,
+            "<p>{label} episode: run {}, seed {}, score {:.3}</p><p>",
+            e.run, e.seed, e.verdict.score
+        );
+        match draw(&t.recordings[&(e.run, e.seed)]) {
+            Ok(pngs) => {
+                for (k, png) in pngs.iter().enumerate() {
+                    let name = format!("{}/{}-{label}-{k}.png", s.slug, slug(&t.task));
+                    write(&format!("submissions/{name}"), png)?;
+                    let _ = write!(
+                        html,
+                        "<img src=\"{name}\" alt=\"{label} episode, frame {k}\" width=224 height=224> "
+                    );
+                }
+            }
+            Err(why) => {
+                let _ = write!(
+                    html,
+                    "<small>(frames could not be drawn: {})</small>",
+                    esc(&why)
+                );
+            }
+        }
+        html.push_str("</p>");
+    }
+    Ok(html)
 }
 
 #[cfg(test)]
