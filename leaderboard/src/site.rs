@@ -978,13 +978,16 @@ pub fn build(
     Ok(written)
 }
 
+/// Writes one file of the site (its path relative to the site's folder).
+type WriteFile<'a> = dyn FnMut(&str, &[u8]) -> Result<(), SiteError> + 'a;
+
 /// The best and the worst episode of a task (highest and lowest score, the first in plan order
 /// on a tie), drawn from their recordings: an HTML fragment, the PNGs written beside the page.
 fn episode_frames(
     s: &Submission,
     t: &TaskResult,
     draw: &DrawFrames,
-    write: &mut dyn FnMut(&str, &[u8]) -> Result<(), SiteError>,
+    write: &mut WriteFile,
 ) -> Result<String, SiteError> {
     let drawn: Vec<&EpisodeResult> = t
         .episodes
