@@ -761,6 +761,12 @@ fn the_site_ranks_verified_bundles_beside_the_paper_and_is_the_same_twice() {
         "{index}"
     );
     assert!(index.contains("<svg"), "a chart");
+    // Over the suite, paired on its seeds: the expert won both episodes the no-motion run lost
+    // (2 discordant pairs: p = 2 * (1/2)^2 = 0.5).
+    assert!(
+        index.contains("<td class=l>scripted expert</td><td class=l>no motion</td><td>2</td><td>2</td><td>0</td><td>5.000e-1</td><td>not significant</td>"),
+        "{index}"
+    );
 
     // The task page: Wilson intervals, the paired test on the same seeds, the paper's row.
     let task = read("tasks/thermal-cycler-close-lid.html");

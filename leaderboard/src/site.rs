@@ -475,6 +475,63 @@ fn paired(a: &Submission, ta: &TaskResult, b: &Submission, tb: &TaskResult) -> O
     })
 }
 
+/// Two submissions compared over every task they share, each episode paired with the other's
+/// on the same task, run and seed (McNemar on the pooled discordant episodes).
+pub fn paired_over_suite(a: &Submission, b: &Submission) -> Option<Paired> {
+    let mut total: Option<Paired> = None;
+    for ta in &a.tasks {
+        let Some(tb) = b.tasks.iter().find(|t| t.task == ta.task) else {
+            continue;
+        };
+        if let Some(p) = paired(a, ta, b, tb) {
+            let t = total.get_or_insert(Paired {
+                first: p.first.clone(),
+                second: p.second.clone(),
+                pairs: 0,
+                only_first: 0,
+                only_second: 0,
+                p_value: 1.0,
+                significant: false,
+            });
+            t.pairs += p.pairs;
+            t.only_first += p.only_first;
+            t.only_second += p.only_second;
+        }
+    }
+    total.map(|mut t| {
+        t.p_value = mcnemar(t.only_first, t.only_second);
+        t.significant = t.p_value < 0.05;
+        t
+    })
+}
+
+/// The paired comparisons of a table, as HTML.
+fn paired_table(pairs: &[Paired]) -> String {
+    let mut html = String::from(
+        "<table><tr><th>first</th><th>second</th><th>pairs</th><th>only first won</th>\
+         <th>only second won</th><th>p</th><th>at 5%</th></tr>",
+    );
+    for p in pairs {
+        let _ = write!(
+            html,
+            "<tr><td class=l>{}</td><td class=l>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.3e}</td><td>{}</td></tr>",
+            esc(&p.first),
+            esc(&p.second),
+            p.pairs,
+            p.only_first,
+            p.only_second,
+            p.p_value,
+            if p.significant {
+                "significant"
+            } else {
+                "not significant"
+            }
+        );
+    }
+    html.push_str("</table>");
+    html
+}
+
 /// Text for a Markdown table cell: no cell breaks, no line breaks, no raw HTML.
 fn md_cell(s: &str) -> String {
     s.replace('|', "\\|")
@@ -645,6 +702,21 @@ pub fn build(
             })
             .collect();
         body.push_str(&chart(&bars));
+        // Every two submissions of the group, paired over the suite's episodes.
+        let members: Vec<&Submission> = subs
+            .iter()
+            .filter(|s| &s.group == group && !matches!(s.standing, Standing::Refused(_)))
+            .collect();
+        let mut pairs = Vec::new();
+        for (i, a) in members.iter().enumerate() {
+            for b in members.iter().skip(i + 1) {
+                pairs.extend(paired_over_suite(a, b));
+            }
+        }
+        if !pairs.is_empty() {
+            body.push_str("<h3>Paired over the suite (same tasks and seeds, exact McNemar)</h3>");
+            body.push_str(&paired_table(&pairs));
+        }
     }
     // The tasks.
     let mut task_ids: BTreeMap<String, String> = BTreeMap::new();
@@ -851,25 +923,8 @@ pub fn build(
             }
         }
         if !pairs.is_empty() {
-            body.push_str("<h2>Paired comparisons (same seeds, exact McNemar)</h2><table><tr><th>first</th><th>second</th><th>pairs</th><th>only first won</th><th>only second won</th><th>p</th><th>at 5%</th></tr>");
-            for p in &pairs {
-                let _ = write!(
-                    body,
-                    "<tr><td class=l>{}</td><td class=l>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.3e}</td><td>{}</td></tr>",
-                    esc(&p.first),
-                    esc(&p.second),
-                    p.pairs,
-                    p.only_first,
-                    p.only_second,
-                    p.p_value,
-                    if p.significant {
-                        "significant"
-                    } else {
-                        "not significant"
-                    }
-                );
-            }
-            body.push_str("</table>");
+            body.push_str("<h2>Paired comparisons (same seeds, exact McNemar)</h2>");
+            body.push_str(&paired_table(&pairs));
         }
         if let Some(r) = reference
             .entry
