@@ -49,19 +49,6 @@ fn measure(task: &compiler::Task, dir: &Path) -> Result<()> {
             out: bundle.clone(),
         },
     )?;
-    let reenact = |t: &compiler::Task, seed: u64, actions: &[Vec<f64>]| {
-        scoring::replay::reenact(t, seed, actions)
-            .map(|r| leaderboard::verify::Reenacted {
-                hash: r.hash,
-                success: r.verdict.success,
-                score: r.verdict.score,
-                control_steps: r.control_steps,
-                finished: r.finished,
-                unused_actions: r.unused_actions,
-                refused: r.refused,
-            })
-            .map_err(|e| e.to_string())
-    };
     let mut rates = Vec::new();
     for workers in [1, 2] {
         let work = dir.join(format!("verify-{workers}"));
@@ -70,7 +57,7 @@ fn measure(task: &compiler::Task, dir: &Path) -> Result<()> {
             suites: suites.clone(),
             workers,
         };
-        let v = leaderboard::verify::verify(&unpacked, &opts, &reenact);
+        let v = leaderboard::verify::verify(&unpacked, &opts, &crate::submissions::reenact);
         anyhow::ensure!(
             v.accepted(),
             "the bench's own bundle was refused: {:?}",

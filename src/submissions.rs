@@ -124,6 +124,25 @@ pub fn run(c: &LeaderboardCommand) -> Result<ExitCode> {
     }
 }
 
+/// The verifier's re-enactment: `scoring::replay::reenact` in the verifier's terms.
+pub fn reenact(
+    task: &compiler::Task,
+    seed: u64,
+    actions: &[Vec<f64>],
+) -> Result<leaderboard::verify::Reenacted, String> {
+    scoring::replay::reenact(task, seed, actions)
+        .map(|r| leaderboard::verify::Reenacted {
+            hash: r.hash,
+            success: r.verdict.success,
+            score: r.verdict.score,
+            control_steps: r.control_steps,
+            finished: r.finished,
+            unused_actions: r.unused_actions,
+            refused: r.refused,
+        })
+        .map_err(|e| e.to_string())
+}
+
 /// Three frames (start, middle, end) of a recording's first camera at 224x224, drawn from its
 /// recorded states: the submission page's look at an episode.
 fn draw_frames(path: &std::path::Path) -> Result<Vec<Vec<u8>>, String> {
@@ -312,19 +331,6 @@ fn verify(
     let opts = leaderboard::verify::VerifyOptions {
         suites: suites.to_path_buf(),
         workers,
-    };
-    let reenact = |task: &compiler::Task, seed: u64, actions: &[Vec<f64>]| {
-        scoring::replay::reenact(task, seed, actions)
-            .map(|r| leaderboard::verify::Reenacted {
-                hash: r.hash,
-                success: r.verdict.success,
-                score: r.verdict.score,
-                control_steps: r.control_steps,
-                finished: r.finished,
-                unused_actions: r.unused_actions,
-                refused: r.refused,
-            })
-            .map_err(|e| e.to_string())
     };
     let v = leaderboard::verify::verify(&unpacked, &opts, &reenact);
     drop(temp);

@@ -36,17 +36,6 @@ fn suites(name: &str, protocol: &str) -> PathBuf {
     dir
 }
 
-fn run_ok(args: &[&str]) -> String {
-    let out = autobio(args);
-    assert!(
-        out.status.success(),
-        "autobio {args:?}: {}{}",
-        text(&out.stdout),
-        text(&out.stderr)
-    );
-    text(&out.stdout)
-}
-
 /// The shipped suites, an expert run of them, its bundle; made once.
 struct Fixture {
     suites: PathBuf,
@@ -66,7 +55,7 @@ fn fixture() -> &'static Fixture {
         let root = scratch("lb-runs");
         let (run, hold) = (root.join("expert"), root.join("hold"));
         for (dir, policy) in [(&run, "expert"), (&hold, "hold")] {
-            run_ok(&[
+            common::autobio_ok(&[
                 "eval",
                 "--suite",
                 suite.to_str().unwrap(),
@@ -77,7 +66,7 @@ fn fixture() -> &'static Fixture {
             ]);
         }
         let bundle = root.join("expert.tar.zst");
-        let said = run_ok(&[
+        let said = common::autobio_ok(&[
             "leaderboard",
             "submit",
             run.to_str().unwrap(),
@@ -216,7 +205,7 @@ fn an_honest_bundle_verifies() {
     assert!(m.contains_key(&format!("runs/0/{TASK}_seed1.mcap")));
     // Packing the same runs again gives the same bytes.
     let again = scratch("lb-again").join("b.tar.zst");
-    run_ok(&[
+    common::autobio_ok(&[
         "leaderboard",
         "submit",
         f.run.to_str().unwrap(),
@@ -364,7 +353,7 @@ fn results_for_a_changed_protocol_are_refused() {
     std::fs::write(&protocol, original.replace("\"31.5 s\"", "\"60 s\"")).unwrap();
     let suites = suites("lb-changed-suites", protocol.to_str().unwrap());
     let run = dir.join("run");
-    run_ok(&[
+    common::autobio_ok(&[
         "eval",
         "--suite",
         suites.join("mini.toml").to_str().unwrap(),
@@ -373,7 +362,7 @@ fn results_for_a_changed_protocol_are_refused() {
     ]);
     std::fs::write(&protocol, &original).unwrap();
     let bundle = dir.join("b.tar");
-    run_ok(&[
+    common::autobio_ok(&[
         "leaderboard",
         "submit",
         run.to_str().unwrap(),
@@ -551,7 +540,7 @@ fn a_model_servers_suite_run_verifies() {
         pi0.replace("reset_frame = false", "reset_frame = true"),
     )
     .unwrap();
-    run_ok(&[
+    common::autobio_ok(&[
         "eval",
         "--suite",
         f.suites.join("mini.toml").to_str().unwrap(),
@@ -568,7 +557,7 @@ fn a_model_servers_suite_run_verifies() {
         .collect();
     assert_eq!(outcomes, ["success", "success"]);
     let bundle = dir.join("pi0.tar.zst");
-    run_ok(&[
+    common::autobio_ok(&[
         "leaderboard",
         "submit",
         run.to_str().unwrap(),
@@ -601,7 +590,7 @@ fn an_audit_passes_the_model_that_made_the_bundle_and_flags_one_far_below_its_cl
     .unwrap();
     let dir = scratch("lb-audit");
     let run = dir.join("run");
-    run_ok(&[
+    common::autobio_ok(&[
         "eval",
         "--suite",
         suites.join("mini.toml").to_str().unwrap(),
@@ -609,7 +598,7 @@ fn an_audit_passes_the_model_that_made_the_bundle_and_flags_one_far_below_its_cl
         run.to_str().unwrap(),
     ]);
     let bundle = dir.join("expert.tar.zst");
-    run_ok(&[
+    common::autobio_ok(&[
         "leaderboard",
         "submit",
         run.to_str().unwrap(),
@@ -627,7 +616,7 @@ fn an_audit_passes_the_model_that_made_the_bundle_and_flags_one_far_below_its_cl
     .unwrap();
     let audit = |policy: &str| {
         let recordings = dir.join(format!("{policy}-recordings"));
-        run_ok(&[
+        common::autobio_ok(&[
             "eval",
             "--protocol",
             "protocols/thermal_cycler/close_lid.toml",
@@ -708,7 +697,7 @@ fn the_site_ranks_verified_bundles_beside_the_paper_and_is_the_same_twice() {
     let (code, said) = verify(&expert, &f.suites);
     assert_eq!(code, 0, "{said}");
     let hold = bundles.join("hold.tar.zst");
-    run_ok(&[
+    common::autobio_ok(&[
         "leaderboard",
         "submit",
         f.hold.to_str().unwrap(),
@@ -720,7 +709,7 @@ fn the_site_ranks_verified_bundles_beside_the_paper_and_is_the_same_twice() {
     let bytes = std::fs::read(&f.bundle).unwrap();
     std::fs::write(bundles.join("cut.tar.zst"), &bytes[..bytes.len() / 3]).unwrap();
     let build = |out: &Path| {
-        run_ok(&[
+        common::autobio_ok(&[
             "leaderboard",
             "build",
             bundles.to_str().unwrap(),
@@ -896,7 +885,7 @@ fn a_chain_task_page_shows_each_stage_as_the_paper_does() {
     std::fs::create_dir_all(&bundles).unwrap();
     for policy in ["expert", "hold"] {
         let run = dir.join(policy);
-        run_ok(&[
+        common::autobio_ok(&[
             "eval",
             "--suite",
             suites.join("mini.toml").to_str().unwrap(),
@@ -905,7 +894,7 @@ fn a_chain_task_page_shows_each_stage_as_the_paper_does() {
             "--out",
             run.to_str().unwrap(),
         ]);
-        run_ok(&[
+        common::autobio_ok(&[
             "leaderboard",
             "submit",
             run.to_str().unwrap(),
@@ -916,7 +905,7 @@ fn a_chain_task_page_shows_each_stage_as_the_paper_does() {
         ]);
     }
     let site = dir.join("site");
-    run_ok(&[
+    common::autobio_ok(&[
         "leaderboard",
         "build",
         bundles.to_str().unwrap(),

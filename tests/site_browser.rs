@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{autobio, scratch, text};
+use common::scratch;
 use serde_json::{Value, json};
 use std::io::{BufRead, BufReader};
 use std::net::TcpStream;
@@ -14,17 +14,6 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 use tungstenite::{Message, WebSocket};
-
-fn run_ok(args: &[&str]) -> String {
-    let out = autobio(args);
-    assert!(
-        out.status.success(),
-        "autobio {args:?}: {}{}",
-        text(&out.stdout),
-        text(&out.stderr)
-    );
-    text(&out.stdout)
-}
 
 /// A site built from one verified expert bundle of a 2-episode suite.
 fn site(dir: &Path) -> PathBuf {
@@ -41,7 +30,7 @@ fn site(dir: &Path) -> PathBuf {
     )
     .unwrap();
     let run = dir.join("run");
-    run_ok(&[
+    common::autobio_ok(&[
         "eval",
         "--suite",
         suites.join("mini.toml").to_str().unwrap(),
@@ -51,7 +40,7 @@ fn site(dir: &Path) -> PathBuf {
     let bundles = dir.join("bundles");
     std::fs::create_dir_all(&bundles).unwrap();
     let bundle = bundles.join("expert.tar.zst");
-    run_ok(&[
+    common::autobio_ok(&[
         "leaderboard",
         "submit",
         run.to_str().unwrap(),
@@ -60,7 +49,7 @@ fn site(dir: &Path) -> PathBuf {
         "--out",
         bundle.to_str().unwrap(),
     ]);
-    run_ok(&[
+    common::autobio_ok(&[
         "leaderboard",
         "verify",
         bundle.to_str().unwrap(),
@@ -68,7 +57,7 @@ fn site(dir: &Path) -> PathBuf {
         suites.to_str().unwrap(),
     ]);
     let site = dir.join("site");
-    run_ok(&[
+    common::autobio_ok(&[
         "leaderboard",
         "build",
         bundles.to_str().unwrap(),

@@ -106,6 +106,18 @@ pub fn autobio_within(args: &[&str], limit: std::time::Duration) -> Output {
     }
 }
 
+/// Runs the `autobio` binary, which must succeed; its standard output.
+pub fn autobio_ok(args: &[&str]) -> String {
+    let out = autobio(args);
+    assert!(
+        out.status.success(),
+        "autobio {args:?}: {}{}",
+        text(&out.stdout),
+        text(&out.stderr)
+    );
+    text(&out.stdout)
+}
+
 pub fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
 }
