@@ -161,27 +161,11 @@ fn a_job_array_verifies_one_bundle_per_task_and_records_each() {
     )
     .unwrap();
     let run = root.join("run");
-    let out = autobio(&[
-        "eval",
-        "--suite",
-        suites.join("one.toml").to_str().unwrap(),
-        "--out",
-        run.to_str().unwrap(),
-    ]);
-    assert!(out.status.success(), "{}", text(&out.stderr));
+    common::eval_suite(&suites.join("one.toml"), &run, &[]);
     let bundles = root.join("bundles");
     std::fs::create_dir_all(&bundles).unwrap();
     let submit = |name: &str| {
-        let out = autobio(&[
-            "leaderboard",
-            "submit",
-            run.to_str().unwrap(),
-            "--model-name",
-            name,
-            "--out",
-            bundles.join(format!("{name}.tar")).to_str().unwrap(),
-        ]);
-        assert!(out.status.success(), "{}", text(&out.stderr));
+        common::submit(&run, name, &bundles.join(format!("{name}.tar")), &[]);
     };
     submit("a-honest");
     // The second bundle claims the episode failed.

@@ -55,28 +55,10 @@ fn fixture() -> &'static Fixture {
         let root = scratch("lb-runs");
         let (run, hold) = (root.join("expert"), root.join("hold"));
         for (dir, policy) in [(&run, "expert"), (&hold, "hold")] {
-            common::autobio_ok(&[
-                "eval",
-                "--suite",
-                suite.to_str().unwrap(),
-                "--policy",
-                policy,
-                "--out",
-                dir.to_str().unwrap(),
-            ]);
+            common::eval_suite(&suite, dir, &["--policy", policy]);
         }
         let bundle = root.join("expert.tar.zst");
-        let said = common::autobio_ok(&[
-            "leaderboard",
-            "submit",
-            run.to_str().unwrap(),
-            "--model-name",
-            "scripted expert",
-            "--training",
-            "none",
-            "--out",
-            bundle.to_str().unwrap(),
-        ]);
+        let said = common::submit(&run, "scripted expert", &bundle, &["--training", "none"]);
         assert!(said.contains("for suite mini"), "{said}");
         Fixture {
             suites,
@@ -205,17 +187,7 @@ fn an_honest_bundle_verifies() {
     assert!(m.contains_key(&format!("runs/0/{TASK}_seed1.mcap")));
     // Packing the same runs again gives the same bytes.
     let again = scratch("lb-again").join("b.tar.zst");
-    common::autobio_ok(&[
-        "leaderboard",
-        "submit",
-        f.run.to_str().unwrap(),
-        "--model-name",
-        "scripted expert",
-        "--training",
-        "none",
-        "--out",
-        again.to_str().unwrap(),
-    ]);
+    common::submit(&f.run, "scripted expert", &again, &["--training", "none"]);
     assert_eq!(
         std::fs::read(&again).unwrap(),
         std::fs::read(&f.bundle).unwrap()
@@ -353,24 +325,10 @@ fn results_for_a_changed_protocol_are_refused() {
     std::fs::write(&protocol, original.replace("\"31.5 s\"", "\"60 s\"")).unwrap();
     let suites = suites("lb-changed-suites", protocol.to_str().unwrap());
     let run = dir.join("run");
-    common::autobio_ok(&[
-        "eval",
-        "--suite",
-        suites.join("mini.toml").to_str().unwrap(),
-        "--out",
-        run.to_str().unwrap(),
-    ]);
+    common::eval_suite(&suites.join("mini.toml"), &run, &[]);
     std::fs::write(&protocol, &original).unwrap();
     let bundle = dir.join("b.tar");
-    common::autobio_ok(&[
-        "leaderboard",
-        "submit",
-        run.to_str().unwrap(),
-        "--model-name",
-        "x",
-        "--out",
-        bundle.to_str().unwrap(),
-    ]);
+    common::submit(&run, "x", &bundle, &[]);
     refused(&bundle, &suites, "the results are for a modified task");
 }
 
@@ -540,32 +498,23 @@ fn a_model_servers_suite_run_verifies() {
         pi0.replace("reset_frame = false", "reset_frame = true"),
     )
     .unwrap();
-    common::autobio_ok(&[
-        "eval",
-        "--suite",
-        f.suites.join("mini.toml").to_str().unwrap(),
-        "--model",
-        &server.url,
-        "--profile",
-        profile.to_str().unwrap(),
-        "--out",
-        run.to_str().unwrap(),
-    ]);
+    common::eval_suite(
+        &f.suites.join("mini.toml"),
+        &run,
+        &[
+            "--model",
+            &server.url,
+            "--profile",
+            profile.to_str().unwrap(),
+        ],
+    );
     let outcomes: Vec<Value> = common::journal(&run, TASK)
         .iter()
         .map(|e| e["outcome"].clone())
         .collect();
     assert_eq!(outcomes, ["success", "success"]);
     let bundle = dir.join("pi0.tar.zst");
-    common::autobio_ok(&[
-        "leaderboard",
-        "submit",
-        run.to_str().unwrap(),
-        "--model-name",
-        "reference server",
-        "--out",
-        bundle.to_str().unwrap(),
-    ]);
+    common::submit(&run, "reference server", &bundle, &[]);
     let index: Value = serde_json::from_slice(&members(&bundle)["index.json"]).unwrap();
     assert_eq!(index["model"]["wire"], "openpi");
     assert_eq!(index["model"]["profile"], "pi0");
@@ -590,23 +539,9 @@ fn an_audit_passes_the_model_that_made_the_bundle_and_flags_one_far_below_its_cl
     .unwrap();
     let dir = scratch("lb-audit");
     let run = dir.join("run");
-    common::autobio_ok(&[
-        "eval",
-        "--suite",
-        suites.join("mini.toml").to_str().unwrap(),
-        "--out",
-        run.to_str().unwrap(),
-    ]);
+    common::eval_suite(&suites.join("mini.toml"), &run, &[]);
     let bundle = dir.join("expert.tar.zst");
-    common::autobio_ok(&[
-        "leaderboard",
-        "submit",
-        run.to_str().unwrap(),
-        "--model-name",
-        "expert",
-        "--out",
-        bundle.to_str().unwrap(),
-    ]);
+    common::submit(&run, "expert", &bundle, &[]);
     let profile = dir.join("pi0.toml");
     let pi0 = std::fs::read_to_string("profiles/pi0.toml").unwrap();
     std::fs::write(
@@ -697,15 +632,7 @@ fn the_site_ranks_verified_bundles_beside_the_paper_and_is_the_same_twice() {
     let (code, said) = verify(&expert, &f.suites);
     assert_eq!(code, 0, "{said}");
     let hold = bundles.join("hold.tar.zst");
-    common::autobio_ok(&[
-        "leaderboard",
-        "submit",
-        f.hold.to_str().unwrap(),
-        "--model-name",
-        "no motion",
-        "--out",
-        hold.to_str().unwrap(),
-    ]);
+    common::submit(&f.hold, "no motion", &hold, &[]);
     let bytes = std::fs::read(&f.bundle).unwrap();
     std::fs::write(bundles.join("cut.tar.zst"), &bytes[..bytes.len() / 3]).unwrap();
     let build = |out: &Path| {
@@ -885,24 +812,8 @@ fn a_chain_task_page_shows_each_stage_as_the_paper_does() {
     std::fs::create_dir_all(&bundles).unwrap();
     for policy in ["expert", "hold"] {
         let run = dir.join(policy);
-        common::autobio_ok(&[
-            "eval",
-            "--suite",
-            suites.join("mini.toml").to_str().unwrap(),
-            "--policy",
-            policy,
-            "--out",
-            run.to_str().unwrap(),
-        ]);
-        common::autobio_ok(&[
-            "leaderboard",
-            "submit",
-            run.to_str().unwrap(),
-            "--model-name",
-            policy,
-            "--out",
-            bundles.join(format!("{policy}.tar")).to_str().unwrap(),
-        ]);
+        common::eval_suite(&suites.join("mini.toml"), &run, &["--policy", policy]);
+        common::submit(&run, policy, &bundles.join(format!("{policy}.tar")), &[]);
     }
     let site = dir.join("site");
     common::autobio_ok(&[

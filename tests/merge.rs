@@ -29,48 +29,36 @@ fn merge(shards: &[&Path], out: &Path) -> std::process::Output {
     autobio(&args)
 }
 
+/// The no-motion control's `episodes` episodes run as shards 0/2 and 1/2 into two folders.
+fn hold_shards(first: &Path, second: &Path, episodes: &str) {
+    for (dir, shard) in [(first, "0/2"), (second, "1/2")] {
+        let out = autobio(&[
+            "eval",
+            "--protocol",
+            "protocols/thermal_cycler/close_lid.toml",
+            "--policy",
+            "hold",
+            "--episodes",
+            episodes,
+            "--seed",
+            "0",
+            "--shard",
+            shard,
+            "--out",
+            dir.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{}", text(&out.stderr));
+    }
+}
+
 #[test]
 fn merging_never_writes_a_shard() {
     let root = scratch("merge");
     let (s0, s1) = (root.join("s0"), root.join("s1"));
-    for (dir, shard) in [(&s0, "0/2"), (&s1, "1/2")] {
-        let out = autobio(&[
-            "eval",
-            "--protocol",
-            "protocols/thermal_cycler/close_lid.toml",
-            "--policy",
-            "hold",
-            "--episodes",
-            "3",
-            "--seed",
-            "0",
-            "--shard",
-            shard,
-            "--out",
-            dir.to_str().unwrap(),
-        ]);
-        assert!(out.status.success(), "{}", text(&out.stderr));
-    }
+    hold_shards(&s0, &s1, "3");
     // One episode over two shards: shard 1 plans none, and its journal is empty.
     let (e0, e1) = (root.join("e0"), root.join("e1"));
-    for (dir, shard) in [(&e0, "0/2"), (&e1, "1/2")] {
-        let out = autobio(&[
-            "eval",
-            "--protocol",
-            "protocols/thermal_cycler/close_lid.toml",
-            "--policy",
-            "hold",
-            "--episodes",
-            "1",
-            "--seed",
-            "0",
-            "--shard",
-            shard,
-            "--out",
-            dir.to_str().unwrap(),
-        ]);
-        assert!(out.status.success(), "{}", text(&out.stderr));
-    }
+    hold_shards(&e0, &e1, "1");
     let empty = [e0.as_path(), e1.as_path()];
     let before_empty = snapshot(&empty);
     assert_eq!(

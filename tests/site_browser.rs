@@ -30,25 +30,11 @@ fn site(dir: &Path) -> PathBuf {
     )
     .unwrap();
     let run = dir.join("run");
-    common::autobio_ok(&[
-        "eval",
-        "--suite",
-        suites.join("mini.toml").to_str().unwrap(),
-        "--out",
-        run.to_str().unwrap(),
-    ]);
+    common::eval_suite(&suites.join("mini.toml"), &run, &[]);
     let bundles = dir.join("bundles");
     std::fs::create_dir_all(&bundles).unwrap();
     let bundle = bundles.join("expert.tar.zst");
-    common::autobio_ok(&[
-        "leaderboard",
-        "submit",
-        run.to_str().unwrap(),
-        "--model-name",
-        "scripted expert",
-        "--out",
-        bundle.to_str().unwrap(),
-    ]);
+    common::submit(&run, "scripted expert", &bundle, &[]);
     common::autobio_ok(&[
         "leaderboard",
         "verify",

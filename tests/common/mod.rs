@@ -118,6 +118,40 @@ pub fn autobio_ok(args: &[&str]) -> String {
     text(&out.stdout)
 }
 
+/// `autobio eval --suite SUITE --out OUT` with `extra` arguments, which must succeed.
+pub fn eval_suite(suite: &std::path::Path, out: &std::path::Path, extra: &[&str]) -> String {
+    let mut args = vec![
+        "eval",
+        "--suite",
+        suite.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend(extra);
+    autobio_ok(&args)
+}
+
+/// `autobio leaderboard submit RUN --model-name MODEL --out BUNDLE` with `extra` arguments,
+/// which must succeed.
+pub fn submit(
+    run: &std::path::Path,
+    model: &str,
+    bundle: &std::path::Path,
+    extra: &[&str],
+) -> String {
+    let mut args = vec![
+        "leaderboard",
+        "submit",
+        run.to_str().unwrap(),
+        "--model-name",
+        model,
+        "--out",
+        bundle.to_str().unwrap(),
+    ];
+    args.extend(extra);
+    autobio_ok(&args)
+}
+
 pub fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
 }
