@@ -11,6 +11,7 @@
 mod capture;
 mod export;
 mod merge;
+pub mod meta;
 mod parquet;
 pub mod stats;
 mod video;

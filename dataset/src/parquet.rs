@@ -353,3 +353,37 @@ pub fn read_state_action(path: &Path) -> Result<Vec<StateAction>, DatasetError> 
     }
     Ok(rows)
 }
+
+/// v3.0's `meta/tasks.parquet` read back: (task_index, task) in file order.
+pub fn read_tasks(path: &Path) -> Result<Vec<(i64, String)>, DatasetError> {
+    use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
+    let bad = |e: String| DatasetError::Parquet {
+        path: path.to_path_buf(),
+        why: e,
+    };
+    let file = std::fs::File::open(path).map_err(|e| DatasetError::io("open", path, e))?;
+    let reader = ParquetRecordBatchReaderBuilder::try_new(file)
+        .and_then(|b| b.build())
+        .map_err(|e| bad(e.to_string()))?;
+    let mut rows = Vec::new();
+    for batch in reader {
+        let batch = batch.map_err(|e| bad(e.to_string()))?;
+        let index = batch
+            .column_by_name("task_index")
+            .and_then(|c| c.as_any().downcast_ref::<Int64Array>())
+            .ok_or_else(|| bad("no int64 column `task_index`".into()))?;
+        let task = batch
+            .column_by_name("__index_level_0__")
+            .or_else(|| batch.column_by_name("task"))
+            .and_then(|c| c.as_any().downcast_ref::<StringArray>())
+            .ok_or_else(|| bad("no task string column (the pandas index or `task`)".into()))?;
+        rows.extend(
+            index
+                .values()
+                .iter()
+                .zip(task.iter())
+                .map(|(&i, t)| (i, t.unwrap_or_default().to_string())),
+        );
+    }
+    Ok(rows)
+}

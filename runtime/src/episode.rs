@@ -211,11 +211,39 @@ impl Episode {
                 value: action[index],
             });
         }
+        let bounds = self.action_bounds();
+        for (index, (&value, &(low, high))) in action.iter().zip(&bounds).enumerate() {
+            // A hair of slack for values a model computed in f32.
+            let slack = 1e-6 * (1.0 + high.abs().max(low.abs()).min(1e6));
+            if value < low - slack || value > high + slack {
+                return Err(StepError::OutOfRange {
+                    index,
+                    value,
+                    low,
+                    high,
+                });
+            }
+        }
         let scene = self.scene.clone();
+        let mut rest = action;
+        for ids in &scene.robots {
+            let (mine, others) = rest.split_at(ids.model.action_len());
+            rest = others;
+            for (k, a) in ids.actuators.iter().enumerate() {
+                self.data.ctrl_mut()[*a] = mine[k];
+            }
+            self.data.ctrl_mut()[ids.gripper_actuator] =
+                ids.model.gripper.clamp(mine[ids.actuators.len()]);
+        }
+        Ok(())
+    }
+
+    /// Each action component's range, in the action layout: the arm actuators' `ctrlrange`
+    /// (unbounded where the actuator is not limited), then the gripper's command range.
+    pub fn action_bounds(&self) -> Vec<(f64, f64)> {
         let model = self.data.model();
         let (limited, range) = (model.actuator_ctrllimited(), model.actuator_ctrlrange());
-        // Each action component's range: the arm actuators' `ctrlrange`, the gripper's command.
-        let bounds: Vec<(f64, f64)> = scene
+        self.scene
             .robots
             .iter()
             .flat_map(|ids| {
@@ -229,30 +257,7 @@ impl Episode {
                     .chain([(g.open.min(g.closed), g.open.max(g.closed))])
                     .collect::<Vec<_>>()
             })
-            .collect();
-        for (index, (&value, &(low, high))) in action.iter().zip(&bounds).enumerate() {
-            // A hair of slack for values a model computed in f32.
-            let slack = 1e-6 * (1.0 + high.abs().max(low.abs()).min(1e6));
-            if value < low - slack || value > high + slack {
-                return Err(StepError::OutOfRange {
-                    index,
-                    value,
-                    low,
-                    high,
-                });
-            }
-        }
-        let mut rest = action;
-        for ids in &scene.robots {
-            let (mine, others) = rest.split_at(ids.model.action_len());
-            rest = others;
-            for (k, a) in ids.actuators.iter().enumerate() {
-                self.data.ctrl_mut()[*a] = mine[k];
-            }
-            self.data.ctrl_mut()[ids.gripper_actuator] =
-                ids.model.gripper.clamp(mine[ids.actuators.len()]);
-        }
-        Ok(())
+            .collect()
     }
 
     /// One physics step: `mj_step` (detents and threads are plugins inside it), then every item's

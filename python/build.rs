@@ -1,0 +1,43 @@
+//! Build script of the Python extension: the MuJoCo rpath every package that links MuJoCo embeds
+//! (`build/rpath.rs`), and the shipped protocols (`protocols/**/*.toml`) compiled into the
+//! extension, so that an installed wheel names every shipped task without a checkout.
+#[path = "../build/rpath.rs"]
+mod rpath;
+
+use std::path::{Path, PathBuf};
+
+fn main() {
+    rpath::main();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../protocols");
+    let root = root
+        .canonicalize()
+        .expect("the checkout's protocols/ folder");
+    println!("cargo:rerun-if-changed={}", root.display());
+    let mut files = Vec::new();
+    walk(&root, &mut files);
+    files.sort();
+    let mut table = String::from("pub static SHIPPED: &[(&str, &str)] = &[\n");
+    for f in &files {
+        let rel = f.strip_prefix(&root).expect("under the root");
+        table += &format!(
+            "    ({:?}, include_str!({:?})),\n",
+            rel.to_string_lossy(),
+            f.display().to_string()
+        );
+    }
+    table += "];\n";
+    let out = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
+    std::fs::write(out.join("protocols.rs"), table).expect("OUT_DIR is writable");
+}
+
+fn walk(dir: &Path, files: &mut Vec<PathBuf>) {
+    for entry in std::fs::read_dir(dir).expect("protocols/ is readable") {
+        let path = entry.expect("a readable entry").path();
+        if path.is_dir() {
+            println!("cargo:rerun-if-changed={}", path.display());
+            walk(&path, files);
+        } else if path.extension().is_some_and(|e| e == "toml") {
+            files.push(path);
+        }
+    }
+}

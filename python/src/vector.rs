@@ -1,0 +1,230 @@
+//! `autobio._core.VecEnv`: N episodes of one task stepped together, each on its own thread in
+//! Rust (the GIL released while they run), for gymnasium's vector API (`autobio/vector.py`).
+//!
+//! Each worker thread makes and owns its environment (a MuJoCo episode and its EGL cameras stay
+//! on the thread that made them) and answers one command at a time. Per slot, a batch either
+//! resets (autoreset, or a first reset) or steps; replies come back in slot order. Episodes are
+//! the single environment's: the same seed and actions give the same trajectory hash.
+
+use crate::env::{EnvFailure, Outcome, options, outcome, runtime_err};
+use crate::tasks;
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict};
+use std::sync::Mutex;
+use std::sync::mpsc::{Receiver, Sender, channel};
+use std::thread::JoinHandle;
+
+enum Command {
+    Reset(u64),
+    Step(Vec<f64>),
+}
+
+/// One slot's answer: the step's outcome (a reset's is all zero), then the observation.
+struct Reply {
+    outcome: Result<Outcome, EnvFailure>,
+    state: Vec<f64>,
+    frames: Vec<Vec<u8>>,
+    instruction: String,
+    stage: usize,
+    success: bool,
+    score: f64,
+    hash: String,
+    control_steps: u64,
+    seed: u64,
+}
+
+struct Worker {
+    commands: Sender<Command>,
+    replies: Mutex<Receiver<Result<Reply, String>>>,
+    thread: Option<JoinHandle<()>>,
+}
+
+/// What a worker's thread runs: make the environment on the first reset, then obey.
+fn serve(
+    task: compiler::Task,
+    opts: runtime::EnvOptions,
+    images: bool,
+    commands: Receiver<Command>,
+    replies: Sender<Result<Reply, String>>,
+) {
+    let mut env: Option<runtime::Env> = None;
+    let mut seed = 0;
+    for command in commands {
+        let result = (|| {
+            let step = match command {
+                Command::Reset(s) => {
+                    seed = s;
+                    match env.as_mut() {
+                        Some(e) => e.reset(s).map(|_| ()),
+                        None => runtime::Env::make(&task, s, opts).map(|e| env = Some(e)),
+                    }
+                    .map_err(|e| e.to_string())?;
+                    Ok((0.0, false, false, None))
+                }
+                Command::Step(action) => match env.as_mut() {
+                    Some(e) => outcome(e.step(&action)),
+                    None => return Err("reset the vector environment before stepping it".into()),
+                },
+            };
+            let e = env.as_mut().expect("made by the first reset");
+            let frames = if images {
+                e.frames()
+                    .map_err(|e| e.to_string())?
+                    .iter()
+                    .map(|f| f.rgb.clone())
+                    .collect()
+            } else {
+                Vec::new()
+            };
+            let verdict = e.verdict();
+            Ok(Reply {
+                outcome: step,
+                state: e.episode().state(),
+                frames,
+                instruction: e.instruction().to_string(),
+                stage: e.stage(),
+                success: verdict.success,
+                score: verdict.score,
+                hash: e.trajectory_hash(),
+                control_steps: e.control_steps(),
+                seed,
+            })
+        })();
+        if replies.send(result).is_err() {
+            break;
+        }
+    }
+}
+
+/// N episodes of one task on N threads.
+#[pyclass(module = "autobio._core")]
+pub struct VecEnv {
+    workers: Vec<Worker>,
+}
+
+#[pymethods]
+impl VecEnv {
+    /// `task`: a shipped task id or a protocol file; `images`: draw the cameras every step.
+    #[new]
+    #[pyo3(signature = (task, num_envs, image_size = None, images = true))]
+    fn new(
+        task: &str,
+        num_envs: usize,
+        image_size: Option<(usize, usize)>,
+        images: bool,
+    ) -> PyResult<Self> {
+        if num_envs == 0 {
+            return Err(PyValueError::new_err("num_envs must be at least 1"));
+        }
+        let task = tasks::load(task).map_err(crate::load_err)?;
+        let opts = options(image_size);
+        let workers = (0..num_envs)
+            .map(|k| {
+                let (commands, inbox) = channel();
+                let (outbox, replies) = channel();
+                let task = task.clone();
+                let thread = std::thread::Builder::new()
+                    .name(format!("autobio-env-{k}"))
+                    .spawn(move || serve(task, opts, images, inbox, outbox))
+                    .map_err(runtime_err)?;
+                Ok(Worker {
+                    commands,
+                    replies: Mutex::new(replies),
+                    thread: Some(thread),
+                })
+            })
+            .collect::<PyResult<Vec<_>>>()?;
+        Ok(VecEnv { workers })
+    }
+
+    #[getter]
+    fn num_envs(&self) -> usize {
+        self.workers.len()
+    }
+
+    /// One batch: slot k resets to `resets[k]` when that is a seed, else steps with
+    /// `actions[k]`. Every slot runs at once; the replies come back in slot order, each a dict:
+    /// `reward`, `terminated`, `truncated`, `error`, `state`, `frames`, `instruction`, `stage`,
+    /// `is_success`, `score`, `trajectory_hash`, `control_steps`, `seed`.
+    fn batch<'py>(
+        &mut self,
+        py: Python<'py>,
+        actions: Vec<Vec<f64>>,
+        resets: Vec<Option<u64>>,
+    ) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        let n = self.workers.len();
+        if resets.len() != n || (actions.len() != n && !actions.is_empty()) {
+            return Err(PyValueError::new_err(format!(
+                "a batch needs {n} actions and {n} reset seeds, got {} and {}",
+                actions.len(),
+                resets.len()
+            )));
+        }
+        let workers = &self.workers;
+        let replies = py.detach(move || {
+            let mut actions = actions.into_iter();
+            for (w, reset) in workers.iter().zip(resets) {
+                let action = actions.next().unwrap_or_default();
+                let command = match reset {
+                    Some(seed) => Command::Reset(seed),
+                    None => Command::Step(action),
+                };
+                w.commands
+                    .send(command)
+                    .map_err(|_| "an environment thread has stopped".to_string())?;
+            }
+            workers
+                .iter()
+                .map(|w| {
+                    w.replies
+                        .lock()
+                        .map_err(|_| "an environment thread has stopped".to_string())?
+                        .recv()
+                        .map_err(|_| "an environment thread has stopped".to_string())?
+                })
+                .collect::<Result<Vec<Reply>, String>>()
+        });
+        let replies = replies.map_err(PyRuntimeError::new_err)?;
+        replies
+            .into_iter()
+            .map(|r| {
+                let (reward, terminated, truncated, error) = r.outcome?;
+                let d = PyDict::new(py);
+                d.set_item("reward", reward)?;
+                d.set_item("terminated", terminated)?;
+                d.set_item("truncated", truncated)?;
+                d.set_item("error", error)?;
+                d.set_item("state", r.state)?;
+                let frames: Vec<Bound<'py, PyBytes>> =
+                    r.frames.iter().map(|f| PyBytes::new(py, f)).collect();
+                d.set_item("frames", frames)?;
+                d.set_item("instruction", r.instruction)?;
+                d.set_item("stage", r.stage)?;
+                d.set_item("is_success", r.success)?;
+                d.set_item("score", r.score)?;
+                d.set_item("trajectory_hash", r.hash)?;
+                d.set_item("control_steps", r.control_steps)?;
+                d.set_item("seed", r.seed)?;
+                Ok(d)
+            })
+            .collect()
+    }
+
+    /// Stops every thread (also when the object is dropped).
+    fn close(&mut self) {
+        for w in &mut self.workers {
+            let (dead, _) = channel();
+            w.commands = dead;
+            if let Some(t) = w.thread.take() {
+                let _ = t.join();
+            }
+        }
+    }
+}
+
+impl Drop for VecEnv {
+    fn drop(&mut self) {
+        self.close();
+    }
+}
