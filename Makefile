@@ -45,6 +45,9 @@ demo: build
 
 test: setup
 	$(CARGO) test --release --workspace
+	# The Python package (python/tests) in its own environment, against the CLI just built.
+	AUTOBIO_BIN=$${CARGO_TARGET_DIR:-target}/release/autobio \
+	  .deps/python-env/bin/python -m pytest python/tests -q -p no:cacheprovider
 	$(CARGO) clippy --release --workspace --all-targets -- -D warnings
 	$(CARGO) fmt --all -- --check
 

@@ -82,4 +82,36 @@ if [ ! -e "$STAMP" ]; then
   rm -rf "$DEPS/servers" && mv "$DEPS/servers.tmp" "$DEPS/servers"
   touch "$STAMP"
 fi
-echo "setup: ok (mujoco $MUJOCO_VERSION, robot models, the mcap reader and the model servers' environment under $DEPS/)"
+# The Python package (python/, issue 25): maturin builds the wheel from the Rust core (cargo does
+# nothing when nothing changed), and a fresh virtual environment (.deps/python-env) gets it beside
+# gymnasium, vla-eval and pytest from PyPI; the wheel is reinstalled whenever it changed.
+MATURIN=maturin==1.16.0
+if [ ! -e "$DEPS/build-python/.ok-$MATURIN" ]; then
+  echo "setup: making the wheel builder's environment ($DEPS/build-python: $MATURIN)"
+  rm -rf "$DEPS/build-python"
+  python3 -m venv "$DEPS/build-python"
+  "$DEPS/build-python/bin/pip" install -q --disable-pip-version-check "$MATURIN"
+  touch "$DEPS/build-python/.ok-$MATURIN"
+fi
+rm -rf "$DEPS/dist.tmp"
+# A fixed SOURCE_DATE_EPOCH: the same build gives the same wheel bytes (no needless reinstall).
+SOURCE_DATE_EPOCH=315532800 "$DEPS/build-python/bin/maturin" build --quiet --release -m python/Cargo.toml --out "$DEPS/dist.tmp" >/dev/null
+rm -rf "$DEPS/dist" && mv "$DEPS/dist.tmp" "$DEPS/dist"
+WHEEL=$(ls "$DEPS"/dist/autobio-*.whl)
+PYREQS=python/requirements-test.txt
+PYSTAMP="$DEPS/python-env/.requirements-$(sha256sum "$PYREQS" | cut -c1-16)"
+if [ ! -e "$PYSTAMP" ]; then
+  echo "setup: making the Python package's test environment ($DEPS/python-env)"
+  # Made where it stays: a virtual environment's scripts name its path.
+  rm -rf "$DEPS/python-env"
+  python3 -m venv "$DEPS/python-env"
+  "$DEPS/python-env/bin/pip" install -q --disable-pip-version-check -r "$PYREQS"
+  touch "$PYSTAMP"
+fi
+WHEEL_SUM=$(sha256sum "$WHEEL" | cut -c1-16)
+if [ ! -e "$DEPS/python-env/.wheel-$WHEEL_SUM" ]; then
+  echo "setup: installing $(basename "$WHEEL") into $DEPS/python-env"
+  "$DEPS/python-env/bin/pip" install -q --disable-pip-version-check --force-reinstall --no-deps "$WHEEL"
+  rm -f "$DEPS"/python-env/.wheel-* && touch "$DEPS/python-env/.wheel-$WHEEL_SUM"
+fi
+echo "setup: ok (mujoco $MUJOCO_VERSION, robot models, the mcap reader, the model servers' environment and the Python package under $DEPS/)"

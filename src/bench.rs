@@ -38,6 +38,8 @@ pub enum Section {
     Physics,
     /// Verifying a bundle and building the leaderboard site.
     Leaderboard,
+    /// The Python package against the Rust environment (on the first scene).
+    Python,
 }
 
 #[derive(Clone, Debug, clap::Args)]
@@ -80,6 +82,11 @@ pub fn run(tasks: &[compiler::Task], only: &[Section]) -> Result<()> {
         && let Some(first) = tasks.first()
     {
         crate::bench_leaderboard::figures(first)?;
+    }
+    if wants(Section::Python)
+        && let Some(first) = tasks.first()
+    {
+        crate::bench_python::figures(first)?;
     }
     let mut first_step_s = None;
     if wants(Section::Scenes) {

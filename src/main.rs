@@ -6,6 +6,7 @@
 mod output;
 mod bench;
 mod bench_leaderboard;
+mod bench_python;
 mod check;
 mod datasets;
 mod demo;

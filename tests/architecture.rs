@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 /// Every crate's sources: the CLI's and each workspace member's.
-const CRATES: [&str; 13] = [
+const CRATES: [&str; 14] = [
     "src",
     "dsl/src",
     "compiler/src",
@@ -20,6 +20,7 @@ const CRATES: [&str; 13] = [
     "scoring/src",
     "dataset/src",
     "leaderboard/src",
+    "python/src",
 ];
 
 /// Every `.rs` file under `dir`, recursively.
@@ -242,4 +243,28 @@ fn no_module_reaches_itself_through_its_imports() {
         ("primitives".to_string(), vec!["check".to_string()]),
     ]);
     assert!(find_cycle(&graph).is_some());
+}
+
+/// The Python package's modules say what they do too: each starts with a docstring, which
+/// `help()` shows.
+#[test]
+fn every_python_module_starts_with_a_docstring() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("python/autobio");
+    let modules: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "py"))
+        .collect();
+    assert!(modules.len() >= 6, "{modules:?}: the walk found the package");
+    let bare: Vec<String> = modules
+        .iter()
+        .filter(|p| {
+            !std::fs::read_to_string(p)
+                .unwrap()
+                .trim_start()
+                .starts_with("\"\"\"")
+        })
+        .map(|p| p.display().to_string())
+        .collect();
+    assert!(bare.is_empty(), "start these with a docstring: {bare:?}");
 }

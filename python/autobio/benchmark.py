@@ -54,8 +54,9 @@ class AutobioBenchmark(StepBenchmark):
         self._envs = {}
         self._env = None
 
-    def configure_render(self, mode):
-        # autobio draws with EGL on the CPU's Mesa (or a GPU's EGL) either way.
+    @classmethod
+    def configure_render(cls, mode):
+        # autobio draws with EGL (Mesa on the CPU, or a GPU's) whichever mode: nothing to set.
         return {}
 
     def get_tasks(self):

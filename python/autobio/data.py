@@ -17,7 +17,8 @@ class Recording:
     ``actions`` (T, A) and ``states`` (T, S) are float64, one row per control step, every
     robot's block concatenated in task order (``robots``); ``physics_times`` (T+1,) and
     ``physics`` (T+1, Q) are MuJoCo's state before each step and at the end; ``labware`` is each
-    recorded item state list with its time; ``images`` maps a camera to its frames, (T, H, W, 3)
+    recorded item state list with its time; ``trajectory_hash``, ``control_steps`` and ``error``
+    are the episode's end as the runtime recorded it; ``images`` maps a camera to its frames, (T, H, W, 3)
     uint8, when loaded with ``images=True``; ``task``, ``instance`` and ``verdict`` are the
     compiled task, the seed's draw and the judge's verdict as dicts."""
 
@@ -31,6 +32,9 @@ class Recording:
     physics: np.ndarray
     labware: list
     duration_s: float
+    trajectory_hash: str | None = None
+    control_steps: int | None = None
+    error: str | None = None
     images: dict = field(default_factory=dict)
     image_times: dict = field(default_factory=dict)
 
@@ -52,10 +56,11 @@ def load_recording(path, images=False):
     decodes every camera frame (PNG) into (T, H, W, 3) uint8 arrays."""
     raw = _core.read_recording(str(path))
     times, physics = raw["physics"]
+    end = json.loads(raw["verdict"]) if raw["verdict"] else {}
     rec = Recording(
         task=json.loads(raw["task"]),
         instance=json.loads(raw["instance"]),
-        verdict=json.loads(raw["verdict"]) if raw["verdict"] else None,
+        verdict=end.get("verdict"),
         robots=list(raw["robots"]),
         actions=_matrix(raw["actions"]),
         states=_matrix(raw["states"]),
@@ -63,6 +68,9 @@ def load_recording(path, images=False):
         physics=_matrix(physics),
         labware=[(t, json.loads(s)) for t, s in raw["labware"]],
         duration_s=float(raw["duration_s"]),
+        trajectory_hash=end.get("trajectory_hash"),
+        control_steps=end.get("control_steps"),
+        error=end.get("error"),
     )
     if images:
         for camera, (stamps, pngs) in raw["images"].items():

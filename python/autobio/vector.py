@@ -72,7 +72,7 @@ class AutobioVectorEnv(VectorEnv):
         return [r["instruction"] for r in self._last] if self._last else []
 
     def reset(self, *, seed=None, options=None):
-        super().reset(seed=seed)
+        super().reset(seed=seed if seed is None or isinstance(seed, int) else None)
         if seed is None:
             base = 0 if self._seeds is None else int(self._seeds.max()) + 1
             seeds = [base + i for i in range(self.num_envs)]

@@ -106,6 +106,15 @@ impl Env {
         serde_json::to_string(&self.env.verdict()).map_err(runtime_err)
     }
 
+    /// The action that holds every robot at its current targets: `autobio eval --policy hold`'s
+    /// no-motion control, in the action layout.
+    fn hold_action(&self) -> Vec<f64> {
+        let ep = self.env.episode();
+        (0..ep.scene.robots.len())
+            .flat_map(|r| ep.robot_ctrl(r))
+            .collect()
+    }
+
     /// (is_success, score): the judge's verdict so far, without its per-predicate detail.
     fn outcome(&self) -> (bool, f64) {
         let v = self.env.verdict();
