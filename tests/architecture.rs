@@ -255,7 +255,10 @@ fn every_python_module_starts_with_a_docstring() {
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|e| e == "py"))
         .collect();
-    assert!(modules.len() >= 6, "{modules:?}: the walk found the package");
+    assert!(
+        modules.len() >= 6,
+        "{modules:?}: the walk found the package"
+    );
     let bare: Vec<String> = modules
         .iter()
         .filter(|p| {

@@ -8,3 +8,15 @@ from .vector import AutobioVectorEnv as AutobioVectorEnv, make_vec as make_vec
 __version__: str
 
 def tasks(simulated_only: bool = True) -> list[dict[str, Any]]: ...
+
+__all__ = [
+    "AutobioEnv",
+    "AutobioVectorEnv",
+    "ProtocolError",
+    "Recording",
+    "dataset_tasks",
+    "load_recording",
+    "make",
+    "make_vec",
+    "tasks",
+]

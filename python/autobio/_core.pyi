@@ -1,6 +1,18 @@
 """Type stubs for autobio's native core (the Rust extension)."""
 
-from typing import Any
+from typing import Any, final
+
+__all__ = [
+    "__version__",
+    "ProtocolError",
+    "Env",
+    "VecEnv",
+    "tasks",
+    "compile",
+    "read_recording",
+    "decode_png",
+    "dataset_tasks",
+]
 
 __version__: str
 
@@ -24,10 +36,11 @@ def decode_png(png: bytes) -> tuple[int, int, bytes]:
 def dataset_tasks(root: str) -> list[tuple[int, str]]:
     """A LeRobot dataset's (task_index, task) rows."""
 
+@final
 class Env:
     """One task's episodes, stepped by hand."""
 
-    def __init__(self, task: str, seed: int = 0, image_size: tuple[int, int] | None = None) -> None: ...
+    def __new__(cls, task: str, seed: int = 0, image_size: tuple[int, int] | None = None) -> Env: ...
     def reset(self, seed: int) -> None: ...
     def step(self, action: list[float]) -> tuple[float, bool, bool, str | None]: ...
     def state(self) -> list[float]: ...
@@ -58,12 +71,13 @@ class Env:
     action_low: list[float]
     action_high: list[float]
 
+@final
 class VecEnv:
     """N episodes of one task on N threads."""
 
-    def __init__(
-        self, task: str, num_envs: int, image_size: tuple[int, int] | None = None, images: bool = True
-    ) -> None: ...
+    def __new__(
+        cls, task: str, num_envs: int, image_size: tuple[int, int] | None = None, images: bool = True
+    ) -> VecEnv: ...
     num_envs: int
     def batch(self, actions: list[list[float]], resets: list[int | None]) -> list[dict[str, Any]]: ...
     def close(self) -> None: ...

@@ -108,12 +108,12 @@ class AutobioVectorEnv(VectorEnv):
         return self._observations(replies), rewards, terminated, truncated, self._infos(replies)
 
     def render(self):
-        """Each sub-environment's cameras side by side, as a list of frames."""
+        """Each sub-environment's cameras side by side, one frame per sub-environment."""
         if not self._last:
             return None
-        return [
+        return tuple(
             np.concatenate([self._frame(f) for f in r["frames"]], axis=1) for r in self._last
-        ]
+        )
 
     def close_extras(self, **kwargs):
         if self._core is not None:

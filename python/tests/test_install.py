@@ -53,3 +53,12 @@ def test_help_shows_the_docs():
         if thing in (autobio.AutobioEnv, autobio.AutobioVectorEnv):
             text += sys.modules[thing.__module__].__doc__
         assert words in text, (thing, text[:200])
+
+
+def test_the_type_stubs_match_the_installed_package(tmp_path):
+    allowlist = ROOT / "python/tests/stubtest-allowlist.txt"
+    run = subprocess.run(
+        [sys.executable, "-m", "mypy.stubtest", "autobio", "--allowlist", str(allowlist)],
+        capture_output=True, text=True, cwd=tmp_path,
+    )
+    assert run.returncode == 0, run.stdout + run.stderr

@@ -1,0 +1,33 @@
+import os
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+@dataclass
+class Recording:
+    task: dict[str, Any]
+    instance: dict[str, Any]
+    verdict: dict[str, Any] | None
+    robots: list[str]
+    actions: NDArray[np.float64]
+    states: NDArray[np.float64]
+    physics_times: NDArray[np.float64]
+    physics: NDArray[np.float64]
+    labware: list[tuple[float, list[dict[str, Any]]]]
+    duration_s: float
+    trajectory_hash: str | None = ...
+    control_steps: int | None = ...
+    error: str | None = ...
+    images: dict[str, NDArray[np.uint8]] = ...
+    image_times: dict[str, NDArray[np.float64]] = ...
+    @property
+    def seed(self) -> int | None: ...
+    @property
+    def task_id(self) -> str | None: ...
+    @property
+    def success(self) -> bool: ...
+
+def load_recording(path: str | os.PathLike[str], images: bool = False) -> Recording: ...
+def dataset_tasks(root: str | os.PathLike[str]) -> dict[int, str]: ...
