@@ -108,6 +108,16 @@ if [ ! -e "$PYSTAMP" ]; then
   "$DEPS/python-env/bin/pip" install -q --disable-pip-version-check -r "$PYREQS"
   touch "$PYSTAMP"
 fi
+# The package's own dependencies as wheels, so a fresh environment installs it with no network
+# (python/tests/test_install.py: `pip install --no-index --find-links .deps/wheelhouse`).
+RUNREQS="numpy==1.26.4 gymnasium==1.4.0"
+HOUSE_STAMP="$DEPS/wheelhouse/.ok-$(echo "$RUNREQS" | sha256sum | cut -c1-16)"
+if [ ! -e "$HOUSE_STAMP" ]; then
+  echo "setup: fetching the package's dependencies into $DEPS/wheelhouse"
+  rm -rf "$DEPS/wheelhouse"
+  python3 -m pip download -q --disable-pip-version-check --only-binary=:all: -d "$DEPS/wheelhouse" $RUNREQS
+  touch "$HOUSE_STAMP"
+fi
 WHEEL_SUM=$(sha256sum "$WHEEL" | cut -c1-16)
 if [ ! -e "$DEPS/python-env/.wheel-$WHEEL_SUM" ]; then
   echo "setup: installing $(basename "$WHEEL") into $DEPS/python-env"

@@ -25,7 +25,7 @@ pub fn figures(task: &compiler::Task) -> Result<()> {
     rust_seconds(task, 20)?;
     let rust = STEPS as f64 / rust_seconds(task, STEPS)?;
     let out = std::process::Command::new(&python)
-        .args(["-m", "autobio.bench", "--task", &task.id])
+        .args(["-m", "autobio.bench", "--task", &task.source])
         .args(["--steps", &STEPS.to_string()])
         .args(["--image-size", &format!("{}x{}", SIZE[0], SIZE[1])])
         .output()

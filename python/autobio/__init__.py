@@ -4,8 +4,8 @@ The Rust core (``autobio._core``) compiles protocols and steps the simulation; t
 shapes it for the tools VLA researchers use:
 
 - ``autobio.make(task, seed=..., image_size=...)``: a gymnasium environment for a shipped task id
-  (``autobio.tasks()``) or a protocol file; every shipped task is also registered with gymnasium
-  as ``autobio/<task id>-v0`` (``gymnasium.make("autobio/thermal_cycler.close_lid-v0")``), with a
+  (``autobio.tasks()``) or a protocol file; every shipped task that simulates (all but those
+  whose labware has no model yet) is also registered with gymnasium as ``autobio/<task id>-v0`` (``gymnasium.make("autobio/thermal_cycler.close_lid-v0")``), with a
   vector entry point (``gymnasium.make_vec(..., vectorization_mode="vector_entry_point")``) that
   steps N episodes on threads in Rust.
 - ``autobio.benchmark.AutobioBenchmark``: the benchmark class for allenai's vla-eval

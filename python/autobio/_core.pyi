@@ -9,6 +9,7 @@ __all__ = [
     "VecEnv",
     "tasks",
     "compile",
+    "task_info",
     "read_recording",
     "decode_png",
     "dataset_tasks",
@@ -23,6 +24,9 @@ class ProtocolError(ValueError):
 def tasks() -> list[dict[str, Any]]:
     """Every shipped task (id, file, level, instruction, stages, robots, cameras, layouts,
     time limit, control period, max steps, parameter names, simulated)."""
+
+def task_info(task: str) -> dict[str, Any]:
+    """The dict tasks() gives, for a shipped task id or a protocol file."""
 
 def compile(task: str) -> str:
     """The compiled task of a shipped id or a protocol file, as JSON."""

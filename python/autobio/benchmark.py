@@ -21,7 +21,7 @@ import os
 
 import numpy as np
 
-from . import __version__, tasks as _tasks
+from . import __version__, _core
 from .env import AutobioEnv
 
 try:
@@ -73,17 +73,14 @@ class AutobioBenchmark(StepBenchmark):
         ]
 
     def get_metadata(self):
-        steps = [
-            t["max_steps"]
-            for t in _tasks(simulated_only=False)
-            if t["id"] in self.task_ids
-        ]
-        return {"max_steps": max(steps, default=3000), "autobio_version": __version__}
+        steps = [_core.task_info(t)["max_steps"] for t in self.task_ids]
+        return {"max_steps": max(steps), "autobio_version": __version__}
 
     def get_metric_keys(self):
         return {"success": "mean", "score": "mean"}
 
     def reset(self, task):
+        # One environment per task, kept: a seed of the same task reuses its scene and renderer.
         env = self._envs.get(task["id"])
         if env is None:
             env = self._envs[task["id"]] = AutobioEnv(task["id"], image_size=self.image_size)

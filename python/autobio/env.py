@@ -15,12 +15,15 @@ targets in rad, then the gripper command), float64 within the actuators' ranges.
 Reward: the task's score when the episode ends (0 before), ``terminated`` when it succeeded,
 ``truncated`` when a stage's or the task's time ran out, exactly as ``autobio eval`` judges.
 ``info["is_success"]`` is the judge's verdict at every step. A simulation that becomes unstable
-ends the episode (``truncated``, reward 0) with its reason in ``info["error"]``.
+ends the episode (``truncated``, failed, the reward the judge's score at that moment, as eval
+scores it) with its reason in ``info["error"]``. An action of the wrong length, not finite or
+outside its range raises ``ValueError`` before anything moves; the episode goes on.
 
 Seeds are ``autobio eval``'s episode seeds: ``reset(seed=s)`` is episode ``s``; ``reset()``
 with no seed goes on to the next seed (the previous one plus ``seed_stride``, 1 by default).
 """
 
+import json
 import string
 
 import gymnasium
@@ -66,7 +69,6 @@ class AutobioEnv(gymnasium.Env):
         self.instruction_in_obs = instruction_in_obs
         self.seed_stride = seed_stride
         self._episode_seed = None
-        self._last_info = {}
         core = self._core
         self.task_id = core.id
         self.camera_names = list(core.camera_names)
@@ -87,7 +89,10 @@ class AutobioEnv(gymnasium.Env):
             n = len(self.state_names)
             obs["agent_pos"] = spaces.Box(-np.inf, np.inf, (n,), dtype=np.float64)
         if instruction_in_obs:
-            obs["instruction"] = spaces.Text(max_length=1024, charset=_TEXT)
+            # Printable ASCII and every other character the task's instructions and parameter
+            # values use (`°C`, `µL`).
+            extra = sorted({c for c in core.task_json() if c not in _TEXT and c.isprintable()})
+            obs["instruction"] = spaces.Text(max_length=1024, charset=_TEXT + "".join(extra))
         self.observation_space = spaces.Dict(obs)
         low = np.asarray(core.action_low, dtype=np.float64)
         high = np.asarray(core.action_high, dtype=np.float64)
@@ -124,7 +129,6 @@ class AutobioEnv(gymnasium.Env):
         self._episode_seed = episode
         info = self._info()
         info["params"] = dict(self._core.params)
-        self._last_info = info
         return self._observation(), info
 
     def step(self, action):
@@ -135,7 +139,6 @@ class AutobioEnv(gymnasium.Env):
         info = self._info()
         if error is not None:
             info["error"] = error
-        self._last_info = info
         return self._observation(), float(reward), bool(terminated), bool(truncated), info
 
     def render(self):
@@ -149,14 +152,10 @@ class AutobioEnv(gymnasium.Env):
 
     def verdict(self):
         """The judge's verdict so far: success, score and each stage's predicates."""
-        import json
-
         return json.loads(self._core.verdict_json())
 
     def labware(self):
         """Every item's live state (parts, joints, panel values), as the recordings store it."""
-        import json
-
         return json.loads(self._core.labware_json())
 
     def _pixels(self):

@@ -15,6 +15,8 @@ Observations are batched (``pixels/<camera>``: (N, H, W, 3) uint8, ``agent_pos``
 ``trajectory_hash``, ``instruction``, ``error``) with gymnasium's ``_<key>`` masks.
 """
 
+import numbers
+
 import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
@@ -39,8 +41,10 @@ class AutobioVectorEnv(VectorEnv):
         image_size=(224, 224),
         render_mode="rgb_array",
         obs_type="pixels_agent_pos",
-        **_ignored,
+        max_episode_steps=None,
     ):
+        # `max_episode_steps` is what gymnasium.make_vec passes from the registration: the time
+        # limit over the control period plus one, so autobio's judge ends every episode first.
         # One single environment describes the spaces; it is closed straight away.
         probe = AutobioEnv(task, image_size=image_size, render_mode=render_mode, obs_type=obs_type)
         self.single_observation_space = probe.observation_space
@@ -72,12 +76,13 @@ class AutobioVectorEnv(VectorEnv):
         return [r["instruction"] for r in self._last] if self._last else []
 
     def reset(self, *, seed=None, options=None):
-        super().reset(seed=seed if seed is None or isinstance(seed, int) else None)
+        one = seed is None or isinstance(seed, numbers.Integral)
+        super().reset(seed=int(seed) if one and seed is not None else None)
         if seed is None:
             base = 0 if self._seeds is None else int(self._seeds.max()) + 1
             seeds = [base + i for i in range(self.num_envs)]
-        elif isinstance(seed, int):
-            seeds = [seed + i for i in range(self.num_envs)]
+        elif isinstance(seed, numbers.Integral):
+            seeds = [int(seed) + i for i in range(self.num_envs)]
         else:
             seeds = [int(s) for s in seed]
             if len(seeds) != self.num_envs:

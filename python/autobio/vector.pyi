@@ -21,7 +21,7 @@ class AutobioVectorEnv(VectorEnv[dict[str, Any], NDArray[np.float64], NDArray[An
         image_size: tuple[int, int] | None = (224, 224),
         render_mode: str | None = "rgb_array",
         obs_type: str = "pixels_agent_pos",
-        **_ignored: Any,
+        max_episode_steps: int | None = None,
     ) -> None: ...
     @property
     def task_description(self) -> list[str]: ...

@@ -4,8 +4,9 @@
 //! the reward, `terminated` and `truncated` are the runtime's, as `autobio eval` reads them.
 //!
 //! A simulation that becomes unstable ends the episode as `autobio eval` ends it (a failure with a
-//! reason); an action of the wrong length, not finite or outside its range is the caller's
-//! mistake and raises `ValueError`.
+//! reason, scored as the judge stood); an action of the wrong length, not finite or outside its
+//! range is the caller's mistake and raises `ValueError` before anything moves (the episode goes
+//! on).
 
 use crate::tasks;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
@@ -16,13 +17,16 @@ use runtime::{EnvError, EnvOptions, StepError};
 /// What one step did: reward, terminated, truncated, and why the episode ended early, if it did.
 pub type Outcome = (f64, bool, bool, Option<String>);
 
-/// A step's result in Python's terms: a refused action raises, an unstable simulation ends the
-/// episode with its reason.
-pub fn outcome(step: Result<runtime::Transition, EnvError>) -> Result<Outcome, EnvFailure> {
-    match step {
+/// One step in Python's terms: an action the runtime would refuse raises before anything moves
+/// (the episode goes on); an unstable simulation ends the episode with its reason and the judge's
+/// score at that moment, failed, as `autobio eval` scores it.
+pub fn step(env: &mut runtime::Env, action: &[f64]) -> Result<Outcome, EnvFailure> {
+    runtime::check_action(&env.episode().action_bounds(), action)
+        .map_err(|e| EnvFailure::Action(e.to_string()))?;
+    match env.step(action) {
         Ok(t) => Ok((t.reward, t.terminated, t.truncated, None)),
         Err(EnvError::Step(e @ StepError::Unstable { .. })) => {
-            Ok((0.0, false, true, Some(e.to_string())))
+            Ok((env.verdict().score, false, true, Some(e.to_string())))
         }
         Err(EnvError::Step(e)) => Err(EnvFailure::Action(e.to_string())),
         Err(e) => Err(EnvFailure::Other(e.to_string())),
@@ -86,7 +90,7 @@ impl Env {
     /// One control step: (reward, terminated, truncated, error). `error` is why the simulation
     /// ended the episode (unstable), else None.
     fn step(&mut self, action: Vec<f64>) -> PyResult<Outcome> {
-        Ok(outcome(self.env.step(&action))?)
+        Ok(step(&mut self.env, &action)?)
     }
 
     /// Every robot's state, concatenated in task order (`state_names`).

@@ -34,34 +34,49 @@ pub(crate) fn load_err(e: tasks::LoadError) -> PyErr {
 fn shipped_tasks(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
     tasks::shipped()
         .iter()
-        .map(|s| {
-            let t = &s.task;
-            let d = PyDict::new(py);
-            d.set_item("id", &t.id)?;
-            d.set_item("file", format!("protocols/{}", s.file))?;
-            d.set_item("level", &t.level)?;
-            d.set_item("instruction", &t.instruction)?;
-            let stages: Vec<&str> = t.stages.iter().map(|s| s.instruction.as_str()).collect();
-            d.set_item("stages", stages)?;
-            let robots: Vec<(&str, &str)> = t
-                .robots
-                .iter()
-                .map(|r| (r.name.as_str(), r.model.as_str()))
-                .collect();
-            d.set_item("robots", robots)?;
-            let cameras: Vec<&str> = t.cameras.iter().map(|c| c.name.as_str()).collect();
-            d.set_item("cameras", cameras)?;
-            d.set_item("state_names", env::layout(t, |m| m.state_names()))?;
-            d.set_item("action_names", env::layout(t, |m| m.action_names()))?;
-            d.set_item("time_limit_s", t.time_limit_s)?;
-            d.set_item("control_dt", env::control_dt(t))?;
-            d.set_item("max_steps", env::max_steps(t))?;
-            let params: Vec<&str> = t.params.iter().map(|p| p.name.as_str()).collect();
-            d.set_item("params", params)?;
-            d.set_item("simulated", s.simulated)?;
-            Ok(d)
-        })
+        .map(|s| sheet(py, &s.task, &format!("protocols/{}", s.file), s.simulated))
         .collect()
+}
+
+/// The same dict as `tasks()` gives, for a shipped task id or a protocol file.
+#[pyfunction]
+fn task_info<'py>(py: Python<'py>, task: &str) -> PyResult<Bound<'py, PyDict>> {
+    let t = tasks::load(task).map_err(load_err)?;
+    let simulated = tasks::simulated(&t);
+    let file = t.source.clone();
+    sheet(py, &t, &file, simulated)
+}
+
+fn sheet<'py>(
+    py: Python<'py>,
+    t: &compiler::Task,
+    file: &str,
+    simulated: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("id", &t.id)?;
+    d.set_item("file", file)?;
+    d.set_item("level", &t.level)?;
+    d.set_item("instruction", &t.instruction)?;
+    let stages: Vec<&str> = t.stages.iter().map(|s| s.instruction.as_str()).collect();
+    d.set_item("stages", stages)?;
+    let robots: Vec<(&str, &str)> = t
+        .robots
+        .iter()
+        .map(|r| (r.name.as_str(), r.model.as_str()))
+        .collect();
+    d.set_item("robots", robots)?;
+    let cameras: Vec<&str> = t.cameras.iter().map(|c| c.name.as_str()).collect();
+    d.set_item("cameras", cameras)?;
+    d.set_item("state_names", env::layout(t, |m| m.state_names()))?;
+    d.set_item("action_names", env::layout(t, |m| m.action_names()))?;
+    d.set_item("time_limit_s", t.time_limit_s)?;
+    d.set_item("control_dt", env::control_dt(t))?;
+    d.set_item("max_steps", env::max_steps(t))?;
+    let params: Vec<&str> = t.params.iter().map(|p| p.name.as_str()).collect();
+    d.set_item("params", params)?;
+    d.set_item("simulated", simulated)?;
+    Ok(d)
 }
 
 /// The compiled task of a shipped task id or a protocol file, as JSON (`autobio compile`'s form).
@@ -79,6 +94,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<vector::VecEnv>()?;
     m.add_function(wrap_pyfunction!(shipped_tasks, m)?)?;
     m.add_function(wrap_pyfunction!(compile, m)?)?;
+    m.add_function(wrap_pyfunction!(task_info, m)?)?;
     m.add_function(wrap_pyfunction!(recording::read_recording, m)?)?;
     m.add_function(wrap_pyfunction!(recording::decode_png, m)?)?;
     m.add_function(wrap_pyfunction!(recording::dataset_tasks, m)?)?;

@@ -55,6 +55,11 @@ pub fn shipped() -> &'static [Shipped] {
     })
 }
 
+/// Every item has an instrument model: the runtime can build the task's scene.
+pub fn simulated(task: &Task) -> bool {
+    task.labware.iter().all(|l| l.params.instrument().is_some())
+}
+
 /// A shipped task by id, or a protocol or chain file by path (a chain's stages confined to its
 /// folder, as `autobio check` reads them).
 pub fn load(spec: &str) -> Result<Task, LoadError> {

@@ -4,9 +4,11 @@
 //! Each worker thread makes and owns its environment (a MuJoCo episode and its EGL cameras stay
 //! on the thread that made them) and answers one command at a time. Per slot, a batch either
 //! resets (autoreset, or a first reset) or steps; replies come back in slot order. Episodes are
-//! the single environment's: the same seed and actions give the same trajectory hash.
+//! the single environment's: the same seed and actions give the same trajectory hash. Every action
+//! of a batch is checked against the actuators' ranges before any slot moves, so a refused one
+//! raises `ValueError` naming its slot and no episode has advanced.
 
-use crate::env::{EnvFailure, Outcome, options, outcome, runtime_err};
+use crate::env::{EnvFailure, Outcome, options, runtime_err, step};
 use crate::tasks;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -32,6 +34,8 @@ struct Reply {
     hash: String,
     control_steps: u64,
     seed: u64,
+    /// The action components' ranges (the same for every seed of a task).
+    bounds: Vec<(f64, f64)>,
 }
 
 struct Worker {
@@ -63,7 +67,7 @@ fn serve(
                     Ok((0.0, false, false, None))
                 }
                 Command::Step(action) => match env.as_mut() {
-                    Some(e) => outcome(e.step(&action)),
+                    Some(e) => step(e, &action),
                     None => return Err("reset the vector environment before stepping it".into()),
                 },
             };
@@ -89,6 +93,7 @@ fn serve(
                 hash: e.trajectory_hash(),
                 control_steps: e.control_steps(),
                 seed,
+                bounds: e.episode().action_bounds(),
             })
         })();
         if replies.send(result).is_err() {
@@ -101,6 +106,9 @@ fn serve(
 #[pyclass(module = "autobio._core")]
 pub struct VecEnv {
     workers: Vec<Worker>,
+    /// The action ranges, once a reset reported them: every action is checked against them
+    /// before any slot moves.
+    bounds: Option<Vec<(f64, f64)>>,
 }
 
 #[pymethods]
@@ -135,7 +143,10 @@ impl VecEnv {
                 })
             })
             .collect::<PyResult<Vec<_>>>()?;
-        Ok(VecEnv { workers })
+        Ok(VecEnv {
+            workers,
+            bounds: None,
+        })
     }
 
     #[getter]
@@ -161,31 +172,56 @@ impl VecEnv {
                 resets.len()
             )));
         }
+        for (k, (action, reset)) in actions.iter().zip(&resets).enumerate() {
+            if reset.is_some() {
+                continue;
+            }
+            let Some(bounds) = &self.bounds else {
+                return Err(PyRuntimeError::new_err(
+                    "reset the vector environment before stepping it",
+                ));
+            };
+            runtime::check_action(bounds, action)
+                .map_err(|e| PyValueError::new_err(format!("environment {k}: {e}")))?;
+        }
         let workers = &self.workers;
         let replies = py.detach(move || {
+            // Every worker that took a command is answered before anything is returned, so a
+            // failure never leaves a reply queued for the next batch.
             let mut actions = actions.into_iter();
-            for (w, reset) in workers.iter().zip(resets) {
-                let action = actions.next().unwrap_or_default();
-                let command = match reset {
-                    Some(seed) => Command::Reset(seed),
-                    None => Command::Step(action),
-                };
-                w.commands
-                    .send(command)
-                    .map_err(|_| "an environment thread has stopped".to_string())?;
-            }
-            workers
+            let sent: Vec<bool> = workers
                 .iter()
-                .map(|w| {
+                .zip(resets)
+                .map(|(w, reset)| {
+                    let action = actions.next().unwrap_or_default();
+                    let command = match reset {
+                        Some(seed) => Command::Reset(seed),
+                        None => Command::Step(action),
+                    };
+                    w.commands.send(command).is_ok()
+                })
+                .collect();
+            let stopped = || "an environment thread has stopped".to_string();
+            let replies: Vec<Result<Reply, String>> = workers
+                .iter()
+                .zip(&sent)
+                .map(|(w, &sent)| {
+                    if !sent {
+                        return Err(stopped());
+                    }
                     w.replies
                         .lock()
-                        .map_err(|_| "an environment thread has stopped".to_string())?
+                        .map_err(|_| stopped())?
                         .recv()
-                        .map_err(|_| "an environment thread has stopped".to_string())?
+                        .map_err(|_| stopped())?
                 })
-                .collect::<Result<Vec<Reply>, String>>()
+                .collect();
+            replies.into_iter().collect::<Result<Vec<Reply>, String>>()
         });
         let replies = replies.map_err(PyRuntimeError::new_err)?;
+        if self.bounds.is_none() {
+            self.bounds = replies.first().map(|r| r.bounds.clone());
+        }
         replies
             .into_iter()
             .map(|r| {

@@ -1,6 +1,7 @@
 """The wheel `make setup` builds installs with pip into a fresh virtual environment on this
-machine's Python and runs a task from any folder, with no variables exported (MuJoCo and the
-robot models are found the way the CLI finds them); `help()` shows the package's docs."""
+machine's Python (its dependencies from the wheelhouse setup fetched: no network) and runs a task
+from any folder, with no variables exported (MuJoCo and the robot models are found the way the CLI
+finds them); `help()` shows the package's docs; the type stubs match the package."""
 
 import glob
 import os
@@ -22,7 +23,8 @@ def test_the_wheel_installs_into_a_fresh_environment_and_runs_a_task(tmp_path):
     clean = {k: v for k, v in os.environ.items()
              if not k.startswith(("LD_", "MUJOCO", "AUTOBIO", "PYTHON", "CARGO"))}
     install = subprocess.run(
-        [python, "-m", "pip", "install", "-q", "--disable-pip-version-check", wheels[0]],
+        [python, "-m", "pip", "install", "-q", "--disable-pip-version-check", "--no-index",
+         "--find-links", str(ROOT / ".deps/wheelhouse"), wheels[0]],
         capture_output=True, text=True, env=clean,
     )
     assert install.returncode == 0, install.stderr

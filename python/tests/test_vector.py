@@ -52,7 +52,7 @@ def test_vector_episodes_are_the_single_environments(expert_runs):
     venv.close()
 
 
-def test_autoreset_starts_the_next_seed_and_random_batches_match_single_envs():
+def test_random_batches_match_single_envs_and_a_bad_action_moves_no_slot():
     task = "tube.transfer"
     venv = autobio.make_vec(task, num_envs=3, image_size=(32, 32))
     venv.action_space.seed(4)
@@ -63,6 +63,14 @@ def test_autoreset_starts_the_next_seed_and_random_batches_match_single_envs():
     per_env = [[a[i] for a in actions] for i in range(3)]
     assert list(infos["trajectory_hash"]) == single_hashes(task, [10, 11, 12], per_env)
     assert list(infos["control_steps"]) == [12, 12, 12]
+    bad = venv.action_space.sample()
+    bad[2][0] = 100.0
+    with pytest.raises(ValueError, match="environment 2: .*outside its actuator's range"):
+        venv.step(bad)
+    obs, rewards, terminated, truncated, infos = venv.step(venv.action_space.sample())
+    assert list(infos["control_steps"]) == [13, 13, 13]
+    obs, infos = venv.reset(seed=np.int64(3))
+    assert list(infos["seed"]) == [3, 4, 5]
     venv.close()
 
 

@@ -47,6 +47,36 @@ pub struct RestoreError {
     pub items: usize,
 }
 
+/// The rule every action meets before it is applied: one value per action component
+/// (`bounds`, from [`Episode::action_bounds`]), each finite and within its range (a hair of
+/// slack for values a model computed in f32). A refused action changes nothing.
+pub fn check_action(bounds: &[(f64, f64)], action: &[f64]) -> Result<(), StepError> {
+    if action.len() != bounds.len() {
+        return Err(StepError::BadAction {
+            got: action.len(),
+            want: bounds.len(),
+        });
+    }
+    if let Some(index) = action.iter().position(|v| !v.is_finite()) {
+        return Err(StepError::NonFinite {
+            index,
+            value: action[index],
+        });
+    }
+    for (index, (&value, &(low, high))) in action.iter().zip(bounds).enumerate() {
+        let slack = 1e-6 * (1.0 + high.abs().max(low.abs()).min(1e6));
+        if value < low - slack || value > high + slack {
+            return Err(StepError::OutOfRange {
+                index,
+                value,
+                low,
+                high,
+            });
+        }
+    }
+    Ok(())
+}
+
 pub struct Episode {
     pub scene: Arc<Scene>,
     pub task: Task,
@@ -198,32 +228,7 @@ impl Episode {
 
     /// Sets every robot's targets from one concatenated action (see the module doc).
     pub fn apply(&mut self, action: &[f64]) -> Result<(), StepError> {
-        let want = self.scene.action_len();
-        if action.len() != want {
-            return Err(StepError::BadAction {
-                got: action.len(),
-                want,
-            });
-        }
-        if let Some(index) = action.iter().position(|v| !v.is_finite()) {
-            return Err(StepError::NonFinite {
-                index,
-                value: action[index],
-            });
-        }
-        let bounds = self.action_bounds();
-        for (index, (&value, &(low, high))) in action.iter().zip(&bounds).enumerate() {
-            // A hair of slack for values a model computed in f32.
-            let slack = 1e-6 * (1.0 + high.abs().max(low.abs()).min(1e6));
-            if value < low - slack || value > high + slack {
-                return Err(StepError::OutOfRange {
-                    index,
-                    value,
-                    low,
-                    high,
-                });
-            }
-        }
+        check_action(&self.action_bounds(), action)?;
         let scene = self.scene.clone();
         let mut rest = action;
         for ids in &scene.robots {

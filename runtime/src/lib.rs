@@ -19,6 +19,6 @@ pub mod scene;
 pub use results::recording as record;
 
 pub use env::{Env, EnvError, EnvOptions, ObserveError, Observer, Transition};
-pub use episode::{Episode, StepError};
+pub use episode::{Episode, StepError, check_action};
 pub use labware::LabwareState;
 pub use scene::{Scene, SceneError};
