@@ -48,10 +48,13 @@ pub struct DemoArgs {
     shard: Option<scoring::eval::Shard>,
     #[command(flatten)]
     files: FileSizeArgs,
+    /// Record a protocol whose success already holds at the start (W0001; refused otherwise)
+    #[arg(long)]
+    allow_trivial: bool,
 }
 
 pub fn run(front: &Front, a: &DemoArgs) -> Result<ExitCode> {
-    let tasks = front.load_all(&a.protocol)?;
+    let tasks = front.load_all_to_run(&a.protocol, a.allow_trivial)?;
     let version = match a.format {
         DemoFormat::Mcap if a.shard.is_some() => {
             bail!("--shard splits datasets; for recordings use eval --record --shard")

@@ -5,6 +5,7 @@
 use crate::front::Front;
 use crate::progress;
 use anyhow::Result;
+use results::run::record::results_path;
 use scoring::policies::PolicySpec;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -68,6 +69,10 @@ pub struct EvalArgs {
     /// with `autobio results merge`
     #[arg(long, value_name = "I/N", requires = "out")]
     shard: Option<scoring::eval::Shard>,
+    /// Run a protocol whose success already holds at the start (W0001; refused otherwise: a
+    /// robot that does nothing would pass it)
+    #[arg(long)]
+    allow_trivial: bool,
 }
 
 #[derive(Clone, Debug, clap::Subcommand)]
@@ -103,8 +108,9 @@ pub fn eval(front: &Front, a: &EvalArgs) -> Result<ExitCode> {
         None => (a.protocol.clone(), a.episodes, a.seed, a.runs),
     };
     let mut rows = Vec::new();
+    let mut written = Vec::new();
     for p in &protocols {
-        let task = front.load(p)?;
+        let task = front.load_to_run(p, a.allow_trivial)?;
         let opts = scoring::eval::EvalOptions {
             policy: a.policy.clone(),
             episodes,
@@ -145,15 +151,18 @@ pub fn eval(front: &Front, a: &EvalArgs) -> Result<ExitCode> {
                 m.profile.origin
             );
         }
-        let mut view = progress::ProgressView::new(&task.id);
+        let mut view = progress::ProgressView::for_task(&task);
         let report = scoring::evaluate(&task, &opts, |p| view.update(p));
         view.finish();
         rows.push(report?);
+        if let Some(o) = &a.out {
+            written.push(results_path(o, &task.id));
+        }
     }
     out!("{}", leaderboard::results_table(&rows));
     out!("{}", leaderboard::runs_table(&rows));
-    if let Some(o) = &a.out {
-        outln!("results: {}/<task>.results.json", o.display());
+    for path in written {
+        outln!("results: {}", path.display());
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -194,7 +203,9 @@ pub fn results(c: &ResultsCommand) -> Result<ExitCode> {
             let rows = scoring::eval::merge(shards, out)?;
             out!("{}", leaderboard::results_table(&rows));
             out!("{}", leaderboard::runs_table(&rows));
-            outln!("merged: {}/<task>.results.json", out.display());
+            for r in &rows {
+                outln!("merged: {}", results_path(out, &r.task_id).display());
+            }
             Ok(ExitCode::SUCCESS)
         }
     }

@@ -1,5 +1,8 @@
 //! What every subcommand that reads protocols shares: the chain root and colour choice, and
-//! loading a protocol or chain into a task (its diagnostics shown when it has errors).
+//! loading a protocol or chain into a task (its diagnostics shown when it has errors). The
+//! subcommands that run episodes load through [`Front::load_to_run`], which also shows `check`'s
+//! warnings and refuses a trivial task (W0001: its success holds before the first step) unless
+//! the user allows it.
 
 use crate::diagnostics;
 use anyhow::{Result, bail};
@@ -27,5 +30,42 @@ impl Front {
     /// Loads every file, stopping at the first with errors.
     pub fn load_all(&self, paths: &[PathBuf]) -> Result<Vec<compiler::Task>> {
         paths.iter().map(|p| self.load(p)).collect()
+    }
+
+    /// Loads a protocol to run episodes of: its errors as [`Front::load`]; its warnings shown
+    /// (what `check` would print); a task whose success already holds at the start (W0001)
+    /// refused unless `allow_trivial`, since a motionless robot would pass it.
+    pub fn load_to_run(&self, path: &Path, allow_trivial: bool) -> Result<compiler::Task> {
+        let task = self.load(path)?;
+        let checked = compiler::check_file(path, self.root.as_deref())?;
+        if checked.diagnostics.is_empty() {
+            return Ok(task);
+        }
+        err!("{}", diagnostics::render_all(&checked, self.color));
+        let trivial = checked
+            .diagnostics
+            .iter()
+            .any(|d| d.code == dsl::Code::W0001);
+        if trivial && !allow_trivial {
+            let name = &checked.file;
+            bail!(
+                "{name}: its success already holds before the first step (W0001), so a robot that \
+                 does nothing passes it; state a round trip as a chain of two protocols, or pass \
+                 --allow-trivial to run it anyway"
+            )
+        }
+        Ok(task)
+    }
+
+    /// [`Front::load_to_run`] for every file, stopping at the first refused.
+    pub fn load_all_to_run(
+        &self,
+        paths: &[PathBuf],
+        allow_trivial: bool,
+    ) -> Result<Vec<compiler::Task>> {
+        paths
+            .iter()
+            .map(|p| self.load_to_run(p, allow_trivial))
+            .collect()
     }
 }

@@ -14,6 +14,7 @@ mod describe;
 mod diagnostics;
 mod eval;
 mod front;
+mod picture;
 mod progress;
 mod replay;
 mod submissions;
@@ -76,6 +77,9 @@ enum Command {
     /// Re-score a recording offline; re-simulate it from its recorded state (--simulate) or redraw
     /// its cameras at any size (--render)
     Replay(replay::ReplayArgs),
+    /// Draw a seed's initial scene (every task camera and a view from above) to a PNG, without
+    /// running the expert
+    Render(picture::RenderArgs),
     /// Measure every task under the folders (expert and hold on the same seeds) and write the task
     /// table (docs/tasks.md)
     Tasks(tasks_doc::TasksArgs),
@@ -115,6 +119,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Results { command } => eval::results(command),
         Command::Leaderboard { command } => submissions::run(command),
         Command::Replay(a) => replay::run(a),
+        Command::Render(a) => picture::run(&front, a),
         Command::Tasks(a) => tasks_doc::run_cli(a),
         Command::Bench(a) => bench::run_cli(&front, a),
     }

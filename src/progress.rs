@@ -8,6 +8,8 @@ use std::time::Instant;
 
 pub struct ProgressView {
     label: String,
+    /// The task evaluated, so that a failure line names what its seed drew.
+    task: Option<compiler::Task>,
     bar: bool,
     started: Instant,
     drawn: bool,
@@ -19,11 +21,31 @@ impl ProgressView {
     pub fn new(label: &str) -> ProgressView {
         ProgressView {
             label: label.to_string(),
+            task: None,
             bar: std::io::stderr().is_terminal(),
             started: Instant::now(),
             drawn: false,
             left_out: 0,
         }
+    }
+
+    /// Progress of an evaluation of `task`: each failure line also names the parameters its
+    /// seed drew.
+    pub fn for_task(task: &compiler::Task) -> ProgressView {
+        ProgressView {
+            task: Some(task.clone()),
+            ..ProgressView::new(&task.id)
+        }
+    }
+
+    /// `; drew row=B, col=4` for a seed of a task with parameters, else nothing.
+    fn drawn(&self, seed: u64) -> String {
+        let Some(task) = self.task.as_ref().filter(|t| !t.params.is_empty()) else {
+            return String::new();
+        };
+        let params = task.sample(seed).params;
+        let values: Vec<String> = params.iter().map(|(k, v)| format!("{k}={v}")).collect();
+        format!("; drew {}", values.join(", "))
     }
 
     /// One evaluated episode.
@@ -39,14 +61,19 @@ impl ProgressView {
             .as_deref()
             .map(|r| format!(": {r}"))
             .unwrap_or_default();
+        let drawn = if e.success {
+            String::new()
+        } else {
+            self.drawn(e.seed)
+        };
         self.draw(
             (p.done, p.total, p.resumed),
             &format!("success {rate:.1}%"),
             e.error
                 .as_ref()
-                .map(|_| format!("seed {} (run {}): {outcome}{reason}", e.seed, e.run)),
+                .map(|_| format!("seed {} (run {}{drawn}): {outcome}{reason}", e.seed, e.run)),
             &format!(
-                "{}/{} seed {} (run {}): {outcome}{reason}  running success {rate:.1}%",
+                "{}/{} seed {} (run {}{drawn}): {outcome}{reason}  running success {rate:.1}%",
                 p.done, p.total, e.seed, e.run
             ),
         );

@@ -76,9 +76,9 @@ fn each_arm_does_its_own_step_and_both_are_recorded() {
     assert_eq!(
         labels,
         [
-            "step 0: close_lid cycler with lidder",
-            "step 1: pick tube with mover",
-            "step 2: place tube with mover"
+            "step 1: close_lid cycler with lidder",
+            "step 2: pick tube with mover",
+            "step 3: place tube with mover"
         ]
     );
     let handover = stage_times[1].1;
@@ -170,10 +170,10 @@ fn steps_marked_together_move_both_arms_in_the_same_control_steps() {
             .unwrap()
     };
     assert_eq!(
-        started(&starts_par, "step 1"),
-        started(&starts_par, "step 0")
+        started(&starts_par, "step 2"),
+        started(&starts_par, "step 1")
     );
-    assert!(started(&starts_seq, "step 1") > 2.0, "{starts_seq:?}");
+    assert!(started(&starts_seq, "step 2") > 2.0, "{starts_seq:?}");
     assert!(
         t_par < t_seq - 2.0,
         "together {t_par} s, one after another {t_seq} s"

@@ -212,7 +212,11 @@ pub(crate) fn prove(cx: &mut Cx, scene: &ProofScene, stages: &[ProofStage], para
                     first.span,
                     "every success predicate already holds before the first step".to_string(),
                 )
-                .with_hint("check the initial `state` and the predicates");
+                .with_hint(
+                    "check the initial `state` and the predicates; a round trip (open, then close) \
+                     is a chain of two protocols; `eval` and `demo` refuse this task unless \
+                     `--allow-trivial`",
+                );
                 d.notes.extend(describe(bound));
                 d.notes.extend(origin.clone());
                 cx.push(d);

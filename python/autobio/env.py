@@ -15,8 +15,8 @@ targets in rad, then the gripper command), float64 within the actuators' ranges.
 Reward: the task's score when the episode ends (0 before), ``terminated`` when it succeeded,
 ``truncated`` when a stage's or the task's time ran out, exactly as ``autobio eval`` judges.
 ``info["is_success"]`` is the judge's verdict at every step. A simulation that becomes unstable
-ends the episode (``truncated``, failed, the reward the judge's score at that moment, as eval
-scores it) with its reason in ``info["error"]``. An action of the wrong length, not finite or
+ends the episode (``truncated``, reward 0: an episode that ends in an error scores 0, as in
+``autobio eval``) with its reason in ``info["error"]``. An action of the wrong length, not finite or
 outside its range raises ``ValueError`` before anything moves; the episode goes on.
 
 Seeds are ``autobio eval``'s episode seeds: ``reset(seed=s)`` is episode ``s``; ``reset()``

@@ -4,7 +4,7 @@
 //! the reward, `terminated` and `truncated` are the runtime's, as `autobio eval` reads them.
 //!
 //! A simulation that becomes unstable ends the episode as `autobio eval` ends it (a failure with a
-//! reason, scored as the judge stood); an action of the wrong length, not finite or outside its
+//! reason, scoring 0); an action of the wrong length, not finite or outside its
 //! range is the caller's mistake and raises `ValueError` before anything moves (the episode goes
 //! on).
 
@@ -18,15 +18,15 @@ use runtime::{EnvError, EnvOptions, StepError};
 pub type Outcome = (f64, bool, bool, Option<String>);
 
 /// One step in Python's terms: an action the runtime would refuse raises before anything moves
-/// (the episode goes on); an unstable simulation ends the episode with its reason and the judge's
-/// score at that moment, failed, as `autobio eval` scores it.
+/// (the episode goes on); an unstable simulation ends the episode with its reason, failed and
+/// scoring 0, as `autobio eval` scores an episode that ends in an error.
 pub fn step(env: &mut runtime::Env, action: &[f64]) -> Result<Outcome, EnvFailure> {
     runtime::check_action(&env.episode().action_bounds(), action)
         .map_err(|e| EnvFailure::Action(e.to_string()))?;
     match env.step(action) {
         Ok(t) => Ok((t.reward, t.terminated, t.truncated, None)),
         Err(EnvError::Step(e @ StepError::Unstable { .. })) => {
-            Ok((env.verdict().score, false, true, Some(e.to_string())))
+            Ok((0.0, false, true, Some(e.to_string())))
         }
         Err(EnvError::Step(e)) => Err(EnvFailure::Action(e.to_string())),
         Err(e) => Err(EnvFailure::Other(e.to_string())),

@@ -196,6 +196,8 @@ fn evaluate(
     states: &[LabwareState],
     start: &[LabwareState],
 ) -> PredicateValue {
+    // The predicate as the author wrote it, with this episode's parameters filled in.
+    let text = render(&pred.text, params).unwrap_or_else(|_| pred.text.clone());
     let Some(Measure {
         value,
         target,
@@ -204,7 +206,7 @@ fn evaluate(
     }) = measure(task, params, &pred.check, states)
     else {
         return PredicateValue {
-            text: pred.text.clone(),
+            text,
             holds: false,
             value: f64::NAN,
             target: f64::NAN,
@@ -225,7 +227,7 @@ fn evaluate(
         0.0
     };
     PredicateValue {
-        text: pred.text.clone(),
+        text,
         holds,
         value,
         target,

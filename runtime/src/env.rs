@@ -278,6 +278,17 @@ impl Env {
         Ok(&self.frames.as_ref().expect("drawn above").1)
     }
 
+    /// The state now from a free camera (`view`), at the environment's image size; not one of the
+    /// task's cameras, and not cached.
+    pub fn view(&mut self, view: &crate::render::View) -> Result<Image, RenderError> {
+        if self.cameras.is_none() {
+            let [w, h] = self.image_size();
+            self.cameras = Some(Cameras::new(&self.episode.scene, w, h)?);
+        }
+        let cams = self.cameras.as_mut().expect("made above");
+        cams.render_view(&self.episode.data, self.episode.logic(), view)
+    }
+
     /// One control step with no observer but the trajectory hash.
     pub fn step(&mut self, action: &[f64]) -> Result<Transition, EnvError> {
         self.step_with(action, &mut [])

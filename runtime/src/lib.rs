@@ -12,6 +12,7 @@ pub mod deps;
 pub mod env;
 pub mod episode;
 pub mod kinematics;
+pub mod picture;
 pub mod render;
 pub mod scene;
 

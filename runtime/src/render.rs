@@ -23,6 +23,17 @@ use mujoco_rs::renderer::MjRenderer;
 use robots::Detail;
 use std::sync::Arc;
 
+/// A free camera: where it looks, from how far, and from which direction (degrees, MuJoCo's
+/// azimuth and elevation: -90 looks straight down).
+#[derive(Clone, Debug, PartialEq)]
+pub struct View {
+    pub name: String,
+    pub lookat: [f64; 3],
+    pub distance: f64,
+    pub azimuth_deg: f64,
+    pub elevation_deg: f64,
+}
+
 /// The largest image side drawn with simplified meshes.
 pub const SIMPLIFIED_MAX_SIDE: usize = 320;
 
@@ -153,31 +164,63 @@ impl Cameras {
         m.kinematics();
         m.camlight();
         let mut out = Vec::with_capacity(self.ids.len());
-        for (k, &id) in self.ids.iter().enumerate() {
-            let failed = |why: String| RenderError::Draw {
-                camera: names[k].clone(),
-                why,
-            };
-            self.renderer.set_camera(MjvCamera::new_fixed(id));
-            self.renderer
-                .sync_data(&mut self.mirror)
-                .map_err(|e| failed(format!("sync: {e:?}")))?;
-            self.renderer
-                .render()
-                .map_err(|e| failed(format!("{e:?}")))?;
-            let rgb = self
-                .renderer
-                .rgb_flat()
-                .ok_or_else(|| failed("the renderer produced no RGB".into()))?
-                .to_vec();
-            out.push(Image {
-                camera: names[k].clone(),
-                width: self.width,
-                height: self.height,
-                rgb,
-            });
+        for (k, name) in names.iter().enumerate().take(self.ids.len()) {
+            let camera = MjvCamera::new_fixed(self.ids[k]);
+            out.push(self.draw(camera, name)?);
         }
         Ok(out)
+    }
+
+    /// The state of `data` seen from a free camera looking at `view.lookat` (no task camera):
+    /// `autobio render`'s view from above.
+    pub fn render_view(
+        &mut self,
+        data: &MjData<Arc<MjModel>>,
+        logic: &[Logic],
+        view: &View,
+    ) -> Result<Image, RenderError> {
+        self.update_screens(logic)?;
+        let m = &mut self.mirror;
+        m.qpos_mut().copy_from_slice(data.qpos());
+        m.mocap_pos_mut().copy_from_slice(data.mocap_pos());
+        m.mocap_quat_mut().copy_from_slice(data.mocap_quat());
+        m.kinematics();
+        m.camlight();
+        let camera = MjvCamera {
+            type_: MjtCamera::mjCAMERA_FREE as i32,
+            lookat: view.lookat,
+            distance: view.distance,
+            azimuth: view.azimuth_deg,
+            elevation: view.elevation_deg,
+            ..MjvCamera::default()
+        };
+        self.draw(camera, &view.name)
+    }
+
+    /// One frame of the mirrored state from `camera`.
+    fn draw(&mut self, camera: MjvCamera, name: &str) -> Result<Image, RenderError> {
+        let failed = |why: String| RenderError::Draw {
+            camera: name.to_string(),
+            why,
+        };
+        self.renderer.set_camera(camera);
+        self.renderer
+            .sync_data(&mut self.mirror)
+            .map_err(|e| failed(format!("sync: {e:?}")))?;
+        self.renderer
+            .render()
+            .map_err(|e| failed(format!("{e:?}")))?;
+        let rgb = self
+            .renderer
+            .rgb_flat()
+            .ok_or_else(|| failed("the renderer produced no RGB".into()))?
+            .to_vec();
+        Ok(Image {
+            camera: name.to_string(),
+            width: self.width,
+            height: self.height,
+            rgb,
+        })
     }
 
     /// Redraws and uploads the displays whose shown values changed since they were last drawn.

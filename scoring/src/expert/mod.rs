@@ -93,7 +93,8 @@ impl ExpertPolicy {
         let mut steps = Vec::new();
         let mut group = 0;
         for (i, (stage, step)) in task.steps().enumerate() {
-            let context = || format!("step {i} `{}`", step.primitive);
+            // Steps are numbered from 1, as `describe` and the protocol's reader count them.
+            let context = || format!("step {} `{}`", i + 1, step.primitive);
             let robot = task
                 .robot_index(&step.robot)
                 .ok_or_else(|| planning(context(), PlanFailure::NoRobot(step.robot.clone())))?;
@@ -129,7 +130,8 @@ impl ExpertPolicy {
             steps.push(Step {
                 on: args.get("on").cloned(),
                 label: format!(
-                    "step {i}: {} {} with {}",
+                    "step {}: {} {} with {}",
+                    i + 1,
                     step.primitive,
                     args.get("on").map(String::as_str).unwrap_or(""),
                     step.robot

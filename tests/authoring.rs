@@ -1,0 +1,190 @@
+//! What a protocol author meets when running a protocol (issue 29, first part): a trivial task
+//! (success holds before the first step) is refused by `eval` and `demo` unless allowed, with
+//! `check`'s warnings shown; an episode that ends in an error scores 0, so an all-error run
+//! reports success 0 and mean score 0; results name the real results file and carry predicates
+//! with the seed's values filled in; failure lines name what the seed drew and number steps from
+//! 1; `autobio render` draws a seed's initial scene.
+
+mod common;
+use common::{autobio, autobio_ok, scratch, text};
+
+const TRIVIAL: &str = "tests/corpus/warnings/success_holds_at_start.toml";
+
+#[test]
+fn a_trivial_protocol_is_refused_by_eval_and_demo_and_runs_when_allowed() {
+    let dir = scratch("trivial");
+    let out_dir = dir.display().to_string();
+    for args in [
+        vec![
+            "eval",
+            "--protocol",
+            TRIVIAL,
+            "--episodes",
+            "1",
+            "--policy",
+            "hold",
+        ],
+        vec![
+            "demo",
+            "--protocol",
+            TRIVIAL,
+            "--episodes",
+            "1",
+            "--out",
+            &out_dir,
+        ],
+    ] {
+        let out = autobio(&args);
+        let said = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {said}");
+        assert!(
+            said.contains("warning[W0001]") && said.contains(":52:8"),
+            "{args:?}: check's warning, at its place: {said}"
+        );
+        assert!(said.contains("--allow-trivial"), "{said}");
+    }
+    // Allowed, it runs; the no-motion control wins it, which is why it is refused.
+    let out = autobio_ok(&[
+        "eval",
+        "--protocol",
+        TRIVIAL,
+        "--episodes",
+        "2",
+        "--policy",
+        "hold",
+        "--allow-trivial",
+    ]);
+    assert!(out.contains("100.0%"), "{out}");
+    // A protocol with no warning runs as before, printing none.
+    let out = autobio(&[
+        "eval",
+        "--protocol",
+        "protocols/tube/transfer.toml",
+        "--episodes",
+        "1",
+        "--policy",
+        "hold",
+    ]);
+    assert!(out.status.success());
+    assert!(
+        !text(&out.stderr).contains("warning["),
+        "{}",
+        text(&out.stderr)
+    );
+}
+
+#[test]
+fn an_all_error_run_scores_zero_even_on_a_task_whose_checks_hold() {
+    let dir = scratch("all-errors");
+    let empty = dir.join("no-recordings");
+    std::fs::create_dir_all(&empty).unwrap();
+    let policy = format!("replay:{}", empty.display());
+    let out = dir.join("run");
+    autobio_ok(&[
+        "eval",
+        "--protocol",
+        TRIVIAL,
+        "--episodes",
+        "3",
+        "--policy",
+        &policy,
+        "--allow-trivial",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let results: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join("tube.transfer.results.json")).unwrap(),
+    )
+    .unwrap();
+    for e in results["episodes"].as_array().unwrap() {
+        assert_eq!(e["outcome"], "policy_error", "{e}");
+        assert_eq!(e["verdict"]["score"], 0.0, "{e}");
+        // The checks did hold: what scores 0 is the error, not the state.
+        assert_eq!(e["verdict"]["stages"][0]["predicates"][0]["holds"], true);
+    }
+    let summary = &results["summary"];
+    assert_eq!(summary["success_rate"], 0.0, "{summary}");
+    assert_eq!(summary["mean_score"], 0.0, "{summary}");
+}
+
+#[test]
+fn results_name_the_real_file_and_the_filled_in_predicate() {
+    let dir = scratch("filled");
+    let out = autobio_ok(&[
+        "eval",
+        "--protocol",
+        "protocols/tube/transfer.toml",
+        "--episodes",
+        "2",
+        "--policy",
+        "hold",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    let path = dir.join("tube.transfer.results.json");
+    assert!(
+        out.contains(&format!("results: {}", path.display())),
+        "{out}"
+    );
+    assert!(!out.contains("<task>"), "{out}");
+    let results: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let task = common::compile("protocols/tube/transfer.toml");
+    for e in results["episodes"].as_array().unwrap() {
+        let drawn = task.sample(e["seed"].as_u64().unwrap()).params;
+        let want = format!("tube in target.{}{}", drawn["row"], drawn["col"]);
+        let text = &e["verdict"]["stages"][0]["predicates"][0]["text"];
+        assert_eq!(text, &serde_json::Value::String(want), "{e}");
+    }
+}
+
+#[test]
+fn failure_lines_name_the_seeds_draw_and_count_steps_from_one() {
+    let out = autobio(&[
+        "eval",
+        "--protocol",
+        "protocols/tube/unscrew_cap.toml",
+        "--episodes",
+        "1",
+        "--seed",
+        "4",
+    ]);
+    let said = text(&out.stderr);
+    let task = common::compile("protocols/tube/unscrew_cap.toml");
+    let slot = &task.sample(4).params["slot"];
+    assert!(
+        said.contains(&format!("seed 4 (run 0; drew slot={slot})")),
+        "{said}"
+    );
+    // The protocol's second step (`hand_over`; the first is `pick`) is step 2.
+    assert!(said.contains("step 2 `hand_over`"), "{said}");
+}
+
+#[test]
+fn render_draws_a_seeds_initial_scene_and_seeds_differ() {
+    let dir = scratch("render");
+    let png = |seed: &str| {
+        let path = dir.join(format!("seed{seed}.png"));
+        let out = autobio_ok(&[
+            "render",
+            "protocols/tube/transfer.toml",
+            "--seed",
+            seed,
+            "--png",
+            path.to_str().unwrap(),
+            "--size",
+            "96x64",
+        ]);
+        assert!(out.contains("table_front, arm/wrist, above"), "{out}");
+        assert!(out.contains("drew col="), "{out}");
+        results::Image::from_png("sheet", &std::fs::read(&path).unwrap()).unwrap()
+    };
+    let (a, b, a_again) = (png("1"), png("2"), png("1"));
+    assert_eq!((a.width, a.height), (96 * 3, 64));
+    assert!(common::spread(&a.rgb) > 10.0, "a picture, not a blank");
+    assert_ne!(
+        a.rgb, b.rgb,
+        "two seeds of a randomised task draw two scenes"
+    );
+    assert_eq!(a.rgb, a_again.rgb, "the same seed draws the same picture");
+}
