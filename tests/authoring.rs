@@ -188,3 +188,30 @@ fn render_draws_a_seeds_initial_scene_and_seeds_differ() {
     );
     assert_eq!(a.rgb, a_again.rgb, "the same seed draws the same picture");
 }
+
+#[test]
+fn a_parameter_driven_slot_sums_up_its_bad_values_in_one_diagnostic() {
+    let checked = compiler::check_file(
+        std::path::Path::new("tests/corpus/multi/parameter_slots.toml"),
+        None,
+    )
+    .unwrap();
+    assert_eq!(checked.diagnostics.len(), 2, "{:#?}", checked.diagnostics);
+    for d in &checked.diagnostics {
+        assert!(
+            d.message.contains("`row = C` (any `col`)")
+                && d.message.contains("`col = 6` (any `row`)"),
+            "{}",
+            d.message
+        );
+        assert!(
+            d.hint
+                .as_deref()
+                .is_some_and(|h| h.contains("2x5 grid, A1..B5")),
+            "{:?}",
+            d.hint
+        );
+        // The summary depends on the parameters; it names no single combination.
+        assert!(d.notes.is_empty(), "{:?}", d.notes);
+    }
+}

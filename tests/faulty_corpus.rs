@@ -4,7 +4,9 @@
 //! none may panic. Files under tests/corpus/warnings compile, with the warning they declare.
 //! Files under tests/corpus/fuzz are fuzzer findings, kept as regressions. Chains are checked
 //! with the repository as their protocol root (`--root`), so that they can name shipped
-//! protocols; tests/corpus/faulty/stages holds stage files for chains, not cases.
+//! protocols; tests/corpus/faulty/stages holds stage files for chains, not cases. Files under
+//! tests/corpus/multi hold several independent mistakes, one `# expect:` line each: one `check`
+//! must report exactly those, each at its place.
 
 use std::path::{Path, PathBuf};
 
@@ -18,7 +20,12 @@ struct Expect {
 
 fn expectation(path: &Path, source: &str) -> Expect {
     let first = source.lines().next().unwrap_or_default();
-    let rest = first
+    parse_expect(path, first)
+}
+
+/// One `# expect: CODE at [FILE:]LINE:COL on `TEXT`` line.
+fn parse_expect(path: &Path, line: &str) -> Expect {
+    let rest = line
         .strip_prefix("# expect: ")
         .unwrap_or_else(|| panic!("{}: first line must be `# expect: ..`", path.display()));
     let (code, rest) = rest.split_once(" at ").expect("`CODE at ..`");
@@ -161,5 +168,44 @@ fn fuzzer_findings_stay_fixed() {
                 "{name}: {d:?}"
             );
         }
+    }
+}
+
+/// Files with several independent mistakes get every one of them in one pass: exactly the
+/// diagnostics their `# expect:` lines list, each at its place covering its text.
+#[test]
+fn every_mistake_of_a_multi_mistake_file_is_found_in_one_pass() {
+    let corpus = files("tests/corpus/multi");
+    assert!(!corpus.is_empty());
+    for path in corpus {
+        let name = path.display().to_string();
+        let source = std::fs::read_to_string(&path).unwrap();
+        let wants: Vec<Expect> = source
+            .lines()
+            .take_while(|l| l.starts_with("# expect: "))
+            .map(|l| parse_expect(&path, l))
+            .collect();
+        assert!(
+            wants.len() >= 2,
+            "{name}: a multi-mistake file lists its mistakes"
+        );
+        let checked = check(&path);
+        let found: Vec<(String, usize, usize, String)> = checked
+            .diagnostics
+            .iter()
+            .map(|d| {
+                let (line, col) = dsl::render::line_col(&source, d.span.start);
+                let text = source[d.span.start..d.span.end].to_string();
+                (d.code.as_str().to_string(), line, col, text)
+            })
+            .collect();
+        let mut want: Vec<(String, usize, usize, String)> = wants
+            .into_iter()
+            .map(|e| (e.code, e.line, e.col, e.text))
+            .collect();
+        let mut got = found.clone();
+        want.sort();
+        got.sort();
+        assert_eq!(got, want, "{name}: {:#?}", checked.diagnostics);
     }
 }

@@ -74,6 +74,13 @@ pub(crate) fn lower<'a>(cx: &mut Cx, p: &'a Protocol, file: &str) -> Option<Lowe
     let steps = check_steps(cx, p, &robot_names, &param_names);
     let declared: Vec<&str> = p.labware.iter().map(|l| l.name.value.as_str()).collect();
     let predicates = lower_predicates(cx, p, &kinds, &robot_names, &param_names, &declared);
+    crate::slots::check(
+        cx,
+        &slot_uses(p, &kinds, &predicates),
+        &kinds,
+        &robot_names,
+        &params,
+    );
     let m = &p.meta;
     let labware_spans = p
         .labware
@@ -121,6 +128,69 @@ pub(crate) fn lower<'a>(cx: &mut Cx, p: &'a Protocol, file: &str) -> Option<Lowe
         labware_spans,
         camera,
     })
+}
+
+/// Every place the protocol names a slot, for [`crate::slots::check`]: each labware's `at`, each
+/// step's location arguments (the item being the step's `on`), each `in` predicate.
+fn slot_uses(
+    p: &Protocol,
+    kinds: &KindMap,
+    predicates: &[CheckedPredicate],
+) -> Vec<crate::slots::SlotUse> {
+    use crate::slots::SlotUse;
+    let item = |name: &str| kinds.get(name).map(|k| (name.to_string(), *k));
+    let mut uses: Vec<SlotUse> = p
+        .labware
+        .iter()
+        .filter_map(|l| {
+            l.at.as_ref().map(|at| SlotUse {
+                span: at.span,
+                template: at.value.clone(),
+                item: item(&l.name.value),
+                start: true,
+            })
+        })
+        .collect();
+    for step in &p.steps {
+        let Some(prim) = step
+            .primitive
+            .as_ref()
+            .and_then(|n| primitives::primitive(&n.value))
+        else {
+            continue;
+        };
+        let on = step.arg("on").map(|v| v.value.text());
+        for a in prim
+            .args
+            .iter()
+            .filter(|a| a.kind == primitives::ArgKind::Location)
+        {
+            if let Some(v) = step.arg(a.name) {
+                uses.push(SlotUse {
+                    span: v.span,
+                    template: v.value.text(),
+                    item: on.as_deref().and_then(item),
+                    start: false,
+                });
+            }
+        }
+    }
+    for cp in predicates {
+        if let Check::InSlot {
+            item: name,
+            location,
+            ..
+        } = &cp.predicate.check
+        {
+            uses.push(SlotUse {
+                span: cp.span,
+                template: location.clone(),
+                item: item(name),
+                start: false,
+            });
+        }
+    }
+    uses
 }
 
 /// The fixed camera of a `[camera]` table: standing at `pos`, looking at `look_at` with the image's

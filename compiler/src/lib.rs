@@ -20,6 +20,7 @@ pub mod predicates;
 pub mod primitives;
 mod proof;
 mod report;
+mod slots;
 pub mod stage_files;
 mod task;
 pub mod world;

@@ -1,0 +1,218 @@
+//! Every place a protocol names a slot (a labware's `at`, a step's location argument, an `in`
+//! predicate) checked over the parameters' domains in one pass, before the state proof: a slot the
+//! holder lacks, a holder that does not take the item, two items declared in one place. Each
+//! mistake is reported once at every place it occurs, whatever else is wrong in the file, and a
+//! parameter-driven name's bad values are summed up in one diagnostic (`row = C` for any `col`),
+//! not shown as the first failing combination. It decides nothing about the order of steps: the
+//! proof does.
+
+use crate::params::{Bindings, ParamSpec, placeholders, proof_assignments, render};
+use crate::primitives::{self, Env};
+use crate::report::Cx;
+use dsl::{Code, Diagnostic, Span};
+use labware::LabwareKind;
+use std::collections::{BTreeMap, BTreeSet};
+
+/// One place a slot is named.
+pub(crate) struct SlotUse {
+    pub span: Span,
+    /// As written: `target.{row}{col}`.
+    pub template: String,
+    /// The item that stands there (the labware placed, moved or checked), with its kind.
+    pub item: Option<(String, &'static LabwareKind)>,
+    /// A labware's `at`: two of them may not name the same slot.
+    pub start: bool,
+}
+
+/// Checks every use; `params` are the lowered parameters (a placeholder naming none is reported
+/// elsewhere, so such a use is skipped here).
+pub(crate) fn check(
+    cx: &mut Cx,
+    uses: &[SlotUse],
+    kinds: &BTreeMap<String, &'static LabwareKind>,
+    robots: &[String],
+    params: &[ParamSpec],
+) {
+    let env = Env { kinds, robots };
+    let known: BTreeSet<&str> = params.iter().map(|p| p.name.as_str()).collect();
+    let mut combinations: Option<Vec<Bindings>> = None;
+    let mut starts: BTreeMap<String, &str> = BTreeMap::new();
+    for u in uses {
+        let names: BTreeSet<String> = placeholders(&u.template)
+            .into_iter()
+            .map(|(_, n)| n)
+            .collect();
+        if names.iter().any(|n| !known.contains(n.as_str())) {
+            continue;
+        }
+        if names.is_empty() {
+            if let Err(m) = fits(&env, &u.template, u.item.as_ref()) {
+                cx.push(m.at(u.span));
+            } else if u.start
+                && let Some((name, _)) = &u.item
+            {
+                match starts.get(&u.template) {
+                    Some(other) => cx.push(
+                        Diagnostic::new(
+                            Code::E0016,
+                            u.span,
+                            format!("`{name}` and `{other}` both start in `{}`", u.template),
+                        )
+                        .with_hint(
+                            "give each its own slot, or draw one with `slot = .., free = true`",
+                        ),
+                    ),
+                    None => {
+                        starts.insert(u.template.clone(), name);
+                    }
+                }
+            }
+            continue;
+        }
+        // The values of the placeholders this use names, in every combination the proof traces.
+        let all = combinations.get_or_insert_with(|| proof_assignments(params).0);
+        let projections: BTreeSet<Bindings> = all
+            .iter()
+            .map(|b| {
+                b.iter()
+                    .filter(|(k, _)| names.contains(*k))
+                    .map(|(k, v)| (k.clone(), v.clone()))
+                    .collect()
+            })
+            .collect();
+        let mut bad: Vec<(Bindings, Misfit)> = Vec::new();
+        let mut good: Vec<Bindings> = Vec::new();
+        for b in projections {
+            let Ok(place) = render(&u.template, &b) else {
+                continue;
+            };
+            match fits(&env, &place, u.item.as_ref()) {
+                Ok(()) => good.push(b),
+                Err(m) => bad.push((b, m)),
+            }
+        }
+        if bad.is_empty() {
+            continue;
+        }
+        // A misfit that does not depend on the values (the holder never takes the item) is said
+        // once, without them.
+        if good.is_empty() && bad.iter().all(|(_, m)| m.independent) {
+            cx.push(bad.swap_remove(0).1.at(u.span));
+            continue;
+        }
+        cx.push(summary(u, &bad, &good, kinds));
+    }
+}
+
+/// Why a rendered place does not fit.
+struct Misfit {
+    message: String,
+    hint: Option<String>,
+    /// Holds whatever the slot's name: the holder has no slots, or does not take the item.
+    independent: bool,
+}
+
+impl Misfit {
+    fn at(self, span: Span) -> Diagnostic {
+        let mut d = Diagnostic::new(Code::E0016, span, self.message);
+        d.hint = self.hint;
+        d
+    }
+}
+
+fn fits(
+    env: &Env,
+    place: &str,
+    item: Option<&(String, &'static LabwareKind)>,
+) -> Result<(), Misfit> {
+    let (holder, _slot, hkind) = primitives::resolve_location(env, place).map_err(|message| {
+        let independent = place
+            .split_once('.')
+            .and_then(|(h, _)| env.kinds.get(h))
+            .is_none_or(|k| k.slots.is_none());
+        Misfit {
+            message,
+            hint: None,
+            independent,
+        }
+    })?;
+    if let Some((_, kind)) = item {
+        let accepts = hkind.slots.map(|s| s.accepts).unwrap_or(&[]);
+        if !accepts.contains(&kind.name) {
+            return Err(Misfit {
+                message: format!(
+                    "a slot of `{holder}` (a {}) does not take a {}",
+                    hkind.name, kind.name
+                ),
+                hint: Some(format!("it takes: {}", accepts.join(", "))),
+                independent: true,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// One diagnostic for a parameter-driven place: each value that fails whatever the others are
+/// (`row = C`, for any `col`), then the combinations left over, with the holder's slots.
+fn summary(
+    u: &SlotUse,
+    bad: &[(Bindings, Misfit)],
+    good: &[Bindings],
+    kinds: &BTreeMap<String, &'static LabwareKind>,
+) -> Diagnostic {
+    let names: Vec<&String> = bad[0].0.keys().collect();
+    let mut phrases = Vec::new();
+    let mut covered: BTreeSet<&Bindings> = BTreeSet::new();
+    for name in &names {
+        let values: BTreeSet<&String> = bad.iter().map(|(b, _)| &b[*name]).collect();
+        for v in values {
+            if good.iter().any(|b| &b[*name] == v) {
+                continue;
+            }
+            let others: Vec<String> = names
+                .iter()
+                .filter(|n| *n != name)
+                .map(|n| format!("`{n}`"))
+                .collect();
+            phrases.push(if others.is_empty() {
+                format!("`{name} = {v}`")
+            } else {
+                format!("`{name} = {v}` (any {})", others.join(", "))
+            });
+            covered.extend(bad.iter().map(|(b, _)| b).filter(|b| &b[*name] == v));
+        }
+    }
+    let rest: Vec<&Bindings> = bad
+        .iter()
+        .map(|(b, _)| b)
+        .filter(|b| !covered.contains(b))
+        .collect();
+    for b in rest.iter().take(3) {
+        let parts: Vec<String> = b.iter().map(|(k, v)| format!("{k} = {v}")).collect();
+        phrases.push(format!("`{}`", parts.join(", ")));
+    }
+    if rest.len() > 3 {
+        phrases.push(format!("{} more combinations", rest.len() - 3));
+    }
+    let holder = u.template.split_once('.').map_or("", |(h, _)| h);
+    let mut d = Diagnostic::new(
+        Code::E0016,
+        u.span,
+        format!(
+            "`{}` names no slot it can use when {}",
+            u.template,
+            phrases.join(" or ")
+        ),
+    );
+    d.hint = match kinds.get(holder).and_then(|k| k.slots) {
+        Some(slots) => Some(format!(
+            "`{holder}`'s slots: {}; narrow the parameters' domains to them",
+            slots.layout.describe()
+        )),
+        None => bad[0].1.hint.clone(),
+    };
+    if bad.iter().any(|(_, m)| m.independent) {
+        d.notes.push(bad[0].1.message.clone());
+    }
+    d
+}
