@@ -74,9 +74,9 @@ pub(crate) fn lower<'a>(cx: &mut Cx, p: &'a Protocol, file: &str) -> Option<Lowe
     let steps = check_steps(cx, p, &robot_names, &param_names);
     let declared: Vec<&str> = p.labware.iter().map(|l| l.name.value.as_str()).collect();
     let predicates = lower_predicates(cx, p, &kinds, &robot_names, &param_names, &declared);
-    crate::slots::check(
+    crate::sweep::check(
         cx,
-        &slot_uses(p, &kinds, &predicates),
+        &sweep_uses(p, &kinds, &predicates),
         &kinds,
         &robot_names,
         &params,
@@ -130,24 +130,27 @@ pub(crate) fn lower<'a>(cx: &mut Cx, p: &'a Protocol, file: &str) -> Option<Lowe
     })
 }
 
-/// Every place the protocol names a slot, for [`crate::slots::check`]: each labware's `at`, each
-/// step's location arguments (the item being the step's `on`), each `in` predicate.
-fn slot_uses(
+/// Every place the protocol names a slot or a quantity, for [`crate::sweep::check`]: each
+/// labware's `at`, each step's location arguments (the item being the step's `on`), volumes and
+/// panel values, each `in` predicate and each volume or panel predicate's target.
+fn sweep_uses(
     p: &Protocol,
     kinds: &KindMap,
     predicates: &[CheckedPredicate],
-) -> Vec<crate::slots::SlotUse> {
-    use crate::slots::SlotUse;
+) -> Vec<crate::sweep::Use> {
+    use crate::sweep::{Use, What};
     let item = |name: &str| kinds.get(name).map(|k| (name.to_string(), *k));
-    let mut uses: Vec<SlotUse> = p
+    let mut uses: Vec<Use> = p
         .labware
         .iter()
         .filter_map(|l| {
-            l.at.as_ref().map(|at| SlotUse {
+            l.at.as_ref().map(|at| Use {
                 span: at.span,
                 template: at.value.clone(),
-                item: item(&l.name.value),
-                start: true,
+                what: What::Slot {
+                    item: item(&l.name.value),
+                    start: true,
+                },
             })
         })
         .collect();
@@ -160,35 +163,59 @@ fn slot_uses(
             continue;
         };
         let on = step.arg("on").map(|v| v.value.text());
-        for a in prim
-            .args
-            .iter()
-            .filter(|a| a.kind == primitives::ArgKind::Location)
-        {
-            if let Some(v) = step.arg(a.name) {
-                uses.push(SlotUse {
-                    span: v.span,
-                    template: v.value.text(),
+        let panel = on
+            .as_deref()
+            .and_then(|o| kinds.get(o))
+            .zip(step.arg("param").map(|v| v.value.text()))
+            .and_then(|(k, param)| k.panel_param(&param));
+        for a in prim.args {
+            let Some(v) = step.arg(a.name) else {
+                continue;
+            };
+            let what = match a.kind {
+                primitives::ArgKind::Location => What::Slot {
                     item: on.as_deref().and_then(item),
                     start: false,
-                });
-            }
+                },
+                primitives::ArgKind::Volume => What::Quantity(Dimension::Volume),
+                primitives::ArgKind::PanelValue => match panel {
+                    Some(pp) => What::Quantity(primitives::panel_dimension(pp.unit)),
+                    None => continue,
+                },
+                _ => continue,
+            };
+            uses.push(Use {
+                span: v.span,
+                template: v.value.text(),
+                what,
+            });
         }
     }
     for cp in predicates {
-        if let Check::InSlot {
-            item: name,
-            location,
-            ..
-        } = &cp.predicate.check
-        {
-            uses.push(SlotUse {
-                span: cp.span,
-                template: location.clone(),
-                item: item(name),
-                start: false,
-            });
-        }
+        let (template, what) = match &cp.predicate.check {
+            Check::InSlot {
+                item: name,
+                location,
+                ..
+            } => (
+                location.clone(),
+                What::Slot {
+                    item: item(name),
+                    start: false,
+                },
+            ),
+            Check::Volume { value, .. } => (value.clone(), What::Quantity(Dimension::Volume)),
+            Check::Panel { value, unit, .. } => (
+                value.clone(),
+                What::Quantity(primitives::panel_dimension(unit)),
+            ),
+            _ => continue,
+        };
+        uses.push(Use {
+            span: cp.span,
+            template,
+            what,
+        });
     }
     uses
 }

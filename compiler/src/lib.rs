@@ -20,8 +20,8 @@ pub mod predicates;
 pub mod primitives;
 mod proof;
 mod report;
-mod slots;
 pub mod stage_files;
+mod sweep;
 mod task;
 pub mod world;
 

@@ -92,6 +92,35 @@ pub fn unit(symbol: &str) -> Option<(Dimension, f64)> {
         .map(|(_, d, f)| (*d, *f))
 }
 
+/// The unit a symbol that is not one most likely means: lab spellings (`C`, `deg C`, `RPM`,
+/// `sec`, `secs`, `mins`, `seconds`), other case (`ML`), else the closest symbol by spelling.
+pub fn suggest_unit(symbol: &str) -> Option<&'static str> {
+    let folded: String = symbol
+        .chars()
+        .filter(|c| !c.is_whitespace() && *c != '.')
+        .collect::<String>()
+        .to_lowercase();
+    let spelled = match folded.as_str() {
+        "c" | "degc" | "degreesc" | "degreec" | "celsius" | "ºc" | "°c" => Some("°C"),
+        "rpm" | "rpms" | "r/min" => Some("rpm"),
+        "sec" | "secs" | "second" | "seconds" => Some("s"),
+        "mins" | "minute" | "minutes" => Some("min"),
+        "msec" | "msecs" | "millisecond" | "milliseconds" => Some("ms"),
+        "degree" | "degrees" => Some("deg"),
+        "microliter" | "microliters" | "microlitre" | "microlitres" => Some("µL"),
+        "milliliter" | "milliliters" | "millilitre" | "millilitres" => Some("mL"),
+        _ => None,
+    };
+    spelled
+        .or_else(|| {
+            UNITS
+                .iter()
+                .map(|(s, _, _)| *s)
+                .find(|s| s.to_lowercase() == folded)
+        })
+        .or_else(|| crate::did_you_mean(symbol, UNITS.iter().map(|(s, _, _)| *s)))
+}
+
 /// Parses "<number> <unit>" (the space is optional). Errors are lowercase messages.
 pub fn parse_quantity(text: &str) -> Result<Quantity, String> {
     let t = text.trim();
@@ -113,8 +142,10 @@ pub fn parse_quantity(text: &str) -> Result<Quantity, String> {
     if sym.is_empty() {
         return Err(format!("`{text}` has no unit"));
     }
-    let (dimension, factor) =
-        unit(sym).ok_or_else(|| format!("unknown unit `{sym}` in `{text}`"))?;
+    let (dimension, factor) = unit(sym).ok_or_else(|| match suggest_unit(sym) {
+        Some(u) => format!("unknown unit `{sym}` in `{text}`; did you mean `{u}`?"),
+        None => format!("unknown unit `{sym}` in `{text}`"),
+    })?;
     Ok(Quantity {
         si: value * factor,
         dimension,
@@ -123,6 +154,25 @@ pub fn parse_quantity(text: &str) -> Result<Quantity, String> {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn a_misspelt_unit_gets_the_one_it_means() {
+        for (typed, meant) in [
+            ("C", "°C"),
+            ("deg C", "°C"),
+            ("RPM", "rpm"),
+            ("sec", "s"),
+            ("secs", "s"),
+            ("mins", "min"),
+            ("ML", "mL"),
+            ("Mm", "mm"),
+        ] {
+            assert_eq!(super::suggest_unit(typed), Some(meant), "{typed}");
+            let e = super::parse_quantity(&format!("37 {typed}")).unwrap_err();
+            assert!(e.ends_with(&format!("did you mean `{meant}`?")), "{e}");
+        }
+        assert_eq!(super::suggest_unit("parsecs"), None);
+    }
+
     use super::*;
 
     #[test]

@@ -1,34 +1,44 @@
 //! Every place a protocol names a slot (a labware's `at`, a step's location argument, an `in`
-//! predicate) checked over the parameters' domains in one pass, before the state proof: a slot the
-//! holder lacks, a holder that does not take the item, two items declared in one place. Each
-//! mistake is reported once at every place it occurs, whatever else is wrong in the file, and a
-//! parameter-driven name's bad values are summed up in one diagnostic (`row = C` for any `col`),
-//! not shown as the first failing combination. It decides nothing about the order of steps: the
-//! proof does.
+//! predicate) or a quantity (a step's volume or panel value, a panel or volume predicate's target)
+//! checked over the parameters' domains in one pass, before the state proof: a slot the holder
+//! lacks, a holder that does not take the item, two items declared in one place, a unit that is not
+//! known or of the wrong dimension. Each mistake is reported once at every place it occurs,
+//! whatever else is wrong in the file, and a parameter-driven value's bad values are summed up in
+//! one diagnostic (`row = C` for any `col`), not shown as the first failing combination. It decides
+//! nothing about the order of steps: the proof does.
 
 use crate::params::{Bindings, ParamSpec, placeholders, proof_assignments, render};
 use crate::primitives::{self, Env};
 use crate::report::Cx;
-use dsl::{Code, Diagnostic, Span};
+use dsl::{Code, Diagnostic, Dimension, Span};
 use labware::LabwareKind;
 use std::collections::{BTreeMap, BTreeSet};
 
-/// One place a slot is named.
-pub(crate) struct SlotUse {
+/// One place a slot or a quantity is named.
+pub(crate) struct Use {
     pub span: Span,
-    /// As written: `target.{row}{col}`.
+    /// As written: `target.{row}{col}`, `{temp} °C`.
     pub template: String,
-    /// The item that stands there (the labware placed, moved or checked), with its kind.
-    pub item: Option<(String, &'static LabwareKind)>,
-    /// A labware's `at`: two of them may not name the same slot.
-    pub start: bool,
+    pub what: What,
+}
+
+/// What a place must name.
+pub(crate) enum What {
+    /// A slot, and the item that stands there (the labware placed, moved or checked) with its
+    /// kind; `start`: a labware's `at` (two of them may not name the same slot).
+    Slot {
+        item: Option<(String, &'static LabwareKind)>,
+        start: bool,
+    },
+    /// A quantity of this dimension.
+    Quantity(Dimension),
 }
 
 /// Checks every use; `params` are the lowered parameters (a placeholder naming none is reported
 /// elsewhere, so such a use is skipped here).
 pub(crate) fn check(
     cx: &mut Cx,
-    uses: &[SlotUse],
+    uses: &[Use],
     kinds: &BTreeMap<String, &'static LabwareKind>,
     robots: &[String],
     params: &[ParamSpec],
@@ -46,10 +56,12 @@ pub(crate) fn check(
             continue;
         }
         if names.is_empty() {
-            if let Err(m) = fits(&env, &u.template, u.item.as_ref()) {
+            if let Err(m) = fits(&env, &u.template, &u.what) {
                 cx.push(m.at(u.span));
-            } else if u.start
-                && let Some((name, _)) = &u.item
+            } else if let What::Slot {
+                item: Some((name, _)),
+                start: true,
+            } = &u.what
             {
                 match starts.get(&u.template) {
                     Some(other) => cx.push(
@@ -86,7 +98,7 @@ pub(crate) fn check(
             let Ok(place) = render(&u.template, &b) else {
                 continue;
             };
-            match fits(&env, &place, u.item.as_ref()) {
+            match fits(&env, &place, &u.what) {
                 Ok(()) => good.push(b),
                 Err(m) => bad.push((b, m)),
             }
@@ -97,7 +109,14 @@ pub(crate) fn check(
         // A misfit that does not depend on the values (the holder never takes the item) is said
         // once, without them.
         if good.is_empty() && bad.iter().all(|(_, m)| m.independent) {
-            cx.push(bad.swap_remove(0).1.at(u.span));
+            // Said in the author's terms: the template, not one combination's rendering.
+            let (b, mut m) = bad.swap_remove(0);
+            if let Ok(place) = render(&u.template, &b) {
+                m.message = m
+                    .message
+                    .replace(&format!("`{place}`"), &format!("`{}`", u.template));
+            }
+            cx.push(m.at(u.span));
             continue;
         }
         cx.push(summary(u, &bad, &good, kinds));
@@ -106,6 +125,7 @@ pub(crate) fn check(
 
 /// Why a rendered place does not fit.
 struct Misfit {
+    code: Code,
     message: String,
     hint: Option<String>,
     /// Holds whatever the slot's name: the holder has no slots, or does not take the item.
@@ -114,23 +134,35 @@ struct Misfit {
 
 impl Misfit {
     fn at(self, span: Span) -> Diagnostic {
-        let mut d = Diagnostic::new(Code::E0016, span, self.message);
+        let mut d = Diagnostic::new(self.code, span, self.message);
         d.hint = self.hint;
         d
     }
 }
 
-fn fits(
-    env: &Env,
-    place: &str,
-    item: Option<&(String, &'static LabwareKind)>,
-) -> Result<(), Misfit> {
+fn fits(env: &Env, place: &str, what: &What) -> Result<(), Misfit> {
+    let item = match what {
+        What::Slot { item, .. } => item.as_ref(),
+        What::Quantity(dim) => {
+            // A unit that is not known, or of another dimension, is wrong whatever the number.
+            return crate::predicates::quantity(place, &Bindings::new(), *dim)
+                .map(|_| ())
+                .map_err(|message| Misfit {
+                    code: Code::E0020,
+                    independent: message.starts_with("unknown unit")
+                        || message.contains(", but a "),
+                    message,
+                    hint: None,
+                });
+        }
+    };
     let (holder, _slot, hkind) = primitives::resolve_location(env, place).map_err(|message| {
         let independent = place
             .split_once('.')
             .and_then(|(h, _)| env.kinds.get(h))
             .is_none_or(|k| k.slots.is_none());
         Misfit {
+            code: Code::E0016,
             message,
             hint: None,
             independent,
@@ -140,6 +172,7 @@ fn fits(
         let accepts = hkind.slots.map(|s| s.accepts).unwrap_or(&[]);
         if !accepts.contains(&kind.name) {
             return Err(Misfit {
+                code: Code::E0016,
                 message: format!(
                     "a slot of `{holder}` (a {}) does not take a {}",
                     hkind.name, kind.name
@@ -155,7 +188,7 @@ fn fits(
 /// One diagnostic for a parameter-driven place: each value that fails whatever the others are
 /// (`row = C`, for any `col`), then the combinations left over, with the holder's slots.
 fn summary(
-    u: &SlotUse,
+    u: &Use,
     bad: &[(Bindings, Misfit)],
     good: &[Bindings],
     kinds: &BTreeMap<String, &'static LabwareKind>,
@@ -195,21 +228,25 @@ fn summary(
         phrases.push(format!("{} more combinations", rest.len() - 3));
     }
     let holder = u.template.split_once('.').map_or("", |(h, _)| h);
+    let (code, names_what) = match u.what {
+        What::Slot { .. } => (Code::E0016, "no slot it can use"),
+        What::Quantity(_) => (Code::E0020, "no quantity it can use"),
+    };
     let mut d = Diagnostic::new(
-        Code::E0016,
+        code,
         u.span,
         format!(
-            "`{}` names no slot it can use when {}",
+            "`{}` names {names_what} when {}",
             u.template,
             phrases.join(" or ")
         ),
     );
-    d.hint = match kinds.get(holder).and_then(|k| k.slots) {
-        Some(slots) => Some(format!(
+    d.hint = match (&u.what, kinds.get(holder).and_then(|k| k.slots)) {
+        (What::Slot { .. }, Some(slots)) => Some(format!(
             "`{holder}`'s slots: {}; narrow the parameters' domains to them",
             slots.layout.describe()
         )),
-        None => bad[0].1.hint.clone(),
+        _ => bad[0].1.hint.clone(),
     };
     if bad.iter().any(|(_, m)| m.independent) {
         d.notes.push(bad[0].1.message.clone());
