@@ -215,3 +215,43 @@ fn a_parameter_driven_slot_sums_up_its_bad_values_in_one_diagnostic() {
         assert!(d.notes.is_empty(), "{:?}", d.notes);
     }
 }
+
+#[test]
+fn names_units_and_state_words_get_what_the_author_meant() {
+    let checked = compiler::check_file(
+        std::path::Path::new("tests/corpus/multi/keys_and_states.toml"),
+        None,
+    )
+    .unwrap();
+    let hint = |code: &str, message: &str| -> String {
+        checked
+            .diagnostics
+            .iter()
+            .find(|d| d.code.as_str() == code && d.message.contains(message))
+            .and_then(|d| d.hint.clone())
+            .unwrap_or_else(|| panic!("no {code} `{message}` in {:#?}", checked.diagnostics))
+    };
+    assert!(hint("E0003", "time_limit_sec").contains("did you mean `time_limit_s`?"));
+    assert!(hint("E0003", "`action`").contains("do = \"close_lid\""));
+    let state = hint("E0017", "unlocked");
+    assert!(state.starts_with("declare `closed`"), "{state}");
+    let units = compiler::check_file(
+        std::path::Path::new("tests/corpus/multi/units_and_slots.toml"),
+        None,
+    )
+    .unwrap();
+    let messages: Vec<&str> = units
+        .diagnostics
+        .iter()
+        .map(|d| d.message.as_str())
+        .collect();
+    for (unit, meant) in [("RPM", "rpm"), ("C", "°C"), ("secs", "s")] {
+        assert!(
+            messages
+                .iter()
+                .any(|m| m.contains(&format!("unknown unit `{unit}`"))
+                    && m.ends_with(&format!("did you mean `{meant}`?"))),
+            "{messages:?}"
+        );
+    }
+}

@@ -220,6 +220,26 @@ fn sweep_uses(
     uses
 }
 
+/// What to declare for a state word a part cannot start in: the word an author means by a
+/// negation or another form (`unlocked` is `closed`: shut, not latched), else the closest word.
+fn state_hint(word: &str, initial: &[&str]) -> String {
+    let meant = match word.to_lowercase().as_str() {
+        "unlocked" | "shut" | "close" | "unlatched" => Some("closed"),
+        "opened" => Some("open"),
+        "lock" | "latched" => Some("locked"),
+        "removed" => Some("off"),
+        "screwed" | "capped" => Some("on"),
+        _ => None,
+    };
+    match meant.filter(|m| initial.contains(m)) {
+        Some(m) => format!(
+            "declare `{m}`; the states it can start in: {}",
+            initial.join(", ")
+        ),
+        None => hint_for(word, initial, "initial states"),
+    }
+}
+
 /// The fixed camera of a `[camera]` table: standing at `pos`, looking at `look_at` with the image's
 /// up as close to world up as the view allows.
 fn fixed_camera(cx: &mut Cx, c: &dsl::ast::Camera) -> Option<CameraMount> {
@@ -389,7 +409,10 @@ pub(crate) fn time_limit_warning(cx: &mut Cx, t: &Spanned<f64>) {
                     t.value
                 ),
             )
-            .with_hint("time limits are in seconds unless a unit says otherwise: \"30 s\""),
+            .with_hint(format!(
+                "give at least one control step ({} ms), e.g. \"30 s\"; check the value's unit",
+                period * 1e3
+            )),
         );
     } else if t.value > LONGEST_TIME_LIMIT {
         cx.push(
@@ -528,7 +551,7 @@ fn initial_state(
                 Code::E0017,
                 value.span,
                 format!("`{}` cannot start `{text}`", key.value),
-                Some(hint_for(&text, ps.initial, "initial states")),
+                Some(state_hint(&text, ps.initial)),
             );
         } else {
             spec.initial.insert(key.value.clone(), text);

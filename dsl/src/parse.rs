@@ -125,6 +125,18 @@ fn type_name(v: &DeValue<'_>) -> &'static str {
 }
 
 /// Splits a unit-suffixed key (`yaw_deg`) into its base and unit; plain keys have no unit.
+/// Keys other tools name a step's action with, taken for a misspelt `do` when a step has none.
+const DO_SYNONYMS: &[&str] = &[
+    "action",
+    "primitive",
+    "op",
+    "operation",
+    "verb",
+    "command",
+    "type",
+    "step",
+];
+
 fn split_unit(key: &str) -> (&str, Option<(&str, Dimension, f64)>) {
     if let Some((base, sym)) = key.rsplit_once('_')
         && let Some((dim, factor)) = unit(sym)
@@ -208,8 +220,17 @@ impl Parser {
 
     fn unknown_key(&mut self, key: &Key<'_>, allowed: &[&str], table: &str) {
         let (base, _) = split_unit(key.get_ref());
-        let hint = did_you_mean(base, allowed.iter().copied())
-            .map(|s| format!("did you mean `{s}`?"))
+        // A known key with a misspelt unit suffix (`time_limit_sec`): the suffix it means.
+        let suffixed = key.get_ref().rsplit_once('_').and_then(|(b, sym)| {
+            let unit = crate::quantity::suggest_unit(sym)?;
+            allowed
+                .contains(&b)
+                .then(|| format!("did you mean `{b}_{unit}`? (a unit suffix is the unit's symbol)"))
+        });
+        let hint = suffixed
+            .or_else(|| {
+                did_you_mean(base, allowed.iter().copied()).map(|s| format!("did you mean `{s}`?"))
+            })
             .or_else(|| Some(format!("keys allowed in {table}: {}", allowed.join(", "))));
         self.err(
             Code::E0003,
@@ -796,12 +817,22 @@ impl Parser {
                 }
             }
             if s.primitive.is_none() {
-                self.err(
-                    Code::E0002,
-                    s.span,
-                    "step has no `do`".into(),
-                    Some("e.g. do = \"close_lid\"".into()),
-                );
+                // A key another tool names the action with (`action = "close_lid"`) is named at
+                // its place, with the key this language uses.
+                let mut hint = "e.g. do = \"close_lid\"".to_string();
+                for (k, v) in &s.args {
+                    if DO_SYNONYMS.contains(&k.value.as_str()) {
+                        let value = v.value.text();
+                        self.err(
+                            Code::E0003,
+                            k.span,
+                            format!("unknown key `{}` in a step", k.value),
+                            Some(format!("did you mean `do`? write do = \"{value}\"")),
+                        );
+                        hint = format!("the step's action is its `do`: do = \"{value}\"");
+                    }
+                }
+                self.err(Code::E0002, s.span, "step has no `do`".into(), Some(hint));
             }
             out.push(s);
         }
