@@ -56,11 +56,11 @@ impl ProgressView {
             .ok()
             .and_then(|v| v.as_str().map(str::to_string))
             .unwrap_or_default();
-        let reason = e
-            .error
-            .as_deref()
-            .map(|r| format!(": {r}"))
-            .unwrap_or_default();
+        let reason = match e.error.as_deref() {
+            Some(r) => format!(": {r}"),
+            None if !e.success => failed_checks(&e.verdict),
+            None => String::new(),
+        };
         let drawn = if e.success {
             String::new()
         } else {
@@ -137,5 +137,40 @@ impl ProgressView {
         if self.bar && self.drawn {
             errln!("");
         }
+    }
+}
+
+/// `: \`tube in target.B3\` failed (height 31.0 mm, within 5.0 mm)`: each check that did not
+/// hold at the end, with the parts that failed and by how much, in the author's units.
+fn failed_checks(v: &results::Verdict) -> String {
+    let failed: Vec<String> = v
+        .predicates()
+        .iter()
+        .filter(|p| !p.holds)
+        .map(|p| {
+            let parts: Vec<String> = p
+                .parts
+                .iter()
+                .filter(|q| !q.holds)
+                .map(|q| {
+                    let (value, tolerance, unit) = match q.unit.as_str() {
+                        "m" => (q.value * 1e3, q.tolerance * 1e3, "mm"),
+                        "rad" => (q.value.to_degrees(), q.tolerance.to_degrees(), "°"),
+                        u => (q.value, q.tolerance, u),
+                    };
+                    format!("{} {value:.1} {unit}, within {tolerance:.1} {unit}", q.name)
+                })
+                .collect();
+            if parts.is_empty() {
+                format!("`{}` failed", p.text)
+            } else {
+                format!("`{}` failed ({})", p.text, parts.join("; "))
+            }
+        })
+        .collect();
+    if failed.is_empty() {
+        String::new()
+    } else {
+        format!(": {}", failed.join(", "))
     }
 }

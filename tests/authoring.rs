@@ -255,3 +255,58 @@ fn names_units_and_state_words_get_what_the_author_meant() {
         );
     }
 }
+
+#[test]
+fn a_failing_slot_predicate_says_which_part_failed_and_by_how_much() {
+    let dir = scratch("parts");
+    let out = autobio(&[
+        "eval",
+        "--protocol",
+        "protocols/tube/transfer.toml",
+        "--episodes",
+        "1",
+        "--policy",
+        "hold",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    let said = text(&out.stderr);
+    assert!(
+        said.contains("failed (in-plane distance ") && said.contains("mm, within 15.0 mm)"),
+        "{said}"
+    );
+    let results: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("tube.transfer.results.json")).unwrap(),
+    )
+    .unwrap();
+    let p = &results["episodes"][0]["verdict"]["stages"][0]["predicates"][0];
+    let parts = p["parts"].as_array().unwrap();
+    let names: Vec<&str> = parts.iter().map(|q| q["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["in-plane distance", "height", "tilt"]);
+    // The tube stands upright in the other rack, at the racks' common height: only the distance
+    // fails, and it is the predicate's own value.
+    let holds: Vec<bool> = parts
+        .iter()
+        .map(|q| q["holds"].as_bool().unwrap())
+        .collect();
+    assert_eq!(holds, [false, true, true], "{parts:?}");
+    assert_eq!(parts[0]["value"], p["value"]);
+    // A predicate that holds carries no parts.
+    let dir = scratch("parts-expert");
+    autobio_ok(&[
+        "eval",
+        "--protocol",
+        "protocols/tube/transfer.toml",
+        "--episodes",
+        "1",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    let results: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("tube.transfer.results.json")).unwrap(),
+    )
+    .unwrap();
+    let p = &results["episodes"][0]["verdict"]["stages"][0]["predicates"][0];
+    assert_eq!(p["holds"], true);
+    assert!(p.get("parts").is_none(), "{p}");
+}

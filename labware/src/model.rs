@@ -306,19 +306,27 @@ pub trait Instrument {
     }
 }
 
-/// Whether an item with root pose `item` stands in a slot seated at `seat`: distance (value) from
-/// the seat in the seat's plane within `xy`, height along the seat's axis within `z` and tilt from
-/// the seat's axis within `tilt` (rad). A rack's seats are upright; a fixed-angle rotor's lean.
-pub fn seated(seat: &Pose, item: &Pose, xy: f64, z: f64, tilt: f64) -> Measure {
+/// How an item with root pose `item` stands against a slot seated at `seat`: its distance from
+/// the seat in the seat's plane (m), its height along the seat's axis (m, signed) and its tilt
+/// from the seat's axis (rad). A rack's seats are upright; a fixed-angle rotor's lean.
+pub fn seat_offsets(seat: &Pose, item: &Pose) -> (f64, f64, f64) {
     let d = seat.rotation.inverse() * (item.translation.vector - seat.translation.vector);
     let planar = (d.x * d.x + d.y * d.y).sqrt();
     let axis = seat.rotation * nalgebra::Vector3::z();
     let up = item.rotation * nalgebra::Vector3::z();
     let tilted = up.dot(&axis).clamp(-1.0, 1.0).acos();
+    (planar, d.z, tilted)
+}
+
+/// Whether an item with root pose `item` stands in a slot seated at `seat`: distance (value) from
+/// the seat in the seat's plane within `xy`, height along the seat's axis within `z` and tilt from
+/// the seat's axis within `tilt` (rad) ([`seat_offsets`]).
+pub fn seated(seat: &Pose, item: &Pose, xy: f64, z: f64, tilt: f64) -> Measure {
+    let (planar, height, tilted) = seat_offsets(seat, item);
     Measure {
         value: planar,
         target: 0.0,
         tolerance: xy,
-        holds: planar <= xy && d.z.abs() <= z && tilted <= tilt,
+        holds: planar <= xy && height.abs() <= z && tilted <= tilt,
     }
 }

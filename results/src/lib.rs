@@ -18,4 +18,4 @@ pub mod verdict;
 pub use episode::{EpisodeResult, Outcome, TrajectoryHash};
 pub use image::Image;
 pub use run::{EvalReport, RESULTS_SCHEMA_VERSION, RunError};
-pub use verdict::{Judge, PredicateValue, StageVerdict, Verdict};
+pub use verdict::{Judge, PartValue, PredicateValue, StageVerdict, Verdict};

@@ -25,6 +25,21 @@ pub struct PredicateValue {
     pub tolerance: f64,
     /// 0..1: how far the value has come from where the stage started toward the target.
     pub progress: f64,
+    /// A predicate that measures several things (an item seated in a slot: in-plane distance,
+    /// height, tilt), each against its own tolerance, so that a failure says which part failed
+    /// and by how much; empty for one-number predicates.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub parts: Vec<PartValue>,
+}
+
+/// One measured part of a predicate, in its own unit (`unit`: "m" or "rad").
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PartValue {
+    pub name: String,
+    pub value: f64,
+    pub tolerance: f64,
+    pub unit: String,
+    pub holds: bool,
 }
 
 /// A measurement in JSON: a number, or null for NaN (which JSON cannot hold), read back as NaN.
@@ -189,6 +204,46 @@ fn measure(
     }
 }
 
+/// The parts of an `in` predicate: in-plane distance, height and tilt against their tolerances.
+fn parts(task: &Task, params: &Bindings, check: &Check, states: &[LabwareState]) -> Vec<PartValue> {
+    let Check::InSlot {
+        item,
+        location,
+        tolerance,
+        height,
+        tilt,
+    } = check
+    else {
+        return Vec::new();
+    };
+    let state_of = |name: &str| states.iter().find(|s| s.name == name);
+    let seat = (|| {
+        let location = render(location, params).ok()?;
+        let (holder, slot) = location.split_once('.')?;
+        let spec = task.labware.iter().find(|l| l.name == holder)?;
+        let seat = spec
+            .params
+            .instrument()?
+            .slot_seat(slot, state_of(holder)?)?;
+        Some(labware::model::seat_offsets(&seat, &state_of(item)?.pose))
+    })();
+    let Some((planar, dz, tilted)) = seat else {
+        return Vec::new();
+    };
+    let part = |name: &str, value: f64, tolerance: f64, unit: &str| PartValue {
+        name: name.into(),
+        holds: value.abs() <= tolerance,
+        value,
+        tolerance,
+        unit: unit.into(),
+    };
+    vec![
+        part("in-plane distance", planar, tolerance.value, "m"),
+        part("height", dz, *height, "m"),
+        part("tilt", tilted, *tilt, "rad"),
+    ]
+}
+
 fn evaluate(
     task: &Task,
     params: &Bindings,
@@ -212,6 +267,7 @@ fn evaluate(
             target: f64::NAN,
             tolerance: f64::NAN,
             progress: 0.0,
+            parts: Vec::new(),
         };
     };
     let from = measure(task, params, &pred.check, start)
@@ -233,6 +289,11 @@ fn evaluate(
         target,
         tolerance,
         progress,
+        parts: if holds {
+            Vec::new()
+        } else {
+            parts(task, params, &pred.check, states)
+        },
     }
 }
 
