@@ -106,16 +106,21 @@ pub(crate) fn check(
         if bad.is_empty() {
             continue;
         }
-        // A misfit that does not depend on the values (the holder never takes the item) is said
-        // once, without them.
-        if good.is_empty() && bad.iter().all(|(_, m)| m.independent) {
-            // Said in the author's terms: the template, not one combination's rendering.
-            let (b, mut m) = bad.swap_remove(0);
-            if let Ok(place) = render(&u.template, &b) {
-                m.message = m
+        // A misfit that does not depend on the values (the holder never takes the item, a unit
+        // that is not known, no unit at all) is said once, in the author's terms: the template,
+        // not one combination's rendering.
+        let said: Vec<String> = bad
+            .iter()
+            .map(|(b, m)| match render(&u.template, b) {
+                Ok(place) => m
                     .message
-                    .replace(&format!("`{place}`"), &format!("`{}`", u.template));
-            }
+                    .replace(&format!("`{place}`"), &format!("`{}`", u.template)),
+                Err(_) => m.message.clone(),
+            })
+            .collect();
+        if good.is_empty() && said.iter().all(|m| *m == said[0]) {
+            let (_, mut m) = bad.swap_remove(0);
+            m.message = said[0].clone();
             cx.push(m.at(u.span));
             continue;
         }
@@ -151,8 +156,10 @@ fn fits(env: &Env, place: &str, what: &What) -> Result<(), Misfit> {
                     code: Code::E0020,
                     independent: message.starts_with("unknown unit")
                         || message.contains(", but a "),
+                    hint: message
+                        .ends_with("has no unit")
+                        .then(|| "a parameter used as a quantity must render with its unit".into()),
                     message,
-                    hint: None,
                 });
         }
     };
