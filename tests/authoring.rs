@@ -310,3 +310,48 @@ fn a_failing_slot_predicate_says_which_part_failed_and_by_how_much() {
     assert_eq!(p["holds"], true);
     assert!(p.get("parts").is_none(), "{p}");
 }
+
+/// A round trip in one protocol: "was open" remembers a state seen at some control step, so the
+/// lid that starts closed, is opened and is closed again is a task a motionless arm fails.
+#[test]
+fn a_round_trip_with_the_history_predicate_checks_clean_fails_hold_and_the_expert_wins_it() {
+    let file = "protocols/thermal_cycler/open_and_close.toml";
+    let checked = compiler::check_file(std::path::Path::new(file), None).unwrap();
+    assert!(checked.diagnostics.is_empty(), "{:#?}", checked.diagnostics);
+    let task = checked.task.unwrap();
+    for seed in [0, 7] {
+        let expert = common::run(&task, seed, "expert");
+        assert!(expert.success, "seed {seed}: {:?}", expert.verdict);
+        let was = &expert.verdict.predicates()[0];
+        assert!(was.text == "cycler.lid was open" && was.holds, "{was:?}");
+        // At the end the lid is shut: what holds is the memory of it open, not the state now.
+        assert!((was.value - was.target).abs() > was.tolerance, "{was:?}");
+        let hold = common::run(&task, seed, "hold");
+        assert!(
+            !hold.success && hold.verdict.score == 0.0,
+            "{:?}",
+            hold.verdict
+        );
+        assert!(!hold.verdict.predicates()[0].holds);
+    }
+    // Without the history predicate the same protocol is trivial (its success holds at the
+    // start) and refused.
+    let dir = scratch("round-trip");
+    let trivial = dir.join("trivial.toml");
+    std::fs::write(
+        &trivial,
+        std::fs::read_to_string(file)
+            .unwrap()
+            .replace("\"cycler.lid was open\", ", ""),
+    )
+    .unwrap();
+    let out = autobio(&[
+        "eval",
+        "--protocol",
+        trivial.to_str().unwrap(),
+        "--episodes",
+        "1",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("W0001"), "{}", text(&out.stderr));
+}

@@ -187,8 +187,11 @@ fn progress_is_a_bar_on_a_terminal_and_lines_elsewhere() {
     let out = eval(&["--episodes", "2", "--policy", "hold"], &dir);
     let err = text(&out.stderr);
     assert!(err.contains("1/2 seed 5 (run 0): time_limit"), "{err}");
+    // A failed episode's line names the checks that did not hold.
     assert!(
-        err.contains("2/2 seed 6 (run 0): time_limit  running success 0.0%"),
+        err.contains(
+            "2/2 seed 6 (run 0): time_limit: `cycler.lid is closed` failed, `cycler.lid is locked` failed  running success 0.0%"
+        ),
         "{err}"
     );
     assert!(!err.contains('\r'), "{err}");

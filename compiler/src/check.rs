@@ -1233,7 +1233,7 @@ fn lower_predicates(
                     Code::E0030,
                     text.span,
                     format!("cannot read predicate `{}`: {e}", text.value),
-                    Some("forms: `<lw>.<part> is <state>`, `<item> in <holder>.<slot>`, `<lw>.volume = <q>`, `<lw>.<value> = <q>`, `<robot> touches <item>`, `<lw>.<joint> in [lo, hi] <unit>`, `<item> near [x, y, z] m`".into()),
+                    Some("forms: `<lw>.<part> is <state>`, `<lw>.<part> was <state>` (at some step), `<item> in <holder>.<slot>`, `<lw>.volume = <q>`, `<lw>.<value> = <q>`, `<robot> touches <item>`, `<lw>.<joint> in [lo, hi] <unit>`, `<item> near [x, y, z] m`".into()),
                 );
                 continue;
             }
@@ -1329,6 +1329,7 @@ fn resolve_check(
             labware: lw,
             part,
             state,
+            ever,
         } => {
             let kind = lookup(cx, lw)?;
             let Some(ps) = kind.part(part) else {
@@ -1358,6 +1359,7 @@ fn resolve_check(
                     part: part.clone(),
                     state: state.clone(),
                     tolerance: None,
+                    ever: *ever,
                 },
                 tol,
             ))

@@ -4,6 +4,9 @@
 //!
 //! Forms (`{param}` placeholders may stand for names, slots and values):
 //! - `<labware>.<part> is <state>`                 part state (lid closed, cap off, power on)
+//! - `<labware>.<part> was <state>`                the part has been in that state at some control
+//!   step of the stage (stateful: once seen it holds; a round trip in one protocol is "was open"
+//!   and "is closed")
 //! - `<labware>.<joint> in [<lo>, <hi>] <unit>`    joint range (rad, deg or m)
 //! - `<item> in <holder>.<slot>`                   object in slot
 //! - `<container>.volume <op> <quantity>`          volume, op one of `=`, `>=`, `<=`
@@ -45,6 +48,10 @@ pub enum Check {
         part: String,
         state: String,
         tolerance: Option<Tolerance>,
+        /// `was`: the part has been in the state at some control step of the stage, not
+        /// necessarily now (the judge and the proof remember it).
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+        ever: bool,
     },
     JointRange {
         labware: String,
@@ -111,6 +118,8 @@ pub enum Form {
         labware: String,
         part: String,
         state: String,
+        /// Written with `was`: at some step of the stage, not necessarily now.
+        ever: bool,
     },
     JointRange {
         labware: String,
@@ -176,7 +185,11 @@ pub fn parse(text: &str) -> Result<Parsed, String> {
         }
         None => (text, None),
     };
-    let form = if let Some((lhs, state)) = body.split_once(" is ") {
+    let state_form = body
+        .split_once(" is ")
+        .map(|(l, r)| (l, r, false))
+        .or_else(|| body.split_once(" was ").map(|(l, r)| (l, r, true)));
+    let form = if let Some((lhs, state, ever)) = state_form {
         let (labware, part) = split_dot(lhs.trim())
             .ok_or_else(|| format!("`{}` must be `<labware>.<part>`", lhs.trim()))?;
         let state = state.trim();
@@ -187,6 +200,7 @@ pub fn parse(text: &str) -> Result<Parsed, String> {
             labware,
             part,
             state: state.to_string(),
+            ever,
         }
     } else if let Some((lhs, rest)) = body.split_once(" in ") {
         let lhs = lhs.trim();
@@ -246,7 +260,7 @@ pub fn parse(text: &str) -> Result<Parsed, String> {
             .iter()
             .find_map(|(op, c)| body.split_once(op).map(|(l, r)| (l, *c, r)))
             .ok_or_else(|| {
-                "expected `is`, `in`, `=`, `>=`, `<=`, `touches` or `near`".to_string()
+                "expected `is`, `was`, `in`, `=`, `>=`, `<=`, `touches` or `near`".to_string()
             })?;
         let (labware, field) = split_dot(lhs.trim())
             .ok_or_else(|| format!("`{}` must be `<labware>.<value>`", lhs.trim()))?;
@@ -293,6 +307,11 @@ pub fn panel_quantity(template: &str, bound: &Bindings) -> Option<f64> {
 impl Check {
     /// Why this check's target value cannot be read under these parameter values (a volume or
     /// panel value template that renders to a bare number or the wrong unit); `None` when it can.
+    /// A `was` check: it holds once the state has been seen at some step of the stage.
+    pub fn is_history(&self) -> bool {
+        matches!(self, Check::State { ever: true, .. })
+    }
+
     pub fn target_error(&self, bound: &Bindings) -> Option<String> {
         match self {
             Check::Volume { value, .. } => quantity(value, bound, Dimension::Volume).err(),
@@ -404,7 +423,17 @@ mod tests {
             Form::State {
                 labware: s("cycler"),
                 part: s("lid"),
-                state: s("closed")
+                state: s("closed"),
+                ever: false,
+            }
+        );
+        assert_eq!(
+            form("cycler.lid was open"),
+            Form::State {
+                labware: s("cycler"),
+                part: s("lid"),
+                state: s("open"),
+                ever: true,
             }
         );
         // Degrees become radians; millimetres metres.
@@ -466,7 +495,7 @@ mod tests {
     #[test]
     fn rejects_malformed_forms() {
         // Each refused for its own reason, not just refused.
-        let verb = "expected `is`, `in`, `=`, `>=`, `<=`, `touches` or `near`";
+        let verb = "expected `is`, `was`, `in`, `=`, `>=`, `<=`, `touches` or `near`";
         for (t, why) in [
             ("cycler lid closed", verb),
             ("cycler.lid is", verb),

@@ -201,6 +201,8 @@ pub(crate) fn prove(cx: &mut Cx, scene: &ProofScene, stages: &[ProofStage], para
                 .iter()
                 .map(|p| p.predicate.check.eval_abstract(&w, bound))
                 .collect();
+            // `was` checks remember a state seen after any step of the stage.
+            let mut seen: Vec<bool> = holds.iter().map(|h| *h == Some(true)).collect();
             if !warned_trivial[si]
                 && !holds.is_empty()
                 && holds.iter().all(|h| *h == Some(true))
@@ -213,9 +215,9 @@ pub(crate) fn prove(cx: &mut Cx, scene: &ProofScene, stages: &[ProofStage], para
                     "every success predicate already holds before the first step".to_string(),
                 )
                 .with_hint(
-                    "check the initial `state` and the predicates; a round trip (open, then close) \
-                     is a chain of two protocols; `eval` and `demo` refuse this task unless \
-                     `--allow-trivial`",
+                    "check the initial `state` and the predicates; state a round trip with `was` \
+                     (`cycler.lid was open` beside `cycler.lid is closed`) or as a chain; `eval` \
+                     and `demo` refuse this task unless `--allow-trivial`",
                 );
                 d.notes.extend(describe(bound));
                 d.notes.extend(origin.clone());
@@ -245,9 +247,21 @@ pub(crate) fn prove(cx: &mut Cx, scene: &ProofScene, stages: &[ProofStage], para
                     cx.push(d);
                     continue 'combination;
                 }
+                for (k, p) in stage.predicates.iter().enumerate() {
+                    if p.predicate.check.is_history()
+                        && p.predicate.check.eval_abstract(&w, bound) == Some(true)
+                    {
+                        seen[k] = true;
+                    }
+                }
             }
-            for p in stage.predicates {
-                if p.predicate.check.eval_abstract(&w, bound) == Some(false) {
+            for (k, p) in stage.predicates.iter().enumerate() {
+                let now = if p.predicate.check.is_history() {
+                    Some(seen[k])
+                } else {
+                    p.predicate.check.eval_abstract(&w, bound)
+                };
+                if now == Some(false) {
                     let mut d = Diagnostic::new(
                         Code::E0033,
                         p.span,

@@ -311,7 +311,7 @@ impl Code {
                 "`[tolerances]` names a tolerance no predicate of this protocol uses, or gives it a unit of the\nwrong dimension; a predicate's `within` must match what the predicate measures."
             }
             Code::W0001 => {
-                "Every success predicate is already true in the initial state, so an episode succeeds before the\nrobot moves. Usually an initial `state` or a predicate is wrong. A round trip (open a lid, then\nclose it) is a chain of two protocols. `eval` and `demo` refuse the task unless `--allow-trivial`."
+                "Every success predicate is already true in the initial state, so an episode succeeds before the\nrobot moves. Usually an initial `state` or a predicate is wrong. A round trip (open a lid, then\nclose it) is written with `was` (`cycler.lid was open` beside `cycler.lid is closed`) or as a chain. `eval` and `demo` refuse the task unless `--allow-trivial`."
             }
             Code::W0002 => {
                 "The parameters have too many combinations to trace them all; the proof traced a deterministic\nsample of them. Narrow the domains for an exhaustive proof."

@@ -103,6 +103,7 @@ fn measure(
             part,
             state,
             tolerance,
+            ..
         } => {
             let model = spec_of(labware)?.params.instrument()?;
             model.measure(
@@ -304,12 +305,23 @@ fn stage_verdict(
     states: &[LabwareState],
     start: &[LabwareState],
     completed_at_s: Option<f64>,
+    seen: &[bool],
 ) -> StageVerdict {
     let stage = &task.stages[index];
     let predicates: Vec<PredicateValue> = stage
         .success
         .iter()
-        .map(|p| evaluate(task, params, p, states, start))
+        .enumerate()
+        .map(|(k, p)| {
+            let mut v = evaluate(task, params, p, states, start);
+            // A `was` check holds once its state has been seen in this stage.
+            if p.check.is_history() && seen.get(k).copied().unwrap_or(false) {
+                v.holds = true;
+                v.progress = 1.0;
+                v.parts.clear();
+            }
+            v
+        })
         .collect();
     let success = !predicates.is_empty() && predicates.iter().all(|p| p.holds);
     let score = match stage.scoring {
@@ -359,6 +371,8 @@ pub struct Judge {
     stage_start: Vec<LabwareState>,
     /// Since when every predicate of the current stage has held, while it settles.
     holding_since: Option<f64>,
+    /// Per predicate of the current stage: a `was` check's state has been seen.
+    seen: Vec<bool>,
     done: Vec<StageVerdict>,
     last: Option<StageVerdict>,
 }
@@ -373,6 +387,7 @@ impl Judge {
             stage_start_s: 0.0,
             stage_start: initial.to_vec(),
             holding_since: None,
+            seen: Vec::new(),
             done: Vec::new(),
             last: None,
         }
@@ -390,6 +405,15 @@ impl Judge {
         // Whole microseconds: a recording stores nanosecond timestamps, and a replay must agree.
         let time = (time * 1e6).round() / 1e6;
         while self.stage < self.task.stages.len() {
+            let stage = &self.task.stages[self.stage];
+            self.seen.resize(stage.success.len(), false);
+            for (k, p) in stage.success.iter().enumerate() {
+                if p.check.is_history()
+                    && measure(&self.task, &self.params, &p.check, states).is_some_and(|m| m.holds)
+                {
+                    self.seen[k] = true;
+                }
+            }
             let v = stage_verdict(
                 &self.task,
                 &self.params,
@@ -397,6 +421,7 @@ impl Judge {
                 states,
                 &self.stage_start,
                 Some(time),
+                &self.seen,
             );
             let settle = self.task.stages[self.stage].settle_s;
             let settled = v.success && {
@@ -412,6 +437,7 @@ impl Judge {
                 return time - self.stage_start_s >= limit - 1e-9;
             }
             self.holding_since = None;
+            self.seen.clear();
             self.done.push(v);
             self.last = None;
             self.stage += 1;
