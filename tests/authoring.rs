@@ -355,3 +355,31 @@ fn a_round_trip_with_the_history_predicate_checks_clean_fails_hold_and_the_exper
     assert_eq!(out.status.code(), Some(2));
     assert!(text(&out.stderr).contains("W0001"), "{}", text(&out.stderr));
 }
+
+#[test]
+fn describe_with_a_seed_shows_everything_the_seed_draws() {
+    let file = "protocols/tube/transfer.toml";
+    let out = autobio_ok(&["describe", file, "--seed", "3"]);
+    let drawn = common::compile(file).sample(3);
+    let joints: Vec<String> = drawn.robot_q[0].iter().map(|v| format!("{v:.3}")).collect();
+    assert!(
+        out.contains(&format!("robot arm joints [{}] rad", joints.join(", "))),
+        "{out}"
+    );
+    assert!(
+        out.contains("labware target at (0.300, 0.200, 0.854) m"),
+        "{out}"
+    );
+    assert!(
+        out.contains(&format!("labware tube in source.{}", drawn.params["from"])),
+        "{out}"
+    );
+    // Another seed draws another start.
+    let other = autobio_ok(&["describe", file, "--seed", "4"]);
+    let line = |s: &str| {
+        s.lines()
+            .find(|l| l.contains("robot arm joints"))
+            .map(String::from)
+    };
+    assert_ne!(line(&out), line(&other));
+}

@@ -185,10 +185,41 @@ pub fn describe(task: &Task) -> String {
     out
 }
 
-/// One episode of the task as `seed` draws it: parameter values and the instructions.
+/// One episode of the task as `seed` draws it: every robot's start joints, every item's
+/// placement and jittered joints, the parameter values and the instructions.
 pub fn example(task: &Task, seed: u64) -> String {
     let inst = task.sample(seed);
     let mut out = format!("\nepisode with seed {seed}\n");
+    for (r, q) in task.robots.iter().zip(&inst.robot_q) {
+        let joints: Vec<String> = q.iter().map(|v| format!("{v:.3}")).collect();
+        let _ = writeln!(out, "  robot {} joints [{}] rad", r.name, joints.join(", "));
+    }
+    for (l, pose) in task.labware.iter().zip(&inst.labware_placement) {
+        if let Some(at) = &l.at {
+            let at = crate::params::render(at, &inst.params).unwrap_or_else(|_| at.clone());
+            let _ = writeln!(out, "  labware {} in {at}", l.name);
+            continue;
+        }
+        let t = pose.translation.vector;
+        let (_, _, yaw) = pose.rotation.euler_angles();
+        let _ = writeln!(
+            out,
+            "  labware {} at ({:.3}, {:.3}, {:.3}) m, yaw {:.1} deg",
+            l.name,
+            t.x,
+            t.y,
+            t.z,
+            yaw.to_degrees()
+        );
+        if let Some(joints) = inst.labware_joints.get(&l.name) {
+            for (role, offset) in joints {
+                let _ = writeln!(
+                    out,
+                    "    {role} starts {offset:+.4} rad off its declared angle"
+                );
+            }
+        }
+    }
     for (k, v) in &inst.params {
         let _ = writeln!(out, "  {{{k}}} = {v}");
     }
