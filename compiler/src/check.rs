@@ -530,6 +530,27 @@ fn lower_labware(cx: &mut Cx, p: &Protocol) -> (Vec<Option<LabwareSpec>>, KindMa
             for (key, value) in &l.state {
                 initial_state(cx, k, &mut spec, key, value);
             }
+            // A start the language allows but the item's model cannot set up yet: said here,
+            // not first by `eval` when it builds the scene.
+            if let Some(why) = spec
+                .params
+                .instrument()
+                .and_then(|m| m.unsupported_start(&spec.initial))
+            {
+                let span = l
+                    .state
+                    .first()
+                    .map_or(l.name.span, |(_, v)| v.span);
+                cx.push(
+                    Diagnostic::new(
+                        Code::W0007,
+                        span,
+                        format!("the simulator cannot start `{}` this way yet", l.name.value),
+                    )
+                    .with_note(why)
+                    .with_hint("the protocol checks and compiles; `eval` and `demo` cannot build its scene"),
+                );
+            }
             Some(spec)
         })
         .collect();

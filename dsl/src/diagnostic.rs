@@ -100,6 +100,8 @@ pub enum Code {
     W0005,
     /// A Greek mu where the micro sign is meant.
     W0006,
+    /// A start state the simulator cannot set up yet.
+    W0007,
 }
 
 impl Code {
@@ -139,10 +141,11 @@ impl Code {
             Code::W0004 => "W0004",
             Code::W0005 => "W0005",
             Code::W0006 => "W0006",
+            Code::W0007 => "W0007",
         }
     }
 
-    pub const ALL: [Code; 34] = [
+    pub const ALL: [Code; 35] = [
         Code::E0001,
         Code::E0002,
         Code::E0003,
@@ -177,6 +180,7 @@ impl Code {
         Code::W0004,
         Code::W0005,
         Code::W0006,
+        Code::W0007,
     ];
 
     pub fn from_name(name: &str) -> Option<Code> {
@@ -222,6 +226,7 @@ impl Code {
             Code::W0004 => "a time limit no episode can mean",
             Code::W0005 => "weights under binary scoring, which ignores them",
             Code::W0006 => "a Greek mu where the micro sign is meant",
+            Code::W0007 => "a start state the simulator cannot set up yet",
         }
     }
 
@@ -327,6 +332,9 @@ impl Code {
             }
             Code::W0006 => {
                 "`μ` (U+03BC, GREEK SMALL LETTER MU) looks like the micro sign `µ` (U+00B5) that `µL` is\nwritten with. The unit is read as microlitres; write `µL` or `uL` to silence this."
+            }
+            Code::W0007 => {
+                "The language allows this start state, but the item's simulation model cannot set it up yet\n(a tube whose cap starts off: the cap has no place to lie). The protocol checks and compiles;\n`eval` and `demo` refuse to build its scene. `autobio describe --catalogue` marks such states."
             }
         }
     }
