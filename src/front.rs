@@ -16,9 +16,14 @@ pub struct Front {
 impl Front {
     /// Checks a protocol or chain file and returns its task, or shows its diagnostics and fails.
     pub fn load(&self, path: &Path) -> Result<compiler::Task> {
+        self.checked(path).map(|(_, task)| task)
+    }
+
+    /// The file checked, with its task; its diagnostics shown and an error when it has errors.
+    fn checked(&self, path: &Path) -> Result<(compiler::Checked, compiler::Task)> {
         let checked = compiler::check_file(path, self.root.as_deref())?;
-        match checked.task {
-            Some(ref t) if !checked.diagnostics.iter().any(|d| d.is_error()) => Ok(t.clone()),
+        match checked.task.clone() {
+            Some(t) if !checked.diagnostics.iter().any(|d| d.is_error()) => Ok((checked, t)),
             _ => {
                 err!("{}", diagnostics::render_all(&checked, self.color));
                 let name = &checked.file;
@@ -36,8 +41,7 @@ impl Front {
     /// (what `check` would print); a task whose success already holds at the start (W0001)
     /// refused unless `allow_trivial`, since a motionless robot would pass it.
     pub fn load_to_run(&self, path: &Path, allow_trivial: bool) -> Result<compiler::Task> {
-        let task = self.load(path)?;
-        let checked = compiler::check_file(path, self.root.as_deref())?;
+        let (checked, task) = self.checked(path)?;
         if checked.diagnostics.is_empty() {
             return Ok(task);
         }
@@ -49,8 +53,9 @@ impl Front {
         if trivial && !allow_trivial {
             let name = &checked.file;
             bail!(
-                "{name}: its success already holds before the first step (W0001), so a robot that \
-                 does nothing passes it; state a round trip as a chain of two protocols, or pass \
+                "{name}: its success already holds before the first step (W0001, for the \
+                 parameter values its note names), so a robot that does nothing passes it; state \
+                 a round trip with `was` (`cycler.lid was open`) or as a chain, or pass \
                  --allow-trivial to run it anyway"
             )
         }

@@ -100,6 +100,7 @@ fn every_simulated_task_scores_zero_without_motion() {
             "centrifuge_mini.open_lid",
             "thermal_cycler.close_lid",
             "thermal_cycler.close_then_open",
+            "thermal_cycler.open_and_close",
             "thermal_cycler.open_lid",
             "thermal_cycler.open_then_close",
             "thermal_mixer.set_parameters",

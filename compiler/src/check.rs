@@ -78,6 +78,7 @@ pub(crate) fn lower<'a>(cx: &mut Cx, p: &'a Protocol, file: &str) -> Option<Lowe
         cx,
         &sweep_uses(p, &kinds, &predicates),
         &kinds,
+        &declared,
         &robot_names,
         &params,
     );

@@ -305,13 +305,13 @@ pub fn panel_quantity(template: &str, bound: &Bindings) -> Option<f64> {
 }
 
 impl Check {
-    /// Why this check's target value cannot be read under these parameter values (a volume or
-    /// panel value template that renders to a bare number or the wrong unit); `None` when it can.
     /// A `was` check: it holds once the state has been seen at some step of the stage.
     pub fn is_history(&self) -> bool {
         matches!(self, Check::State { ever: true, .. })
     }
 
+    /// Why this check's target value cannot be read under these parameter values (a volume or
+    /// panel value template that renders to a bare number or the wrong unit); `None` when it can.
     pub fn target_error(&self, bound: &Bindings) -> Option<String> {
         match self {
             Check::Volume { value, .. } => quantity(value, bound, Dimension::Volume).err(),

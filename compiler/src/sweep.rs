@@ -40,6 +40,7 @@ pub(crate) fn check(
     cx: &mut Cx,
     uses: &[Use],
     kinds: &BTreeMap<String, &'static LabwareKind>,
+    declared: &[&str],
     robots: &[String],
     params: &[ParamSpec],
 ) {
@@ -53,6 +54,20 @@ pub(crate) fn check(
             .map(|(_, n)| n)
             .collect();
         if names.iter().any(|n| !known.contains(n.as_str())) {
+            continue;
+        }
+        // A holder declared with a kind that is not known (reported at its `kind`), or an item
+        // that cannot stand in a slot at all (reported at its `at`): nothing more to say here.
+        let holder = u.template.split_once('.').map_or("", |(h, _)| h);
+        if declared.contains(&holder) && !kinds.contains_key(holder) {
+            continue;
+        }
+        if let What::Slot {
+            item: Some((_, kind)),
+            start: true,
+        } = &u.what
+            && !kind.movable
+        {
             continue;
         }
         if names.is_empty() {

@@ -124,7 +124,6 @@ fn type_name(v: &DeValue<'_>) -> &'static str {
     }
 }
 
-/// Splits a unit-suffixed key (`yaw_deg`) into its base and unit; plain keys have no unit.
 /// Keys other tools name a step's action with, taken for a misspelt `do` when a step has none.
 const DO_SYNONYMS: &[&str] = &[
     "action",
@@ -137,6 +136,7 @@ const DO_SYNONYMS: &[&str] = &[
     "step",
 ];
 
+/// Splits a unit-suffixed key (`yaw_deg`) into its base and unit; plain keys have no unit.
 fn split_unit(key: &str) -> (&str, Option<(&str, Dimension, f64)>) {
     if let Some((base, sym)) = key.rsplit_once('_')
         && let Some((dim, factor)) = unit(sym)

@@ -415,6 +415,17 @@ fn check_claim(task: &Task, c: &Claim, root: &Path, reenact: &Reenact) -> Option
         Err(why) => return Some(format!("{what}: cannot be re-enacted: {why}")),
     };
     let ended_by_error = e.error.is_some();
+    // What the harness recorded for this episode: the judge's verdict, or, for an episode that
+    // ended in an error, the failure that scores 0 (`Verdict::ended_by_error`).
+    let mut judged = results::Verdict {
+        success: got.success,
+        score: got.score,
+        stages: Vec::new(),
+    };
+    if ended_by_error {
+        judged.ended_by_error();
+    }
+    let (want_success, want_score) = (judged.success, judged.score);
     let mut differs = Vec::new();
     if got.hash != e.trajectory_hash {
         differs.push(format!(
@@ -423,11 +434,11 @@ fn check_claim(task: &Task, c: &Claim, root: &Path, reenact: &Reenact) -> Option
             short(&e.trajectory_hash)
         ));
     }
-    if got.success != e.success {
-        differs.push(format!("success {} (claimed {})", got.success, e.success));
+    if want_success != e.success {
+        differs.push(format!("success {want_success} (claimed {})", e.success));
     }
-    if got.score != e.verdict.score {
-        differs.push(format!("score {} (claimed {})", got.score, e.verdict.score));
+    if want_score != e.verdict.score {
+        differs.push(format!("score {want_score} (claimed {})", e.verdict.score));
     }
     if got.control_steps != e.control_steps {
         differs.push(format!(

@@ -79,6 +79,14 @@ pub struct Verdict {
 }
 
 impl Verdict {
+    /// The verdict of an episode that ended in an error (a policy error, a server fault, an
+    /// unstable simulation): a failure that scores 0, whatever its checks said when it stopped.
+    /// One rule for the harness that records it and the verifier that re-enacts it.
+    pub fn ended_by_error(&mut self) {
+        self.success = false;
+        self.score = 0.0;
+    }
+
     /// The predicates of the last stage reached.
     pub fn predicates(&self) -> &[PredicateValue] {
         self.stages

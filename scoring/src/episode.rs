@@ -339,11 +339,9 @@ pub fn run_episode_with(
     }
     let mut verdict = env.verdict();
     if failure.is_some() {
-        // An episode that ends in an error is a failure and scores 0, whatever the checks said
-        // when it stopped: a run's mean score never credits a policy that crashed (a task
-        // whose success held at the start would otherwise score 1).
-        verdict.success = false;
-        verdict.score = 0.0;
+        // A run's mean score never credits a policy that crashed (a task whose success held at
+        // the start would otherwise score 1).
+        verdict.ended_by_error();
     }
     let steps = env.control_steps();
     policy.end_episode(verdict.success, steps);
