@@ -312,21 +312,31 @@ pub fn concat_frames(parts: &[std::path::PathBuf], out: &Path) -> Result<(), Dat
     Ok(())
 }
 
+/// A table file's record batches, to read in order.
+fn batches(
+    path: &Path,
+) -> Result<parquet::arrow::arrow_reader::ParquetRecordBatchReader, DatasetError> {
+    use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
+    let file = std::fs::File::open(path).map_err(|e| DatasetError::io("open", path, e))?;
+    ParquetRecordBatchReaderBuilder::try_new(file)
+        .and_then(|b| b.build())
+        .map_err(|e| DatasetError::Parquet {
+            path: path.to_path_buf(),
+            why: e.to_string(),
+        })
+}
+
 /// One frame's `observation.state` and `action`.
 pub type StateAction = (Vec<f32>, Vec<f32>);
 
 /// Every frame's `observation.state` and `action` of an episode's frames table, in order.
 pub fn read_state_action(path: &Path) -> Result<Vec<StateAction>, DatasetError> {
     use arrow_array::Array;
-    use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
     let bad = |e: String| DatasetError::Parquet {
         path: path.to_path_buf(),
         why: e,
     };
-    let file = std::fs::File::open(path).map_err(|e| DatasetError::io("open", path, e))?;
-    let reader = ParquetRecordBatchReaderBuilder::try_new(file)
-        .and_then(|b| b.build())
-        .map_err(|e| bad(e.to_string()))?;
+    let reader = batches(path)?;
     let mut rows = Vec::new();
     for batch in reader {
         let batch = batch.map_err(|e| bad(e.to_string()))?;
@@ -356,15 +366,11 @@ pub fn read_state_action(path: &Path) -> Result<Vec<StateAction>, DatasetError> 
 
 /// v3.0's `meta/tasks.parquet` read back: (task_index, task) in file order.
 pub fn read_tasks(path: &Path) -> Result<Vec<(i64, String)>, DatasetError> {
-    use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
     let bad = |e: String| DatasetError::Parquet {
         path: path.to_path_buf(),
         why: e,
     };
-    let file = std::fs::File::open(path).map_err(|e| DatasetError::io("open", path, e))?;
-    let reader = ParquetRecordBatchReaderBuilder::try_new(file)
-        .and_then(|b| b.build())
-        .map_err(|e| bad(e.to_string()))?;
+    let reader = batches(path)?;
     let mut rows = Vec::new();
     for batch in reader {
         let batch = batch.map_err(|e| bad(e.to_string()))?;

@@ -156,13 +156,7 @@ impl Cameras {
         logic: &[Logic],
         names: &[String],
     ) -> Result<Vec<Image>, RenderError> {
-        self.update_screens(logic)?;
-        let m = &mut self.mirror;
-        m.qpos_mut().copy_from_slice(data.qpos());
-        m.mocap_pos_mut().copy_from_slice(data.mocap_pos());
-        m.mocap_quat_mut().copy_from_slice(data.mocap_quat());
-        m.kinematics();
-        m.camlight();
+        self.mirror_state(data, logic)?;
         let mut out = Vec::with_capacity(self.ids.len());
         for (k, name) in names.iter().enumerate().take(self.ids.len()) {
             let camera = MjvCamera::new_fixed(self.ids[k]);
@@ -179,13 +173,7 @@ impl Cameras {
         logic: &[Logic],
         view: &View,
     ) -> Result<Image, RenderError> {
-        self.update_screens(logic)?;
-        let m = &mut self.mirror;
-        m.qpos_mut().copy_from_slice(data.qpos());
-        m.mocap_pos_mut().copy_from_slice(data.mocap_pos());
-        m.mocap_quat_mut().copy_from_slice(data.mocap_quat());
-        m.kinematics();
-        m.camlight();
+        self.mirror_state(data, logic)?;
         let camera = MjvCamera {
             type_: MjtCamera::mjCAMERA_FREE as i32,
             lookat: view.lookat,
@@ -195,6 +183,23 @@ impl Cameras {
             ..MjvCamera::default()
         };
         self.draw(camera, &view.name)
+    }
+
+    /// The drawn state made `data`'s: its displays redrawn where they changed, its positions
+    /// recomputed from `qpos` and the mocap poses.
+    fn mirror_state(
+        &mut self,
+        data: &MjData<Arc<MjModel>>,
+        logic: &[Logic],
+    ) -> Result<(), RenderError> {
+        self.update_screens(logic)?;
+        let m = &mut self.mirror;
+        m.qpos_mut().copy_from_slice(data.qpos());
+        m.mocap_pos_mut().copy_from_slice(data.mocap_pos());
+        m.mocap_quat_mut().copy_from_slice(data.mocap_quat());
+        m.kinematics();
+        m.camlight();
+        Ok(())
     }
 
     /// One frame of the mirrored state from `camera`.
