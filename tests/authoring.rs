@@ -10,6 +10,12 @@ use common::{autobio, autobio_ok, scratch, text};
 
 const TRIVIAL: &str = "tests/corpus/warnings/success_holds_at_start.toml";
 
+/// The results JSON a tube-transfer run wrote into `dir`.
+fn transfer_results(dir: &std::path::Path) -> serde_json::Value {
+    let path = dir.join("tube.transfer.results.json");
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
 #[test]
 fn a_trivial_protocol_is_refused_by_eval_and_demo_and_runs_when_allowed() {
     let dir = scratch("trivial");
@@ -92,10 +98,7 @@ fn an_all_error_run_scores_zero_even_on_a_task_whose_checks_hold() {
         "--out",
         out.to_str().unwrap(),
     ]);
-    let results: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(out.join("tube.transfer.results.json")).unwrap(),
-    )
-    .unwrap();
+    let results = transfer_results(&out);
     for e in results["episodes"].as_array().unwrap() {
         assert_eq!(e["outcome"], "policy_error", "{e}");
         assert_eq!(e["verdict"]["score"], 0.0, "{e}");
@@ -275,10 +278,7 @@ fn a_failing_slot_predicate_says_which_part_failed_and_by_how_much() {
         said.contains("failed (in-plane distance ") && said.contains("mm, within 15.0 mm)"),
         "{said}"
     );
-    let results: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(dir.join("tube.transfer.results.json")).unwrap(),
-    )
-    .unwrap();
+    let results = transfer_results(&dir);
     let p = &results["episodes"][0]["verdict"]["stages"][0]["predicates"][0];
     let parts = p["parts"].as_array().unwrap();
     let names: Vec<&str> = parts.iter().map(|q| q["name"].as_str().unwrap()).collect();
@@ -302,10 +302,7 @@ fn a_failing_slot_predicate_says_which_part_failed_and_by_how_much() {
         "--out",
         dir.to_str().unwrap(),
     ]);
-    let results: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(dir.join("tube.transfer.results.json")).unwrap(),
-    )
-    .unwrap();
+    let results = transfer_results(&dir);
     let p = &results["episodes"][0]["verdict"]["stages"][0]["predicates"][0];
     assert_eq!(p["holds"], true);
     assert!(p.get("parts").is_none(), "{p}");
