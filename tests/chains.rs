@@ -30,7 +30,7 @@ fn expert(task: &compiler::Task, seed: u64) -> scoring::EpisodeResult {
 }
 
 #[test]
-fn both_chains_run_to_success_stage_by_stage() {
+fn every_inverse_chain_runs_to_success_stage_by_stage() {
     for (path, first, second) in [
         (
             "protocols/thermal_cycler/close_then_open.toml",
@@ -41,6 +41,18 @@ fn both_chains_run_to_success_stage_by_stage() {
             "protocols/thermal_cycler/open_then_close.toml",
             "thermal_cycler.open_lid",
             "thermal_cycler.close_lid",
+        ),
+        // The opener's retreat from the raised lid is planned here: a lone open_lid episode ends
+        // at success, before it.
+        (
+            "protocols/centrifuge_5430/open_then_close.toml",
+            "centrifuge_5430.open_lid",
+            "centrifuge_5430.close_lid",
+        ),
+        (
+            "protocols/centrifuge_mini/open_then_close.toml",
+            "centrifuge_mini.open_lid",
+            "centrifuge_mini.close_lid",
         ),
     ] {
         let task = compile(path);

@@ -363,6 +363,29 @@ impl StepFrame {
     }
 }
 
+impl StepFrame {
+    /// Other tool paths that do what `motion` is for, tried in order when its own path cannot be
+    /// solved. Only a retreat has such freedom: the hand has let go and needs only to be clear of
+    /// what it held, so where backing off along the tool runs out of reach (a lid's grip at the
+    /// top of its arc) it may rise, or back off and rise, instead. Empty for every other motion.
+    pub fn fallback_poses(&self, motion: &Motion, tcp_now: &Pose) -> Vec<Vec<Pose>> {
+        let Motion::Retreat { distance } = motion else {
+            return Vec::new();
+        };
+        let up = |d: f64| translation([0.0, 0.0, d]) * tcp_now;
+        let half = distance * std::f64::consts::FRAC_1_SQRT_2;
+        vec![
+            line(tcp_now, &up(*distance), 6),
+            line(
+                tcp_now,
+                &(translation([0.0, 0.0, half]) * translated_local(tcp_now, [0.0, 0.0, -half])),
+                6,
+            ),
+            line(tcp_now, &up(-distance), 6),
+        ]
+    }
+}
+
 /// The turn about the affordance's z axis, allowed by its symmetry, that brings it closest to
 /// `tool`'s orientation.
 fn closest_turn(a: &Affordance, tool: &Pose) -> Rot {

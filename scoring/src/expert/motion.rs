@@ -116,18 +116,26 @@ impl ExpertPolicy {
         // Before the step's first path, the other symmetric grasp is a second try.
         let waypoints = match solve_path(arm, &poses) {
             Ok(w) => w,
-            Err(first) => {
-                let other = (!lane.step_moved)
-                    .then(|| frame.other_grasp())
-                    .flatten()
-                    .ok_or_else(|| planning(context.clone(), first.clone()))?;
-                let poses = other
-                    .poses(&q.motion, &lab, &tcp_now)
-                    .map_err(|e| planning(context.clone(), e))?;
-                let w = solve_path(arm, &poses).map_err(|_| planning(context.clone(), first))?;
-                lane.frame = Some((q.step, other));
-                w
-            }
+            Err(first) => match frame
+                .fallback_poses(&q.motion, &tcp_now)
+                .iter()
+                .find_map(|p| solve_path(arm, p).ok())
+            {
+                Some(w) => w,
+                None => {
+                    let other = (!lane.step_moved)
+                        .then(|| frame.other_grasp())
+                        .flatten()
+                        .ok_or_else(|| planning(context.clone(), first.clone()))?;
+                    let poses = other
+                        .poses(&q.motion, &lab, &tcp_now)
+                        .map_err(|e| planning(context.clone(), e))?;
+                    let w =
+                        solve_path(arm, &poses).map_err(|_| planning(context.clone(), first))?;
+                    lane.frame = Some((q.step, other));
+                    w
+                }
+            },
         };
         lane.step_moved = true;
         // TOPP's grid: 200 intervals, and for a planned route (~100 waypoints) 8 per waypoint.
