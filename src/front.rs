@@ -46,11 +46,7 @@ impl Front {
             return Ok(task);
         }
         err!("{}", diagnostics::render_all(&checked, self.color));
-        let trivial = checked
-            .diagnostics
-            .iter()
-            .any(|d| d.code == dsl::Code::W0001);
-        if trivial && !allow_trivial {
+        if checked.trivial_at().is_some() && !allow_trivial {
             let name = &checked.file;
             bail!(
                 "{name}: its success already holds before the first step (W0001, for the \

@@ -234,3 +234,46 @@ all = ["arm touches pipette"]
         .expect("no model of the pipette yet");
     assert!(err.to_string().contains("no simulation model yet"), "{err}");
 }
+
+/// What a later stage says about its own start, randomisation and camera is ignored by the
+/// chain, and each place it differs from what the chain carries is a warning there.
+#[test]
+fn a_later_stage_start_that_the_chain_ignores_is_warned_at_each_place() {
+    let path = "tests/corpus/warnings/chain_stage_start_differs.toml";
+    let checked = compiler::check_file(Path::new(path), Some(Path::new("."))).unwrap();
+    assert!(checked.task.is_some(), "{:#?}", checked.diagnostics);
+    let mut found: Vec<(usize, usize, String)> = checked
+        .diagnostics
+        .iter()
+        .map(|d| {
+            assert_eq!(d.code, dsl::Code::W0008, "{d:?}");
+            let (file, text) = checked.text_of(d).unwrap();
+            assert!(file.ends_with("cycler_close_start_differs.toml"), "{file}");
+            let (line, col) = dsl::render::line_col(&text, d.span.start);
+            (line, col, text[d.span.start..d.span.end].to_string())
+        })
+        .collect();
+    found.sort();
+    assert_eq!(
+        found,
+        [
+            (19, 17, "\"closed\"".to_string()),
+            (21, 12, "arm".to_string()),
+            (24, 1, "[camera]".to_string()),
+        ]
+    );
+    // The shipped chains declare one scene in every stage: not a word.
+    for chain in [
+        "protocols/thermal_cycler/open_then_close.toml",
+        "protocols/thermal_cycler/close_then_open.toml",
+        "protocols/centrifuge_5430/open_then_close.toml",
+        "protocols/centrifuge_mini/open_then_close.toml",
+    ] {
+        let checked = compiler::check_file(Path::new(chain), None).unwrap();
+        assert!(
+            checked.diagnostics.is_empty(),
+            "{chain}: {:#?}",
+            checked.diagnostics
+        );
+    }
+}

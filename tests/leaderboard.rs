@@ -142,7 +142,16 @@ fn journal_member() -> String {
 
 /// The journal with `edit` applied to its lines.
 fn edit_journal(m: &mut BTreeMap<String, Vec<u8>>, edit: impl FnOnce(Vec<String>) -> Vec<String>) {
-    let key = journal_member();
+    edit_journal_of(TASK, m, edit)
+}
+
+/// Task `task`'s journal with `edit` applied to its lines.
+fn edit_journal_of(
+    task: &str,
+    m: &mut BTreeMap<String, Vec<u8>>,
+    edit: impl FnOnce(Vec<String>) -> Vec<String>,
+) {
+    let key = format!("runs/0/{task}.journal.jsonl");
     let lines: Vec<String> = text(&m[&key]).lines().map(str::to_string).collect();
     let edited = edit(lines).join("\n") + "\n";
     m.insert(key, edited.into_bytes());
@@ -837,4 +846,81 @@ fn a_chain_task_page_shows_each_stage_as_the_paper_does() {
         page.contains("<td class=l>hold</td><td>0.0</td><td>0.0</td>"),
         "{page}"
     );
+}
+
+/// An episode that ended in an error (here the expert, which has no motions for a hand-over yet)
+/// is a failure scoring 0: such a run verifies, and the same run claiming a score for it does not.
+#[test]
+fn episodes_that_ended_in_an_error_verify_at_score_zero() {
+    let suites = suites("lb-errors-suites", &repo("protocols/tube/unscrew_cap.toml"));
+    let dir = scratch("lb-errors");
+    let run = dir.join("run");
+    common::eval_suite(&suites.join("mini.toml"), &run, &["--policy", "expert"]);
+    let bundle = dir.join("b.tar.zst");
+    common::submit(&run, "expert", &bundle, &[]);
+    let m = members(&bundle);
+    let journal = m
+        .iter()
+        .find(|(k, _)| k.ends_with(".journal.jsonl"))
+        .map(|(_, v)| String::from_utf8(v.clone()).unwrap())
+        .unwrap();
+    for line in journal.lines() {
+        let e: Value = serde_json::from_str(line).unwrap();
+        assert_eq!(e["outcome"], "policy_error", "{e}");
+        assert_eq!(e["verdict"]["score"], 0.0, "{e}");
+    }
+    let (code, said) = verify(&bundle, &suites);
+    assert_eq!(code, 0, "{said}");
+    let mut forged = m.clone();
+    edit_journal_of("tube.unscrew_cap", &mut forged, |mut lines| {
+        let mut e: Value = serde_json::from_str(&lines[0]).unwrap();
+        e["verdict"]["score"] = Value::from(1.0);
+        lines[0] = e.to_string();
+        lines
+    });
+    let out = dir.join("forged.tar.zst");
+    pack(&forged, &out, true);
+    refused(&out, &suites, "seed 0 (run 0)");
+}
+
+/// A task whose success holds before the first step is run only under `--allow-trivial`, and such
+/// a run is not submitted to a leaderboard: exit 2, the warning's place named, no bundle written.
+#[test]
+fn a_run_of_a_trivial_task_is_not_submitted() {
+    let dir = scratch("lb-trivial");
+    let protocol = dir.join("open_and_close.toml");
+    let shipped = std::fs::read_to_string("protocols/thermal_cycler/open_and_close.toml").unwrap();
+    let trivial = shipped.replace("\"cycler.lid was open\", ", "");
+    assert_ne!(trivial, shipped, "the round trip's `was` predicate");
+    std::fs::write(&protocol, trivial).unwrap();
+    let suites = suites("lb-trivial-suites", protocol.to_str().unwrap());
+    let suite = suites.join("mini.toml");
+    let run = dir.join("run");
+    let refused_run = common::autobio(&[
+        "eval",
+        "--suite",
+        suite.to_str().unwrap(),
+        "--out",
+        run.to_str().unwrap(),
+    ]);
+    assert_eq!(refused_run.status.code(), Some(2));
+    common::eval_suite(&suite, &run, &["--policy", "hold", "--allow-trivial"]);
+    let bundle = dir.join("b.tar.zst");
+    let out = common::autobio(&[
+        "leaderboard",
+        "submit",
+        run.to_str().unwrap(),
+        "--model-name",
+        "hold",
+        "--out",
+        bundle.to_str().unwrap(),
+    ]);
+    let said = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{said}");
+    assert!(
+        said.contains("is trivial") && said.contains("W0001"),
+        "{said}"
+    );
+    assert!(said.contains("open_and_close.toml:"), "{said}");
+    assert!(!bundle.exists());
 }

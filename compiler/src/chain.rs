@@ -1,7 +1,8 @@
 //! Chains: several protocols run in order on the first one's scene, compiled into one
 //! long-horizon task with a stage per protocol. Later stages must declare the same robots and
-//! labware; their own initial states are ignored, because the proof carries the state over from
-//! the stage before.
+//! labware where the first puts them (E0034); their own initial states, randomisation and camera
+//! are ignored, because the proof carries the state over from the stage before and the scene is
+//! drawn once (W0008 where they differ). Not here: the state proof itself (`proof`).
 
 use crate::check::{self, Lowered};
 use crate::params::ParamSpec;
@@ -189,11 +190,17 @@ fn compile_stages(
     }
     let stages: Vec<ProofStage> = lowered
         .iter()
-        .map(|(_, path, low)| ProofStage {
+        .enumerate()
+        .map(|(k, (_, path, low))| ProofStage {
             id: low.id.clone(),
             file: Some(path.clone()),
             steps: &low.steps,
             predicates: &low.predicates,
+            declared: (k > 0).then(|| parsed_protocol(&parsed, path)),
+            time_limit_s: c.stages[lowered[k].0]
+                .time_limit
+                .as_ref()
+                .map_or(low.stage.time_limit_s, |t| t.value),
         })
         .collect();
     let scene = ProofScene {
@@ -248,7 +255,10 @@ fn parsed_protocol<'a>(parsed: &'a [(usize, String, Protocol)], path: &str) -> &
         .2
 }
 
-/// A later stage must name the same robots and labware, of the same models and kinds.
+/// The chain's scene rule: a later stage must declare the first stage's robots and labware, no
+/// more and no fewer, of the same models and kinds and where the first stage puts them (E0034);
+/// what it says about the start that the chain ignores, its randomisation and camera, is W0008
+/// (a start state that differs from the one carried over is the proof's to say).
 fn same_scene(cx: &mut Cx, first: &Lowered, later: &Lowered, ast: &Protocol) {
     for l in &ast.labware {
         let kind = later.kinds.get(&l.name.value).map(|k| k.name);
@@ -273,15 +283,25 @@ fn same_scene(cx: &mut Cx, first: &Lowered, later: &Lowered, ast: &Protocol) {
                 ),
                 None,
             ),
-            Some(_) => {}
+            Some(_) => {
+                let (Some(a), Some(b)) = (
+                    first.labware.iter().find(|x| x.name == l.name.value),
+                    later.labware.iter().find(|x| x.name == l.name.value),
+                ) else {
+                    continue;
+                };
+                if !same_pose(&a.placement, &b.placement) {
+                    moved(cx, &l.name, &l.pose, &a.placement, &b.placement);
+                }
+                let jitter = (a.xy_jitter_m, a.yaw_jitter_rad, &a.joint_jitter);
+                if jitter != (b.xy_jitter_m, b.yaw_jitter_rad, &b.joint_jitter) {
+                    ignored_randomisation(cx, ast, &l.name);
+                }
+            }
         }
     }
     for r in &ast.robots {
-        let model = later
-            .robots
-            .iter()
-            .find(|x| x.name == r.name.value)
-            .map(|x| &x.model);
+        let spec = later.robots.iter().find(|x| x.name == r.name.value);
         match first.robots.iter().find(|x| x.name == r.name.value) {
             None => cx.err(
                 Code::E0034,
@@ -289,7 +309,7 @@ fn same_scene(cx: &mut Cx, first: &Lowered, later: &Lowered, ast: &Protocol) {
                 format!("robot `{}` is not in the chain's scene", r.name.value),
                 None,
             ),
-            Some(x) if Some(&x.model) != model => cx.err(
+            Some(x) if Some(&x.model) != spec.map(|s| &s.model) => cx.err(
                 Code::E0034,
                 r.name.span,
                 format!(
@@ -298,9 +318,129 @@ fn same_scene(cx: &mut Cx, first: &Lowered, later: &Lowered, ast: &Protocol) {
                 ),
                 None,
             ),
-            Some(_) => {}
+            Some(x) => {
+                let Some(s) = spec else { continue };
+                if !same_pose(&x.base, &s.base) {
+                    moved(cx, &r.name, &r.base, &x.base, &s.base);
+                }
+                if x.joint_jitter != s.joint_jitter {
+                    ignored_randomisation(cx, ast, &r.name);
+                }
+            }
         }
     }
+    // What the first stage has and this one leaves out: the stage would not stand on its own as
+    // the scene the chain runs it in.
+    let missing: Vec<String> = first
+        .robots
+        .iter()
+        .filter(|x| !ast.robots.iter().any(|r| r.name.value == x.name))
+        .map(|x| format!("robot `{}`", x.name))
+        .chain(
+            first
+                .kinds
+                .keys()
+                .filter(|n| !ast.labware.iter().any(|l| &l.name.value == *n))
+                .map(|n| format!("labware `{n}`")),
+        )
+        .collect();
+    if !missing.is_empty() {
+        cx.err(
+            Code::E0034,
+            ast.meta.span,
+            format!(
+                "this stage leaves out {} of the chain's scene",
+                missing.join(", ")
+            ),
+            Some(
+                "every stage declares the whole scene, as the first stage does: copy its \
+                 `[robots.*]` and `[labware.*]` tables"
+                    .into(),
+            ),
+        );
+    }
+    if later.camera != first.camera {
+        let span = ast.camera.as_ref().map(|c| c.span).unwrap_or(ast.meta.span);
+        cx.push(
+            Diagnostic::new(
+                Code::W0008,
+                span,
+                "this stage's camera differs from the first stage's, which the chain uses",
+            )
+            .with_hint("a chain is seen from one camera: declare the first stage's `[camera]`"),
+        );
+    }
+}
+
+/// Two placements the same to a micrometre and a microradian.
+fn same_pose(a: &labware::Pose, b: &labware::Pose) -> bool {
+    (a.translation.vector - b.translation.vector).norm() < 1e-6
+        && a.rotation.angle_to(&b.rotation) < 1e-6
+}
+
+/// E0034 at a later stage's pose (or name, when the pose is the default) that differs from the
+/// first stage's.
+fn moved(
+    cx: &mut Cx,
+    name: &dsl::ast::Spanned<String>,
+    pose: &dsl::ast::Pose,
+    first: &labware::Pose,
+    here: &labware::Pose,
+) {
+    let span = pose
+        .pos
+        .as_ref()
+        .map(|p| p.span)
+        .or(pose.yaw.as_ref().map(|y| y.span))
+        .unwrap_or(name.span);
+    let show = |p: &labware::Pose| {
+        let v = p.translation.vector;
+        let (_, _, yaw) = p.rotation.euler_angles();
+        format!(
+            "[{:.3}, {:.3}, {:.3}] m, yaw {:.0}°",
+            v.x,
+            v.y,
+            v.z,
+            yaw.to_degrees()
+        )
+    };
+    cx.push(
+        Diagnostic::new(
+            Code::E0034,
+            span,
+            format!(
+                "`{}` stands at {} here but at {} in the first stage",
+                name.value,
+                show(here),
+                show(first)
+            ),
+        )
+        .with_note(
+            "the bench does not move between stages: a chain runs on the first stage's scene",
+        )
+        .with_hint("declare the first stage's pose, or run this protocol on its own"),
+    );
+}
+
+/// W0008 at a later stage's randomisation of `name` that differs from the first stage's.
+fn ignored_randomisation(cx: &mut Cx, ast: &Protocol, name: &dsl::ast::Spanned<String>) {
+    let span = ast
+        .randomise
+        .iter()
+        .find(|r| r.target.value == name.value)
+        .map(|r| r.target.span)
+        .unwrap_or(name.span);
+    cx.push(
+        Diagnostic::new(
+            Code::W0008,
+            span,
+            format!(
+                "`{}` is randomised differently here than in the first stage; the chain draws the scene once, from the first stage's ranges",
+                name.value
+            ),
+        )
+        .with_hint("declare the first stage's `[randomise]` ranges"),
+    );
 }
 
 fn lower_chain(

@@ -142,9 +142,14 @@ pub fn describe(task: &Task) -> String {
                 .iter()
                 .map(|(a, v)| format!("{a} = {v}"))
                 .collect();
+            // As the scene marks kinds without a model: a step the expert cannot run yet.
+            let expert = match crate::primitives::primitive(&step.primitive) {
+                Some(p) if p.motions.is_none() => " [no expert motions yet]",
+                _ => "",
+            };
             let _ = writeln!(
                 w,
-                "    {}. {}({}) with {}{}",
+                "    {}. {}({}) with {}{}{expert}",
                 k + 1,
                 step.primitive,
                 args.join(", "),
@@ -243,6 +248,13 @@ pub fn catalogue() -> String {
         } else {
             " [no expert motions yet]"
         };
+        let takes_on = p.args.iter().any(|a| a.name == "on");
+        let taken = if takes_on && !labware::KINDS.iter().any(|k| k.supports(p.name)) {
+            " [no labware kind takes it yet]"
+        } else {
+            ""
+        };
+        let expert = format!("{expert}{taken}");
         let _ = writeln!(w, "  {}{expert}", p.signature());
         let _ = writeln!(w, "      {}", p.description);
         let _ = writeln!(w, "      needs:  {}", p.requires);

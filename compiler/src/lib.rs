@@ -45,6 +45,8 @@ pub fn compile(p: &Protocol, file: &str) -> (Option<Task>, Vec<Diagnostic>) {
             file: None,
             steps: &low.steps,
             predicates: &low.predicates,
+            declared: None,
+            time_limit_s: low.stage.time_limit_s,
         }];
         let scene = proof::ProofScene {
             labware: &low.labware,
@@ -137,6 +139,18 @@ impl Checked {
             None => Some((self.file.clone(), self.source.clone())),
             Some(f) => self.stages.text(f).map(|t| (f.clone(), t)),
         }
+    }
+
+    /// Where the proof found the task trivial (W0001: its success holds before the first step,
+    /// so a motionless robot passes it), as `file:line:col`; `None` when it is not.
+    pub fn trivial_at(&self) -> Option<String> {
+        let d = self
+            .diagnostics
+            .iter()
+            .find(|d| d.code == dsl::Code::W0001)?;
+        let (file, text) = self.text_of(d)?;
+        let (line, col) = dsl::render::line_col(&text, d.span.start);
+        Some(format!("{file}:{line}:{col}"))
     }
 }
 

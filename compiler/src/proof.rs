@@ -20,6 +20,11 @@ pub(crate) struct ProofStage<'a> {
     pub file: Option<String>,
     pub steps: &'a [CheckedStep<'a>],
     pub predicates: &'a [CheckedPredicate],
+    /// A later chain stage's own file, whose start declarations the chain ignores (W0008 where
+    /// they differ from the state carried over); `None` for a first stage or a lone protocol.
+    pub declared: Option<&'a dsl::ast::Protocol>,
+    /// The stage's time limit (s), as the chain may override it.
+    pub time_limit_s: f64,
 }
 
 /// The scene the stages share.
@@ -140,6 +145,108 @@ fn initial_world(cx: &mut Cx, scene: &ProofScene, bound: &Bindings) -> Option<Wo
     ok.then_some(w)
 }
 
+/// W0008 at each start state or place a later stage's file declares that differs from what the
+/// chain carries into it from the stage before: the chain ignores the declaration, and an author
+/// who wrote it likely expects something else.
+fn carried_over(cx: &mut Cx, w: &World, ast: &dsl::ast::Protocol, bound: &Bindings, origin: &str) {
+    for l in &ast.labware {
+        let name = &l.name.value;
+        for (key, value) in &l.state {
+            let declared = value.value.text();
+            if let Some(now) = w.part(name, &key.value)
+                && now != declared
+            {
+                cx.push(
+                    Diagnostic::new(
+                        Code::W0008,
+                        value.span,
+                        format!(
+                            "`{name}.{}` starts `{declared}` in this file, but the chain carries it over `{now}`",
+                            key.value
+                        ),
+                    )
+                    .with_note(origin.to_string())
+                    .with_hint("in a chain this stage starts where the one before ended; declare that state, or drop this one"),
+                );
+            }
+        }
+        if let Some(at) = &l.at {
+            let declared = render(&at.value, bound).unwrap_or_else(|_| at.value.clone());
+            let now = match w.locations.get(name) {
+                Some(Location::Slot { holder, slot }) => Some(format!("{holder}.{slot}")),
+                Some(other) => Some(other.to_string()),
+                None => None,
+            };
+            if let Some(now) = now
+                && now != declared
+            {
+                let mut d = Diagnostic::new(
+                    Code::W0008,
+                    at.span,
+                    format!(
+                        "`{name}` starts in `{declared}` in this file, but the chain carries it over {}",
+                        match w.locations.get(name) {
+                            Some(Location::Slot { .. }) => format!("in `{now}`"),
+                            _ => now.clone(),
+                        }
+                    ),
+                )
+                .with_note(origin.to_string())
+                .with_hint("in a chain this stage starts where the one before ended");
+                d.notes.extend(describe(bound));
+                cx.push(d);
+            }
+        }
+    }
+}
+
+/// W0009 at the step whose panel setting takes the stage's button holding past its time limit:
+/// the instrument cannot show the value in time even if every motion took no time at all.
+fn slow_panel(
+    cx: &mut Cx,
+    step: &CheckedStep,
+    args: &BTreeMap<String, String>,
+    held_before: f64,
+    w: &World,
+    limit_s: f64,
+    bound: &Bindings,
+) {
+    let this = w.panel_hold_s - held_before;
+    let what = match (args.get("on"), args.get("param"), args.get("value")) {
+        (Some(on), Some(param), Some(value)) => format!("setting `{on}.{param}` to {value}"),
+        _ => format!("`{}`", step.primitive.name),
+    };
+    let span = step
+        .ast
+        .arg("value")
+        .map(|a| a.span)
+        .unwrap_or(step.ast.span);
+    let mut d = Diagnostic::new(
+        Code::W0009,
+        span,
+        if held_before > 0.0 {
+            format!(
+                "{what} holds its button {this:.1} s; with the stage's earlier panel steps, {:.1} s, past its time limit of {limit_s} s",
+                w.panel_hold_s
+            )
+        } else {
+            format!("{what} holds its button {this:.1} s, past the stage's time limit of {limit_s} s")
+        },
+    )
+    .with_hint(format!(
+        "raise `time_limit` above {:.0} s (the motions need time too), or set a value nearer the start",
+        w.panel_hold_s.ceil()
+    ));
+    if step
+        .ast
+        .arg("value")
+        .is_some_and(|v| v.value.text().contains('{'))
+    {
+        d.notes.extend(describe(bound));
+    }
+    cx.push(d);
+}
+
 /// Runs the proof and reports into `cx`. Stops tracing a combination at its first failure.
 pub(crate) fn prove(cx: &mut Cx, scene: &ProofScene, stages: &[ProofStage], params: &[ParamSpec]) {
     let (assignments, complete) = proof_assignments(params);
@@ -187,6 +294,10 @@ pub(crate) fn prove(cx: &mut Cx, scene: &ProofScene, stages: &[ProofStage], para
                     stages[si - 1].id
                 )
             });
+            if let (Some(ast), Some(origin)) = (stage.declared, &origin) {
+                carried_over(cx, &w, ast, bound, origin);
+            }
+            w.panel_hold_s = 0.0;
             for p in stage.predicates {
                 if let Some(e) = p.predicate.check.target_error(bound) {
                     let mut d = Diagnostic::new(Code::E0020, p.span, e)
@@ -233,6 +344,7 @@ pub(crate) fn prove(cx: &mut Cx, scene: &ProofScene, stages: &[ProofStage], para
                     robot: &step.planned.robot,
                     args: &args,
                 };
+                let held_before = w.panel_hold_s;
                 if let Err(v) = primitives::apply(&mut w, &env, &bound_step) {
                     let span = v
                         .arg
@@ -246,6 +358,9 @@ pub(crate) fn prove(cx: &mut Cx, scene: &ProofScene, stages: &[ProofStage], para
                     d.notes.extend(origin.clone());
                     cx.push(d);
                     continue 'combination;
+                }
+                if w.panel_hold_s > stage.time_limit_s && held_before <= stage.time_limit_s {
+                    slow_panel(cx, step, &args, held_before, &w, stage.time_limit_s, bound);
                 }
                 for (k, p) in stage.predicates.iter().enumerate() {
                     if p.predicate.check.is_history()

@@ -10,7 +10,9 @@ use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
 /// 2: stages (chains), parameters, typed checks with named tolerances, progress scoring.
-pub const TASK_SCHEMA_VERSION: u32 = 2;
+/// 3: a state check may be `ever` (the `was` predicate: held at some control step so far), which
+/// a reader of version 2 would take for a check of the present.
+pub const TASK_SCHEMA_VERSION: u32 = 3;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Task {

@@ -60,6 +60,9 @@ pub struct World {
     /// (instrument, panel parameter) -> displayed value (its canonical unit).
     pub panel: BTreeMap<(String, String), f64>,
     pub hands: BTreeMap<String, Hand>,
+    /// Seconds of button holding the panel steps so far have needed (the proof resets it at
+    /// each stage and compares it with the stage's time limit: W0009).
+    pub panel_hold_s: f64,
 }
 
 impl World {

@@ -257,7 +257,8 @@ fn record(
             Some(&mut capture),
         )
         .map_err(|e| episode_err(e.to_string()))?,
-        Err(e) => scoring::episode::policy_failed(task, scene, &instance, &e),
+        Err(e) => scoring::episode::policy_failed(task, scene, &instance, &e, None)
+            .map_err(|e| episode_err(e.to_string()))?,
     };
     let outcome = if result.success {
         Ok(instance.instruction.clone())

@@ -102,6 +102,10 @@ pub enum Code {
     W0006,
     /// A start state the simulator cannot set up yet.
     W0007,
+    /// A later chain stage's declaration that the chain ignores.
+    W0008,
+    /// A panel value the instrument cannot reach within the time limit.
+    W0009,
 }
 
 impl Code {
@@ -142,10 +146,12 @@ impl Code {
             Code::W0005 => "W0005",
             Code::W0006 => "W0006",
             Code::W0007 => "W0007",
+            Code::W0008 => "W0008",
+            Code::W0009 => "W0009",
         }
     }
 
-    pub const ALL: [Code; 35] = [
+    pub const ALL: [Code; 37] = [
         Code::E0001,
         Code::E0002,
         Code::E0003,
@@ -181,6 +187,8 @@ impl Code {
         Code::W0005,
         Code::W0006,
         Code::W0007,
+        Code::W0008,
+        Code::W0009,
     ];
 
     pub fn from_name(name: &str) -> Option<Code> {
@@ -227,6 +235,8 @@ impl Code {
             Code::W0005 => "weights under binary scoring, which ignores them",
             Code::W0006 => "a Greek mu where the micro sign is meant",
             Code::W0007 => "a start state the simulator cannot set up yet",
+            Code::W0008 => "a later chain stage's declaration that the chain ignores",
+            Code::W0009 => "a panel value the instrument cannot reach within the time limit",
         }
     }
 
@@ -310,7 +320,7 @@ impl Code {
                 "Traced to its end, the plan leaves a state in which a success predicate is false, so even a\nperfect execution would fail. Fix the steps or the predicate."
             }
             Code::E0034 => {
-                "Every stage of a chain runs on the first stage's scene: a later stage must declare the same robots\nand labware (same names and kinds). Its own initial states are ignored; the state is traced."
+                "Every stage of a chain runs on the first stage's scene: a later stage must declare the same robots\nand labware, no more and no fewer, with the same models and kinds, where the first stage puts them\n(a robot's base, a labware pose). The bench does not move between stages. What a later stage\nsays about the start (initial states, randomisation, camera) is ignored: see W0008."
             }
             Code::E0035 => {
                 "`[tolerances]` names a tolerance no predicate of this protocol uses, or gives it a unit of the\nwrong dimension; a predicate's `within` must match what the predicate measures."
@@ -335,6 +345,12 @@ impl Code {
             }
             Code::W0007 => {
                 "The language allows this start state, but the item's simulation model cannot set it up yet\n(a tube whose cap starts off: the cap has no place to lie). The protocol checks and compiles;\n`eval` and `demo` refuse to build its scene. `autobio describe --catalogue` marks such states."
+            }
+            Code::W0008 => {
+                "A later stage of a chain starts where the stage before it ended: the state is carried over\n(traced by the proof), the scene is drawn once from the first stage's randomisation and seen\nfrom the first stage's camera. This stage file declares a start state that differs from the one\ncarried over to it, or a randomisation or camera that differs from the first stage's; in the\nchain these are ignored. Make them agree, or leave the stage to run alone."
+            }
+            Code::W0009 => {
+                "`set_parameter` sets a panel's target; the instrument then ramps towards it at its own rate\n(a block heats a few degrees a second). The value set here is not reached within the task's\ntime limit even if the step ran at once, so a predicate on the measured value cannot hold.\nThe hint gives the time it needs: raise `time_limit`, or set a value nearer the start."
             }
         }
     }

@@ -79,6 +79,15 @@ pub struct PanelParam {
     /// One button press changes the value by this much.
     pub step: f64,
     pub initial: f64,
+    /// A held button steps the value once every this many seconds (the panel's auto-repeat).
+    pub repeat_s: f64,
+}
+
+impl PanelParam {
+    /// Seconds a button must be held to step the value from `from` to `to`.
+    pub fn hold_seconds(&self, from: f64, to: f64) -> f64 {
+        ((to - from).abs() / self.step).round() * self.repeat_s
+    }
 }
 
 /// What pressing a button does to the abstract state.
@@ -182,8 +191,11 @@ const CAP: PartState = PartState {
     states: &["on", "off"],
     initial: &["on", "off"],
 };
+/// What a lid takes, by its latch: none (opened and shut), a latch locked and unlocked by hand
+/// (a lever), or a latch that catches as the lid shuts and a panel key releases (no `lock`).
+const PLAIN_LID_PRIMITIVES: &[&str] = &["open_lid", "close_lid"];
 const LID_PRIMITIVES: &[&str] = &["open_lid", "close_lid", "lock", "unlock"];
-const KEYED_LID_PRIMITIVES: &[&str] = &["open_lid", "close_lid", "lock", "unlock", "press"];
+const KEYED_LID_PRIMITIVES: &[&str] = &["open_lid", "close_lid", "unlock", "press"];
 /// The key on a centrifuge's panel that releases its lid's latch (the lid stays shut).
 const LID_KEY: &[Button] = &[Button {
     name: "open",
@@ -277,6 +289,37 @@ const fn releases_a_latch(buttons: &[Button]) -> bool {
     false
 }
 
+/// Whether any of `parts` has the state `state` (a `const` search: the kinds are constants).
+const fn has_state(parts: &[PartState], state: &str) -> bool {
+    let mut i = 0;
+    while i < parts.len() {
+        let mut j = 0;
+        while j < parts[i].states.len() {
+            if same_text(parts[i].states[j], state) {
+                return true;
+            }
+            j += 1;
+        }
+        i += 1;
+    }
+    false
+}
+
+const fn same_text(a: &str, b: &str) -> bool {
+    let (a, b) = (a.as_bytes(), b.as_bytes());
+    if a.len() != b.len() {
+        return false;
+    }
+    let mut i = 0;
+    while i < a.len() {
+        if a[i] != b[i] {
+            return false;
+        }
+        i += 1;
+    }
+    true
+}
+
 const fn lidded(
     name: &'static str,
     description: &'static str,
@@ -301,8 +344,10 @@ const fn lidded(
         ],
         primitives: if releases_a_latch(buttons) {
             KEYED_LID_PRIMITIVES
-        } else {
+        } else if has_state(parts, "locked") {
             LID_PRIMITIVES
+        } else {
+            PLAIN_LID_PRIMITIVES
         },
         liquid_tool: false,
     }
@@ -371,6 +416,7 @@ pub const KINDS: &[LabwareKind] = &[
                 max: 3000.0,
                 step: 50.0,
                 initial: 900.0,
+                repeat_s: 0.25,
             },
             PanelParam {
                 name: "temperature",
@@ -379,6 +425,7 @@ pub const KINDS: &[LabwareKind] = &[
                 max: 99.0,
                 step: 1.0,
                 initial: 25.0,
+                repeat_s: 0.25,
             },
             PanelParam {
                 name: "time",
@@ -387,6 +434,7 @@ pub const KINDS: &[LabwareKind] = &[
                 max: 300.0,
                 step: 5.0,
                 initial: 60.0,
+                repeat_s: 0.25,
             },
         ],
         buttons: &[

@@ -99,7 +99,8 @@ impl Default for Params {
             button_stiffness: 250.0,
             button_damping: 0.5,
             press_force: 0.5,
-            repeat_s: 0.25,
+            // The catalogue's panel auto-repeat, which the compiler times set_parameter steps by.
+            repeat_s: kind.panel[0].repeat_s,
             settings,
         }
     }

@@ -146,6 +146,7 @@ pub fn submit(runs: &[PathBuf], opts: &SubmitOptions) -> Result<Index, BundleErr
             if name.ends_with(".manifest.json") {
                 let m = Manifest::read(&file)
                     .map_err(|e| BundleError::Runs(format!("{}: {e}", file.display())))?;
+                refuse_trivial(&m)?;
                 if let Some(here) = m.model {
                     match &model {
                         Some(first) if first.profile_sha256 != here.profile_sha256 => {
@@ -191,6 +192,25 @@ pub fn submit(runs: &[PathBuf], opts: &SubmitOptions) -> Result<Index, BundleErr
     };
     write_archive(&opts.out, &index, &members)?;
     Ok(index)
+}
+
+/// A run of a task whose success holds before the first step (W0001) is not submitted: a
+/// motionless robot passes it, and `eval` ran it only under `--allow-trivial`. A leaderboard has
+/// no such override. The protocol is checked again where the run read it; one that has moved since
+/// is left to `leaderboard verify`, which checks the shipped protocols.
+fn refuse_trivial(m: &Manifest) -> Result<(), BundleError> {
+    let Ok(checked) = compiler::check_file(Path::new(&m.protocol), None) else {
+        return Ok(());
+    };
+    match checked.trivial_at() {
+        Some(at) => Err(BundleError::Runs(format!(
+            "task `{}` is trivial: its success already holds before the first step \
+             (warning[W0001] at {at}), so a robot that does nothing passes it; a leaderboard \
+             ranks no such task",
+            m.task_id
+        ))),
+        None => Ok(()),
+    }
 }
 
 /// Writes the index and the members (in the index's order, with fixed metadata: the same runs

@@ -129,6 +129,15 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
     let mut claims: Vec<Claim> = Vec::new();
     for protocol in shipped.protocols() {
         let task = match compiler::check_file(&protocol, None) {
+            Ok(c) if c.trivial_at().is_some() => {
+                v.failures.push(format!(
+                    "the shipped {} is trivial (warning[W0001] at {}): a robot that does \
+                     nothing passes it, and a leaderboard ranks no such task",
+                    protocol.display(),
+                    c.trivial_at().unwrap_or_default()
+                ));
+                continue;
+            }
             Ok(c) => match c.task {
                 Some(t) => t,
                 None => {

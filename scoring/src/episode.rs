@@ -54,30 +54,37 @@ pub fn outcome_of(e: &crate::PolicyError) -> Outcome {
 
 /// The result of an episode whose policy could not be made (the expert cannot plan it, a replay
 /// has no recording of its seed, the model server cannot be reached): judged on the initial
-/// state, with its reason.
+/// state, a failure that scores 0 (`Verdict::ended_by_error`), with its reason. With `record`, the
+/// episode is recorded like any other (its start, no actions, the verdict), so that a run's every
+/// episode has its recording and a leaderboard can re-enact it.
 pub fn policy_failed(
     task: &Task,
     scene: &Arc<runtime::Scene>,
     instance: &SceneInstance,
     failure: &crate::PolicyError,
-) -> EpisodeResult {
+    record: Option<PathBuf>,
+) -> Result<EpisodeResult, EpisodeError> {
     let env = Env::new(scene.clone(), task, instance, EnvOptions::default());
     let mut verdict = env.verdict();
-    verdict.success = false;
-    EpisodeResult {
+    verdict.ended_by_error();
+    let error = failure.to_string();
+    if let Some(path) = &record {
+        Recording::create(path.clone(), task, instance, 0)?.finish(&env, Some(&error), &verdict)?;
+    }
+    Ok(EpisodeResult {
         seed: instance.seed,
         run: 0,
         success: false,
         outcome: outcome_of(failure),
         verdict,
-        error: Some(failure.to_string()),
+        error: Some(error),
         sim_time_s: 0.0,
         control_steps: 0,
         wall_time_s: 0.0,
         policy_time_s: 0.0,
         trajectory_hash: results::TrajectoryHash::new().hex(),
-        recording: None,
-    }
+        recording: record.map(|p| p.display().to_string()),
+    })
 }
 
 /// An episode's MCAP recording, as an observer: before each action every robot's state and

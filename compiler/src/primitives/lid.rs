@@ -5,8 +5,14 @@ use crate::motion::{Motion, MotionStep, Target, goals};
 
 pub(super) fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
     let name = step.primitive.name;
-    let (lw, kind) = step.on_empty_handed(w, env)?;
-    let state = lid_state(w, &lw, kind)?.to_string();
+    // The latch is asked about first: `lock` on a lid its kind cannot lock says why, and what to
+    // do instead, rather than only that the kind does not list `lock`.
+    let (lw, kind) = step.labware(env, "on")?;
+    if kind.part("lid").is_none() {
+        // Not a lidded kind at all: the general refusal, with what the kind does support.
+        step.on_empty_handed(w, env)?;
+    }
+    lid_state(w, &lw, kind)?;
     let latched = kind
         .part("lid")
         .is_some_and(|p| p.states.contains(&"locked"));
@@ -44,6 +50,8 @@ pub(super) fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), V
             )
         });
     }
+    let (lw, kind) = step.on_empty_handed(w, env)?;
+    let state = lid_state(w, &lw, kind)?.to_string();
     if !needs.contains(&state.as_str()) {
         let hint = if keyed && name == "open_lid" && state == "locked" {
             format!(

@@ -207,7 +207,7 @@ impl BoundStep<'_> {
         })
     }
 
-    fn labware(
+    pub(super) fn labware(
         &self,
         env: &Env,
         name: &'static str,
@@ -379,7 +379,13 @@ mod tests {
     fn every_primitive_has_an_effect_and_a_kind() {
         for p in CATALOGUE.iter() {
             let used = labware::KINDS.iter().any(|k| k.supports(p.name));
-            assert!(used || p.name == "release", "{} is used by no kind", p.name);
+            // `release` takes no `on`; `lock` is for a latch locked by hand apart from closing,
+            // which no kind has yet (the catalogue says so).
+            assert!(
+                used || ["release", "lock"].contains(&p.name),
+                "{} is used by no kind",
+                p.name
+            );
         }
         for k in labware::KINDS {
             for p in k.primitives {

@@ -91,6 +91,9 @@ fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
             hint: Some("pick a value on the button grid".into()),
         });
     }
-    w.panel.insert((lw.clone(), pname.to_string()), value);
+    let key = (lw.clone(), pname.to_string());
+    let from = w.panel.get(&key).copied().unwrap_or(p.initial);
+    w.panel_hold_s += p.hold_seconds(from, value);
+    w.panel.insert(key, value);
     Ok(())
 }

@@ -352,7 +352,12 @@ impl Worker<'_> {
                         why,
                     })?,
                 Err(e @ PolicyError::Unknown { .. }) => return Err(e.into()),
-                Err(e) => crate::episode::policy_failed(task, scene, &instance, &e),
+                Err(e) => crate::episode::policy_failed(task, scene, &instance, &e, eo.record)
+                    .map_err(|why| EvalError::Episode {
+                        task: task.id.clone(),
+                        seed,
+                        why,
+                    })?,
             };
         r.run = run;
         Ok(r)
