@@ -154,7 +154,11 @@ pub fn eval(front: &Front, a: &EvalArgs) -> Result<ExitCode> {
         let mut view = progress::ProgressView::for_task(&task);
         let report = scoring::evaluate(&task, &opts, |p| view.update(p));
         view.finish();
-        rows.push(report?);
+        let report = report?;
+        if report.policy == "expert" {
+            warn_tight_stages(&task, &report.episodes);
+        }
+        rows.push(report);
         if let Some(o) = &a.out {
             written.push(results_path(o, &task.id));
         }
@@ -165,6 +169,38 @@ pub fn eval(front: &Front, a: &EvalArgs) -> Result<ExitCode> {
         outln!("results: {}", path.display());
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Says which stages' time limits the expert's run found tight (`scoring::stage_time`): an author
+/// validating a protocol or chain with the expert learns it before a model is held to them.
+fn warn_tight_stages(task: &compiler::Task, episodes: &[scoring::EpisodeResult]) {
+    for t in scoring::stage_time::tight_stages(task, episodes) {
+        let ran_out = match t.ran_out {
+            0 => String::new(),
+            n => format!(
+                ", and ran out of time in it on {n} of {} episodes",
+                episodes.len()
+            ),
+        };
+        let hint = if t.stage > 1 {
+            format!(
+                "it starts where stage {} left the robot, not at its home pose: give it more time \
+                 with `time_limit` in the chain's `[[stages]]`",
+                t.stage - 1
+            )
+        } else {
+            "raise the protocol's `time_limit`".to_string()
+        };
+        errln!(
+            "warning: stage {} `{}` has a tight time limit: the expert took up to {:.1} s of its \
+             {} s (seed {}){ran_out}\n  = hint: {hint}",
+            t.stage,
+            t.id,
+            t.longest_s,
+            t.limit_s,
+            t.longest_seed
+        );
+    }
 }
 
 /// Reads the suite and leaves its copy in `out` (a run continued into `out` must be of the same

@@ -277,3 +277,52 @@ fn a_later_stage_start_that_the_chain_ignores_is_warned_at_each_place() {
         );
     }
 }
+
+/// `eval` with the expert says which stage's time limit is tight: a chain's later stage starts
+/// where the one before left the robot. The shipped chain, with its own limits, draws no word.
+#[test]
+fn the_expert_run_warns_of_a_tight_stage_time_limit() {
+    let run = |path: &str| {
+        let out = tempfile_dir(path);
+        let o = Command::new(env!("CARGO_BIN_EXE_autobio"))
+            .args([
+                "eval",
+                "--root",
+                ".",
+                "--protocol",
+                path,
+                "--policy",
+                "expert",
+            ])
+            .args(["--episodes", "2", "--workers", "2", "--out", &out])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stderr).to_string()
+    };
+    let said = run("tests/data/chains/tight_close.toml");
+    let warning = said
+        .lines()
+        .find(|l| {
+            l.starts_with("warning: stage 2 `thermal_cycler.close_lid` has a tight time limit")
+        })
+        .unwrap_or_else(|| panic!("{said}"));
+    assert!(warning.contains("of its 10.5 s"), "{warning}");
+    assert!(
+        said.contains("starts where stage 1 left the robot"),
+        "{said}"
+    );
+    assert!(!said.contains("stage 1 `"), "{said}");
+    let shipped = run("protocols/thermal_cycler/open_then_close.toml");
+    assert!(!shipped.contains("tight time limit"), "{shipped}");
+}
+
+fn tempfile_dir(name: &str) -> String {
+    let dir = std::env::temp_dir().join(format!(
+        "autobio-chains-{}-{}",
+        std::process::id(),
+        name.replace('/', "_")
+    ));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir.display().to_string()
+}

@@ -14,6 +14,7 @@ pub mod policy;
 pub mod remote;
 pub mod replay;
 pub mod route;
+pub mod stage_time;
 
 /// Profiles and verdicts live in `results` (no simulator needed to read them).
 pub use results::{profile, verdict};
