@@ -10,6 +10,8 @@ bin="${AUTOBIO_BIN:-${CARGO_TARGET_DIR:-target}/release/autobio}"
 out="$(mktemp -d)"
 trap 'rm -rf "$out"' EXIT
 for p in protocols/*/*.toml; do
+  # A scene file (shared by protocols with `scene = ..`) is no task.
+  if grep -q '^\[scene\]' "$p"; then continue; fi
   for policy in expert hold; do
     dir="$out/$policy/$(basename "$(dirname "$p")")_$(basename "$p" .toml)"
     mkdir -p "$out/$policy"

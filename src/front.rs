@@ -22,8 +22,13 @@ impl Front {
     /// The file checked, with its task; its diagnostics shown and an error when it has errors.
     fn checked(&self, path: &Path) -> Result<(compiler::Checked, compiler::Task)> {
         let checked = compiler::check_file(path, self.root.as_deref())?;
+        let errors = checked.diagnostics.iter().any(|d| d.is_error());
         match checked.task.clone() {
-            Some(t) if !checked.diagnostics.iter().any(|d| d.is_error()) => Ok((checked, t)),
+            Some(t) if !errors => Ok((checked, t)),
+            None if !errors => bail!(
+                "{} is a scene file, not a task: protocols stand in it with `scene = \"..\"`",
+                checked.file
+            ),
             _ => {
                 err!("{}", diagnostics::render_all(&checked, self.color));
                 let name = &checked.file;

@@ -79,7 +79,8 @@ struct Row {
     hold: EvalReport,
 }
 
-/// Every protocol file under `dirs` (one level of subfolders, as `protocols/` is laid out).
+/// Every protocol file under `dirs` (one level of subfolders, as `protocols/` is laid out); scene
+/// files, which are no tasks, left out.
 fn protocol_files(dirs: &[PathBuf]) -> Result<Vec<PathBuf>> {
     let mut out = Vec::new();
     for dir in dirs {
@@ -91,7 +92,9 @@ fn protocol_files(dirs: &[PathBuf]) -> Result<Vec<PathBuf>> {
                 let path = entry?.path();
                 if path.is_dir() {
                     walk.push(path);
-                } else if path.extension().is_some_and(|e| e == "toml") {
+                } else if path.extension().is_some_and(|e| e == "toml")
+                    && !std::fs::read_to_string(&path).is_ok_and(|t| compiler::is_scene_file(&t))
+                {
                     out.push(path);
                 }
             }

@@ -3,22 +3,9 @@
 //! compiling twice gives byte-identical tasks. After an intended change, regenerate with
 //! `UPDATE_GOLDEN=1 cargo test --release --test golden` and review the diff.
 
-use std::path::{Path, PathBuf};
+mod common;
 
-fn shipped() -> Vec<PathBuf> {
-    let mut out = Vec::new();
-    for dir in std::fs::read_dir("protocols").unwrap() {
-        let dir = dir.unwrap().path();
-        for f in std::fs::read_dir(&dir).unwrap() {
-            let f = f.unwrap().path();
-            if f.extension().is_some_and(|e| e == "toml") {
-                out.push(f);
-            }
-        }
-    }
-    out.sort();
-    out
-}
+use std::path::{Path, PathBuf};
 
 fn outputs(path: &Path) -> Vec<(&'static str, String)> {
     let name = path.display().to_string();
@@ -62,7 +49,7 @@ fn outputs(path: &Path) -> Vec<(&'static str, String)> {
 #[test]
 fn shipped_protocols_match_their_golden_outputs() {
     let update = std::env::var_os("UPDATE_GOLDEN").is_some();
-    let protocols = shipped();
+    let protocols = common::shipped_protocols();
     assert!(protocols.len() >= 9, "{protocols:?}");
     let mut stale = Vec::new();
     let mut produced = std::collections::BTreeSet::new();
@@ -118,7 +105,7 @@ fn shipped_protocols_match_their_golden_outputs() {
 /// depended on one would differ here (the goldens pin the bytes across processes).
 #[test]
 fn compiling_twice_gives_identical_bytes() {
-    for path in shipped() {
+    for path in common::shipped_protocols() {
         let a = outputs(&path);
         let b = outputs(&path);
         assert_eq!(a, b, "{}", path.display());

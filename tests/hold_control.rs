@@ -4,26 +4,14 @@
 //! Also checks the policy factory: the report's policy field comes from the policy, and an unknown
 //! name is refused with the known ones listed.
 
-use scoring::eval::{EvalOptions, evaluate};
+mod common;
 
-fn shipped() -> Vec<std::path::PathBuf> {
-    let mut out = Vec::new();
-    for dir in std::fs::read_dir("protocols").unwrap() {
-        for f in std::fs::read_dir(dir.unwrap().path()).unwrap() {
-            let f = f.unwrap().path();
-            if f.extension().is_some_and(|e| e == "toml") {
-                out.push(f);
-            }
-        }
-    }
-    out.sort();
-    out
-}
+use scoring::eval::{EvalOptions, evaluate};
 
 #[test]
 fn every_simulated_task_scores_zero_without_motion() {
     let mut simulated = Vec::new();
-    for path in shipped() {
+    for path in common::shipped_protocols() {
         let name = path.display().to_string();
         let (task, diags) =
             compiler::compile_source(&std::fs::read_to_string(&path).unwrap(), &name);

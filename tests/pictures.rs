@@ -13,20 +13,6 @@ use runtime::scene::Owner;
 use std::collections::HashMap;
 use std::sync::Arc;
 
-fn shipped() -> Vec<String> {
-    let mut out = Vec::new();
-    for dir in std::fs::read_dir("protocols").unwrap() {
-        for f in std::fs::read_dir(dir.unwrap().path()).unwrap() {
-            let f = f.unwrap().path();
-            if f.extension().is_some_and(|e| e == "toml") {
-                out.push(f.display().to_string());
-            }
-        }
-    }
-    out.sort();
-    out
-}
-
 /// The first frame of `path`'s seed-0 episode from its fixed camera (full detail), with its
 /// labware drawn or every labware geom made transparent.
 /// `None` where the scene is not simulated (its start is refused).
@@ -59,7 +45,8 @@ fn first_frame(path: &str, labware: bool) -> Option<Vec<u8>> {
 #[test]
 fn every_task_opens_on_a_frame_that_shows_its_labware() {
     let mut unsimulated = Vec::new();
-    for path in shipped() {
+    for path in common::shipped_protocols() {
+        let path = path.display().to_string();
         let Some(frame) = first_frame(&path, true) else {
             unsimulated.push(path);
             continue;

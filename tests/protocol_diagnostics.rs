@@ -170,7 +170,8 @@ fn explain_documents_every_code() {
 #[test]
 fn a_key_latched_lid_is_released_by_its_key_before_it_opens() {
     let shipped = std::fs::read_to_string("protocols/centrifuge_5430/open_lid.toml").unwrap();
-    let compile = |source: &str| compiler::compile_source(source, "open_lid.toml");
+    let compile =
+        |source: &str| compiler::compile_source(source, "protocols/centrifuge_5430/open_lid.toml");
     assert!(compile(&shipped).0.is_some(), "unlock, then open_lid");
     let pressed = shipped.replacen("do = \"unlock\"", "do = \"press\"\nbutton = \"open\"", 1);
     assert!(

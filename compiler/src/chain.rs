@@ -9,6 +9,7 @@ use crate::params::ParamSpec;
 use crate::physics;
 use crate::proof::{self, ProofScene, ProofStage};
 use crate::report::Cx;
+use crate::scene_file::{self, Merged};
 use crate::stage_files::{StageError, StageLoader};
 use crate::task::*;
 use dsl::ast::{Chain, Document, Protocol};
@@ -23,7 +24,11 @@ pub(crate) fn compile_chain(
     load: &dyn StageLoader,
 ) -> (Option<Task>, Vec<Diagnostic>) {
     let mut included: Vec<(String, String)> = Vec::new();
-    let (task, mut diags) = compile_stages(c, file, source, load, &mut included);
+    let mut scenes: Vec<Merged> = Vec::new();
+    let (task, mut diags) = compile_stages(c, file, source, load, &mut included, &mut scenes);
+    for m in &scenes {
+        m.remap(&mut diags);
+    }
     for d in &mut diags {
         if let Some(f) = &d.file
             && let Some((_, note)) = included.iter().find(|(p, _)| p == f)
@@ -72,6 +77,7 @@ fn compile_stages(
     source: &str,
     load: &dyn StageLoader,
     included: &mut Vec<(String, String)>,
+    scenes: &mut Vec<Merged>,
 ) -> (Option<Task>, Vec<Diagnostic>) {
     let mut cx = Cx::new(None);
     for stage in &c.stages {
@@ -112,14 +118,33 @@ fn compile_stages(
             included.push((path.clone(), note));
         }
         let (doc, diags) = dsl::parse(&loaded.text);
-        texts.insert(path.clone(), loaded.text);
         cx.file = Some(path.clone());
         for d in diags {
             cx.push(d);
         }
+        let doc = match doc {
+            Document::Protocol(mut p) => {
+                scenes.extend(scene_file::merge(
+                    &mut cx,
+                    &mut p,
+                    &path,
+                    &loaded.text,
+                    load,
+                ));
+                Document::Protocol(p)
+            }
+            other => other,
+        };
+        texts.insert(path.clone(), loaded.text);
         cx.file = None;
         match doc {
             Document::Protocol(p) => parsed.push((i, path, *p)),
+            Document::Scene(_) => cx.err(
+                Code::E0006,
+                proto.span,
+                format!("stage `{}` is a scene file, not a protocol", proto.value),
+                Some("name the protocols that use it".into()),
+            ),
             Document::Chain(_) => cx.err(
                 Code::E0006,
                 proto.span,

@@ -302,6 +302,16 @@ const ITEM_MARGIN: f64 = 0.3;
 const LONGEST_TIME_LIMIT: f64 = 86_400.0;
 
 /// Warnings for values that parse and type-check but are almost certainly mistakes.
+/// Checks a scene file alone (`autobio check scene.toml`): its names, robots, labware, start
+/// states and randomisation, as a protocol standing in it would have them checked.
+pub(crate) fn check_scene(cx: &mut Cx, p: &Protocol) {
+    duplicates(cx, p);
+    implausible(cx, p);
+    let mut robots = lower_robots(cx, p);
+    let (mut labware, _) = lower_labware(cx, p);
+    randomise(cx, p, &mut robots, &mut labware);
+}
+
 fn implausible(cx: &mut Cx, p: &Protocol) {
     // Where each robot stands and how far it reaches, for the labware poses below.
     let arms: Vec<([f64; 3], f64)> = p

@@ -20,6 +20,7 @@ pub mod predicates;
 pub mod primitives;
 mod proof;
 mod report;
+mod scene_file;
 pub mod stage_files;
 mod sweep;
 mod task;
@@ -36,6 +37,19 @@ use report::Cx;
 /// Checks and lowers one protocol to a one-stage task.
 pub fn compile(p: &Protocol, file: &str) -> (Option<Task>, Vec<Diagnostic>) {
     let mut cx = Cx::new(None);
+    if let Some(scene) = &p.scene {
+        // The scene file is read relative to the protocol's: only the file-reading entry points
+        // can merge it.
+        cx.push(
+            Diagnostic::new(
+                dsl::Code::E0006,
+                scene.span,
+                "this protocol's scene file was not read",
+            )
+            .with_hint("compile it from its file (`check_file`, `compile_source_with`)"),
+        );
+        return (None, cx.diags);
+    }
     let task = check::lower(&mut cx, p, file).and_then(|low| {
         if cx.has_errors() {
             return None;
@@ -100,8 +114,32 @@ pub fn compile_source_with(
         return (None, diags);
     }
     let (task, more) = match &doc {
-        Document::Protocol(p) => compile(p, file),
+        Document::Protocol(p) => {
+            let mut p = p.as_ref().clone();
+            let mut cx = Cx::new(None);
+            let named = p.scene.is_some();
+            let merged = scene_file::merge(&mut cx, &mut p, file, source, load);
+            // A scene that was read is checked with the protocol, mistakes and all (every one in
+            // one pass); without the scene it names, the protocol would be all errors.
+            let (task, more) = if named && merged.is_none() {
+                (None, Vec::new())
+            } else {
+                compile(&p, file)
+            };
+            let mut all = cx.diags;
+            all.extend(more);
+            if let Some(m) = merged {
+                m.remap(&mut all);
+            }
+            (task, all)
+        }
         Document::Chain(c) => chain::compile_chain(c, file, source, load),
+        // A scene file is checked, and is no task.
+        Document::Scene(s) => {
+            let mut cx = Cx::new(None);
+            check::check_scene(&mut cx, s);
+            (None, cx.diags)
+        }
     };
     diags.extend(more);
     if diags.iter().any(|d| d.is_error()) {
@@ -109,6 +147,12 @@ pub fn compile_source_with(
     } else {
         (task, diags)
     }
+}
+
+/// Whether `source` is a scene file (`[scene]`, shared by protocols through `scene = ".."`),
+/// which is no task: folders of protocols are listed without them.
+pub fn is_scene_file(source: &str) -> bool {
+    matches!(dsl::parse(source).0, Document::Scene(_))
 }
 
 /// [`compile_source_with`] reading chain stages from the file system, confined to the chain's

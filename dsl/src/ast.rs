@@ -47,11 +47,18 @@ pub enum Document {
     Protocol(Box<Protocol>),
     // Boxed too: both are large and a document is made once per file.
     Chain(Box<Chain>),
+    /// A scene file (`[scene]`): robots, labware, randomisation and camera that protocols share
+    /// with `scene = "<file>"`. Only those tables of the protocol are filled.
+    Scene(Box<Protocol>),
 }
 
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct Protocol {
     pub format: Option<Spanned<i64>>,
+    /// `scene = "<file>"`: the scene file whose robots, labware, randomisation and camera this
+    /// protocol stands in (the compiler reads it and merges it in, see `compiler::scene_file`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scene: Option<Spanned<String>>,
     pub meta: Meta,
     pub robots: Vec<Robot>,
     pub labware: Vec<Labware>,
@@ -225,4 +232,74 @@ pub struct StageRef {
     /// Overrides the protocol's time limit (seconds).
     pub time_limit: Option<Spanned<f64>>,
     pub span: Span,
+}
+
+impl Protocol {
+    /// Moves every span of the scene's tables (robots, labware, randomisation, camera) `by` bytes
+    /// on: a scene file's tables merged into a protocol point past the protocol's own text, where
+    /// the compiler maps them back to the scene file.
+    pub fn shift_scene_spans(&mut self, by: usize) {
+        let s = |span: &mut Span| {
+            span.start += by;
+            span.end += by;
+        };
+        fn pose(p: &mut Pose, s: &impl Fn(&mut Span)) {
+            if let Some(x) = &mut p.pos {
+                s(&mut x.span);
+            }
+            if let Some(x) = &mut p.yaw {
+                s(&mut x.span);
+            }
+        }
+        for r in &mut self.robots {
+            s(&mut r.name.span);
+            if let Some(m) = &mut r.model {
+                s(&mut m.span);
+            }
+            pose(&mut r.base, &s);
+        }
+        for l in &mut self.labware {
+            s(&mut l.name.span);
+            if let Some(k) = &mut l.kind {
+                s(&mut k.span);
+            }
+            pose(&mut l.pose, &s);
+            if let Some(a) = &mut l.at {
+                s(&mut a.span);
+            }
+            for (k, v) in &mut l.state {
+                s(&mut k.span);
+                s(&mut v.span);
+            }
+        }
+        for r in &mut self.randomise {
+            s(&mut r.target.span);
+            for item in &mut r.items {
+                match item {
+                    RandomItem::Joints { low, high, span } => {
+                        s(&mut low.span);
+                        s(&mut high.span);
+                        s(span);
+                    }
+                    RandomItem::Xy(x) | RandomItem::Yaw(x) => s(&mut x.span),
+                    RandomItem::LabwareJoints { joints, span } => {
+                        for (k, v) in joints {
+                            s(&mut k.span);
+                            s(&mut v.span);
+                        }
+                        s(span);
+                    }
+                }
+            }
+        }
+        if let Some(c) = &mut self.camera {
+            for x in [&mut c.pos, &mut c.look_at].into_iter().flatten() {
+                s(&mut x.span);
+            }
+            if let Some(f) = &mut c.fovy {
+                s(&mut f.span);
+            }
+            s(&mut c.span);
+        }
+    }
 }

@@ -12,7 +12,10 @@ type Key<'i> = toml::Spanned<std::borrow::Cow<'i, str>>;
 /// Parses a protocol or chain file. Never fails and never panics: the AST holds whatever could be
 /// read, and the diagnostics say what could not. A file with a top-level `[chain]` table is a chain.
 pub fn parse(source: &str) -> (Document, Vec<Diagnostic>) {
-    let mut p = Parser { diags: Vec::new() };
+    let mut p = Parser {
+        diags: Vec::new(),
+        kindless: Vec::new(),
+    };
     let (doc, errors) = DeTable::parse_recoverable(source);
     if !errors.is_empty() {
         let mut unclosed = crate::source::unclosed_string(source);
@@ -52,8 +55,13 @@ pub fn parse(source: &str) -> (Document, Vec<Diagnostic>) {
     }
     let doc = doc.get_ref();
     p.greek_mu(source, doc);
+    let scene_table = doc
+        .iter()
+        .any(|(k, v)| k.get_ref() == "scene" && matches!(v.get_ref(), DeValue::Table(_)));
     let document = if doc.iter().any(|(k, _)| k.get_ref() == "chain") {
         Document::Chain(Box::new(p.chain(doc)))
+    } else if scene_table && !doc.iter().any(|(k, _)| k.get_ref() == "protocol") {
+        Document::Scene(Box::new(p.scene_file(doc)))
     } else {
         Document::Protocol(Box::new(p.protocol(doc)))
     };
@@ -77,10 +85,13 @@ fn lowercase_first(s: &str) -> String {
 
 struct Parser {
     diags: Vec<Diagnostic>,
+    /// Labware entries without `kind`, reported unless the protocol names a scene file.
+    kindless: Vec<Diagnostic>,
 }
 
 const TOP_KEYS: &[&str] = &[
     "format",
+    "scene",
     "protocol",
     "robots",
     "labware",
@@ -92,6 +103,15 @@ const TOP_KEYS: &[&str] = &[
     "camera",
 ];
 const CHAIN_TOP_KEYS: &[&str] = &["format", "chain", "stages"];
+const SCENE_TOP_KEYS: &[&str] = &[
+    "format",
+    "scene",
+    "robots",
+    "labware",
+    "randomise",
+    "camera",
+];
+const SCENE_KEYS: &[&str] = &["description"];
 const CHAIN_KEYS: &[&str] = &["id", "version", "level", "instruction"];
 const STAGE_KEYS: &[&str] = &["protocol", "instruction", "time_limit"];
 const PARAM_KEYS: &[&str] = &[
@@ -424,6 +444,7 @@ impl Parser {
         for (key, value) in ordered(doc) {
             match key.get_ref().as_ref() {
                 "format" => p.format = self.integer(value, "format"),
+                "scene" => p.scene = self.string(value, "scene"),
                 "protocol" => p.meta = self.meta(value),
                 "robots" => {
                     p.robots = self.named_tables(value, "[robots]", |s, n, t| s.robot(n, t))
@@ -444,6 +465,10 @@ impl Parser {
                 "camera" => p.camera = self.camera(value),
                 _ => self.unknown_key(key, TOP_KEYS, "the top level"),
             }
+        }
+        let kindless = std::mem::take(&mut self.kindless);
+        if p.scene.is_none() {
+            self.diags.extend(kindless);
         }
         self.check_format(p.format.as_ref());
         if !doc.iter().any(|(k, _)| k.get_ref() == "protocol") {
@@ -470,6 +495,46 @@ impl Parser {
                 Some("add `[success]` with `all = [\"<labware>.<part> is <state>\", ...]`".into()),
             );
         }
+        p
+    }
+
+    /// A scene file: `format`, a `[scene]` table (with an optional `description`), and the
+    /// tables a protocol's scene is made of. Steps, success, parameters and the like belong in
+    /// the protocols that use it.
+    fn scene_file(&mut self, doc: &DeTable<'_>) -> Protocol {
+        let mut p = Protocol::default();
+        for (key, value) in ordered(doc) {
+            match key.get_ref().as_ref() {
+                "format" => p.format = self.integer(value, "format"),
+                "scene" => {
+                    if let Some(t) = self.table(value, "`[scene]`") {
+                        for (k, v) in self.settings(t) {
+                            match k.get_ref().as_ref() {
+                                "description" => {
+                                    self.string(v, "scene.description");
+                                }
+                                _ => self.unknown_key(k, SCENE_KEYS, "`[scene]`"),
+                            }
+                        }
+                    }
+                }
+                "robots" => {
+                    p.robots = self.named_tables(value, "[robots]", |s, n, t| s.robot(n, t))
+                }
+                "labware" => {
+                    p.labware = self.named_tables(value, "[labware]", |s, n, t| s.labware(n, t))
+                }
+                "randomise" => {
+                    p.randomise =
+                        self.named_tables(value, "[randomise]", |s, n, t| s.randomise(n, t))
+                }
+                "camera" => p.camera = self.camera(value),
+                _ => self.unknown_key(key, SCENE_TOP_KEYS, "a scene file"),
+            }
+        }
+        let kindless = std::mem::take(&mut self.kindless);
+        self.diags.extend(kindless);
+        self.check_format(p.format.as_ref());
         p
     }
 
@@ -579,11 +644,15 @@ impl Parser {
             }
         }
         if !t.iter().any(|(k, _)| k.get_ref() == "kind") {
-            self.err(
-                Code::E0002,
-                l.name.span,
-                format!("labware `{}` has no `kind`", l.name.value),
-                Some("e.g. kind = \"thermal_cycler\"".into()),
+            // Said once the file is read: in a protocol that names a scene file, an entry with
+            // no kind gives the start of the scene's item of that name (the compiler checks it).
+            self.kindless.push(
+                Diagnostic::error(
+                    Code::E0002,
+                    l.name.span,
+                    format!("labware `{}` has no `kind`", l.name.value),
+                )
+                .with_hint("e.g. kind = \"thermal_cycler\""),
             );
         }
         l

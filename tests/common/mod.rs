@@ -270,3 +270,20 @@ pub fn spread(rgb: &[u8]) -> f64 {
         / n)
         .sqrt()
 }
+
+/// Every shipped protocol and chain file (`protocols/<kind>/<name>.toml`), sorted; scene files,
+/// which protocols share and which are no tasks, left out.
+pub fn shipped_protocols() -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for dir in std::fs::read_dir("protocols").unwrap() {
+        for f in std::fs::read_dir(dir.unwrap().path()).unwrap() {
+            let f = f.unwrap().path();
+            let scene = std::fs::read_to_string(&f).is_ok_and(|t| compiler::is_scene_file(&t));
+            if f.extension().is_some_and(|e| e == "toml") && !scene {
+                out.push(f);
+            }
+        }
+    }
+    out.sort();
+    out
+}
