@@ -201,3 +201,73 @@ fn the_scene_file_places_the_camera_once() {
     let fixed = serde_json::to_value(&task.cameras).unwrap().to_string();
     assert!(fixed.contains("1.6"), "{fixed}");
 }
+
+/// Stages that share a scene file each check it; its mistakes are said once, naming every
+/// protocol that used it. A scene file named as a stage is refused as what it is.
+#[test]
+fn a_chain_whose_stages_share_a_scene_says_its_mistakes_once() {
+    let dir = common::scratch("scene-chain");
+    std::fs::write(
+        dir.join("scene.toml"),
+        "format = 1\n[scene]\n[robots.arm]\nmodel = \"ur5e_2f85\"\nbase = { pos_m = [0.0, 0.5, 0.824] }\n\
+         [labware.cycler]\nkind = \"thermal_cycler\"\npose = { pos_m = [-0.05, 0.0, 0.824], yaw_deg = -90 }\n\
+         [randomise.cycler]\nxy_m = 2\n",
+    )
+    .unwrap();
+    for (name, lid, action, goal) in [
+        ("open", "locked", "open_lid", "open"),
+        ("close", "open", "close_lid", "locked"),
+    ] {
+        std::fs::write(
+            dir.join(format!("{name}.toml")),
+            format!(
+                "format = 1\nscene = \"scene.toml\"\n[protocol]\nid = \"t.{name}\"\ninstruction = \"{name} it\"\n\
+                 time_limit = \"30 s\"\n[labware.cycler]\nstate = {{ lid = \"{lid}\" }}\n\
+                 [[steps]]\ndo = \"{action}\"\non = \"cycler\"\nwith = \"arm\"\n[success]\nall = [\"cycler.lid is {goal}\"]\n"
+            ),
+        )
+        .unwrap();
+    }
+    let chain = dir.join("chain.toml");
+    std::fs::write(
+        &chain,
+        "format = 1\n[chain]\nid = \"t.chain\"\n[[stages]]\nprotocol = \"open.toml\"\n[[stages]]\nprotocol = \"close.toml\"\n",
+    )
+    .unwrap();
+    let checked = compiler::check_file(&chain, None).unwrap();
+    assert!(checked.task.is_some(), "{:#?}", checked.diagnostics);
+    let said: Vec<_> = places(&checked);
+    assert_eq!(
+        said,
+        [(
+            "W0003".to_string(),
+            "scene.toml".to_string(),
+            10,
+            8,
+            "2".to_string()
+        )],
+        "{:#?}",
+        checked.diagnostics
+    );
+    let notes = &checked.diagnostics[0].notes;
+    for named in ["open.toml", "close.toml"] {
+        assert!(
+            notes
+                .iter()
+                .any(|n| n.starts_with("scene of ") && n.contains(&format!("{named}, named at"))),
+            "{notes:?}"
+        );
+    }
+    std::fs::write(
+        &chain,
+        "format = 1\n[chain]\nid = \"t.chain\"\n[[stages]]\nprotocol = \"open.toml\"\n[[stages]]\nprotocol = \"scene.toml\"\n",
+    )
+    .unwrap();
+    let refused = compiler::check_file(&chain, None).unwrap();
+    let d = refused
+        .diagnostics
+        .iter()
+        .find(|d| d.code == dsl::Code::E0006)
+        .unwrap_or_else(|| panic!("{:#?}", refused.diagnostics));
+    assert!(d.message.contains("is a scene file"), "{}", d.message);
+}

@@ -29,6 +29,9 @@ pub(crate) fn compile_chain(
     for m in &scenes {
         m.remap(&mut diags);
     }
+    if !scenes.is_empty() {
+        scene_file::dedupe(&mut diags);
+    }
     for d in &mut diags {
         if let Some(f) = &d.file
             && let Some((_, note)) = included.iter().find(|(p, _)| p == f)
@@ -43,6 +46,9 @@ pub(crate) fn compile_chain(
 /// never echoed. A protocol file is valid TOML with a `[protocol]` or `[chain]` table, or, when its
 /// TOML is broken (a protocol with a typo), has a `[protocol]` or `[chain]` header line.
 fn looks_like_protocol(text: &str) -> Result<(), String> {
+    if scene_file::has_scene_header(text) {
+        return Err("it is a scene file (protocols name it with `scene = \"..\"`)".into());
+    }
     let header = text.lines().any(|l| {
         ["[protocol]", "[chain]"].iter().any(|h| {
             l.trim()
@@ -315,7 +321,10 @@ fn same_scene(cx: &mut Cx, first: &Lowered, later: &Lowered, ast: &Protocol) {
                 ) else {
                     continue;
                 };
-                if !same_pose(&a.placement, &b.placement) {
+                // An item that starts in a slot is where the chain carried it (`proof`'s W0008
+                // says when a stage declares otherwise), not at a pose of the bench.
+                let placed = a.at.is_some() || b.at.is_some();
+                if !placed && !same_pose(&a.placement, &b.placement) {
                     moved(cx, &l.name, &l.pose, &a.placement, &b.placement);
                 }
                 let jitter = (a.xy_jitter_m, a.yaw_jitter_rad, &a.joint_jitter);

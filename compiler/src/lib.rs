@@ -188,13 +188,23 @@ impl Checked {
     /// Where the proof found the task trivial (W0001: its success holds before the first step,
     /// so a motionless robot passes it), as `file:line:col`; `None` when it is not.
     pub fn trivial_at(&self) -> Option<String> {
-        let d = self
-            .diagnostics
-            .iter()
-            .find(|d| d.code == dsl::Code::W0001)?;
-        let (file, text) = self.text_of(d)?;
-        let (line, col) = dsl::render::line_col(&text, d.span.start);
-        Some(format!("{file}:{line}:{col}"))
+        // Only the first stage's: a chain's later stage whose success already holds where the
+        // stage before left the world is not won by a robot that does nothing.
+        let d = self.diagnostics.iter().find(|d| {
+            d.code == dsl::Code::W0001
+                && !d.notes.iter().any(|n| n.contains(" starts where stage "))
+        })?;
+        Some(match self.text_of(d) {
+            Some((file, text)) => {
+                let (line, col) = dsl::render::line_col(&text, d.span.start);
+                format!("{file}:{line}:{col}")
+            }
+            None => format!(
+                "{} (byte {})",
+                d.file.as_deref().unwrap_or(&self.file),
+                d.span.start
+            ),
+        })
     }
 }
 

@@ -31,8 +31,6 @@ impl Merged {
                 d.file = Some(self.path.clone());
                 d.span.start -= self.offset;
                 d.span.end -= self.offset;
-            }
-            if d.file.as_deref() == Some(self.path.as_str()) && !d.notes.contains(&self.note) {
                 d.notes.push(self.note.clone());
             }
         }
@@ -60,7 +58,10 @@ pub(crate) fn merge(
                     "a scene file stays inside the protocol's folder; widen it with `--root DIR`"
                 }
                 StageError::NotUtf8 { .. } => "save the scene file as UTF-8",
-                _ => "the path is relative to this protocol's file",
+                StageError::NotAFile { .. } | StageError::TooLarge { .. } => {
+                    "a scene file is a regular file of at most 1 MiB"
+                }
+                StageError::Unreadable { .. } => "the path is relative to this protocol's file",
             };
             let code = match e {
                 StageError::OutsideRoot { .. }
@@ -79,14 +80,23 @@ pub(crate) fn merge(
         }
     };
     let (doc, diags) = dsl::parse(&loaded.text);
+    let (line, col) = dsl::render::line_col(source, named.span.start);
+    let note = format!("scene of {file}, named at {file}:{line}:{col}");
+    // A scene file's own diagnostics are shown in it, with where it was named.
+    let report = |cx: &mut Cx, diags: Vec<Diagnostic>| {
+        cx.file = Some(loaded.path.clone());
+        for d in diags {
+            cx.push(d.with_note(note.clone()));
+        }
+        cx.file = owner.clone();
+    };
+    let broken = diags.iter().any(|d| d.code == Code::E0001);
     let mut scene = match doc {
-        Document::Scene(s) if !diags.iter().any(|d| d.code == Code::E0001) => s,
-        Document::Scene(_) => {
-            cx.file = Some(loaded.path.clone());
-            for d in diags {
-                cx.push(d);
-            }
-            cx.file = owner;
+        Document::Scene(s) if !broken => s,
+        // A scene file with a syntax error parses as nothing: its `[scene]` header says what it
+        // was meant to be, and its errors are its own.
+        _ if broken && has_scene_header(&loaded.text) => {
+            report(cx, diags);
             return None;
         }
         _ => {
@@ -102,18 +112,13 @@ pub(crate) fn merge(
             return None;
         }
     };
-    let (line, col) = dsl::render::line_col(source, named.span.start);
+    report(cx, diags);
     let merged = Merged {
-        owner: owner.clone(),
+        owner,
         offset: source.len() + 1,
-        path: loaded.path.clone(),
-        note: format!("scene of {file}, named at {file}:{line}:{col}"),
+        path: loaded.path,
+        note,
     };
-    cx.file = Some(loaded.path);
-    for d in diags {
-        cx.push(d);
-    }
-    cx.file = owner;
     scene.shift_scene_spans(merged.offset);
     // The scene's robots and labware come first: a robot's place in the action vector is its
     // place in the scene.
@@ -175,4 +180,34 @@ pub(crate) fn merge(
         _ => {}
     }
     Some(merged)
+}
+
+/// Whether `text` has a `[scene]` header line (a scene file, even one whose TOML is broken).
+pub(crate) fn has_scene_header(text: &str) -> bool {
+    text.lines().any(|l| {
+        l.trim()
+            .strip_prefix("[scene]")
+            .is_some_and(|rest| rest.trim().is_empty() || rest.trim().starts_with('#'))
+    })
+}
+
+/// One diagnostic per (code, place, message): stages that share a scene file each check it, and
+/// its mistakes are said once, with every protocol that named it in the notes.
+pub(crate) fn dedupe(diags: &mut Vec<Diagnostic>) {
+    let mut out: Vec<Diagnostic> = Vec::with_capacity(diags.len());
+    for d in diags.drain(..) {
+        match out.iter_mut().find(|o| {
+            (o.code, o.span, &o.file, &o.message) == (d.code, d.span, &d.file, &d.message)
+        }) {
+            Some(o) => {
+                for n in d.notes {
+                    if !o.notes.contains(&n) {
+                        o.notes.push(n);
+                    }
+                }
+            }
+            None => out.push(d),
+        }
+    }
+    *diags = out;
 }
