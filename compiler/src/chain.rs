@@ -49,13 +49,8 @@ fn looks_like_protocol(text: &str) -> Result<(), String> {
     if scene_file::has_scene_header(text) {
         return Err("it is a scene file (protocols name it with `scene = \"..\"`)".into());
     }
-    let header = text.lines().any(|l| {
-        ["[protocol]", "[chain]"].iter().any(|h| {
-            l.trim()
-                .strip_prefix(h)
-                .is_some_and(|rest| rest.trim().is_empty() || rest.trim().starts_with('#'))
-        })
-    });
+    let header =
+        scene_file::has_header(text, "[protocol]") || scene_file::has_header(text, "[chain]");
     let (doc, errors) = toml::de::DeTable::parse_recoverable(text);
     if let Some(e) = errors.first() {
         if header {

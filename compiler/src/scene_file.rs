@@ -184,9 +184,14 @@ pub(crate) fn merge(
 
 /// Whether `text` has a `[scene]` header line (a scene file, even one whose TOML is broken).
 pub(crate) fn has_scene_header(text: &str) -> bool {
+    has_header(text, "[scene]")
+}
+
+/// Whether `text` has the table header line `header` (`[scene]`), alone or before a comment.
+pub(crate) fn has_header(text: &str, header: &str) -> bool {
     text.lines().any(|l| {
         l.trim()
-            .strip_prefix("[scene]")
+            .strip_prefix(header)
             .is_some_and(|rest| rest.trim().is_empty() || rest.trim().starts_with('#'))
     })
 }

@@ -446,23 +446,13 @@ impl Parser {
                 "format" => p.format = self.integer(value, "format"),
                 "scene" => p.scene = self.string(value, "scene"),
                 "protocol" => p.meta = self.meta(value),
-                "robots" => {
-                    p.robots = self.named_tables(value, "[robots]", |s, n, t| s.robot(n, t))
-                }
-                "labware" => {
-                    p.labware = self.named_tables(value, "[labware]", |s, n, t| s.labware(n, t))
-                }
-                "randomise" => {
-                    p.randomise =
-                        self.named_tables(value, "[randomise]", |s, n, t| s.randomise(n, t))
-                }
+                k if self.scene_part(k, value, &mut p) => {}
                 "params" => {
                     p.params = self.named_tables(value, "[params]", |s, n, t| s.param(n, t))
                 }
                 "steps" => p.steps = self.steps(value),
                 "success" => p.success = self.success(value),
                 "tolerances" => p.tolerances = self.tolerances(value),
-                "camera" => p.camera = self.camera(value),
                 _ => self.unknown_key(key, TOP_KEYS, "the top level"),
             }
         }
@@ -518,17 +508,7 @@ impl Parser {
                         }
                     }
                 }
-                "robots" => {
-                    p.robots = self.named_tables(value, "[robots]", |s, n, t| s.robot(n, t))
-                }
-                "labware" => {
-                    p.labware = self.named_tables(value, "[labware]", |s, n, t| s.labware(n, t))
-                }
-                "randomise" => {
-                    p.randomise =
-                        self.named_tables(value, "[randomise]", |s, n, t| s.randomise(n, t))
-                }
-                "camera" => p.camera = self.camera(value),
+                k if self.scene_part(k, value, &mut p) => {}
                 _ => self.unknown_key(key, SCENE_TOP_KEYS, "a scene file"),
             }
         }
@@ -536,6 +516,23 @@ impl Parser {
         self.diags.extend(kindless);
         self.check_format(p.format.as_ref());
         p
+    }
+
+    /// The tables a scene is made of, read the same in a protocol and in a scene file; whether
+    /// `key` was one of them.
+    fn scene_part(&mut self, key: &str, value: &Value<'_>, p: &mut Protocol) -> bool {
+        match key {
+            "robots" => p.robots = self.named_tables(value, "[robots]", |s, n, t| s.robot(n, t)),
+            "labware" => {
+                p.labware = self.named_tables(value, "[labware]", |s, n, t| s.labware(n, t))
+            }
+            "randomise" => {
+                p.randomise = self.named_tables(value, "[randomise]", |s, n, t| s.randomise(n, t))
+            }
+            "camera" => p.camera = self.camera(value),
+            _ => return false,
+        }
+        true
     }
 
     fn meta(&mut self, v: &Value<'_>) -> Meta {
