@@ -400,20 +400,27 @@ fn pedestal(task: &compiler::Task, robot: &str) -> Option<(f64, f64)> {
 
 #[test]
 fn a_raised_arm_stands_on_a_pedestal_from_the_surface_below_it() {
-    // The 5910 opener's arm stands 0.546 m above the bench top (0.824 m): on a riser that
+    // The 5910 opener's arm stands 0.626 m above the bench top (0.824 m): on a riser that
     // reaches from the bench to its base.
     let (bottom, top) = pedestal(&compile(O5910), "arm").expect("the raised arm's pedestal");
     assert!(
-        (bottom - 0.824).abs() < 1e-9 && (top - 1.37).abs() < 1e-9,
+        (bottom - 0.824).abs() < 1e-9 && (top - 1.45).abs() < 1e-9,
         "{bottom} {top}"
     );
-    // Off the bench, the riser stands on the floor.
-    let off = common::compile_edited(O5910, |s| {
-        s.replace("[0.4, 0.25, 1.37]", "[1.0, 0.25, 1.37]")
-    });
+    // Off the bench, the riser stands on the floor (the scene file moved, the protocol as is).
+    let dir = common::scratch("pedestal-off-bench");
+    let riser = std::fs::read_to_string("protocols/centrifuge_5910/riser.toml").unwrap();
+    let moved = riser.replace("[0.4, 0.25, 1.45]", "[1.0, 0.25, 1.45]");
+    assert_ne!(moved, riser);
+    std::fs::write(dir.join("riser.toml"), moved).unwrap();
+    std::fs::copy(O5910, dir.join("open_lid.toml")).unwrap();
+    let off = compiler::check_file(&dir.join("open_lid.toml"), None)
+        .unwrap()
+        .task
+        .unwrap();
     let (bottom, top) = pedestal(&off, "arm").expect("the off-bench arm's pedestal");
     assert!(
-        bottom.abs() < 1e-9 && (top - 1.37).abs() < 1e-9,
+        bottom.abs() < 1e-9 && (top - 1.45).abs() < 1e-9,
         "{bottom} {top}"
     );
     // An arm standing on the bench has none.

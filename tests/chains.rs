@@ -54,6 +54,11 @@ fn every_inverse_chain_runs_to_success_stage_by_stage() {
             "centrifuge_mini.open_lid",
             "centrifuge_mini.close_lid",
         ),
+        (
+            "protocols/centrifuge_5910/open_then_close.toml",
+            "centrifuge_5910.open_lid",
+            "centrifuge_5910.close_lid_riser",
+        ),
     ] {
         let task = compile(path);
         assert_eq!(task.stages.len(), 2);
@@ -268,6 +273,7 @@ fn a_later_stage_start_that_the_chain_ignores_is_warned_at_each_place() {
         "protocols/thermal_cycler/close_then_open.toml",
         "protocols/centrifuge_5430/open_then_close.toml",
         "protocols/centrifuge_mini/open_then_close.toml",
+        "protocols/centrifuge_5910/open_then_close.toml",
     ] {
         let checked = compiler::check_file(Path::new(chain), None).unwrap();
         assert!(
