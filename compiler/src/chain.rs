@@ -258,19 +258,17 @@ fn first_places(
 
 /// A stage file the loader refused, reported at the chain's stage line.
 fn refuse(cx: &mut Cx, proto: &dsl::ast::Spanned<String>, e: &StageError) {
-    let (code, hint) = match e {
-        StageError::OutsideRoot { .. } => (
-            Code::E0009,
-            "stage paths stay inside the chain's folder; widen it with `--root DIR`",
-        ),
-        StageError::NotAFile { .. } | StageError::TooLarge { .. } => (
-            Code::E0009,
-            "a stage is a protocol file: a regular file of at most 1 MiB",
-        ),
-        StageError::NotUtf8 { .. } => (Code::E0008, "save the stage file as UTF-8"),
-        StageError::Unreadable { .. } => (Code::E0006, "paths are relative to the chain file"),
+    let hint = match e {
+        StageError::OutsideRoot { .. } => {
+            "stage paths stay inside the chain's folder; widen it with `--root DIR`"
+        }
+        StageError::NotAFile { .. } | StageError::TooLarge { .. } => {
+            "a stage is a protocol file: a regular file of at most 1 MiB"
+        }
+        StageError::NotUtf8 { .. } => "save the stage file as UTF-8",
+        StageError::Unreadable { .. } => "paths are relative to the chain file",
     };
-    cx.push(Diagnostic::new(code, proto.span, e.to_string()).with_hint(hint));
+    cx.push(Diagnostic::new(e.code(), proto.span, e.to_string()).with_hint(hint));
 }
 
 fn parsed_protocol<'a>(parsed: &'a [(usize, String, Protocol)], path: &str) -> &'a Protocol {

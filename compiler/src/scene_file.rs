@@ -63,19 +63,12 @@ pub(crate) fn merge(
                 }
                 StageError::Unreadable { .. } => "the path is relative to this protocol's file",
             };
-            let code = match e {
-                StageError::OutsideRoot { .. }
-                | StageError::NotAFile { .. }
-                | StageError::TooLarge { .. } => Code::E0009,
-                StageError::NotUtf8 { .. } => Code::E0008,
-                StageError::Unreadable { .. } => Code::E0006,
-            };
             // The loader words its refusals for chain stages.
             let message = e
                 .to_string()
                 .replacen("stage `", "scene file `", 1)
                 .replace("a stage file", "a scene file");
-            cx.push(Diagnostic::new(code, named.span, message).with_hint(hint));
+            cx.push(Diagnostic::new(e.code(), named.span, message).with_hint(hint));
             return None;
         }
     };

@@ -47,6 +47,21 @@ pub enum StageError {
     Unreadable { path: String, error: std::io::Error },
 }
 
+impl StageError {
+    /// The diagnostic code a refusal is reported under, for a chain stage or a scene file alike:
+    /// E0009 for a path or file the rules refuse, E0008 for text that is not UTF-8, E0006 for a
+    /// file that cannot be read.
+    pub fn code(&self) -> dsl::Code {
+        match self {
+            StageError::OutsideRoot { .. }
+            | StageError::NotAFile { .. }
+            | StageError::TooLarge { .. } => dsl::Code::E0009,
+            StageError::NotUtf8 { .. } => dsl::Code::E0008,
+            StageError::Unreadable { .. } => dsl::Code::E0006,
+        }
+    }
+}
+
 /// Reads the stage files a chain names.
 pub trait StageLoader {
     /// The stage `stage` (a path as the chain writes it) of the chain file `chain_file`.
