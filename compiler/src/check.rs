@@ -1586,6 +1586,16 @@ fn resolve_check(
                 Some(("position".into(), v, Dimension::Length)),
             ))
         }
+        Form::Lifted { item, height } => {
+            lookup(cx, item)?;
+            Some((
+                Check::Lifted {
+                    item: item.clone(),
+                    height: *height,
+                },
+                None,
+            ))
+        }
     }
 }
 
@@ -1641,7 +1651,7 @@ fn apply_tolerance(
         | Check::Volume { tolerance, .. }
         | Check::Panel { tolerance, .. }
         | Check::Position { tolerance, .. } => *tolerance = t,
-        Check::JointRange { .. } | Check::Contact { .. } => {}
+        Check::JointRange { .. } | Check::Contact { .. } | Check::Lifted { .. } => {}
     }
     check
 }

@@ -13,6 +13,8 @@
 //! - `<instrument>.<panel value> = <quantity>`     display value
 //! - `<robot> touches <item>`                      contact
 //! - `<item> near [<x>, <y>, <z>] <unit>`          pose within tolerance
+//! - `<item> lifted <quantity>`                    raised at least this far above where it
+//!   started (its start slot's seat, else its placement): held clear, not resting
 //!
 //! Any form but contact and joint range may end in `within <quantity>` to give its tolerance inline.
 
@@ -98,6 +100,11 @@ pub enum Check {
         pos: [f64; 3],
         tolerance: Tolerance,
     },
+    /// The item stands at least `height` (m) above where it started.
+    Lifted {
+        item: String,
+        height: f64,
+    },
 }
 
 fn default_slot_height() -> f64 {
@@ -144,6 +151,10 @@ pub enum Form {
     Near {
         item: String,
         pos: [f64; 3],
+    },
+    Lifted {
+        item: String,
+        height: f64,
     },
 }
 
@@ -255,12 +266,29 @@ pub fn parse(text: &str) -> Result<Parsed, String> {
             item: item.trim().to_string(),
             pos: [v[0] * q.si, v[1] * q.si, v[2] * q.si],
         }
+    } else if let Some((item, height)) = body.split_once(" lifted ") {
+        let item = item.trim();
+        if item.contains(' ') || item.is_empty() {
+            return Err(format!("`{item}` is not an item name"));
+        }
+        let q = parse_quantity(height.trim())?;
+        if q.dimension != Dimension::Length || q.si <= 0.0 {
+            return Err(format!(
+                "`{}` is not a height: write a length above zero, e.g. `lifted 5 cm`",
+                height.trim()
+            ));
+        }
+        Form::Lifted {
+            item: item.into(),
+            height: q.si,
+        }
     } else {
         let (lhs, cmp, rhs) = [(">=", Cmp::Ge), ("<=", Cmp::Le), ("=", Cmp::Eq)]
             .iter()
             .find_map(|(op, c)| body.split_once(op).map(|(l, r)| (l, *c, r)))
             .ok_or_else(|| {
-                "expected `is`, `was`, `in`, `=`, `>=`, `<=`, `touches` or `near`".to_string()
+                "expected `is`, `was`, `in`, `=`, `>=`, `<=`, `touches`, `near` or `lifted`"
+                    .to_string()
             })?;
         let (labware, field) = split_dot(lhs.trim())
             .ok_or_else(|| format!("`{}` must be `<labware>.<value>`", lhs.trim()))?;
@@ -378,6 +406,11 @@ impl Check {
                 Hand::Item(i) | Hand::Stabilising(i) if i == item => Some(true),
                 _ => None,
             },
+            // Held is lifted; standing in a slot or on the bench is not.
+            Check::Lifted { item, .. } => match w.locations.get(item)? {
+                Location::Held { .. } => Some(true),
+                Location::Slot { .. } | Location::Bench => Some(false),
+            },
             Check::JointRange { .. } | Check::Position { .. } => None,
         }
     }
@@ -405,6 +438,7 @@ mod tests {
             "mixer.speed = {rpm} rpm",
             "arm touches tube",
             "tube near [0.3, 0.2, 0.83] m within 5 mm",
+            "tube lifted 9.5 cm",
         ];
         for t in ok {
             assert!(parse(t).is_ok(), "{t}: {:?}", parse(t));
@@ -495,7 +529,7 @@ mod tests {
     #[test]
     fn rejects_malformed_forms() {
         // Each refused for its own reason, not just refused.
-        let verb = "expected `is`, `was`, `in`, `=`, `>=`, `<=`, `touches` or `near`";
+        let verb = "expected `is`, `was`, `in`, `=`, `>=`, `<=`, `touches`, `near` or `lifted`";
         for (t, why) in [
             ("cycler lid closed", verb),
             ("cycler.lid is", verb),

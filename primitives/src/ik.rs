@@ -1,7 +1,9 @@
 //! Inverse kinematics as a sequence of damped least-squares QPs with joint limits, solved by
-//! clarabel: min ||J dq - e||^2 + lambda ||dq||^2  s.t.  lo - q <= dq <= hi - q, |dq| <= step.
+//! clarabel: min ||J dq - e||^2 + lambda ||dq||^2  s.t.  lo - q <= dq <= hi - q, |dq| <= step;
+//! and [`solve_with`], which picks the robot model's method (the closed form of
+//! [`crate::analytic_ik`] with this QP as its fallback).
 
-use crate::Kinematics;
+use crate::{Kinematics, analytic_ik};
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
     DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SupportedConeT,
@@ -53,6 +55,24 @@ pub fn solve_with(
 ) -> Result<Vec<f64>, IkError> {
     match method {
         robots::IkMethod::Qp => solve_ik(kin, target, seed, &IkOptions::default()),
+        robots::IkMethod::Analytic(arm) => {
+            let opt = IkOptions::default();
+            let local = analytic_ik::base_frame(&arm, kin).inverse() * target;
+            let cands = analytic_ik::candidates(&arm, &local, seed);
+            match analytic_ik::best_within(&cands, &kin.limits(), seed) {
+                Some(q) => {
+                    let e = pose_error(target, &kin.tcp(&q));
+                    let pos = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
+                    let rot = (e[3] * e[3] + e[4] * e[4] + e[5] * e[5]).sqrt();
+                    if pos < opt.pos_tol && rot < opt.rot_tol {
+                        Ok(q)
+                    } else {
+                        solve_ik(kin, target, &q, &opt)
+                    }
+                }
+                None => solve_ik(kin, target, seed, &opt),
+            }
+        }
     }
 }
 

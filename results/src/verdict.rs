@@ -182,6 +182,32 @@ fn measure(
                 holds: distance <= tolerance.value,
             })
         }
+        // How far the item stands above where it started: its start slot's seat (the holder
+        // as it is now), else its placement.
+        Check::Lifted { item, height } => {
+            let spec = spec_of(item)?;
+            let start = match &spec.at {
+                Some(at) => {
+                    let at = render(at, params).ok()?;
+                    let (holder, slot) = at.split_once('.')?;
+                    spec_of(holder)?
+                        .params
+                        .instrument()?
+                        .slot_seat(slot, state_of(holder)?)?
+                        .translation
+                        .vector
+                        .z
+                }
+                None => spec.placement.translation.vector.z,
+            };
+            let value = state_of(item)?.pose.translation.vector.z - start;
+            Some(Measure {
+                value,
+                target: *height,
+                tolerance: 0.0,
+                holds: value >= *height,
+            })
+        }
         // The value the instrument's panel shows against the target.
         Check::Panel {
             instrument,

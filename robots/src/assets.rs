@@ -70,3 +70,35 @@ pub(crate) fn write_if_changed(path: &Path, text: &str) -> Result<(), AssetError
     std::fs::write(&tmp, text).map_err(io)?;
     std::fs::rename(tmp, path).map_err(io)
 }
+
+/// The text between the first `open` and the first `close` after it.
+pub(crate) fn between<'a>(s: &'a str, open: &str, close: &str) -> Option<&'a str> {
+    let a = s.find(open)? + open.len();
+    let b = s[a..].find(close)?;
+    Some(&s[a..a + b])
+}
+
+/// Removes every ` name="..."` attribute called `name`.
+pub(crate) fn strip_attribute(s: &str, name: &str) -> String {
+    let key = format!(" {name}=\"");
+    let mut out = String::with_capacity(s.len());
+    let mut rest = s;
+    while let Some(a) = rest.find(&key) {
+        out.push_str(&rest[..a]);
+        let value = &rest[a + key.len()..];
+        rest = match value.find('"') {
+            Some(b) => &value[b + 1..],
+            None => "",
+        };
+    }
+    out.push_str(rest);
+    out
+}
+
+/// A package file that does not have the shape preparation expects.
+pub(crate) fn malformed(path: &Path, what: &str) -> AssetError {
+    AssetError::Io {
+        path: path.to_path_buf(),
+        source: std::io::Error::new(std::io::ErrorKind::InvalidData, what.to_string()),
+    }
+}

@@ -13,6 +13,7 @@
 //!
 //! No MuJoCo API here: the runtime compiles what `prepare` writes; only file IO for the assets.
 
+pub mod aloha_vx300s;
 mod assets;
 pub mod lod;
 pub mod ur5e_2f85;
@@ -53,10 +54,30 @@ pub enum Detail {
 }
 
 /// How the expert solves inverse kinematics for this arm.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum IkMethod {
     /// Damped least-squares QPs with joint limits (clarabel), on the simulator's Jacobian.
     Qp,
+    /// Closed form for a waist-shoulder-elbow arm with a spherical roll-pitch-roll wrist
+    /// ([`AnalyticArm`]), every branch pruned by the joint limits; the QP stays the fallback.
+    Analytic(AnalyticArm),
+}
+
+/// The geometry an analytic solver needs, for arms shaped like the ViperX 300s: a waist about
+/// the base's z, a shoulder and an elbow about y, a forearm roll about x, a wrist pitch about y
+/// and a wrist roll about x, the three wrist axes meeting at the wrist centre. At zero angles the
+/// arm points along the base's x; the tool frame's z runs along the last link's x and its x
+/// along the last link's y.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AnalyticArm {
+    /// Height of the shoulder axis above the base (m).
+    pub shoulder_height: f64,
+    /// From the shoulder axis to the elbow axis at zero angles: along x, along z (m).
+    pub upper_arm: [f64; 2],
+    /// From the elbow axis to the wrist centre, along x (m).
+    pub forearm: f64,
+    /// From the wrist centre to the TCP along the tool axis (m).
+    pub wrist_to_tcp: f64,
 }
 
 /// How the scripted expert moves this arm: joint-space speed limits (rad/s, rad/s²) and the
@@ -67,6 +88,11 @@ pub struct ExpertLimits {
     pub vmax: f64,
     pub amax: f64,
     pub check_step: f64,
+    /// Free-space motions (approaches, transits) go in a straight line in joint space to the
+    /// goal's IK solution, rather than through IK along a straight tool path: for an arm whose
+    /// wrist passes a singularity on the way (the ViperX's roll-pitch-roll wrist at pitch 0),
+    /// where following the tool path swings the two rolls.
+    pub joint_space_transits: bool,
 }
 
 #[derive(Debug)]
@@ -121,7 +147,7 @@ impl RobotModel {
 }
 
 /// The registry: every robot a protocol may name.
-pub const MODELS: &[&RobotModel] = &[&ur5e_2f85::MODEL];
+pub const MODELS: &[&RobotModel] = &[&ur5e_2f85::MODEL, &aloha_vx300s::MODEL];
 
 pub fn model(name: &str) -> Option<&'static RobotModel> {
     MODELS.iter().copied().find(|m| m.name == name)

@@ -60,6 +60,7 @@ pub const MODEL: RobotModel = RobotModel {
         // At the UR5e's 0.9 m reach, 0.02 rad is about 2 cm of tool travel at worst, less than
         // a rotor slot's width.
         check_step: 0.02,
+        joint_space_transits: false,
     },
     ik: IkMethod::Qp,
     prepare,

@@ -16,6 +16,7 @@ use compiler::motion::{Motion, MotionStep};
 use compiler::params::{Bindings, render};
 use compiler::{SceneInstance, Task};
 use motion::{Active, Arm};
+use primitives::Kinematics;
 use primitives::{Lab, StepFrame};
 use runtime::Scene;
 use runtime::clearance::Clearance;
@@ -219,7 +220,15 @@ impl ExpertPolicy {
                                 self.arms[r].target = traj.end();
                                 true
                             } else {
-                                self.arms[r].target = traj.sample(t);
+                                // A spline through waypoints at a joint's limit can overshoot it
+                                // between them: the command stays inside the limits.
+                                let limits = self.arms[r].kin.limits();
+                                self.arms[r].target = traj
+                                    .sample(t)
+                                    .iter()
+                                    .zip(limits)
+                                    .map(|(q, (lo, hi))| q.clamp(lo, hi))
+                                    .collect();
                                 false
                             }
                         }

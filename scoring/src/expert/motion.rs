@@ -142,6 +142,12 @@ impl ExpertPolicy {
         let mut grid = 200;
         let limits = arm.model.expert_limits;
         let waypoints = if q.motion.through_free_space() {
+            let waypoints = if limits.joint_space_transits && waypoints.len() > 2 {
+                let last = waypoints.last().expect("more than two").clone();
+                vec![waypoints[0].clone(), last]
+            } else {
+                waypoints
+            };
             let frame = &lane.frame.as_ref().expect("set above").1;
             let carried = frame
                 .carried()
