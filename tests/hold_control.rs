@@ -96,6 +96,7 @@ fn every_simulated_task_scores_zero_without_motion() {
             "thermal_cycler.open_lid",
             "thermal_cycler.open_then_close",
             "thermal_mixer.set_parameters",
+            "tube.pick_up",
             "tube.transfer",
             "tube.unscrew_cap",
             "two_arm.close_lid_and_transfer",

@@ -48,6 +48,8 @@ pub const MODEL: RobotModel = RobotModel {
         driver_joint: "left_finger",
         open: 0.057,
         closed: 0.021,
+        state_unit: "m",
+        action_unit: "m",
         // AutoBio's Aloha tasks hold a gripper command for 200 physics steps.
         settle_s: 0.4,
         // The closed pads end 24 mm past the pinch point (their tips at 0.154 m).

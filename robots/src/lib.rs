@@ -31,6 +31,10 @@ pub struct Gripper {
     /// Actuator values for fully open and fully closed.
     pub open: f64,
     pub closed: f64,
+    /// The units of the gripper's state and action values (run records carry them): a
+    /// linkage's driver angle in `rad` commanded in `actuator` units, a slide in `m`.
+    pub state_unit: &'static str,
+    pub action_unit: &'static str,
     /// How long a grasp or release takes to settle (s).
     pub settle_s: f64,
     /// How far the closed fingers reach past the TCP along the tool axis (m; negative: they stop

@@ -38,6 +38,8 @@ pub const MODEL: RobotModel = RobotModel {
         driver_joint: "gripper/right_driver_joint",
         open: 0.0,
         closed: 255.0,
+        state_unit: "rad",
+        action_unit: "actuator",
         settle_s: 0.6,
         // Measured from MuJoCo's contact points: closed, the 2F-85's pads meet a button or a lid
         // pushed along the tool axis 17.5 to 17.8 mm past the pinch point.

@@ -80,10 +80,12 @@ impl Conditions {
         let mut gripper = Vec::new();
         for r in &task.robots {
             if let Some(m) = robots::model(&r.model) {
+                let names = m.state_names();
+                let (arm, grip) = names.split_at(m.dof());
+                state.extend(arm.iter().map(|n| format!("{}/{n} (rad)", r.name)));
                 state.extend(
-                    m.state_names()
-                        .iter()
-                        .map(|n| format!("{}/{n} (rad)", r.name)),
+                    grip.iter()
+                        .map(|n| format!("{}/{n} ({})", r.name, m.gripper.state_unit)),
                 );
                 let names = m.action_names();
                 let (arm, grip) = names.split_at(m.dof());
@@ -91,9 +93,14 @@ impl Conditions {
                     arm.iter()
                         .map(|n| format!("{}/{n} (absolute joint target, rad)", r.name)),
                 );
+                // A command in actuator units is just a command; another unit is named.
+                let unit = match m.gripper.action_unit {
+                    "actuator" => String::new(),
+                    u => format!(" in {u}"),
+                };
                 action.extend(grip.iter().map(|n| {
                     format!(
-                        "{}/{n} (absolute command, open {} to closed {})",
+                        "{}/{n} (absolute command{unit}, open {} to closed {})",
                         r.name, m.gripper.open, m.gripper.closed
                     )
                 }));
