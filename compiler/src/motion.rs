@@ -42,6 +42,9 @@ pub enum Motion {
     Approach { target: Target, standoff: f64 },
     /// A straight line to the target.
     Reach { target: Target },
+    /// A straight line to the target and on along its approach axis by the robot's `enclose`
+    /// depth: a round body gripped from the side deep in the fingers.
+    Enclose { target: Target },
     /// To above the target, at the current height or a clearance above the target when that is
     /// higher: a straight line where that is clear, else planned around what it would hit.
     Transit { target: Target },
@@ -73,6 +76,14 @@ pub enum Motion {
     Lift { height: f64 },
     /// Back off along the tool's approach axis.
     Retreat { distance: f64 },
+    /// Turn the tool in place about its approach axis by `angle` (rad, right-handed about the
+    /// approach direction: seen along it, positive is clockwise, so with the tool pointing down
+    /// at a right-hand thread a positive turn tightens and a negative one loosens). With `thread`,
+    /// the grasped part's affordance, the tool also advances along the axis by the thread's lead.
+    Turn {
+        angle: f64,
+        thread: Option<Target>,
+    },
 }
 
 impl Motion {
@@ -80,6 +91,7 @@ impl Motion {
         match self {
             Motion::Approach { .. } => "approach",
             Motion::Reach { .. } => "reach",
+            Motion::Enclose { .. } => "enclose",
             Motion::Transit { .. } => "transit",
             Motion::Follow { .. } => "follow",
             Motion::Press { .. } => "press",
@@ -89,6 +101,7 @@ impl Motion {
             Motion::Release => "release",
             Motion::Lift { .. } => "lift",
             Motion::Retreat { .. } => "retreat",
+            Motion::Turn { .. } => "turn",
         }
     }
 

@@ -757,6 +757,7 @@ impl Instrument for Params {
             pose,
             symmetry: Symmetry::HalfTurn,
             touch,
+            lead: 0.0,
         })
     }
 }

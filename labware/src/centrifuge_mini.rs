@@ -247,6 +247,7 @@ impl Instrument for Params {
             pose: self.grip_affordance(&s.pose, s.joint("lid")),
             symmetry: Symmetry::HalfTurn,
             touch: false,
+            lead: 0.0,
         })
     }
 }

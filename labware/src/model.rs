@@ -120,6 +120,9 @@ pub enum Symmetry {
     HalfTurn,
     /// Any turn about its z axis: a round cap grasped from above.
     Axial,
+    /// Any turn about its y axis, which runs along the item: a round body gripped from the side,
+    /// from whichever side the tool comes.
+    AboutY,
 }
 
 /// A frame a robot tool can be brought to: z is the approach direction, x the fingers' closing
@@ -131,6 +134,10 @@ pub struct Affordance {
     /// A point the closed fingertips touch (a button pressed, a lid pushed), not a grasp: the TCP
     /// stands off it by the robot's finger reach, which only the robot model knows.
     pub touch: bool,
+    /// How far the grasped part advances along the approach axis per radian it is turned about
+    /// it (m/rad; right-handed about the approach): a screw cap's thread lead, pitch / 2π, so that
+    /// a cap turned to loosen is followed as it rises. 0 for what does not turn on a thread.
+    pub lead: f64,
 }
 
 /// A display an instrument draws: the MuJoCo texture (declared in the model's fragment, 8-bit RGB)

@@ -370,6 +370,7 @@ impl Instrument for Params {
             pose: self.grip_affordance(&s.pose, s.joint("lid"), s.joint("lever")),
             symmetry: Symmetry::HalfTurn,
             touch: false,
+            lead: 0.0,
         })
     }
 }

@@ -510,6 +510,7 @@ impl Instrument for Params {
             pose: s.pose * self.panel().frame * top * pose([0.0; 3], tool),
             symmetry: Symmetry::HalfTurn,
             touch: true,
+            lead: 0.0,
         })
     }
 

@@ -260,24 +260,42 @@ impl Instrument for Params {
                 tolerance,
                 holds: away <= tolerance && tilt <= CAP_TILT,
             },
-            "off" => Measure {
-                value: away,
-                target: self.cap_off_rise,
-                tolerance,
-                holds: away >= self.cap_off_rise,
-            },
+            // Off: risen off the thread along the tube's axis, or clear of the neck to the side;
+            // a cap forced down or askew onto its tube is neither.
+            "off" => {
+                let (rise, aside) = cap_rise_and_aside(self, s)?;
+                Measure {
+                    value: rise.max(aside),
+                    target: self.cap_off_rise,
+                    tolerance,
+                    holds: rise >= self.cap_off_rise || aside >= self.cap_radius,
+                }
+            }
             _ => return None,
         })
     }
 
     fn readout(&self, s: &LabwareState) -> BTreeMap<String, String> {
-        let on = cap_offset(self, s).is_none_or(|(away, _)| away < self.cap_off_rise);
+        let on = cap_rise_and_aside(self, s)
+            .is_none_or(|(rise, aside)| rise < self.cap_off_rise && aside < self.cap_radius);
         BTreeMap::from([("cap".into(), if on { "on" } else { "off" }.into())])
     }
 
     /// `grasp`: the cap from above (approach straight down, fingers closing across the cap at its
     /// mid-height); any turn about the tube's axis grasps it the same.
+    /// `hold`: the body from the side, below the cap (approach across the tube's axis, fingers
+    /// closing across the body at [`HOLD_HEIGHT`] of its height), from any side.
     fn affordance(&self, name: &str, s: &LabwareState) -> Option<Affordance> {
+        if name == "hold" {
+            let across = crate::frame::from_axes([0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]);
+            return Some(Affordance {
+                pose: s.pose
+                    * crate::frame::pose([0.0, 0.0, HOLD_HEIGHT * self.height], across),
+                symmetry: Symmetry::AboutY,
+                touch: false,
+                lead: 0.0,
+            });
+        }
         if name != "grasp" {
             return None;
         }
@@ -292,6 +310,7 @@ impl Instrument for Params {
             pose: cap * mid * crate::frame::pose([0.0; 3], down),
             symmetry: Symmetry::Axial,
             touch: false,
+            lead: self.pitch / std::f64::consts::TAU,
         })
     }
 
@@ -302,6 +321,11 @@ impl Instrument for Params {
         })
     }
 }
+
+/// Where a side grip holds a tube's body, as a fraction of its height: fingers 35 mm tall there
+/// stay above a rack's top plate (a 50 mL tube stands 54 mm deep in its rack) and below the
+/// cap's skirt and the fingertips of a hand gripping the cap.
+const HOLD_HEIGHT: f64 = 0.79;
 
 /// Largest tilt (rad) of a cap on its tube that still counts as on.
 const CAP_TILT: f64 = 0.1;
@@ -314,6 +338,14 @@ pub fn cap_offset(p: &Params, s: &LabwareState) -> Option<(f64, f64)> {
     d.z -= p.cap_seat_z();
     let axis = rel.rotation * nalgebra::Vector3::z();
     Some((d.norm(), axis.z.clamp(-1.0, 1.0).acos()))
+}
+
+/// How far the cap has risen from its seat along the tube's axis (m; negative: pushed down onto
+/// the neck) and how far it stands from the axis (m), from the live poses of tube and cap.
+pub fn cap_rise_and_aside(p: &Params, s: &LabwareState) -> Option<(f64, f64)> {
+    let rel = s.pose.inverse() * s.parts.get("cap")?;
+    let d = rel.translation.vector;
+    Some((d.z - p.cap_seat_z(), (d.x * d.x + d.y * d.y).sqrt()))
 }
 
 #[cfg(test)]
@@ -358,6 +390,14 @@ mod tests {
             .insert("cap".into(), placed[1].1 * translation([0.05, 0.0, 0.0]));
         assert!(!p.measure("cap", "on", None, &beside).unwrap().holds);
         assert!(p.measure("cap", "off", None, &beside).unwrap().holds);
+        // A cap forced 14 mm down onto the neck is not on, and not off either.
+        let mut forced = s.clone();
+        forced
+            .parts
+            .insert("cap".into(), placed[1].1 * translation([0.0, 0.0, -0.014]));
+        assert!(!p.measure("cap", "on", None, &forced).unwrap().holds);
+        assert!(!p.measure("cap", "off", None, &forced).unwrap().holds);
+        assert_eq!(p.readout(&forced)["cap"], "on");
         // Grasped where the cap is now, not where it was seated.
         let g2 = p.affordance("grasp", &lifted).unwrap();
         assert!((position(&g2.pose)[2] - position(&g.pose)[2] - 0.02).abs() < 1e-12);

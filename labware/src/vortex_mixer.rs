@@ -194,6 +194,7 @@ impl Instrument for Params {
                 pose: s.pose * pose(face, tool),
                 symmetry: crate::model::Symmetry::HalfTurn,
                 touch: true,
+                lead: 0.0,
             }
         })
     }

@@ -160,6 +160,12 @@ pub struct StepFrame {
     carried: Option<(String, Pose)>,
     /// How far the robot's closed fingertips reach past its TCP along the tool axis (m).
     finger_reach: f64,
+    /// How far past a round body's axis the robot's side grip puts its TCP (m).
+    enclose: f64,
+    /// The step turns a part in the hand and grips it again (`Turn` motions): a reach to a round
+    /// part then grips it at the turn nearest the tool as it is, not at the step's first choice,
+    /// which the part has turned away from.
+    regrip: bool,
     /// Whether the first affordance allows the grasp turned half a turn (see [`Self::other_grasp`]).
     half_turn: bool,
 }
@@ -167,23 +173,28 @@ pub struct StepFrame {
 impl StepFrame {
     /// Chooses, for the step's first affordance target, the symmetric grasp closest to the current
     /// tool orientation, and measures how `carried` (if any) sits in the hand. `finger_reach`: the
-    /// robot's closed fingertips past its TCP (for presses).
+    /// robot's closed fingertips past its TCP (for presses); `enclose`: how deep its side grip
+    /// takes a round body (`robots::Gripper::enclose`).
     pub fn new(
         motions: &[Motion],
         lab: &Lab,
         tcp_now: &Pose,
         carried: Option<&str>,
         finger_reach: f64,
+        enclose: f64,
     ) -> Result<StepFrame, PlanError> {
         let mut frame = StepFrame {
             turn: Rot::identity(),
             carried: None,
             finger_reach,
+            enclose,
+            regrip: motions.iter().any(|m| matches!(m, Motion::Turn { .. })),
             half_turn: false,
         };
         let first = motions.iter().find_map(|m| match m {
             Motion::Approach { target, .. }
             | Motion::Reach { target }
+            | Motion::Enclose { target }
             | Motion::Transit { target }
             | Motion::Press { target, .. } => Some(target),
             _ => None,
@@ -307,7 +318,26 @@ impl StepFrame {
                 let goal = translated_local(&self.target(target, lab)?, [0.0, 0.0, -standoff]);
                 arc(tcp_now, &goal, 16)
             }
-            Motion::Reach { target } => line(tcp_now, &self.target(target, lab)?, 6),
+            Motion::Reach { target } => {
+                let goal = match target {
+                    Target::Affordance { labware, name, .. } if self.regrip => {
+                        let (_, live) = lab.item(labware)?;
+                        let a = lab.affordance(labware, name, live)?;
+                        if a.symmetry == Symmetry::Axial {
+                            a.pose * closest_turn(&a, tcp_now)
+                        } else {
+                            self.target(target, lab)?
+                        }
+                    }
+                    _ => self.target(target, lab)?,
+                };
+                line(tcp_now, &goal, 6)
+            }
+            Motion::Enclose { target } => line(
+                tcp_now,
+                &translated_local(&self.target(target, lab)?, [0.0, 0.0, self.enclose]),
+                8,
+            ),
             Motion::Transit { target } => {
                 // Above the target at the current height, or `TRANSIT_CLEARANCE` above it when
                 // that is higher (a rotor in its housing, a rack's tubes), in a straight line:
@@ -352,6 +382,25 @@ impl StepFrame {
                 &translated_local(tcp_now, [0.0, 0.0, -distance]),
                 6,
             ),
+            // In steps of at most 0.1 rad, so that the IK's nearest solution follows the turn.
+            Motion::Turn { angle, thread } => {
+                let lead = match thread {
+                    Some(Target::Affordance { labware, name, .. }) => {
+                        let (_, live) = lab.item(labware)?;
+                        lab.affordance(labware, name, live)?.lead
+                    }
+                    _ => 0.0,
+                };
+                let n = ((angle.abs() / 0.1).ceil() as usize).max(1);
+                (0..=n)
+                    .map(|i| {
+                        let a = angle * i as f64 / n as f64;
+                        let mut p = translated_local(tcp_now, [0.0, 0.0, lead * a]);
+                        p.rotation *= axis_angle([0.0, 0.0, 1.0], a);
+                        p
+                    })
+                    .collect()
+            }
             Motion::Press { target, depth } => {
                 let at = self.target(target, lab)?;
                 line(tcp_now, &translated_local(&at, [0.0, 0.0, *depth]), 6)
@@ -400,6 +449,14 @@ fn closest_turn(a: &Affordance, tool: &Pose) -> Rot {
         Symmetry::Axial => {
             let rel = (a.pose.rotation.inverse() * tool.rotation).to_rotation_matrix();
             axis_angle([0.0, 0.0, 1.0], rel[(1, 0)].atan2(rel[(0, 0)]))
+        }
+        // The turn about y nearest to the tool's orientation (it maximises the trace).
+        Symmetry::AboutY => {
+            let rel = (a.pose.rotation.inverse() * tool.rotation).to_rotation_matrix();
+            axis_angle(
+                [0.0, 1.0, 0.0],
+                (rel[(0, 2)] - rel[(2, 0)]).atan2(rel[(0, 0)] + rel[(2, 2)]),
+            )
         }
     }
 }
@@ -461,7 +518,7 @@ mod tests {
         let reach = [Motion::Reach {
             target: grip.clone(),
         }];
-        let plain = StepFrame::new(&reach, &lab, &Pose::identity(), None, 0.0).unwrap();
+        let plain = StepFrame::new(&reach, &lab, &Pose::identity(), None, 0.0, 0.0).unwrap();
         let closed = plain.target(&grip, &lab).unwrap();
         // Lid closed, lever raised: the grip's outward axis is +y, so the tool approaches along -y.
         let z = closed.rotation * Vector3::z();
@@ -470,7 +527,7 @@ mod tests {
         // fingers turned over.
         let flipped_tool =
             closed * labware::frame::pose([0.0; 3], axis_angle([0.0, 0.0, 1.0], 3.0));
-        let flipped = StepFrame::new(&reach, &lab, &flipped_tool, None, 0.0).unwrap();
+        let flipped = StepFrame::new(&reach, &lab, &flipped_tool, None, 0.0, 0.0).unwrap();
         let other = flipped.target(&grip, &lab).unwrap();
         assert!((other.translation.vector - closed.translation.vector).norm() < 1e-12);
         assert!((other.rotation * Vector3::z()).dot(&z) > 1.0 - 1e-9);
@@ -532,7 +589,7 @@ mod tests {
         let place = [Motion::Reach {
             target: seat_b3.clone(),
         }];
-        let frame = StepFrame::new(&place, &lab, &tcp, Some("tube"), 0.0).unwrap();
+        let frame = StepFrame::new(&place, &lab, &tcp, Some("tube"), 0.0, 0.0).unwrap();
         let tool = frame.target(&seat_b3, &lab).unwrap();
         // Where the tube would be with the tool there: exactly on the seat, upright.
         let tube_then = tool * frame.carried.clone().unwrap().1;
@@ -540,7 +597,7 @@ mod tests {
         assert!((tube_then.translation.vector - seat.translation.vector).norm() < 1e-12);
         assert!((tube_then.rotation * Vector3::z()).z > 1.0 - 1e-12);
         assert!(matches!(
-            StepFrame::new(&place, &lab, &tcp, None, 0.0),
+            StepFrame::new(&place, &lab, &tcp, None, 0.0, 0.0),
             Err(PlanError::NothingCarried)
         ));
     }

@@ -18,9 +18,10 @@ use crate::assets::{self, AssetError};
 use crate::{AnalyticArm, Detail, ExpertLimits, Gripper, IkMethod, RobotModel, lod};
 use std::path::{Path, PathBuf};
 
-/// From the gripper link to the pinch point along the fingers (m): the middle of the pads'
-/// flat inner faces, which run from 0.064 to 0.154 m.
-const TCP_OFFSET: f64 = 0.13;
+/// From the gripper link to the pinch point along the fingers (m): 4 mm short of the pads' tips
+/// (their flat inner faces run from 0.064 to 0.154 m), so that a cap gripped at its middle
+/// leaves the fingertips inside its skirt, clear of a second hand holding the tube below it.
+const TCP_OFFSET: f64 = 0.15;
 /// Where the gripper link sits on the wrist link, along the wrist's x axis (m).
 const GRIPPER_LINK: f64 = 0.069744;
 
@@ -52,8 +53,12 @@ pub const MODEL: RobotModel = RobotModel {
         action_unit: "m",
         // AutoBio's Aloha tasks hold a gripper command for 200 physics steps.
         settle_s: 0.4,
-        // The closed pads end 24 mm past the pinch point (their tips at 0.154 m).
-        finger_reach: 0.024,
+        // The closed pads end 4 mm past the pinch point (their tips at 0.154 m).
+        finger_reach: 0.004,
+        // The fingers taper from 62 mm tall at their root to 10 mm at the tips: a tube gripped
+        // from the side sits at 0.13 m on the gripper link, where they are 26 mm tall, rather
+        // than between the narrow tips, about which it would pivot.
+        enclose: TCP_OFFSET - 0.13,
     },
     tcp_site: "tcp",
     wrist_camera: "wrist_cam",
@@ -64,10 +69,11 @@ pub const MODEL: RobotModel = RobotModel {
     home: &[0.0, -0.96, 1.16, 0.0, -0.3, 0.0],
     // The ViperX 300s' rated reach (750 mm) plus the fingers past the gripper link.
     reach: 0.85,
-    // As AutoBio's pickup expert (TOPP 0.8 rad/s, 0.8 rad/s²).
+    // Between AutoBio's Aloha experts: its pickup's 0.8 rad/s and 0.8 rad/s², its screw tasks' 2 to
+    // 3 rad/s and 1.5 to 2.5 rad/s² (a cap needs several regrasps within the time limit).
     expert_limits: ExpertLimits {
-        vmax: 0.8,
-        amax: 0.8,
+        vmax: 2.5,
+        amax: 2.5,
         // At its 0.75 m reach, 0.02 rad is at most 15 mm of tool travel: under a tube's width.
         check_step: 0.02,
         joint_space_transits: true,
@@ -81,8 +87,9 @@ pub const MODEL: RobotModel = RobotModel {
     prepare,
 };
 
-/// Joint damping and armature as AutoBio's Aloha (`robot/aloha_left.xml`), and the position
-/// servos' gains.
+/// Joint damping and armature as AutoBio's Aloha (`robot/aloha_left.xml`); the position servos'
+/// gains are gym-aloha's for the waist, shoulder and elbow (AutoBio's 43 at the waist let a
+/// twisted cap's reaction swing the tool 5 mm sideways) and between the two for the wrist.
 const JOINTS: [(&str, f64, f64, f64); 6] = [
     ("waist", 5.76, 0.0, 43.0),
     ("shoulder", 20.0, 0.395, 265.0),
@@ -139,10 +146,12 @@ fn prepare(deps: &Path, detail: Detail) -> Result<PathBuf, AssetError> {
             &format!("<joint name=\"{finger}\" damping=\"40\" armature=\"0.243\" "),
         );
     }
-    // The pads: AutoBio's finger friction with torsion (a turned cap), MuJoCo's default softness.
+    // The pads: AutoBio's finger friction with torsion (a turned cap), and stiff contacts that
+    // take precedence over the other geom's: MuJoCo's default softness scales with the bodies'
+    // mass, and on a 19 g cap it let 15 N of grip sink the pads 4 mm in, down to the tube's neck.
     arm = arm.replace(
         r#"condim="4" solimp="2 1 0.01" solref="0.01 1" friction="1 0.005 0.0001""#,
-        r#"condim="6" friction="1 0.005 0.0005""#,
+        r#"condim="6" friction="1 0.005 0.0005" priority="1" solref="0.004 1" solimp="0.95 0.99 0.001""#,
     );
     // The tool frame at the pinch point: z along the fingers (the gripper link's x), x along
     // the fingers' closing (its y). The camera sits above the gripper looking past the pads
@@ -177,10 +186,10 @@ fn prepare(deps: &Path, detail: Detail) -> Result<PathBuf, AssetError> {
     <exclude body1="left_finger_link" body2="right_finger_link"/>
   </contact>
   <equality>
-    <joint joint1="right_finger" joint2="left_finger" polycoef="0 -1 0 0 0"/>
+    <joint joint1="right_finger" joint2="left_finger" polycoef="0 -1 0 0 0" solref="0.002 1" solimp="0.99 0.999 0.0001"/>
   </equality>
   <actuator>
-{servos}    <position name="gripper" joint="left_finger" kp="400" kv="20" ctrlrange="0.021 0.057" forcerange="-20 20"/>
+{servos}    <position name="gripper" joint="left_finger" kp="2000" kv="124" ctrlrange="0.021 0.057" forcerange="-15 15"/>
   </actuator>
 </mujoco>
 "#

@@ -40,6 +40,10 @@ pub struct Gripper {
     /// How far the closed fingers reach past the TCP along the tool axis (m; negative: they stop
     /// short of it): where a press or push with the closed gripper as a finger touches.
     pub finger_reach: f64,
+    /// How far past a round body's axis a grip from the side puts the TCP, so that the body sits
+    /// in the broad part of the fingers and cannot pivot between two narrow pads (m; 0 for pads
+    /// as broad at the TCP as anywhere).
+    pub enclose: f64,
 }
 
 impl Gripper {

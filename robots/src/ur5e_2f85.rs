@@ -44,6 +44,8 @@ pub const MODEL: RobotModel = RobotModel {
         // Measured from MuJoCo's contact points: closed, the 2F-85's pads meet a button or a lid
         // pushed along the tool axis 17.5 to 17.8 mm past the pinch point.
         finger_reach: 0.0175,
+        // The 2F-85's pads are as broad at the pinch point as anywhere.
+        enclose: 0.0,
     },
     tcp_site: "tcp",
     wrist_camera: "wrist_cam",

@@ -1,6 +1,7 @@
 //! `unscrew_cap`: twist a cap off a stabilised tube.
 
 use super::prelude::*;
+use crate::motion::{Motion, MotionStep, Target};
 
 pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     name: "unscrew_cap",
@@ -9,7 +10,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     requires: "the hand is empty; the cap is on; the tube is in a slot or gripped by another robot",
     leaves: "the cap off, in the robot's hand",
     effect,
-    motions: None,
+    motions: Some(motions),
 };
 
 fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
@@ -33,4 +34,53 @@ fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
     w.set_part(&lw, "cap", "off");
     w.hands.insert(robot.into(), Hand::Cap(lw));
     Ok(())
+}
+
+/// How far one grip turns the cap (rad): a wrist turns about a half turn either way.
+const TURN_PER_GRIP: f64 = 0.75 * std::f64::consts::PI;
+/// Grips to turn the cap off: six thirds of a turn, two turns of a 3 mm pitch, past the nut's
+/// engagement (a 50 mL cap's thread engages over 2.2 turns, the last of which is lead-in).
+const GRIPS: usize = 5;
+
+/// Grasp the cap from above and turn it anticlockwise (seen from above), following it up the
+/// thread, regrasping as a hand does: let go, back off, turn back in the air, grip again where
+/// the cap now is. Then lift it clear.
+fn motions(step: &MotionStep) -> Vec<Motion> {
+    let cap = Target::Affordance {
+        labware: step.arg("on"),
+        name: "grasp".into(),
+        goals: Vec::new(),
+    };
+    let mut m = vec![
+        Motion::Approach {
+            target: cap.clone(),
+            standoff: 0.04,
+        },
+        Motion::Reach {
+            target: cap.clone(),
+        },
+        Motion::Grasp,
+    ];
+    for grip in 0..GRIPS {
+        m.push(Motion::Turn {
+            angle: -TURN_PER_GRIP,
+            thread: Some(cap.clone()),
+        });
+        if grip + 1 < GRIPS {
+            m.extend([
+                Motion::Release,
+                Motion::Retreat { distance: 0.02 },
+                Motion::Turn {
+                    angle: TURN_PER_GRIP,
+                    thread: None,
+                },
+                Motion::Reach {
+                    target: cap.clone(),
+                },
+                Motion::Grasp,
+            ]);
+        }
+    }
+    m.push(Motion::Lift { height: 0.05 });
+    m
 }

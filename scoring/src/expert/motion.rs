@@ -57,8 +57,15 @@ impl ExpertPolicy {
         let lane = &mut self.lanes[r];
         let tcp_now = arm.kin.tcp(&arm.target);
         if lane.frame.as_ref().map(|(s, _)| *s) != Some(q.step) {
-            let reach = arm.model.gripper.finger_reach;
-            let frame = StepFrame::new(&step.motions, &lab, &tcp_now, step.on.as_deref(), reach)
+            let g = arm.model.gripper;
+            let frame = StepFrame::new(
+                &step.motions,
+                &lab,
+                &tcp_now,
+                step.on.as_deref(),
+                g.finger_reach,
+                g.enclose,
+            )
                 .map_err(|e| planning(context.clone(), e))?;
             lane.frame = Some((q.step, frame));
             lane.step_moved = false;
