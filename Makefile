@@ -12,7 +12,8 @@ build: setup
 # The main job: check every shipped protocol, then the scripted expert on both thermal-cycler
 # protocols, the close-then-open chain, the tube transfer, the mini centrifuge's lid, the 5430's
 # lid opened with its key, the 5430's rotor balanced and the thermal mixer's panel (20 seeded
-# episodes each) and on the two-arm task (5): a results table, results JSON and one MCAP recording per episode under
+# episodes each), on the two-arm task and the Aloha tasks (tube pick-up with one arm, the cap
+# unscrewed with two) (5 each): a results table, results JSON and one MCAP recording per episode under
 # out/demo/. Then a model server in the loop: the reference openpi server answering with those
 # recordings, through `eval --suite suites/demo.toml --model`, its run packed as a leaderboard
 # bundle, verified, and built into the site out/demo/site/index.html (scripts/demo-model.sh). Last, the no-motion control
@@ -32,6 +33,8 @@ demo: build
 	  --episodes 20 --seed 0 --out out/demo --record
 	$(CARGO) run --release --quiet -- eval \
 	  --protocol protocols/two_arm/close_lid_and_transfer.toml \
+	  --protocol protocols/tube/pick_up.toml \
+	  --protocol protocols/tube/unscrew_cap.toml \
 	  --episodes 5 --seed 0 --out out/demo --record
 	CARGO="$(CARGO)" ./scripts/demo-model.sh
 	$(CARGO) run --release --quiet -- eval --policy hold \
@@ -41,6 +44,8 @@ demo: build
 	  --protocol protocols/thermal_mixer/set_parameters.toml \
 	  --protocol protocols/centrifuge_5430/open_lid.toml \
 	  --protocol protocols/centrifuge/insert_symmetric.toml \
+	  --protocol protocols/tube/pick_up.toml \
+	  --protocol protocols/tube/unscrew_cap.toml \
 	  --episodes 3 --seed 0
 
 test: setup

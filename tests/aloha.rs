@@ -98,3 +98,72 @@ fn a_tube_lifted_and_then_let_go_fails_the_pick_up() {
     assert!(!lifted.holds && lifted.value < 0.05, "{lifted:?}");
     assert!(!p("arm touches tube").holds);
 }
+
+/// The expert until the cap has risen `rise` metres on its thread, then no motion (the hands
+/// keep their grips: the held targets and gripper commands stay).
+struct StopAt {
+    expert: ExpertPolicy,
+    tube: usize,
+    model: labware::Model,
+    rise: f64,
+    stopped: Option<Vec<Vec<f64>>>,
+}
+
+impl Policy for StopAt {
+    fn name(&self) -> String {
+        "stop-at".into()
+    }
+
+    fn act(&mut self, obs: &Observation) -> Result<Vec<Vec<f64>>, PolicyError> {
+        if let Some(a) = &self.stopped {
+            return Ok(a.clone());
+        }
+        let a = self.expert.act(obs)?;
+        let tube = &obs.privileged.labware[self.tube];
+        let labware::Model::Tube(p) = &self.model else {
+            panic!("a tube model")
+        };
+        let (risen, _) = labware::tube::cap_rise_and_aside(p, tube).unwrap();
+        if risen >= self.rise {
+            self.stopped = Some(a.clone());
+        }
+        Ok(a)
+    }
+}
+
+#[test]
+fn a_cap_turned_half_way_off_is_not_off() {
+    let mut t = compile("protocols/tube/unscrew_cap.toml");
+    t.time_limit_s = 25.0;
+    let tube = t.labware_index("tube").unwrap();
+    let model = t.labware[tube].params.clone();
+    let r = run_with(&t, 3, &Default::default(), |t, s, i| {
+        Box::new(StopAt {
+            expert: ExpertPolicy::new(t, s, i).unwrap(),
+            tube,
+            model,
+            rise: 0.002,
+            stopped: None,
+        })
+    });
+    assert!(!r.success && r.error.is_none(), "{r:?}");
+    let off = r
+        .verdict
+        .predicates()
+        .iter()
+        .find(|p| p.text == "tube.cap is off")
+        .unwrap()
+        .clone();
+    // Two thirds of a turn up the thread, still on it: risen 2 to 4 mm of the 10 mm off needs.
+    assert!(
+        !off.holds && off.value > 0.0015 && off.value < 0.005,
+        "{off:?}"
+    );
+}
+
+#[test]
+fn the_expert_unscrews_the_cap_with_two_arms() {
+    let t = compile("protocols/tube/unscrew_cap.toml");
+    let r = run(&t, 5, "expert");
+    assert!(r.success, "{:#?}", r.verdict);
+}

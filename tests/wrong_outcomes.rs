@@ -2,8 +2,8 @@
 //! tests/tube_transfer.rs, every task's no-motion run in tests/hold_control.rs): a lid left shut
 //! fails open_lid; a lid shut without pressing the lever fails close_lid on the latch rule; a chain
 //! that finishes only its first stage gets partial credit and fails; the two-arm task fails when
-//! only the lid is done. (The tube-unscrewing task has no expert motions yet: its control is the
-//! no-motion run in tests/hold_control.rs.)
+//! only the lid is done. (The Aloha tasks' wrong outcomes, a tube let go and a cap half
+//! unscrewed, are in tests/aloha.rs.)
 
 mod common;
 

@@ -260,15 +260,16 @@ impl Instrument for Params {
                 tolerance,
                 holds: away <= tolerance && tilt <= CAP_TILT,
             },
-            // Off: risen off the thread along the tube's axis, or clear of the neck to the side;
-            // a cap forced down or askew onto its tube is neither.
+            // Off: risen off the thread along the tube's axis, or put down clear of the neck
+            // (its skirt no longer around it). A cap forced down onto its tube, or torn sideways
+            // into the neck (which a thread does not allow; a simulated one may let go), is not.
             "off" => {
                 let (rise, aside) = cap_rise_and_aside(self, s)?;
                 Measure {
-                    value: rise.max(aside),
+                    value: rise.max(aside - self.radius - self.cap_radius + self.cap_off_rise),
                     target: self.cap_off_rise,
                     tolerance,
-                    holds: rise >= self.cap_off_rise || aside >= self.cap_radius,
+                    holds: rise >= self.cap_off_rise || aside >= self.radius + self.cap_radius,
                 }
             }
             _ => return None,
@@ -276,33 +277,37 @@ impl Instrument for Params {
     }
 
     fn readout(&self, s: &LabwareState) -> BTreeMap<String, String> {
-        let on = cap_rise_and_aside(self, s)
-            .is_none_or(|(rise, aside)| rise < self.cap_off_rise && aside < self.cap_radius);
+        let on = cap_rise_and_aside(self, s).is_none_or(|(rise, aside)| {
+            rise < self.cap_off_rise && aside < self.radius + self.cap_radius
+        });
         BTreeMap::from([("cap".into(), if on { "on" } else { "off" }.into())])
     }
 
     /// `grasp`: the cap from above (approach straight down, fingers closing across the cap at its
     /// mid-height); any turn about the tube's axis grasps it the same.
+    /// `cap_start`: the grasp of a cap set coaxially on the mouth, ready to be screwed on.
     /// `hold`: the body from the side, below the cap (approach across the tube's axis, fingers
     /// closing across the body at [`HOLD_HEIGHT`] of its height), from any side.
     fn affordance(&self, name: &str, s: &LabwareState) -> Option<Affordance> {
         if name == "hold" {
             let across = crate::frame::from_axes([0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]);
             return Some(Affordance {
-                pose: s.pose
-                    * crate::frame::pose([0.0, 0.0, HOLD_HEIGHT * self.height], across),
+                pose: s.pose * crate::frame::pose([0.0, 0.0, HOLD_HEIGHT * self.height], across),
                 symmetry: Symmetry::AboutY,
                 touch: false,
                 lead: 0.0,
             });
         }
-        if name != "grasp" {
-            return None;
-        }
-        // The cap where it is now (its frame: the seat's, moved with it), else where it sits.
-        let cap = match s.parts.get("cap") {
-            Some(c) => *c,
-            None => s.pose * translation([0.0, 0.0, self.cap_seat_z()]),
+        // The cap where it is now (its frame: the seat's, moved with it), else where it sits;
+        // for `cap_start`, where it goes to be screwed on: coaxial over the mouth, its thread's
+        // lowest turn on the bolt's highest.
+        let cap = match (name, s.parts.get("cap")) {
+            ("grasp", Some(c)) => *c,
+            ("grasp", None) => s.pose * translation([0.0, 0.0, self.cap_seat_z()]),
+            ("cap_start", _) => {
+                s.pose * translation([0.0, 0.0, self.cap_seat_z() + CAP_START_TURNS * self.pitch])
+            }
+            _ => return None,
         };
         let down = crate::frame::from_axes([1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]);
         let mid = translation([0.0, 0.0, -self.cap_height / 2.0 + 0.004]);
@@ -326,6 +331,10 @@ impl Instrument for Params {
 /// stay above a rack's top plate (a 50 mL tube stands 54 mm deep in its rack) and below the
 /// cap's skirt and the fingertips of a hand gripping the cap.
 const HOLD_HEIGHT: f64 = 0.79;
+
+/// How far above its seat, in turns of the thread, a cap is set on the mouth to be screwed on:
+/// the nut engages the bolt over 2.2 turns.
+const CAP_START_TURNS: f64 = 2.3;
 
 /// Largest tilt (rad) of a cap on its tube that still counts as on.
 const CAP_TILT: f64 = 0.1;
@@ -398,6 +407,11 @@ mod tests {
         assert!(!p.measure("cap", "on", None, &forced).unwrap().holds);
         assert!(!p.measure("cap", "off", None, &forced).unwrap().holds);
         assert_eq!(p.readout(&forced)["cap"], "on");
+        // Nor is one torn 20 mm sideways into the neck at its seat's height.
+        let mut torn = s.clone();
+        torn.parts
+            .insert("cap".into(), placed[1].1 * translation([0.02, 0.0, 0.0]));
+        assert!(!p.measure("cap", "off", None, &torn).unwrap().holds);
         // Grasped where the cap is now, not where it was seated.
         let g2 = p.affordance("grasp", &lifted).unwrap();
         assert!((position(&g2.pose)[2] - position(&g.pose)[2] - 0.02).abs() < 1e-12);

@@ -66,7 +66,7 @@ impl ExpertPolicy {
                 g.finger_reach,
                 g.enclose,
             )
-                .map_err(|e| planning(context.clone(), e))?;
+            .map_err(|e| planning(context.clone(), e))?;
             lane.frame = Some((q.step, frame));
             lane.step_moved = false;
             self.events.push(StageEvent {
