@@ -24,14 +24,6 @@ pub enum Target {
     /// template over the task's parameters), lined up with the seat's axis (upright in a rack,
     /// leaning in a rotor) and `above` metres out along it.
     Seat { location: String, above: f64 },
-    /// The tool pose that brings the held part's affordance `from` (where it is now) onto the
-    /// item's affordance `to`, keeping the hand's hold and the part's heading about `to`'s axis
-    /// where `to` is round: a cap carried back onto its tube's mouth.
-    Carry {
-        labware: String,
-        from: String,
-        to: String,
-    },
     /// The button that moves an instrument's panel value `param` toward `value` (a quantity as
     /// the step renders it, e.g. `"1200 rpm"`), chosen from the live value.
     Button {

@@ -285,7 +285,6 @@ impl Instrument for Params {
 
     /// `grasp`: the cap from above (approach straight down, fingers closing across the cap at its
     /// mid-height); any turn about the tube's axis grasps it the same.
-    /// `cap_start`: the grasp of a cap set coaxially on the mouth, ready to be screwed on.
     /// `hold`: the body from the side, below the cap (approach across the tube's axis, fingers
     /// closing across the body at [`HOLD_HEIGHT`] of its height), from any side.
     fn affordance(&self, name: &str, s: &LabwareState) -> Option<Affordance> {
@@ -298,16 +297,13 @@ impl Instrument for Params {
                 lead: 0.0,
             });
         }
-        // The cap where it is now (its frame: the seat's, moved with it), else where it sits;
-        // for `cap_start`, where it goes to be screwed on: coaxial over the mouth, its thread's
-        // lowest turn on the bolt's highest.
-        let cap = match (name, s.parts.get("cap")) {
-            ("grasp", Some(c)) => *c,
-            ("grasp", None) => s.pose * translation([0.0, 0.0, self.cap_seat_z()]),
-            ("cap_start", _) => {
-                s.pose * translation([0.0, 0.0, self.cap_seat_z() + CAP_START_TURNS * self.pitch])
-            }
-            _ => return None,
+        if name != "grasp" {
+            return None;
+        }
+        // The cap where it is now (its frame: the seat's, moved with it), else where it sits.
+        let cap = match s.parts.get("cap") {
+            Some(c) => *c,
+            None => s.pose * translation([0.0, 0.0, self.cap_seat_z()]),
         };
         let down = crate::frame::from_axes([1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]);
         let mid = translation([0.0, 0.0, -self.cap_height / 2.0 + 0.004]);
@@ -331,10 +327,6 @@ impl Instrument for Params {
 /// stay above a rack's top plate (a 50 mL tube stands 54 mm deep in its rack) and below the
 /// cap's skirt and the fingertips of a hand gripping the cap.
 const HOLD_HEIGHT: f64 = 0.79;
-
-/// How far above its seat, in turns of the thread, a cap is set on the mouth to be screwed on:
-/// the nut engages the bolt over 2.2 turns.
-const CAP_START_TURNS: f64 = 2.3;
 
 /// Largest tilt (rad) of a cap on its tube that still counts as on.
 const CAP_TILT: f64 = 0.1;

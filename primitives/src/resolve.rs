@@ -267,21 +267,7 @@ impl StepFrame {
                 param,
                 value,
             } => Ok(self.tool_at(&lab.button(labware, param, value)?)),
-            Target::Carry { .. } => Err(PlanError::NothingCarried),
         }
-    }
-
-    /// The tool pose for a [`Target::Carry`] from the tool at `tcp_now`; other targets as
-    /// [`Self::target`].
-    fn target_from(&self, target: &Target, lab: &Lab, tcp_now: &Pose) -> Result<Pose, PlanError> {
-        let Target::Carry { labware, from, to } = target else {
-            return self.target(target, lab);
-        };
-        let (_, live) = lab.item(labware)?;
-        let held = lab.affordance(labware, from, live)?;
-        let goal = lab.affordance(labware, to, live)?;
-        let goal = goal.pose * closest_turn(&goal, &held.pose);
-        Ok(goal * held.pose.inverse() * tcp_now)
     }
 
     /// Measures again how the carried item (if any) sits in the hand, with the tool at
@@ -329,10 +315,7 @@ impl StepFrame {
     ) -> Result<Vec<Pose>, PlanError> {
         Ok(match motion {
             Motion::Approach { target, standoff } => {
-                let goal = translated_local(
-                    &self.target_from(target, lab, tcp_now)?,
-                    [0.0, 0.0, -standoff],
-                );
+                let goal = translated_local(&self.target(target, lab)?, [0.0, 0.0, -standoff]);
                 arc(tcp_now, &goal, 16)
             }
             Motion::Reach { target } => {
@@ -346,7 +329,7 @@ impl StepFrame {
                             self.target(target, lab)?
                         }
                     }
-                    _ => self.target_from(target, lab, tcp_now)?,
+                    _ => self.target(target, lab)?,
                 };
                 line(tcp_now, &goal, 6)
             }
@@ -402,10 +385,7 @@ impl StepFrame {
             // In steps of at most 0.1 rad, so that the IK's nearest solution follows the turn.
             Motion::Turn { angle, thread } => {
                 let lead = match thread {
-                    Some(Target::Affordance { labware, name, .. })
-                    | Some(Target::Carry {
-                        labware, to: name, ..
-                    }) => {
+                    Some(Target::Affordance { labware, name, .. }) => {
                         let (_, live) = lab.item(labware)?;
                         lab.affordance(labware, name, live)?.lead
                     }

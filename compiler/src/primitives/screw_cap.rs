@@ -1,7 +1,6 @@
 //! `screw_cap`: screw a held cap back on.
 
 use super::prelude::*;
-use crate::motion::{Motion, MotionStep, Target};
 
 pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     name: "screw_cap",
@@ -10,7 +9,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     requires: "the robot holds `on`'s cap; the tube is in a slot or gripped by another robot",
     leaves: "the cap on; the hand empty",
     effect,
-    motions: Some(motions),
+    motions: None,
 };
 
 fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
@@ -34,52 +33,4 @@ fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
     w.set_part(&lw, "cap", "on");
     w.hands.insert(robot.into(), Hand::Empty);
     Ok(())
-}
-
-/// How far one grip turns the cap (rad): as `unscrew_cap`'s.
-const TURN_PER_GRIP: f64 = 8.0 * std::f64::consts::PI / 9.0;
-/// Grips to screw the cap down from where it is set on the mouth to its seat (2.3 turns):
-/// 960 degrees, the last grip turning it home against the seat.
-const GRIPS: usize = 6;
-
-/// Carry the held cap onto the tube's mouth, coaxial, and turn it clockwise (seen from above),
-/// following it down the thread, regrasping between turns; then let go and back off.
-fn motions(step: &MotionStep) -> Vec<Motion> {
-    let tube = step.arg("on");
-    let onto = Target::Carry {
-        labware: tube.clone(),
-        from: "grasp".into(),
-        to: "cap_start".into(),
-    };
-    let cap = Target::Affordance {
-        labware: tube,
-        name: "grasp".into(),
-        goals: Vec::new(),
-    };
-    // A straight line, not a planned approach: the cap travels in the hand, which the planner's
-    // collision model (items carried whole) does not know of.
-    let mut m = vec![Motion::Reach {
-        target: onto.clone(),
-    }];
-    for grip in 0..GRIPS {
-        m.push(Motion::Turn {
-            angle: TURN_PER_GRIP,
-            thread: Some(onto.clone()),
-        });
-        m.push(Motion::Release);
-        if grip + 1 < GRIPS {
-            m.extend([
-                Motion::Turn {
-                    angle: -TURN_PER_GRIP,
-                    thread: None,
-                },
-                Motion::Reach {
-                    target: cap.clone(),
-                },
-                Motion::Grasp,
-            ]);
-        }
-    }
-    m.push(Motion::Retreat { distance: 0.05 });
-    m
 }
