@@ -450,13 +450,11 @@ fn closest_turn(a: &Affordance, tool: &Pose) -> Rot {
             let rel = (a.pose.rotation.inverse() * tool.rotation).to_rotation_matrix();
             axis_angle([0.0, 0.0, 1.0], rel[(1, 0)].atan2(rel[(0, 0)]))
         }
-        // The turn about y nearest to the tool's orientation (it maximises the trace).
+        // The turn about y that points the approach where the tool points now (projected
+        // across the item's axis): the hold is taken from the side the tool comes from.
         Symmetry::AboutY => {
             let rel = (a.pose.rotation.inverse() * tool.rotation).to_rotation_matrix();
-            axis_angle(
-                [0.0, 1.0, 0.0],
-                (rel[(0, 2)] - rel[(2, 0)]).atan2(rel[(0, 0)] + rel[(2, 2)]),
-            )
+            axis_angle([0.0, 1.0, 0.0], rel[(0, 2)].atan2(rel[(2, 2)]))
         }
     }
 }
@@ -600,5 +598,77 @@ mod tests {
             StepFrame::new(&place, &lab, &tcp, None, 0.0, 0.0),
             Err(PlanError::NothingCarried)
         ));
+    }
+
+    /// A tube held from the side is approached from where the tool comes, across its axis, and
+    /// taken `enclose` deep; a cap turned to loosen is followed up its thread by its lead.
+    #[test]
+    fn a_side_hold_comes_from_the_tool_and_a_turned_cap_rises_by_its_lead() {
+        let tube = labware::Model::for_kind("tube_50ml").unwrap();
+        let model = tube.instrument().unwrap();
+        let labware::Model::Tube(p) = &tube else {
+            panic!("a tube")
+        };
+        let at = labware::frame::pose([0.1, -0.2, 0.83], Rot::identity());
+        let placed = model.place("tube", &at);
+        let s = LabwareState {
+            name: "tube".into(),
+            pose: at,
+            joints: BTreeMap::new(),
+            parts: BTreeMap::from([("cap".into(), placed[1].1)]),
+            logic: BTreeMap::new(),
+            touched_by: Vec::new(),
+        };
+        let params = Bindings::new();
+        let lab = Lab {
+            items: vec![("tube", model, &s)],
+            params: &params,
+        };
+        let hold = Target::Affordance {
+            labware: "tube".into(),
+            name: "hold".into(),
+            goals: Vec::new(),
+        };
+        // A tool pointing along +y (coming from -y), fingers closing along x.
+        let tool = labware::frame::pose(
+            [0.1, -0.5, 0.92],
+            labware::frame::from_axes([1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]),
+        );
+        let motions = [Motion::Enclose {
+            target: hold.clone(),
+        }];
+        let frame = StepFrame::new(&motions, &lab, &tool, None, 0.0, 0.03).unwrap();
+        let path = frame.poses(&motions[0], &lab, &tool).unwrap();
+        let end = path.last().unwrap();
+        let z = end.rotation * Vector3::z();
+        assert!((z - Vector3::y()).norm() < 1e-9, "approach {z:?}");
+        // On the tube's axis, then 30 mm on through it.
+        let axis = end.translation.vector - Vector3::new(0.1, -0.2, 0.0);
+        assert!(
+            (axis.x).abs() < 1e-9 && (axis.y - 0.03).abs() < 1e-9,
+            "{axis:?}"
+        );
+        // Turned to loosen (anticlockwise from above: negative about a downward tool), the tool
+        // rises a pitch per turn.
+        let cap = Target::Affordance {
+            labware: "tube".into(),
+            name: "grasp".into(),
+            goals: Vec::new(),
+        };
+        let grip = model.affordance("grasp", &s).unwrap().pose;
+        let turn = Motion::Turn {
+            angle: -std::f64::consts::PI,
+            thread: Some(cap),
+        };
+        let path = frame.poses(&turn, &lab, &grip).unwrap();
+        let rise = path.last().unwrap().translation.vector.z - grip.translation.vector.z;
+        assert!((rise - p.pitch / 2.0).abs() < 1e-12, "rose {rise}");
+        assert!(path.len() > 30, "in steps of at most 0.1 rad");
+        let back = Motion::Turn {
+            angle: std::f64::consts::PI,
+            thread: None,
+        };
+        let path = frame.poses(&back, &lab, &grip).unwrap();
+        assert!((path.last().unwrap().translation.vector - grip.translation.vector).norm() < 1e-12);
     }
 }
