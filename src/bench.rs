@@ -1,5 +1,6 @@
 //! `autobio bench`: throughput figures, each measured in the same run as its baseline.
-//! - physics, per task scene (by default the thermal cycler's and the tube-transfer scene): harness
+//! - physics, per task scene (by default the thermal cycler's, the tube transfer's, the two-arm
+//!   task's and the two-Aloha unscrewing scene, the thread under load): harness
 //!   steps/s (episode stepping with instrument logic) vs a bare `mj_step` loop on the same compiled
 //!   model and initial state;
 //! - rendering: frames/s of one 224x224 camera image (both task cameras, alternating);
@@ -50,7 +51,8 @@ pub struct BenchArgs {
         default_values = [
             "protocols/thermal_cycler/close_lid.toml",
             "protocols/tube/transfer.toml",
-            "protocols/two_arm/close_lid_and_transfer.toml"
+            "protocols/two_arm/close_lid_and_transfer.toml",
+            "protocols/tube/unscrew_cap.toml"
         ]
     )]
     protocol: Vec<std::path::PathBuf>,
