@@ -16,7 +16,8 @@
 //! - `<item> lifted <quantity>`                    raised at least this far above where it
 //!   started (its start slot's seat, else its placement): held clear, not resting
 //!
-//! Any form but contact and joint range may end in `within <quantity>` to give its tolerance inline.
+//! Any form but contact, joint range and `lifted` may end in `within <quantity>` to give its
+//! tolerance inline.
 
 use crate::params::{Bindings, render};
 use crate::world::{Hand, Location, World};

@@ -323,9 +323,10 @@ impl Instrument for Params {
     }
 }
 
-/// Where a side grip holds a tube's body, as a fraction of its height: fingers 35 mm tall there
-/// stay above a rack's top plate (a 50 mL tube stands 54 mm deep in its rack) and below the
-/// cap's skirt and the fingertips of a hand gripping the cap.
+/// Where a side grip holds a tube's body, as a fraction of its height. Set for the 50 mL tube in
+/// its rack and the Aloha's fingers (26 mm tall where they take the tube): they stay above the
+/// rack's top plate (the tube stands 54 mm deep in it) and below the fingertips of a hand that
+/// grips the cap. Other tubes have no task that holds them yet.
 const HOLD_HEIGHT: f64 = 0.79;
 
 /// Largest tilt (rad) of a cap on its tube that still counts as on.

@@ -165,7 +165,7 @@ pub struct StepFrame {
     /// The step turns a part in the hand and grips it again (`Turn` motions): a reach to a round
     /// part then grips it at the turn nearest the tool as it is, not at the step's first choice,
     /// which the part has turned away from.
-    regrip: bool,
+    regrasp_nearest: bool,
     /// Whether the first affordance allows the grasp turned half a turn (see [`Self::other_grasp`]).
     half_turn: bool,
 }
@@ -188,7 +188,7 @@ impl StepFrame {
             carried: None,
             finger_reach,
             enclose,
-            regrip: motions.iter().any(|m| matches!(m, Motion::Turn { .. })),
+            regrasp_nearest: motions.iter().any(|m| matches!(m, Motion::Turn { .. })),
             half_turn: false,
         };
         let first = motions.iter().find_map(|m| match m {
@@ -320,7 +320,7 @@ impl StepFrame {
             }
             Motion::Reach { target } => {
                 let goal = match target {
-                    Target::Affordance { labware, name, .. } if self.regrip => {
+                    Target::Affordance { labware, name, .. } if self.regrasp_nearest => {
                         let (_, live) = lab.item(labware)?;
                         let a = lab.affordance(labware, name, live)?;
                         if a.symmetry == Symmetry::Axial {
@@ -435,8 +435,8 @@ impl StepFrame {
     }
 }
 
-/// The turn about the affordance's z axis, allowed by its symmetry, that brings it closest to
-/// `tool`'s orientation.
+/// The turn allowed by the affordance's symmetry (about its z axis; for `AboutY`, about its y
+/// axis) that brings it closest to `tool`'s orientation.
 fn closest_turn(a: &Affordance, tool: &Pose) -> Rot {
     match a.symmetry {
         Symmetry::None => Rot::identity(),

@@ -38,7 +38,7 @@ def config_path():
 class AutobioBenchmark(StepBenchmark):
     """autobio tasks for vla-eval (see the module docstring).
 
-    ``tasks``: shipped task ids or protocol files (default: the paper's six simulated tasks of
+    ``tasks``: shipped task ids or protocol files (default: the paper's seven simulated tasks of
     ``suites/paper.toml``); ``seeds``: the episode seeds (default ``range(seed, seed + episodes)``);
     ``image_size``: [width, height] of every camera."""
 
@@ -123,6 +123,7 @@ DEFAULT_TASKS = [
     "thermal_cycler.open_lid",
     "tube.pick_up",
     "tube.transfer",
+    "tube.unscrew_cap",
     "thermal_mixer.set_parameters",
     "centrifuge.insert_symmetric",
 ]

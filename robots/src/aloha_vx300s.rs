@@ -87,9 +87,11 @@ pub const MODEL: RobotModel = RobotModel {
     prepare,
 };
 
-/// Joint damping and armature as AutoBio's Aloha (`robot/aloha_left.xml`); the position servos'
-/// gains are gym-aloha's for the waist, shoulder and elbow (AutoBio's 43 at the waist let a
-/// twisted cap's reaction swing the tool 5 mm sideways) and between the two for the wrist.
+/// Joint damping, armature and position-servo gains as AutoBio's Aloha (`robot/aloha_left.xml`).
+/// (gym-aloha's stiffer gains, 800 to 1600, were tried for the unscrewing task: they held the tool
+/// no better against a cap gripped off centre, which was the pads' contact softness.)
+// 6.28 is AutoBio's wrist damping, not τ.
+#[allow(clippy::approx_constant)]
 const JOINTS: [(&str, f64, f64, f64); 6] = [
     ("waist", 5.76, 0.0, 43.0),
     ("shoulder", 20.0, 0.395, 265.0),
@@ -129,8 +131,15 @@ fn prepare(deps: &Path, detail: Detail) -> Result<PathBuf, AssetError> {
         );
     arm = assets::strip_element(&arm, r#"<body name="camera_focus""#, "</body>");
     arm = assets::strip_element(&arm, r#"<camera name="left_wrist""#, "/>");
-    while arm.contains("name=\"cali_left_site") {
+    // ACT's three calibration sites (a bounded loop: a changed file fails below, not forever).
+    for _ in 0..3 {
         arm = assets::strip_element(&arm, r#"<site pos="0.15 0 0""#, "/>");
+    }
+    if arm.contains("cali_left_site") {
+        return Err(assets::malformed(
+            &arm_file,
+            "calibration sites not where expected",
+        ));
     }
     arm = assets::strip_attribute(&arm, "frictionloss");
     arm = arm.replace("<body ", "<body gravcomp=\"1\" ");
