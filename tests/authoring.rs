@@ -141,44 +141,10 @@ fn results_name_the_real_file_and_the_filled_in_predicate() {
     }
 }
 
-/// Two arms, a tube from a drawn slot, and a hand-over the expert has no motions for.
-const HAND_OVER: &str = r#"format = 1
-[protocol]
-id = "tube.hand_over"
-level = "medium"
-instruction = "hand the tube over"
-time_limit = "20 s"
-[robots.first]
-model = "ur5e_2f85"
-base = { pos_m = [0.0, 0.4, 0.824] }
-[robots.second]
-model = "ur5e_2f85"
-base = { pos_m = [0.0, -0.4, 0.824], yaw_deg = 90 }
-[labware.rack]
-kind = "tube_rack"
-pose = { pos_m = [0.0, 0.0, 0.854] }
-[labware.tube]
-kind = "tube_50ml"
-at = "rack.{slot}"
-[params.slot]
-slot = "rack"
-[[steps]]
-do = "pick"
-on = "tube"
-with = "first"
-[[steps]]
-do = "hand_over"
-on = "tube"
-to = "second"
-with = "first"
-[success]
-all = ["second touches tube", "tube lifted 5 cm"]
-"#;
-
 #[test]
 fn failure_lines_name_the_seeds_draw_and_count_steps_from_one() {
     let protocol = scratch("hand-over").join("hand_over.toml");
-    std::fs::write(&protocol, HAND_OVER).unwrap();
+    std::fs::write(&protocol, common::HAND_OVER).unwrap();
     let path = protocol.to_str().unwrap();
     let out = autobio(&["eval", "--protocol", path, "--episodes", "1", "--seed", "4"]);
     let said = text(&out.stderr);

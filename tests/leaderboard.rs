@@ -848,45 +848,13 @@ fn a_chain_task_page_shows_each_stage_as_the_paper_does() {
     );
 }
 
-/// A protocol the expert cannot run: a hand-over, for which it has no motions yet.
-const HAND_OVER: &str = r#"format = 1
-[protocol]
-id = "tube.hand_over"
-level = "medium"
-instruction = "hand the tube over to the other arm"
-time_limit = "20 s"
-[robots.first]
-model = "ur5e_2f85"
-base = { pos_m = [0.0, 0.4, 0.824] }
-[robots.second]
-model = "ur5e_2f85"
-base = { pos_m = [0.0, -0.4, 0.824], yaw_deg = 90 }
-[labware.rack]
-kind = "tube_rack"
-pose = { pos_m = [0.0, 0.0, 0.854] }
-[labware.tube]
-kind = "tube_50ml"
-at = "rack.A1"
-[[steps]]
-do = "pick"
-on = "tube"
-with = "first"
-[[steps]]
-do = "hand_over"
-on = "tube"
-to = "second"
-with = "first"
-[success]
-all = ["second touches tube", "tube lifted 5 cm"]
-"#;
-
 /// An episode that ended in an error (here the expert, which has no motions for a hand-over yet)
 /// is a failure scoring 0: such a run verifies, and the same run claiming a score for it does not.
 #[test]
 fn episodes_that_ended_in_an_error_verify_at_score_zero() {
     let dir = scratch("lb-errors");
     let protocol = dir.join("hand_over.toml");
-    std::fs::write(&protocol, HAND_OVER).unwrap();
+    std::fs::write(&protocol, common::HAND_OVER).unwrap();
     let suites = suites("lb-errors-suites", protocol.to_str().unwrap());
     let run = dir.join("run");
     common::eval_suite(&suites.join("mini.toml"), &run, &["--policy", "expert"]);

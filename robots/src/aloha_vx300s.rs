@@ -28,22 +28,9 @@ const GRIPPER_LINK: f64 = 0.069744;
 pub const MODEL: RobotModel = RobotModel {
     name: "aloha_vx300s",
     description: "Trossen ViperX 300s (Aloha) with its parallel gripper (gym-aloha's MJCF and meshes)",
-    arm_joints: &[
-        "waist",
-        "shoulder",
-        "elbow",
-        "forearm_roll",
-        "wrist_angle",
-        "wrist_rotate",
-    ],
-    arm_actuators: &[
-        "waist",
-        "shoulder",
-        "elbow",
-        "forearm_roll",
-        "wrist_angle",
-        "wrist_rotate",
-    ],
+    // Each joint's position servo bears its name.
+    arm_joints: ARM,
+    arm_actuators: ARM,
     gripper: Gripper {
         actuator: "gripper",
         driver_joint: "left_finger",
@@ -86,6 +73,16 @@ pub const MODEL: RobotModel = RobotModel {
     }),
     prepare,
 };
+
+/// The arm's joints, base to wrist.
+const ARM: &[&str] = &[
+    "waist",
+    "shoulder",
+    "elbow",
+    "forearm_roll",
+    "wrist_angle",
+    "wrist_rotate",
+];
 
 /// Joint damping, armature and position-servo gains as AutoBio's Aloha (`robot/aloha_left.xml`).
 /// (gym-aloha's stiffer gains, 800 to 1600, were tried for the unscrewing task: they held the tool

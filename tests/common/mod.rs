@@ -287,3 +287,38 @@ pub fn shipped_protocols() -> Vec<PathBuf> {
     out.sort();
     out
 }
+
+/// A protocol the expert cannot run: two arms, a tube from a drawn slot, and a hand-over it has no
+/// motions for yet (every episode ends in a policy error naming step 2).
+pub const HAND_OVER: &str = r#"format = 1
+[protocol]
+id = "tube.hand_over"
+level = "medium"
+instruction = "hand the tube over"
+time_limit = "20 s"
+[robots.first]
+model = "ur5e_2f85"
+base = { pos_m = [0.0, 0.4, 0.824] }
+[robots.second]
+model = "ur5e_2f85"
+base = { pos_m = [0.0, -0.4, 0.824], yaw_deg = 90 }
+[labware.rack]
+kind = "tube_rack"
+pose = { pos_m = [0.0, 0.0, 0.854] }
+[labware.tube]
+kind = "tube_50ml"
+at = "rack.{slot}"
+[params.slot]
+slot = "rack"
+[[steps]]
+do = "pick"
+on = "tube"
+with = "first"
+[[steps]]
+do = "hand_over"
+on = "tube"
+to = "second"
+with = "first"
+[success]
+all = ["second touches tube", "tube lifted 5 cm"]
+"#;
