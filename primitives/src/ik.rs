@@ -45,6 +45,14 @@ pub fn pose_error(target: &Pose, current: &Pose) -> [f64; 6] {
     [p.x, p.y, p.z, r.x, r.y, r.z]
 }
 
+/// A pose error's position (m) and rotation (rad) magnitudes.
+fn error_norms(e: &[f64; 6]) -> (f64, f64) {
+    (
+        (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt(),
+        (e[3] * e[3] + e[4] * e[4] + e[5] * e[5]).sqrt(),
+    )
+}
+
 /// Solves for joint angles reaching `target` from `seed` with the method the robot model chooses:
 /// the one place an [`robots::IkMethod`] meets its solver (an analytic solver is one more arm).
 pub fn solve_with(
@@ -61,9 +69,7 @@ pub fn solve_with(
             let cands = analytic_ik::candidates(&arm, &local, seed);
             match analytic_ik::best_within(&cands, &kin.limits(), seed) {
                 Some(q) => {
-                    let e = pose_error(target, &kin.tcp(&q));
-                    let pos = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
-                    let rot = (e[3] * e[3] + e[4] * e[4] + e[5] * e[5]).sqrt();
+                    let (pos, rot) = error_norms(&pose_error(target, &kin.tcp(&q)));
                     if pos < opt.pos_tol && rot < opt.rot_tol {
                         Ok(q)
                     } else {
@@ -90,8 +96,7 @@ pub fn solve_ik(
     for _ in 0..opt.iterations {
         let (pose, jac) = kin.jacobian(&q);
         let e = pose_error(target, &pose);
-        pos_err = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
-        rot_err = (e[3] * e[3] + e[4] * e[4] + e[5] * e[5]).sqrt();
+        (pos_err, rot_err) = error_norms(&e);
         if pos_err < opt.pos_tol && rot_err < opt.rot_tol {
             return Ok(q);
         }
