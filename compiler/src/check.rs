@@ -1384,7 +1384,13 @@ fn resolve_check(
                 return None;
             }
             let name = format!("{part}_{state}");
-            let tol = kind.tolerance(&name).map(|v| (name, v, Dimension::Angle));
+            // A part that moves on a joint is measured in the joint's unit (a lid's angle); a
+            // loose part (a tube's cap) by its distance from where the state puts it.
+            let dimension = match kind.joints.iter().find(|(j, _)| j == part) {
+                Some((_, "m")) | None => Dimension::Length,
+                Some(_) => Dimension::Angle,
+            };
+            let tol = kind.tolerance(&name).map(|v| (name, v, dimension));
             Some((
                 Check::State {
                     labware: lw.clone(),

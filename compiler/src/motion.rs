@@ -24,6 +24,17 @@ pub enum Target {
     /// template over the task's parameters), lined up with the seat's axis (upright in a rack,
     /// leaning in a rotor) and `above` metres out along it.
     Seat { location: String, above: f64 },
+    /// The tool pose that brings the held part's affordance `from` (where it is now) onto the
+    /// item's affordance `to`, `above` metres back along `to`'s approach axis, keeping the hand's
+    /// hold and the part's heading about `to`'s axis where `to` is round: a cap carried back
+    /// onto its tube's mouth. Measured afresh at each motion, so a second reach corrects what
+    /// the first left over.
+    Carry {
+        labware: String,
+        from: String,
+        to: String,
+        above: f64,
+    },
     /// The button that moves an instrument's panel value `param` toward `value` (a quantity as
     /// the step renders it, e.g. `"1200 rpm"`), chosen from the live value.
     Button {
@@ -79,8 +90,14 @@ pub enum Motion {
     /// Turn the tool in place about its approach axis by `angle` (rad, right-handed about the
     /// approach direction: seen along it, positive is clockwise, so with the tool pointing down
     /// at a right-hand thread a positive turn tightens and a negative one loosens). With `thread`,
-    /// the grasped part's affordance, the tool also advances along the axis by the thread's lead.
-    Turn { angle: f64, thread: Option<Target> },
+    /// the grasped part's affordance, the tool also advances along the axis by the thread's lead;
+    /// with `stop` as well, it turns no further than brings the tool level with `stop` along
+    /// its axis (a cap screwed on stops at its seat; turned on, the thread would tear it).
+    Turn {
+        angle: f64,
+        thread: Option<Target>,
+        stop: Option<Target>,
+    },
 }
 
 impl Motion {

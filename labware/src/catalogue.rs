@@ -217,7 +217,9 @@ const TUBE_PRIMITIVES: &[&str] = &[
 ];
 /// Slot tolerances (m): in-plane distance to the slot centre, height above its seat.
 const SLOT_TOLERANCES: &[(&str, f64)] = &[("slot_xy", 0.015), ("slot_z", 0.005)];
+/// `cap_on`: how far (m) a cap may stand from its seat and count as on.
 const TUBE_TOLERANCES: &[(&str, f64)] = &[
+    ("cap_on", 0.002),
     ("slot_xy", 0.015),
     ("slot_z", 0.005),
     ("volume", 1.0),
@@ -226,6 +228,7 @@ const TUBE_TOLERANCES: &[(&str, f64)] = &[
 /// Small tubes stand in racks of 12.5 mm pitch: a slot tolerance under half the pitch, so no
 /// tube counts as standing in its neighbour's slot.
 const MICROTUBE_TOLERANCES: &[(&str, f64)] = &[
+    ("cap_on", 0.002),
     ("slot_xy", 0.005),
     ("slot_z", 0.003),
     ("volume", 1.0),

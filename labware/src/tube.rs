@@ -209,7 +209,7 @@ impl Instrument for Params {
         );
         for i in 0..BEARING_BALLS {
             contact += &format!(
-                r#"<pair geom1="{name}/bearing{i}" geom2="{name}/core" friction="0.01 0.01 0.001 0.0001 0.0001" solimp="0.9 0.95 0.001"/>
+                r#"<pair geom1="{name}/bearing{i}" geom2="{name}/core" friction="0.01 0.01 0.001 0.0001 0.0001" solref="0.004 1" solimp="0.95 0.99 0.001"/>
 "#
             );
         }
@@ -251,15 +251,20 @@ impl Instrument for Params {
         if part != "cap" {
             return None;
         }
-        let (away, tilt) = cap_offset(self, s)?;
+        let (_, tilt) = cap_offset(self, s)?;
         let tolerance = tolerance.unwrap_or(0.002);
         Some(match state {
-            "on" => Measure {
-                value: away,
-                target: 0.0,
-                tolerance,
-                holds: away <= tolerance && tilt <= CAP_TILT,
-            },
+            // On: screwed to its seat, measured along the thread's travel (the tube's axis),
+            // coaxial within the thread's play and not crossed (tilted).
+            "on" => {
+                let (rise, aside) = cap_rise_and_aside(self, s)?;
+                Measure {
+                    value: rise.abs(),
+                    target: 0.0,
+                    tolerance,
+                    holds: rise.abs() <= tolerance && aside <= CAP_PLAY && tilt <= CAP_TILT,
+                }
+            }
             // Off: risen off the thread along the tube's axis, or put down clear of the neck
             // (its skirt no longer around it). A cap forced down onto its tube, or torn sideways
             // into the neck (which a thread does not allow; a simulated one may let go), is not.
@@ -285,6 +290,8 @@ impl Instrument for Params {
 
     /// `grasp`: the cap from above (approach straight down, fingers closing across the cap at its
     /// mid-height); any turn about the tube's axis grasps it the same.
+    /// `cap_start`: the grasp of a cap set coaxially on the mouth, ready to be screwed on.
+    /// `cap_seated`: the grasp of a cap screwed fully on (where screwing it on stops).
     /// `hold`: the body from the side, below the cap (approach across the tube's axis, fingers
     /// closing across the body at [`HOLD_HEIGHT`] of its height), from any side.
     fn affordance(&self, name: &str, s: &LabwareState) -> Option<Affordance> {
@@ -297,13 +304,19 @@ impl Instrument for Params {
                 lead: 0.0,
             });
         }
-        if name != "grasp" {
-            return None;
-        }
-        // The cap where it is now (its frame: the seat's, moved with it), else where it sits.
-        let cap = match s.parts.get("cap") {
-            Some(c) => *c,
-            None => s.pose * translation([0.0, 0.0, self.cap_seat_z()]),
+        // The cap where it is now (its frame: the seat's, moved with it), else where it sits;
+        // for `cap_start`, where it goes to be screwed on: coaxial over the mouth, its thread's
+        // lowest turn on the bolt's highest.
+        let cap = match (name, s.parts.get("cap")) {
+            ("grasp", Some(c)) => *c,
+            ("grasp", None) | ("cap_seated", _) => {
+                s.pose * translation([0.0, 0.0, self.cap_seat_z()])
+            }
+            ("cap_start", cap) => {
+                let turns = cap.map_or(CAP_START_TURNS, |c| start_turns(&(s.pose.inverse() * c)));
+                s.pose * translation([0.0, 0.0, self.cap_seat_z() + turns * self.pitch])
+            }
+            _ => return None,
         };
         let down = crate::frame::from_axes([1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]);
         let mid = translation([0.0, 0.0, -self.cap_height / 2.0 + 0.004]);
@@ -323,11 +336,31 @@ impl Instrument for Params {
     }
 }
 
-/// Where a side grip holds a tube's body, as a fraction of its height. Set for the 50 mL tube in
-/// its rack and the Aloha's fingers (26 mm tall where they take the tube): they stay above the
-/// rack's top plate (the tube stands 54 mm deep in it) and below the fingertips of a hand that
-/// grips the cap. Other tubes have no task that holds them yet.
+/// Where a side grip holds a tube's body, as a fraction of its height: fingers 35 mm tall there
+/// stay above a rack's top plate (a 50 mL tube stands 54 mm deep in its rack) and below the
+/// cap's skirt and the fingertips of a hand gripping the cap.
 const HOLD_HEIGHT: f64 = 0.79;
+
+/// How far above its seat, in turns of the thread, a cap is set on the mouth to be screwed on, at
+/// most: the nut engages the bolt over 2.2 turns (see [`start_turns`]).
+const CAP_START_TURNS: f64 = 2.3;
+
+/// Where, in turns above its seat, a cap whose pose relative to its tube is `rel` goes to be
+/// screwed on: the highest rise up to [`CAP_START_TURNS`] at which the cap's heading puts its nut
+/// in the bolt's groove (a thread's height and heading are bound: each turn anticlockwise, seen
+/// from above, raises it one pitch from the seat, where the heading is the tube's). Set there,
+/// the nut overlaps the bolt by less than a turn, so it can come straight down onto it, and
+/// turning it follows the thread from the first degree. Set at any other height the nut's ridge
+/// lands on the bolt's (0.03 mm of play each side) and the cap goes on crossed.
+fn start_turns(rel: &Pose) -> f64 {
+    let x = rel.rotation * nalgebra::Vector3::x();
+    let phase = x.y.atan2(x.x).rem_euclid(std::f64::consts::TAU) / std::f64::consts::TAU;
+    phase + (CAP_START_TURNS - phase).floor()
+}
+
+/// Farthest a cap on its tube may stand from the tube's axis (m) and count as on: the play of a
+/// nut on its bolt (a seated cap wanders up to 0.9 mm in the simulated thread).
+const CAP_PLAY: f64 = 0.0015;
 
 /// Largest tilt (rad) of a cap on its tube that still counts as on.
 const CAP_TILT: f64 = 0.1;

@@ -148,6 +148,10 @@ impl<'a> Lab<'a> {
     }
 }
 
+/// How far past its stop a turn that follows a thread carries the tool (m): none, as a thread
+/// has no shoulder (turned past its seat, a cap goes on down the neck, askew).
+const STOP_PAST: f64 = 0.0;
+
 /// How far above its target a transit passes at least (m).
 const TRANSIT_CLEARANCE: f64 = 0.06;
 
@@ -168,6 +172,8 @@ pub struct StepFrame {
     regrasp_nearest: bool,
     /// Whether the first affordance allows the grasp turned half a turn (see [`Self::other_grasp`]).
     half_turn: bool,
+    /// Whether the first affordance is round (any turn about its axis grasps it the same).
+    round: bool,
 }
 
 impl StepFrame {
@@ -190,16 +196,9 @@ impl StepFrame {
             enclose,
             regrasp_nearest: motions.iter().any(|m| matches!(m, Motion::Turn { .. })),
             half_turn: false,
+            round: false,
         };
-        let first = motions.iter().find_map(|m| match m {
-            Motion::Approach { target, .. }
-            | Motion::Reach { target }
-            | Motion::Enclose { target }
-            | Motion::Transit { target }
-            | Motion::Press { target, .. } => Some(target),
-            _ => None,
-        });
-        match first {
+        match first_target(motions) {
             Some(Target::Affordance {
                 labware,
                 name,
@@ -208,6 +207,7 @@ impl StepFrame {
                 let a = lab.affordance(labware, name, &lab.at_goals(labware, goals)?)?;
                 frame.turn = closest_turn(&a, tcp_now);
                 frame.half_turn = a.symmetry != Symmetry::None;
+                frame.round = a.symmetry == Symmetry::Axial;
             }
             Some(Target::Button {
                 labware,
@@ -267,7 +267,30 @@ impl StepFrame {
                 param,
                 value,
             } => Ok(self.tool_at(&lab.button(labware, param, value)?)),
+            Target::Carry { .. } => Err(PlanError::NothingCarried),
         }
+    }
+
+    /// The tool pose for a [`Target::Carry`] from the tool at `tcp_now`; other targets as
+    /// [`Self::target`].
+    fn target_from(&self, target: &Target, lab: &Lab, tcp_now: &Pose) -> Result<Pose, PlanError> {
+        let Target::Carry {
+            labware,
+            from,
+            to,
+            above,
+        } = target
+        else {
+            return self.target(target, lab);
+        };
+        let (_, live) = lab.item(labware)?;
+        let held = lab.affordance(labware, from, live)?;
+        let goal = lab.affordance(labware, to, live)?;
+        let goal = translated_local(
+            &(goal.pose * closest_turn(&goal, &held.pose)),
+            [0.0, 0.0, -above],
+        );
+        Ok(goal * held.pose.inverse() * tcp_now)
     }
 
     /// Measures again how the carried item (if any) sits in the hand, with the tool at
@@ -295,6 +318,23 @@ impl StepFrame {
         })
     }
 
+    /// For a step that turns a round part in the hand (`Turn` motions), the same step with its
+    /// grasp turned a further `angle` (rad) about the part's axis; `None` for any other step.
+    /// The expert's choice where the closest grasp leaves the wrist short of the turn.
+    pub fn grasp_turned(&self, angle: f64) -> Option<StepFrame> {
+        (self.regrasp_nearest && self.round).then(|| StepFrame {
+            turn: self.turn * axis_angle([0.0, 0.0, 1.0], angle),
+            ..self.clone()
+        })
+    }
+
+    /// The tool pose at the step's first target (where its grasp is taken), if it has one.
+    pub fn first_pose(&self, motions: &[Motion], lab: &Lab) -> Result<Option<Pose>, PlanError> {
+        first_target(motions)
+            .map(|t| self.target(t, lab))
+            .transpose()
+    }
+
     /// The TCP pose for an affordance: the chosen symmetric turn, and for a touch, standing off
     /// so that the closed fingertips are at the point.
     fn tool_at(&self, a: &Affordance) -> Pose {
@@ -315,7 +355,10 @@ impl StepFrame {
     ) -> Result<Vec<Pose>, PlanError> {
         Ok(match motion {
             Motion::Approach { target, standoff } => {
-                let goal = translated_local(&self.target(target, lab)?, [0.0, 0.0, -standoff]);
+                let goal = translated_local(
+                    &self.target_from(target, lab, tcp_now)?,
+                    [0.0, 0.0, -standoff],
+                );
                 arc(tcp_now, &goal, 16)
             }
             Motion::Reach { target } => {
@@ -329,7 +372,7 @@ impl StepFrame {
                             self.target(target, lab)?
                         }
                     }
-                    _ => self.target(target, lab)?,
+                    _ => self.target_from(target, lab, tcp_now)?,
                 };
                 line(tcp_now, &goal, 6)
             }
@@ -383,14 +426,30 @@ impl StepFrame {
                 6,
             ),
             // In steps of at most 0.1 rad, so that the IK's nearest solution follows the turn.
-            Motion::Turn { angle, thread } => {
+            Motion::Turn {
+                angle,
+                thread,
+                stop,
+            } => {
                 let lead = match thread {
-                    Some(Target::Affordance { labware, name, .. }) => {
+                    Some(Target::Affordance { labware, name, .. })
+                    | Some(Target::Carry {
+                        labware, to: name, ..
+                    }) => {
                         let (_, live) = lab.item(labware)?;
                         lab.affordance(labware, name, live)?.lead
                     }
                     _ => 0.0,
                 };
+                // No further than level with the stop.
+                let mut angle = *angle;
+                if let (Some(stop), true) = (stop, lead > 0.0) {
+                    let at = self.target(stop, lab)?;
+                    let ahead = (tcp_now.inverse() * at).translation.vector.z.max(0.0);
+                    let most = (ahead + STOP_PAST) / lead;
+                    angle = angle.signum() * angle.abs().min(most);
+                }
+                let angle = &angle;
                 let n = ((angle.abs() / 0.1).ceil() as usize).max(1);
                 (0..=n)
                     .map(|i| {
@@ -433,6 +492,18 @@ impl StepFrame {
             line(tcp_now, &up(-distance), 6),
         ]
     }
+}
+
+/// The step's first target that the tool goes to.
+fn first_target(motions: &[Motion]) -> Option<&Target> {
+    motions.iter().find_map(|m| match m {
+        Motion::Approach { target, .. }
+        | Motion::Reach { target }
+        | Motion::Enclose { target }
+        | Motion::Transit { target }
+        | Motion::Press { target, .. } => Some(target),
+        _ => None,
+    })
 }
 
 /// The turn allowed by the affordance's symmetry (about its z axis; for `AboutY`, about its y
@@ -658,7 +729,8 @@ mod tests {
         let grip = model.affordance("grasp", &s).unwrap().pose;
         let turn = Motion::Turn {
             angle: -std::f64::consts::PI,
-            thread: Some(cap),
+            thread: Some(cap.clone()),
+            stop: None,
         };
         let path = frame.poses(&turn, &lab, &grip).unwrap();
         let rise = path.last().unwrap().translation.vector.z - grip.translation.vector.z;
@@ -667,8 +739,24 @@ mod tests {
         let back = Motion::Turn {
             angle: std::f64::consts::PI,
             thread: None,
+            stop: None,
         };
         let path = frame.poses(&back, &lab, &grip).unwrap();
         assert!((path.last().unwrap().translation.vector - grip.translation.vector).norm() < 1e-12);
+        // Turned to tighten from a millimetre above the seat with the seat as its stop, the tool
+        // goes down to the seat (and STOP_PAST beyond), not a whole half pitch.
+        let above = translation([0.0, 0.0, 0.001]) * grip;
+        let tighten = Motion::Turn {
+            angle: std::f64::consts::PI,
+            thread: Some(cap.clone()),
+            stop: Some(Target::Affordance {
+                labware: "tube".into(),
+                name: "cap_seated".into(),
+                goals: Vec::new(),
+            }),
+        };
+        let path = frame.poses(&tighten, &lab, &above).unwrap();
+        let fall = above.translation.vector.z - path.last().unwrap().translation.vector.z;
+        assert!((fall - 0.001 - STOP_PAST).abs() < 1e-9, "fell {fall}");
     }
 }

@@ -1,6 +1,7 @@
 //! `screw_cap`: screw a held cap back on.
 
 use super::prelude::*;
+use crate::motion::{Motion, MotionStep, Target};
 
 pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     name: "screw_cap",
@@ -9,7 +10,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     requires: "the robot holds `on`'s cap; the tube is in a slot or gripped by another robot",
     leaves: "the cap on; the hand empty",
     effect,
-    motions: None,
+    motions: Some(motions),
 };
 
 fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
@@ -33,4 +34,81 @@ fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
     w.set_part(&lw, "cap", "on");
     w.hands.insert(robot.into(), Hand::Empty);
     Ok(())
+}
+
+/// How far one grip turns the cap (rad): as `unscrew_cap`'s.
+const TURN_PER_GRIP: f64 = 8.0 * std::f64::consts::PI / 9.0;
+/// Grips to screw the cap down from where it is set on the mouth to its seat (2.3 turns):
+/// 960 degrees, the last grip turning it home against the seat.
+const GRIPS: usize = 6;
+/// How far the open hand rises off the cap between grips (m).
+const CLEAR: f64 = 0.015;
+
+/// Carry the held cap onto the tube's mouth, coaxial, and turn it clockwise (seen from above),
+/// following it down the thread, regrasping between turns; then let go and back off.
+fn motions(step: &MotionStep) -> Vec<Motion> {
+    let tube = step.arg("on");
+    let carry = |above: f64| Target::Carry {
+        labware: tube.clone(),
+        from: "grasp".into(),
+        to: "cap_start".into(),
+        above,
+    };
+    let onto = carry(0.0);
+    let cap = Target::Affordance {
+        labware: tube.clone(),
+        name: "grasp".into(),
+        goals: Vec::new(),
+    };
+    let seated = Target::Affordance {
+        labware: tube.clone(),
+        name: "cap_seated".into(),
+        goals: Vec::new(),
+    };
+    // Straight lines, not a planned approach: the cap travels in the hand, which the planner's
+    // collision model (items carried whole) does not know of. Over the mouth first, then onto
+    // it, measured again: the second reach corrects what the first left over (the stricter
+    // alignment screwing on needs).
+    let mut m = vec![
+        Motion::Reach {
+            target: carry(0.01),
+        },
+        Motion::Reach {
+            target: onto.clone(),
+        },
+        // Let go on the mouth: the cap settles coaxial on the tube's neck (its skirt and the
+        // neck centre it), where the arm's own error had set it up to 1.7 mm aside, enough to
+        // cross the thread. Then grip it again where it sits.
+        Motion::Release,
+        Motion::Reach {
+            target: cap.clone(),
+        },
+        Motion::Grasp,
+    ];
+    for grip in 0..GRIPS {
+        m.push(Motion::Turn {
+            angle: TURN_PER_GRIP,
+            thread: Some(onto.clone()),
+            stop: Some(seated.clone()),
+        });
+        m.push(Motion::Release);
+        if grip + 1 < GRIPS {
+            // Up off the cap before turning back: open fingers turned at its height sweep
+            // into the holding hand below it once the cap nears its seat.
+            m.extend([
+                Motion::Lift { height: CLEAR },
+                Motion::Turn {
+                    angle: -TURN_PER_GRIP,
+                    thread: None,
+                    stop: None,
+                },
+                Motion::Reach {
+                    target: cap.clone(),
+                },
+                Motion::Grasp,
+            ]);
+        }
+    }
+    m.push(Motion::Retreat { distance: 0.05 });
+    m
 }

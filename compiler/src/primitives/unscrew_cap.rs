@@ -66,6 +66,7 @@ fn motions(step: &MotionStep) -> Vec<Motion> {
         m.push(Motion::Turn {
             angle: -TURN_PER_GRIP,
             thread: Some(cap.clone()),
+            stop: None,
         });
         if grip + 1 < GRIPS {
             m.extend([
@@ -73,6 +74,7 @@ fn motions(step: &MotionStep) -> Vec<Motion> {
                 Motion::Turn {
                     angle: TURN_PER_GRIP,
                     thread: None,
+                    stop: None,
                 },
                 Motion::Reach {
                     target: cap.clone(),

@@ -67,6 +67,7 @@ impl ExpertPolicy {
                 g.enclose,
             )
             .map_err(|e| planning(context.clone(), e))?;
+            let frame = with_room_to_turn(arm, frame, &step.motions, &lab);
             lane.frame = Some((q.step, frame));
             lane.step_moved = false;
             self.events.push(StageEvent {
@@ -120,6 +121,17 @@ impl ExpertPolicy {
         let poses = frame
             .poses(&q.motion, &lab, &tcp_now)
             .map_err(|e| planning(context.clone(), e))?;
+        // A robot that crosses free space in joint space goes straight to the IK solution
+        // nearest where it is: solved along the tool's path instead, its wrist would follow the
+        // path's orientations through a singularity onto the other branch (the ViperX's forearm
+        // rolled half a turn, leaving its wrist no room for a cap's turn).
+        let limits = arm.model.expert_limits;
+        let direct = q.motion.through_free_space() && limits.joint_space_transits;
+        let ends = |poses: Vec<labware::Pose>| match (poses.first(), poses.last()) {
+            (Some(a), Some(b)) if direct && poses.len() > 2 => vec![*a, *b],
+            _ => poses,
+        };
+        let poses = ends(poses);
         // Before the step's first path, the other symmetric grasp is a second try.
         let waypoints = match solve_path(arm, &poses) {
             Ok(w) => w,
@@ -134,9 +146,11 @@ impl ExpertPolicy {
                         .then(|| frame.other_grasp())
                         .flatten()
                         .ok_or_else(|| planning(context.clone(), first.clone()))?;
-                    let poses = other
-                        .poses(&q.motion, &lab, &tcp_now)
-                        .map_err(|e| planning(context.clone(), e))?;
+                    let poses = ends(
+                        other
+                            .poses(&q.motion, &lab, &tcp_now)
+                            .map_err(|e| planning(context.clone(), e))?,
+                    );
                     let w =
                         solve_path(arm, &poses).map_err(|_| planning(context.clone(), first))?;
                     lane.frame = Some((q.step, other));
@@ -147,14 +161,7 @@ impl ExpertPolicy {
         lane.step_moved = true;
         // TOPP's grid: 200 intervals, and for a planned route (~100 waypoints) 8 per waypoint.
         let mut grid = 200;
-        let limits = arm.model.expert_limits;
         let waypoints = if q.motion.through_free_space() {
-            let waypoints = if limits.joint_space_transits && waypoints.len() > 2 {
-                let last = waypoints.last().expect("more than two").clone();
-                vec![waypoints[0].clone(), last]
-            } else {
-                waypoints
-            };
             let frame = &lane.frame.as_ref().expect("set above").1;
             let carried = frame
                 .carried()
@@ -192,6 +199,56 @@ impl ExpertPolicy {
         let traj = plan_trajectory(waypoints, &topp, grid);
         Ok(Active::Path { traj, t0: obs.time })
     }
+}
+
+/// Grasps about a round part's axis tried for a step that turns it: the step's own, then turned
+/// by 30 degrees more each way, up to half a turn.
+const GRASP_TURNS: [f64; 12] = [
+    0.0, 30.0, -30.0, 60.0, -60.0, 90.0, -90.0, 120.0, -120.0, 150.0, -150.0, 180.0,
+];
+
+/// Largest joint change (rad) between two of a turn's poses (0.1 rad apart) that still follows
+/// one IK branch; more is a jump to another, which the arm would make in a straight joint line
+/// that tears the part from the thread instead of turning it.
+const TURN_STEP_JOINT: f64 = 0.5;
+
+/// For a step that turns a round part in the hand (`Motion::Turn`), the grasp about the part's
+/// axis nearest the step's own from which the arm makes the step's first turn within its joint
+/// limits and on one IK branch: the closest grasp can leave a wrist joint a few degrees short of
+/// the turn, and the arm then tears the part off its thread. Any other step, or a step for which
+/// no grasp has the room, keeps its frame.
+fn with_room_to_turn(arm: &mut Arm, frame: StepFrame, motions: &[Motion], lab: &Lab) -> StepFrame {
+    let Some(angle) = motions.iter().find_map(|m| match m {
+        Motion::Turn { angle, .. } => Some(*angle),
+        _ => None,
+    }) else {
+        return frame;
+    };
+    let turn = Motion::Turn {
+        angle,
+        thread: None,
+        stop: None,
+    };
+    let limits = arm.kin.limits();
+    let within = |q: &[f64]| q.iter().zip(&limits).all(|(v, (lo, hi))| *v >= *lo && *v <= *hi);
+    let mut fits = |f: &StepFrame| -> Option<()> {
+        let grasp = f.first_pose(motions, lab).ok()??;
+        let mut q = solve_with(arm.model.ik, &mut arm.kin, &grasp, &arm.target).ok()?;
+        for pose in f.poses(&turn, lab, &grasp).ok()?.iter().skip(1) {
+            let next = solve_with(arm.model.ik, &mut arm.kin, pose, &q).ok()?;
+            let jump = next.iter().zip(&q).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+            if !within(&next) || jump > TURN_STEP_JOINT {
+                return None;
+            }
+            q = next;
+        }
+        Some(())
+    };
+    GRASP_TURNS
+        .iter()
+        .filter_map(|deg| frame.grasp_turned(deg.to_radians()))
+        .find(|f| fits(f).is_some())
+        .unwrap_or(frame)
 }
 
 /// Joint waypoints through `poses` (the first is where the arm's target is), each solved by the
