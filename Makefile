@@ -35,6 +35,8 @@ demo: build
 	  --protocol protocols/two_arm/close_lid_and_transfer.toml \
 	  --protocol protocols/tube/pick_up.toml \
 	  --protocol protocols/tube/unscrew_cap.toml \
+	  --protocol protocols/tube/screw_cap.toml \
+	  --protocol protocols/vortex_mixer/mix_tube.toml \
 	  --episodes 5 --seed 0 --out out/demo --record
 	CARGO="$(CARGO)" ./scripts/demo-model.sh
 	$(CARGO) run --release --quiet -- eval --policy hold \
@@ -46,6 +48,8 @@ demo: build
 	  --protocol protocols/centrifuge/insert_symmetric.toml \
 	  --protocol protocols/tube/pick_up.toml \
 	  --protocol protocols/tube/unscrew_cap.toml \
+	  --protocol protocols/tube/screw_cap.toml \
+	  --protocol protocols/vortex_mixer/mix_tube.toml \
 	  --episodes 3 --seed 0
 
 test: setup

@@ -52,7 +52,8 @@ pub struct BenchArgs {
             "protocols/thermal_cycler/close_lid.toml",
             "protocols/tube/transfer.toml",
             "protocols/two_arm/close_lid_and_transfer.toml",
-            "protocols/tube/unscrew_cap.toml"
+            "protocols/tube/unscrew_cap.toml",
+            "protocols/vortex_mixer/mix_tube.toml"
         ]
     )]
     protocol: Vec<std::path::PathBuf>,

@@ -1,6 +1,8 @@
 //! The Aloha (ViperX 300s) on real MuJoCo: its layouts name its joints and its gripper in metres;
 //! the expert picks the tube up (the closed-form IK end to end); and a tube that is lifted and
-//! then let go fails the pick-up check, from the state MuJoCo produces. (Its no-motion run is in
+//! then let go fails the pick-up check, from the state MuJoCo produces; two arms unscrew a cap,
+//! and screw it back on, and a cap turned part way off (or part way on) fails its check. (Its
+//! no-motion runs are in
 //! tests/hold_control.rs; its IK round trip in tests/kinematics.rs.)
 
 mod common;
@@ -99,13 +101,15 @@ fn a_tube_lifted_and_then_let_go_fails_the_pick_up() {
     assert!(!p("arm touches tube").holds);
 }
 
-/// The expert until the cap has risen `rise` metres on its thread, then no motion (the hands
-/// keep their grips: the held targets and gripper commands stay).
+/// The expert until `stop` says so of the cap's rise on its thread (m; and whether it has been
+/// off, risen past 10 mm), then no motion (the hands keep their grips: the held targets and
+/// gripper commands stay).
 struct StopAt {
     expert: ExpertPolicy,
     tube: usize,
     model: labware::Model,
-    rise: f64,
+    stop: fn(f64, bool) -> bool,
+    was_off: bool,
     stopped: Option<Vec<Vec<f64>>>,
 }
 
@@ -124,7 +128,8 @@ impl Policy for StopAt {
             panic!("a tube model")
         };
         let (risen, _) = labware::tube::cap_rise_and_aside(p, tube).unwrap();
-        if risen >= self.rise {
+        self.was_off |= risen > 0.01;
+        if (self.stop)(risen, self.was_off) {
             self.stopped = Some(a.clone());
         }
         Ok(a)
@@ -142,7 +147,8 @@ fn a_cap_turned_half_way_off_is_not_off() {
             expert: ExpertPolicy::new(t, s, i).unwrap(),
             tube,
             model,
-            rise: 0.002,
+            stop: |risen, _| risen >= 0.002,
+            was_off: false,
             stopped: None,
         })
     });
@@ -166,4 +172,54 @@ fn the_expert_unscrews_the_cap_with_two_arms() {
     let t = compile("protocols/tube/unscrew_cap.toml");
     let r = run(&t, 5, "expert");
     assert!(r.success, "{:#?}", r.verdict);
+}
+
+/// The screw-on task's expert stopped once the cap, taken off and set back on the mouth, has
+/// been turned down to 1.5 mm of its seat: half a turn short, on its thread but not seated.
+#[test]
+fn a_cap_screwed_half_a_turn_short_is_not_on() {
+    let mut t = compile("protocols/tube/screw_cap.toml");
+    // The expert seats the cap by 55 s (100 seeds); this one is stopped before.
+    t.time_limit_s = 60.0;
+    let tube = t.labware_index("tube").unwrap();
+    let model = t.labware[tube].params.clone();
+    let r = run_with(&t, 0, &Default::default(), |t, s, i| {
+        Box::new(StopAt {
+            expert: ExpertPolicy::new(t, s, i).unwrap(),
+            tube,
+            model,
+            stop: |risen, was_off| was_off && risen <= 0.0015,
+            was_off: false,
+            stopped: None,
+        })
+    });
+    assert!(!r.success && r.error.is_none(), "{r:?}");
+    let p = |text: &str| {
+        r.verdict
+            .predicates()
+            .iter()
+            .find(|p| p.text == text)
+            .unwrap()
+            .clone()
+    };
+    assert!(p("tube.cap was off").holds);
+    // Measured on the thread's travel: still 1 to 1.6 mm up it (the hand stopped mid-turn).
+    let on = p("tube.cap is on within 0.5 mm");
+    assert!(!on.holds && on.value > 0.001 && on.value < 0.0016, "{on:?}");
+}
+
+#[test]
+fn the_expert_screws_the_cap_back_on_with_two_arms() {
+    let t = compile("protocols/tube/screw_cap.toml");
+    let r = run(&t, 1, "expert");
+    assert!(r.success, "{:#?}", r.verdict);
+    // It was off, and is seated along the thread within half a millimetre.
+    let on = r
+        .verdict
+        .predicates()
+        .iter()
+        .find(|p| p.text == "tube.cap is on within 0.5 mm")
+        .unwrap()
+        .clone();
+    assert!(on.holds, "{on:?}");
 }

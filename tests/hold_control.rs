@@ -97,9 +97,11 @@ fn every_simulated_task_scores_zero_without_motion() {
             "thermal_cycler.open_then_close",
             "thermal_mixer.set_parameters",
             "tube.pick_up",
+            "tube.screw_cap",
             "tube.transfer",
             "tube.unscrew_cap",
             "two_arm.close_lid_and_transfer",
+            "vortex_mixer.mix_tube",
         ]
     );
 }

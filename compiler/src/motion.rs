@@ -92,12 +92,16 @@ pub enum Motion {
     /// at a right-hand thread a positive turn tightens and a negative one loosens). With `thread`,
     /// the grasped part's affordance, the tool also advances along the axis by the thread's lead;
     /// with `stop` as well, it turns no further than brings the tool level with `stop` along
-    /// its axis (a cap screwed on stops at its seat; turned on, the thread would tear it).
+    /// its axis (a cap screwed on stops at its seat; turned on, the thread would tear it); a turn
+    /// that moves the tool away from `stop` is not limited.
     Turn {
         angle: f64,
         thread: Option<Target>,
         stop: Option<Target>,
     },
+    /// Turn the tool back in place by what the step's last `Turn` turned (an open hand returning
+    /// to where it gripped, to grip again).
+    TurnBack,
 }
 
 impl Motion {
@@ -116,6 +120,7 @@ impl Motion {
             Motion::Lift { .. } => "lift",
             Motion::Retreat { .. } => "retreat",
             Motion::Turn { .. } => "turn",
+            Motion::TurnBack => "turn back",
         }
     }
 

@@ -217,7 +217,7 @@ const TUBE_PRIMITIVES: &[&str] = &[
 ];
 /// Slot tolerances (m): in-plane distance to the slot centre, height above its seat.
 const SLOT_TOLERANCES: &[(&str, f64)] = &[("slot_xy", 0.015), ("slot_z", 0.005)];
-/// `cap_on`: how far (m) a cap may stand from its seat and count as on.
+/// `cap_on`: how far (m) a cap may stand from its seat, along the tube's axis, and count as on.
 const TUBE_TOLERANCES: &[(&str, f64)] = &[
     ("cap_on", 0.002),
     ("slot_xy", 0.015),

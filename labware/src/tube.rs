@@ -209,7 +209,7 @@ impl Instrument for Params {
         );
         for i in 0..BEARING_BALLS {
             contact += &format!(
-                r#"<pair geom1="{name}/bearing{i}" geom2="{name}/core" friction="0.01 0.01 0.001 0.0001 0.0001" solref="0.004 1" solimp="0.95 0.99 0.001"/>
+                r#"<pair geom1="{name}/bearing{i}" geom2="{name}/core" friction="0.01 0.01 0.001 0.0001 0.0001" solref="0.004 1" solimp="0.9 0.95 0.001"/>
 "#
             );
         }
@@ -257,9 +257,12 @@ impl Instrument for Params {
             // On: screwed to its seat, measured along the thread's travel (the tube's axis),
             // coaxial within the thread's play and not crossed (tilted).
             "on" => {
+                // Its value: how far from seated, up or down the thread, and how far beyond
+                // the play aside (so that a cap at its seat's height but off the axis does not
+                // read as nearly on).
                 let (rise, aside) = cap_rise_and_aside(self, s)?;
                 Measure {
-                    value: rise.abs(),
+                    value: rise.abs() + (aside - CAP_PLAY).max(0.0),
                     target: 0.0,
                     tolerance,
                     holds: rise.abs() <= tolerance && aside <= CAP_PLAY && tilt <= CAP_TILT,
@@ -305,15 +308,16 @@ impl Instrument for Params {
             });
         }
         // The cap where it is now (its frame: the seat's, moved with it), else where it sits;
-        // for `cap_start`, where it goes to be screwed on: coaxial over the mouth, its thread's
-        // lowest turn on the bolt's highest.
+        // for `cap_start`, where it goes to be screwed on: coaxial over the mouth, at the height
+        // its heading puts it in the thread (see `start_turns`).
         let cap = match (name, s.parts.get("cap")) {
             ("grasp", Some(c)) => *c,
             ("grasp", None) | ("cap_seated", _) => {
                 s.pose * translation([0.0, 0.0, self.cap_seat_z()])
             }
             ("cap_start", cap) => {
-                let turns = cap.map_or(CAP_START_TURNS, |c| start_turns(&(s.pose.inverse() * c)));
+                let rel = cap.map_or(Pose::identity(), |c| s.pose.inverse() * c);
+                let turns = start_turns(&rel);
                 s.pose * translation([0.0, 0.0, self.cap_seat_z() + turns * self.pitch])
             }
             _ => return None,
@@ -336,9 +340,10 @@ impl Instrument for Params {
     }
 }
 
-/// Where a side grip holds a tube's body, as a fraction of its height: fingers 35 mm tall there
-/// stay above a rack's top plate (a 50 mL tube stands 54 mm deep in its rack) and below the
-/// cap's skirt and the fingertips of a hand gripping the cap.
+/// Where a side grip holds a tube's body, as a fraction of its height. Set for the 50 mL tube in
+/// its rack and the Aloha's fingers (26 mm tall where they take the tube): they stay above the
+/// rack's top plate (the tube stands 54 mm deep in it) and below the fingertips of a hand that
+/// grips the cap. Other tubes have no task that holds them yet.
 const HOLD_HEIGHT: f64 = 0.79;
 
 /// How far above its seat, in turns of the thread, a cap is set on the mouth to be screwed on, at
@@ -386,6 +391,34 @@ pub fn cap_rise_and_aside(p: &Params, s: &LabwareState) -> Option<(f64, f64)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Set on the mouth to be screwed on, a cap stands at a height its heading fixes: one pitch
+    /// higher per turn anticlockwise from the seat's heading, at most 2.3 turns up and more
+    /// than 1.3 (so the nut overlaps the bolt by less than a turn).
+    #[test]
+    fn a_cap_is_set_on_the_mouth_at_the_height_its_heading_puts_it_in_the_thread() {
+        let p = Params::conical_50ml();
+        let tube = translation([0.3, 0.1, 0.83]);
+        for deg in [0.0, 10.0, 108.0, 179.0, 181.0, 300.0, 359.9, -60.0] {
+            let heading = crate::frame::axis_angle([0.0, 0.0, 1.0], f64::to_radians(deg));
+            let held = tube * crate::frame::pose([0.0, 0.0, 0.2], heading);
+            let s = LabwareState {
+                name: "tube".into(),
+                pose: tube,
+                joints: BTreeMap::new(),
+                parts: BTreeMap::from([("cap".into(), held)]),
+                logic: Default::default(),
+                touched_by: Vec::new(),
+            };
+            let start = p.affordance("cap_start", &s).unwrap().pose;
+            let seated = p.affordance("cap_seated", &s).unwrap().pose;
+            let turns = (position(&start)[2] - position(&seated)[2]) / p.pitch;
+            assert!(turns > 1.3 - 1e-9 && turns <= 2.3 + 1e-9, "{deg}: {turns}");
+            let phase = f64::to_radians(deg).rem_euclid(std::f64::consts::TAU);
+            let off = (turns - phase / std::f64::consts::TAU).rem_euclid(1.0);
+            assert!(off < 1e-9 || off > 1.0 - 1e-9, "{deg}: {turns} turns is out of phase");
+        }
+    }
     use crate::frame::position;
 
     #[test]

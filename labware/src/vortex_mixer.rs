@@ -1,9 +1,13 @@
-//! The vortex mixer (Scientific Industries Vortex-Genie 2 proportions): a weighted housing, a
-//! cup on the eccentric drive of `physics::eccentric` (the cup orbits at the throw without
-//! turning), and a sprung power switch on the front. The instrument acts: its logic drives its
-//! own motor, at the set speed while the power is on and at rest while it is off. A press of the
-//! switch (spring force over the threshold, held for the repeat time, as the thermal mixer's
-//! buttons) toggles the power once; the switch must be let go before it toggles again.
+//! The vortex mixer (Scientific Industries Vortex-Genie 2: its housing's extent, its cup's radius
+//! and height, its 2 mm orbit): a weighted housing, a cup on the eccentric drive of
+//! `physics::eccentric` (the cup orbits at the throw without turning), and a sprung power switch
+//! on the front. The instrument acts: its logic drives its own motor, at the set speed while the
+//! power is on and at rest while it is off. A press of the switch (spring force over the
+//! threshold, held for the repeat time, as the thermal mixer's buttons) toggles the power once;
+//! the switch must be let go before it toggles again. The logic also measures how fast the drive
+//! really turns, and the judge's "power on" asks for that: switched on, and the cup orbiting
+//! within 10% of the set speed. It does not model the real instrument's speed knob (the speed is
+//! a parameter of the model) or its touch mode.
 //!
 //! Frame: origin at the centre of the footprint, +y the front (the switch's side), +z up.
 
@@ -31,21 +35,26 @@ pub struct Params {
     pub throw: f64,
     pub cup_radius: f64,
     pub cup_half_height: f64,
+    /// Where the drive's axis stands behind the footprint's centre (m, along -y).
+    pub cup_back: f64,
 }
 
 impl Default for Params {
     fn default() -> Self {
         Params {
-            housing_half: [0.08, 0.1, 0.08],
-            switch_at: [0.05, 0.1, 0.04],
+            // 122 x 163 x 132 mm; the switch low on the front, left of centre; the cup's axis
+            // 44 mm behind the centre and its top 161 mm up (upstream-autobio.md, 11).
+            housing_half: [0.061, 0.0815, 0.066],
+            switch_at: [-0.032, 0.0815, 0.063],
             switch_travel: 0.004,
             switch_stiffness: 400.0,
             press_force: 0.5,
             repeat_s: 0.25,
             speed_rpm: 2500.0,
             throw: 0.002,
-            cup_radius: 0.02,
-            cup_half_height: 0.01,
+            cup_radius: 0.0282,
+            cup_half_height: 0.0135,
+            cup_back: 0.0439,
         }
     }
 }
@@ -53,6 +62,11 @@ impl Default for Params {
 const POWER: &str = "power";
 const HELD: &str = "switch_held_s";
 const LATCHED: &str = "switch_latched";
+/// The drive's angle at the last step (rad) and the speed measured from it (rad/s).
+const DRIVE_ANGLE: &str = "drive_angle";
+const DRIVE_SPEED: &str = "drive_rad_s";
+/// How far from the set speed (a fraction of it) the drive may turn and count as running.
+const SPEED_TOLERANCE: f64 = 0.1;
 
 impl Params {
     fn drive(&self) -> Eccentric {
@@ -60,6 +74,9 @@ impl Params {
             throw: self.throw,
             cup_radius: self.cup_radius,
             cup_half_height: self.cup_half_height,
+            // The Vortex-Genie 2 cup's second ring of bumps (12 of 2.4 mm at 23.4 mm): a 50 mL
+            // tube stands inside it with 7 mm to spare, a 15 mL one with 13.
+            rim: (0.0234, 0.0024, 12),
             ..Eccentric::default()
         }
     }
@@ -68,7 +85,7 @@ impl Params {
     fn cup_rest(&self) -> Vec3 {
         [
             self.throw,
-            0.0,
+            -self.cup_back,
             2.0 * self.housing_half[2] + self.cup_half_height + 0.002,
         ]
     }
@@ -88,7 +105,7 @@ impl Instrument for Params {
         let h = self.housing_half;
         let drive = self
             .drive()
-            .mjcf(&format!("{name}/vortex"), [0.0, 0.0, 2.0 * h[2]]);
+            .mjcf(&format!("{name}/vortex"), [0.0, -self.cup_back, 2.0 * h[2]]);
         let worldbody = format!(
             r#"<body name="{name}/base" {placement}>
   <geom name="{name}/housing" type="box" size="{hh}" pos="0 0 {hz}" mass="3" rgba="0.82 0.84 0.86 1"/>
@@ -154,6 +171,13 @@ impl Instrument for Params {
         }
         set(logic, HELD, held);
         out.drive("motor", self.motor_speed(logic));
+        let angle = joints.get("drive").copied().unwrap_or(0.0);
+        if dt > 0.0
+            && let Some(last) = logic.get(DRIVE_ANGLE).copied()
+        {
+            set(logic, DRIVE_SPEED, (angle - last) / dt);
+        }
+        set(logic, DRIVE_ANGLE, angle);
     }
 
     fn measure(
@@ -166,13 +190,25 @@ impl Instrument for Params {
         if part != POWER || !matches!(state, "on" | "off") {
             return None;
         }
-        let value = f64::from(u8::from(s.flag(POWER)));
-        let target = f64::from(u8::from(state == "on"));
+        // On: switched on and the drive really turning at the set speed (within 10%), measured.
+        let switched = s.flag(POWER);
+        if state == "on" {
+            let set = rpm_to_rad_s(self.speed_rpm);
+            let speed = s.logic.get(DRIVE_SPEED).copied().unwrap_or(0.0);
+            let running = (speed - set).abs() <= SPEED_TOLERANCE * set;
+            return Some(Measure {
+                value: speed / set,
+                target: 1.0,
+                tolerance: SPEED_TOLERANCE,
+                holds: switched && running,
+            });
+        }
+        let value = f64::from(u8::from(switched));
         Some(Measure {
             value,
-            target,
+            target: 0.0,
             tolerance: 0.0,
-            holds: value == target,
+            holds: !switched,
         })
     }
 
@@ -220,6 +256,41 @@ mod tests {
             p.step(0.002, &joints, logic, &mut out);
         }
         out.drives.last().map(|(_, v)| *v).unwrap_or(f64::NAN)
+    }
+
+    /// "On" is switched on and turning at the set speed, measured from the drive's angle: a
+    /// drive held back to half speed (or still) with the switch on is not on.
+    #[test]
+    fn on_is_the_drive_turning_at_its_set_speed() {
+        let p = Params::default();
+        let set = rpm_to_rad_s(p.speed_rpm);
+        let run = |rate: f64| {
+            let mut logic = p.reset(&BTreeMap::from([(POWER.into(), "on".into())])).logic;
+            let mut out = Effects::default();
+            for i in 0..50 {
+                let joints = BTreeMap::from([
+                    ("switch".to_string(), 0.0),
+                    ("drive".to_string(), rate * 0.002 * i as f64),
+                ]);
+                out.clear();
+                p.step(0.002, &joints, &mut logic, &mut out);
+            }
+            let s = LabwareState {
+                name: "vortex".into(),
+                pose: Pose::identity(),
+                joints: BTreeMap::new(),
+                parts: BTreeMap::new(),
+                logic,
+                touched_by: Vec::new(),
+            };
+            p.measure(POWER, "on", None, &s).unwrap()
+        };
+        let full = run(set);
+        assert!(full.holds && (full.value - 1.0).abs() < 1e-9, "{full:?}");
+        assert!(run(0.95 * set).holds);
+        let half = run(0.5 * set);
+        assert!(!half.holds && (half.value - 0.5).abs() < 1e-9, "{half:?}");
+        assert!(!run(0.0).holds);
     }
 
     #[test]

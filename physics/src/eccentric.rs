@@ -12,6 +12,10 @@ pub struct Eccentric {
     pub cup_radius: f64,
     pub cup_half_height: f64,
     pub cup_mass: f64,
+    /// A ring of bumps on the cup's top that keeps what stands on it from sliding off, as a
+    /// mixer's rubber cup does: ring radius (m), bump radius (m) and count; none when the count
+    /// is 0.
+    pub rim: (f64, f64, usize),
     /// Velocity actuator gain and the largest drive speed (rad/s).
     pub kv: f64,
     pub max_speed: f64,
@@ -24,6 +28,7 @@ impl Default for Eccentric {
             cup_radius: 0.02,
             cup_half_height: 0.01,
             cup_mass: 0.05,
+            rim: (0.0, 0.0, 0),
             kv: 1.0,
             max_speed: 400.0,
         }
@@ -51,7 +56,7 @@ impl Eccentric {
     <body name="{prefix}/cup" pos="0 0 {}">
       <geom name="{prefix}/cup" type="cylinder" size="{} {}" mass="{}" rgba="0.15 0.15 0.15 1"/>
       <site name="{prefix}/cup_centre" pos="0 0 0"/>
-    </body>
+{}    </body>
   </body>
 </body>"#,
             pos[0],
@@ -63,6 +68,7 @@ impl Eccentric {
             self.cup_radius,
             self.cup_half_height,
             self.cup_mass,
+            self.rim_geoms(prefix),
         );
         let equality = format!(
             r#"<joint name="{prefix}/counter_rotation" joint1="{prefix}/orbit" joint2="{prefix}/pivot" polycoef="0 -1 0 0 0" solref="0.002 1"/>"#
@@ -76,6 +82,24 @@ impl Eccentric {
             equality,
             actuator,
         }
+    }
+}
+
+impl Eccentric {
+    /// The rim's bumps: spheres on the cup's top face, evenly around the ring.
+    fn rim_geoms(&self, prefix: &str) -> String {
+        let (ring, r, n) = self.rim;
+        (0..n)
+            .map(|i| {
+                let a = std::f64::consts::TAU * i as f64 / n as f64;
+                format!(
+                    "      <geom name=\"{prefix}/rim{i}\" type=\"sphere\" size=\"{r}\" pos=\"{} {} {}\" mass=\"0.001\" rgba=\"0.15 0.15 0.15 1\"/>\n",
+                    ring * a.cos(),
+                    ring * a.sin(),
+                    self.cup_half_height
+                )
+            })
+            .collect()
     }
 }
 

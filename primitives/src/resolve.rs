@@ -2,7 +2,9 @@
 //! name affordances, joint goals by role and slot seats; here they become world-frame tool poses,
 //! read through each item's instrument model ([`labware::Instrument`]). Choices that must hold for
 //! a whole step (which of an affordance's symmetric grasps to use, how a carried item sits in the
-//! hand) are made once, at the step's start, in a [`StepFrame`].
+//! hand) are made once, at the step's start, in a [`StepFrame`]. A carry target (a held part's
+//! affordance brought onto another's) is resolved from where the tool is, and a turn follows a
+//! thread's lead up to its stop; a turn back undoes the step's last turn.
 
 use compiler::motion::{Goals, Motion, Target};
 use compiler::params::{Bindings, render};
@@ -27,6 +29,8 @@ pub enum PlanError {
     NoSlot(String),
     #[error("a slot is targeted, but the step carries nothing to seat")]
     NothingCarried,
+    #[error("a carry target is resolved from where the tool is, in a motion; it has no pose of its own")]
+    CarryFromNowhere,
     #[error("`{labware}` has no button that sets `{param}` toward `{value}`")]
     NoButton {
         labware: String,
@@ -148,10 +152,6 @@ impl<'a> Lab<'a> {
     }
 }
 
-/// How far past its stop a turn that follows a thread carries the tool (m): none, as a thread
-/// has no shoulder (turned past its seat, a cap goes on down the neck, askew).
-const STOP_PAST: f64 = 0.0;
-
 /// How far above its target a transit passes at least (m).
 const TRANSIT_CLEARANCE: f64 = 0.06;
 
@@ -174,6 +174,8 @@ pub struct StepFrame {
     half_turn: bool,
     /// Whether the first affordance is round (any turn about its axis grasps it the same).
     round: bool,
+    /// The angle the step's last [`Motion::Turn`] turned (rad), which a [`Motion::TurnBack`] undoes.
+    turned: f64,
 }
 
 impl StepFrame {
@@ -197,6 +199,7 @@ impl StepFrame {
             regrasp_nearest: motions.iter().any(|m| matches!(m, Motion::Turn { .. })),
             half_turn: false,
             round: false,
+            turned: 0.0,
         };
         match first_target(motions) {
             Some(Target::Affordance {
@@ -267,7 +270,7 @@ impl StepFrame {
                 param,
                 value,
             } => Ok(self.tool_at(&lab.button(labware, param, value)?)),
-            Target::Carry { .. } => Err(PlanError::NothingCarried),
+            Target::Carry { .. } => Err(PlanError::CarryFromNowhere),
         }
     }
 
@@ -299,6 +302,52 @@ impl StepFrame {
     pub fn regrip(&mut self, lab: &Lab, tcp_now: &Pose) -> Result<(), PlanError> {
         if let Some((item, in_tool)) = &mut self.carried {
             *in_tool = tcp_now.inverse() * lab.pose_of(item)?;
+        }
+        Ok(())
+    }
+
+    /// The lead (m per rad) a turn follows: that of its `thread` target's affordance, else none.
+    fn lead(&self, thread: Option<&Target>, lab: &Lab) -> Result<f64, PlanError> {
+        Ok(match thread {
+            Some(Target::Affordance { labware, name, .. })
+            | Some(Target::Carry {
+                labware, to: name, ..
+            }) => {
+                let (_, live) = lab.item(labware)?;
+                lab.affordance(labware, name, live)?.lead
+            }
+            _ => 0.0,
+        })
+    }
+
+    /// The angle a [`Motion::Turn`] turns from the tool at `tcp_now` (0 for any other motion):
+    /// its own, or less where advancing along its thread would carry the tool past its `stop`.
+    pub fn turn_angle(&self, motion: &Motion, lab: &Lab, tcp_now: &Pose) -> Result<f64, PlanError> {
+        let Motion::Turn {
+            angle,
+            thread,
+            stop,
+        } = motion
+        else {
+            return Ok(0.0);
+        };
+        let lead = self.lead(thread.as_ref(), lab)?;
+        match stop {
+            // Only a turn that advances the tool (along its axis) toward the stop is limited.
+            Some(stop) if lead * angle > 0.0 => {
+                let at = self.target(stop, lab)?;
+                let ahead = (tcp_now.inverse() * at).translation.vector.z.max(0.0);
+                Ok(angle.signum() * angle.abs().min(ahead / lead))
+            }
+            _ => Ok(*angle),
+        }
+    }
+
+    /// Notes the angle `motion` turns, when it is a [`Motion::Turn`], for the step's next
+    /// [`Motion::TurnBack`].
+    pub fn record_turn(&mut self, motion: &Motion, lab: &Lab, tcp_now: &Pose) -> Result<(), PlanError> {
+        if matches!(motion, Motion::Turn { .. }) {
+            self.turned = self.turn_angle(motion, lab, tcp_now)?;
         }
         Ok(())
     }
@@ -426,40 +475,11 @@ impl StepFrame {
                 6,
             ),
             // In steps of at most 0.1 rad, so that the IK's nearest solution follows the turn.
-            Motion::Turn {
-                angle,
-                thread,
-                stop,
-            } => {
-                let lead = match thread {
-                    Some(Target::Affordance { labware, name, .. })
-                    | Some(Target::Carry {
-                        labware, to: name, ..
-                    }) => {
-                        let (_, live) = lab.item(labware)?;
-                        lab.affordance(labware, name, live)?.lead
-                    }
-                    _ => 0.0,
-                };
-                // No further than level with the stop.
-                let mut angle = *angle;
-                if let (Some(stop), true) = (stop, lead > 0.0) {
-                    let at = self.target(stop, lab)?;
-                    let ahead = (tcp_now.inverse() * at).translation.vector.z.max(0.0);
-                    let most = (ahead + STOP_PAST) / lead;
-                    angle = angle.signum() * angle.abs().min(most);
-                }
-                let angle = &angle;
-                let n = ((angle.abs() / 0.1).ceil() as usize).max(1);
-                (0..=n)
-                    .map(|i| {
-                        let a = angle * i as f64 / n as f64;
-                        let mut p = translated_local(tcp_now, [0.0, 0.0, lead * a]);
-                        p.rotation *= axis_angle([0.0, 0.0, 1.0], a);
-                        p
-                    })
-                    .collect()
+            Motion::Turn { thread, .. } => {
+                let lead = self.lead(thread.as_ref(), lab)?;
+                turn_path(tcp_now, self.turn_angle(motion, lab, tcp_now)?, lead)
             }
+            Motion::TurnBack => turn_path(tcp_now, -self.turned, 0.0),
             Motion::Press { target, depth } => {
                 let at = self.target(target, lab)?;
                 line(tcp_now, &translated_local(&at, [0.0, 0.0, *depth]), 6)
@@ -492,6 +512,20 @@ impl StepFrame {
             line(tcp_now, &up(-distance), 6),
         ]
     }
+}
+
+/// The tool turned in place about its axis by `angle` from `tcp`, advancing `lead` per radian
+/// along it, in steps of at most 0.1 rad.
+fn turn_path(tcp: &Pose, angle: f64, lead: f64) -> Vec<Pose> {
+    let n = ((angle.abs() / 0.1).ceil() as usize).max(1);
+    (0..=n)
+        .map(|i| {
+            let a = angle * i as f64 / n as f64;
+            let mut p = translated_local(tcp, [0.0, 0.0, lead * a]);
+            p.rotation *= axis_angle([0.0, 0.0, 1.0], a);
+            p
+        })
+        .collect()
 }
 
 /// The step's first target that the tool goes to.
@@ -744,7 +778,8 @@ mod tests {
         let path = frame.poses(&back, &lab, &grip).unwrap();
         assert!((path.last().unwrap().translation.vector - grip.translation.vector).norm() < 1e-12);
         // Turned to tighten from a millimetre above the seat with the seat as its stop, the tool
-        // goes down to the seat (and STOP_PAST beyond), not a whole half pitch.
+        // goes down to the seat, not a whole half pitch; turned to loosen, the stop does not
+        // hold it back.
         let above = translation([0.0, 0.0, 0.001]) * grip;
         let tighten = Motion::Turn {
             angle: std::f64::consts::PI,
@@ -757,6 +792,17 @@ mod tests {
         };
         let path = frame.poses(&tighten, &lab, &above).unwrap();
         let fall = above.translation.vector.z - path.last().unwrap().translation.vector.z;
-        assert!((fall - 0.001 - STOP_PAST).abs() < 1e-9, "fell {fall}");
+        assert!((fall - 0.001).abs() < 1e-9, "fell {fall}");
+        let Motion::Turn { thread, stop, .. } = tighten else {
+            unreachable!()
+        };
+        let loosen = Motion::Turn {
+            angle: -std::f64::consts::PI,
+            thread,
+            stop,
+        };
+        let path = frame.poses(&loosen, &lab, &above).unwrap();
+        let rise = path.last().unwrap().translation.vector.z - above.translation.vector.z;
+        assert!((rise - p.pitch / 2.0).abs() < 1e-12, "rose {rise}");
     }
 }

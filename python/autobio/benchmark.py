@@ -124,6 +124,7 @@ DEFAULT_TASKS = [
     "tube.pick_up",
     "tube.transfer",
     "tube.unscrew_cap",
+    "tube.screw_cap",
     "thermal_mixer.set_parameters",
     "centrifuge.insert_symmetric",
 ]

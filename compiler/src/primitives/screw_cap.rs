@@ -38,8 +38,9 @@ fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
 
 /// How far one grip turns the cap (rad): as `unscrew_cap`'s.
 const TURN_PER_GRIP: f64 = 8.0 * std::f64::consts::PI / 9.0;
-/// Grips to screw the cap down from where it is set on the mouth to its seat (2.3 turns):
-/// 960 degrees, the last grip turning it home against the seat.
+/// Grips to screw the cap down from where it is set on the mouth (1.3 to 2.3 turns above its
+/// seat) to the seat: up to 960 degrees. Each turn stops where the cap is seated, so the grips
+/// left over once it is turn it no further.
 const GRIPS: usize = 6;
 /// How far the open hand rises off the cap between grips (m).
 const CLEAR: f64 = 0.015;
@@ -97,11 +98,7 @@ fn motions(step: &MotionStep) -> Vec<Motion> {
             // into the holding hand below it once the cap nears its seat.
             m.extend([
                 Motion::Lift { height: CLEAR },
-                Motion::Turn {
-                    angle: -TURN_PER_GRIP,
-                    thread: None,
-                    stop: None,
-                },
+                Motion::TurnBack,
                 Motion::Reach {
                     target: cap.clone(),
                 },

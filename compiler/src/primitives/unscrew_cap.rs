@@ -71,11 +71,7 @@ fn motions(step: &MotionStep) -> Vec<Motion> {
         if grip + 1 < GRIPS {
             m.extend([
                 Motion::Release,
-                Motion::Turn {
-                    angle: TURN_PER_GRIP,
-                    thread: None,
-                    stop: None,
-                },
+                Motion::TurnBack,
                 Motion::Reach {
                     target: cap.clone(),
                 },

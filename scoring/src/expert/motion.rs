@@ -1,7 +1,10 @@
 //! How the expert starts one motion on one robot's lane: the motions that move no pose (grasp and
 //! release at the gripper's values and settle time, a wait, holding until a panel shows a value)
 //! and the pose motions (resolved to tool poses, solved by the IK method the robot model chooses,
-//! routed around obstacles in free space, timed by TOPP under the model's limits). A new motion
+//! routed around obstacles in free space, timed by TOPP under the model's limits). A robot whose
+//! free-space motions go in joint space has only their end pose solved; a step that turns a round
+//! part in the hand takes the grasp about its axis from which the arm can make the turn
+//! (`with_room_to_turn`). A new motion
 //! kind is a `compiler::motion::Motion` variant and its arm here (or in `primitives::resolve` for
 //! its poses).
 
@@ -116,6 +119,9 @@ impl ExpertPolicy {
         // grasp as it is now.
         frame
             .regrip(&lab, &tcp_now)
+            .map_err(|e| planning(context.clone(), e))?;
+        frame
+            .record_turn(&q.motion, &lab, &tcp_now)
             .map_err(|e| planning(context.clone(), e))?;
         let frame = &*frame;
         let poses = frame
@@ -232,6 +238,7 @@ fn with_room_to_turn(arm: &mut Arm, frame: StepFrame, motions: &[Motion], lab: &
     let limits = arm.kin.limits();
     let within = |q: &[f64]| q.iter().zip(&limits).all(|(v, (lo, hi))| *v >= *lo && *v <= *hi);
     let mut fits = |f: &StepFrame| -> Option<()> {
+        // `None` where the grasp or a pose of the turn has no solution that keeps to one branch.
         let grasp = f.first_pose(motions, lab).ok()??;
         let mut q = solve_with(arm.model.ik, &mut arm.kin, &grasp, &arm.target).ok()?;
         for pose in f.poses(&turn, lab, &grasp).ok()?.iter().skip(1) {
