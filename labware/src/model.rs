@@ -7,9 +7,9 @@
 //! ([`Mechanism`]), its joints, equality switches and actuators by role, reset from declared part
 //! states, the per-step logic hook (latches, buttons, a motor driven from its switch: [`Effects`]),
 //! processes with other items ([`crate::process`]), panel values and the displays that show them (drawn into
-//! textures the runtime uploads), the readout the judge scores ([`Instrument::measure`],
-//! [`Instrument::panel_value`], [`Instrument::readout`]), and affordances as functions of live
-//! state.
+//! textures the runtime uploads), what the judge scores ([`Instrument::measure`],
+//! [`Instrument::panel_value`]) and the readout people see ([`Instrument::readout`]), and
+//! affordances as functions of live state.
 
 use crate::frame::{Pose, serde_pose};
 use crate::mjcf::Fragment;

@@ -6,8 +6,9 @@
 //! threshold, held for the repeat time, as the thermal mixer's buttons) toggles the power once;
 //! the switch must be let go before it toggles again. The logic also measures how fast the drive
 //! really turns, and the judge's "power on" asks for that: switched on, and the cup orbiting
-//! within 10% of the set speed. It does not model the real instrument's speed knob (the speed is
-//! a parameter of the model) or its touch mode.
+//! within 10% of the set speed ("off" is the switch's alone: a cup still coasting down is off).
+//! The readout shows both, the switch and the measured speed. It does not model the real
+//! instrument's speed knob (the speed is a parameter of the model) or its touch mode.
 //!
 //! Frame: origin at the centre of the footprint, +y the front (the switch's side), +z up.
 
@@ -42,10 +43,11 @@ pub struct Params {
 impl Default for Params {
     fn default() -> Self {
         Params {
-            // 122 x 163 x 132 mm; the switch low on the front, left of centre; the cup's axis
-            // 44 mm behind the centre and its top 161 mm up (upstream-autobio.md, 11).
+            // 122 x 163 x 132 mm; the switch at mid-height on the front, 32 mm left of centre
+            // seen from the front; the cup's axis 44 mm behind the centre and its top 161 mm up
+            // (upstream-autobio.md, 11; upstream's front faces -y, ours +y).
             housing_half: [0.061, 0.0815, 0.066],
-            switch_at: [-0.032, 0.0815, 0.063],
+            switch_at: [0.032, 0.0815, 0.063],
             switch_travel: 0.004,
             switch_stiffness: 400.0,
             press_force: 0.5,
@@ -147,6 +149,7 @@ impl Instrument for Params {
         let on = initial.get(POWER).is_some_and(|s| s == "on");
         let mut logic = Logic::new();
         set(&mut logic, POWER, f64::from(u8::from(on)));
+        set(&mut logic, DRIVE_SPEED, 0.0);
         Reset {
             joints: Vec::new(),
             logic,
@@ -212,9 +215,16 @@ impl Instrument for Params {
         })
     }
 
+    /// The switch's position and the drive's measured speed: switched on during spin-up (or with
+    /// the drive held back) reads "on" at under the set speed, which the judge's "on" is not.
     fn readout(&self, s: &LabwareState) -> BTreeMap<String, String> {
         let state = if s.flag(POWER) { "on" } else { "off" };
-        BTreeMap::from([(POWER.to_string(), state.to_string())])
+        let rad_s = s.logic.get(DRIVE_SPEED).copied().unwrap_or(0.0);
+        let rpm = rad_s * 60.0 / std::f64::consts::TAU;
+        BTreeMap::from([
+            (POWER.to_string(), state.to_string()),
+            ("speed".to_string(), format!("{rpm:.0} rpm")),
+        ])
     }
 
     fn affordance(&self, name: &str, s: &LabwareState) -> Option<Affordance> {
@@ -288,9 +298,31 @@ mod tests {
         let full = run(set);
         assert!(full.holds && (full.value - 1.0).abs() < 1e-9, "{full:?}");
         assert!(run(0.95 * set).holds);
+        assert!(!run(1.15 * set).holds, "over the set speed");
         let half = run(0.5 * set);
         assert!(!half.holds && (half.value - 0.5).abs() < 1e-9, "{half:?}");
         assert!(!run(0.0).holds);
+        // Turning at speed with the switch off (coasting) is not on.
+        let mut logic = p.reset(&BTreeMap::new()).logic;
+        let mut out = Effects::default();
+        for i in 0..50 {
+            let joints = BTreeMap::from([
+                ("switch".to_string(), 0.0),
+                ("drive".to_string(), set * 0.002 * i as f64),
+            ]);
+            p.step(0.002, &joints, &mut logic, &mut out);
+        }
+        let s = LabwareState {
+            name: "vortex".into(),
+            pose: Pose::identity(),
+            joints: BTreeMap::new(),
+            parts: BTreeMap::new(),
+            logic,
+            touched_by: Vec::new(),
+        };
+        assert!(!p.measure(POWER, "on", None, &s).unwrap().holds);
+        assert!(p.measure(POWER, "off", None, &s).unwrap().holds);
+        assert_eq!(p.readout(&s)["speed"], "2500 rpm");
     }
 
     #[test]

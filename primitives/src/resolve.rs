@@ -31,6 +31,8 @@ pub enum PlanError {
     NothingCarried,
     #[error("a carry target is resolved from where the tool is, in a motion; it has no pose of its own")]
     CarryFromNowhere,
+    #[error("a turn back with no turn before it in the step to undo")]
+    NoTurnToUndo,
     #[error("`{labware}` has no button that sets `{param}` toward `{value}`")]
     NoButton {
         labware: String,
@@ -174,8 +176,9 @@ pub struct StepFrame {
     half_turn: bool,
     /// Whether the first affordance is round (any turn about its axis grasps it the same).
     round: bool,
-    /// The angle the step's last [`Motion::Turn`] turned (rad), which a [`Motion::TurnBack`] undoes.
-    turned: f64,
+    /// The angle the step's last [`Motion::Turn`] turned (rad), until a [`Motion::TurnBack`]
+    /// undoes it.
+    turned: Option<f64>,
 }
 
 impl StepFrame {
@@ -199,7 +202,7 @@ impl StepFrame {
             regrasp_nearest: motions.iter().any(|m| matches!(m, Motion::Turn { .. })),
             half_turn: false,
             round: false,
-            turned: 0.0,
+            turned: None,
         };
         match first_target(motions) {
             Some(Target::Affordance {
@@ -337,17 +340,20 @@ impl StepFrame {
             Some(stop) if lead * angle > 0.0 => {
                 let at = self.target(stop, lab)?;
                 let ahead = (tcp_now.inverse() * at).translation.vector.z.max(0.0);
-                Ok(angle.signum() * angle.abs().min(ahead / lead))
+                Ok(angle.signum() * angle.abs().min(ahead / lead.abs()))
             }
             _ => Ok(*angle),
         }
     }
 
-    /// Notes the angle `motion` turns, when it is a [`Motion::Turn`], for the step's next
-    /// [`Motion::TurnBack`].
+    /// After `motion` (from the tool at `tcp_now`) is under way: a [`Motion::Turn`] is noted for
+    /// the step's next [`Motion::TurnBack`], which forgets it (a second turn back has nothing to
+    /// undo).
     pub fn record_turn(&mut self, motion: &Motion, lab: &Lab, tcp_now: &Pose) -> Result<(), PlanError> {
-        if matches!(motion, Motion::Turn { .. }) {
-            self.turned = self.turn_angle(motion, lab, tcp_now)?;
+        match motion {
+            Motion::Turn { .. } => self.turned = Some(self.turn_angle(motion, lab, tcp_now)?),
+            Motion::TurnBack => self.turned = None,
+            _ => {}
         }
         Ok(())
     }
@@ -479,7 +485,7 @@ impl StepFrame {
                 let lead = self.lead(thread.as_ref(), lab)?;
                 turn_path(tcp_now, self.turn_angle(motion, lab, tcp_now)?, lead)
             }
-            Motion::TurnBack => turn_path(tcp_now, -self.turned, 0.0),
+            Motion::TurnBack => turn_path(tcp_now, -self.turned.ok_or(PlanError::NoTurnToUndo)?, 0.0),
             Motion::Press { target, depth } => {
                 let at = self.target(target, lab)?;
                 line(tcp_now, &translated_local(&at, [0.0, 0.0, *depth]), 6)
@@ -777,6 +783,18 @@ mod tests {
         };
         let path = frame.poses(&back, &lab, &grip).unwrap();
         assert!((path.last().unwrap().translation.vector - grip.translation.vector).norm() < 1e-12);
+        // A turn back undoes the step's last turn, once; with none to undo it is an error.
+        let mut frame = frame.clone();
+        assert_eq!(
+            frame.poses(&Motion::TurnBack, &lab, &grip),
+            Err(PlanError::NoTurnToUndo)
+        );
+        frame.record_turn(&turn, &lab, &grip).unwrap();
+        let turned = *frame.poses(&turn, &lab, &grip).unwrap().last().unwrap();
+        let undone = *frame.poses(&Motion::TurnBack, &lab, &turned).unwrap().last().unwrap();
+        assert!(undone.rotation.angle_to(&grip.rotation) < 1e-12);
+        frame.record_turn(&Motion::TurnBack, &lab, &turned).unwrap();
+        assert!(frame.poses(&Motion::TurnBack, &lab, &grip).is_err());
         // Turned to tighten from a millimetre above the seat with the seat as its stop, the tool
         // goes down to the seat, not a whole half pitch; turned to loosen, the stop does not
         // hold it back.

@@ -120,9 +120,6 @@ impl ExpertPolicy {
         frame
             .regrip(&lab, &tcp_now)
             .map_err(|e| planning(context.clone(), e))?;
-        frame
-            .record_turn(&q.motion, &lab, &tcp_now)
-            .map_err(|e| planning(context.clone(), e))?;
         let frame = &*frame;
         let poses = frame
             .poses(&q.motion, &lab, &tcp_now)
@@ -165,6 +162,12 @@ impl ExpertPolicy {
             },
         };
         lane.step_moved = true;
+        // A turn is noted for the turn back that undoes it (on the frame the path was solved
+        // with: the other grasp's, where that one was taken).
+        if let Some((_, f)) = lane.frame.as_mut() {
+            f.record_turn(&q.motion, &lab, &tcp_now)
+                .map_err(|e| planning(context.clone(), e))?;
+        }
         // TOPP's grid: 200 intervals, and for a planned route (~100 waypoints) 8 per waypoint.
         let mut grid = 200;
         let waypoints = if q.motion.through_free_space() {
