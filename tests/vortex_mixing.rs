@@ -34,7 +34,10 @@ fn the_expert_holds_the_tube_in_the_cup_and_switches_the_mixer_on() {
 fn a_mixer_switched_on_is_not_on_until_its_cup_orbits_at_speed() {
     // Switched on from the start, nobody pressing anything.
     let t = compile_edited(PROTOCOL, |s| {
-        let s = s.replace(r#"state = { power = "off" }"#, r#"state = { power = "on" }"#);
+        let s = s.replace(
+            r#"state = { power = "off" }"#,
+            r#"state = { power = "on" }"#,
+        );
         let press = s.find("[[steps]]\ndo = \"press\"").unwrap();
         let success = s.find("[success]").unwrap();
         format!("{}{}", &s[..press], &s[success..])
@@ -47,7 +50,10 @@ fn a_mixer_switched_on_is_not_on_until_its_cup_orbits_at_speed() {
     let hold = env.episode().ctrl();
     let on = |env: &Env| {
         let state = &env.episode().labware_state()[i];
-        (state.flag("power"), mixer.measure("power", "on", None, state).unwrap())
+        (
+            state.flag("power"),
+            mixer.measure("power", "on", None, state).unwrap(),
+        )
     };
     env.step(&hold).unwrap();
     let (switched, first) = on(&env);
@@ -96,7 +102,10 @@ fn a_tube_lifted_off_the_cup_while_the_mixer_runs_fails() {
     // The holder is the second robot: its block starts after the operator's; its shoulder is
     // its second joint.
     assert_eq!(t.robots[1].name, "holder");
-    let operator = robots::model(&t.robots[0].model).unwrap().action_names().len();
+    let operator = robots::model(&t.robots[0].model)
+        .unwrap()
+        .action_names()
+        .len();
     let r = run_with(&t, 3, &Default::default(), |t, s, i| {
         Box::new(LiftWhenOn {
             expert: ExpertPolicy::new(t, s, i).unwrap(),

@@ -416,7 +416,10 @@ mod tests {
             assert!(turns > 1.3 - 1e-9 && turns <= 2.3 + 1e-9, "{deg}: {turns}");
             let phase = f64::to_radians(deg).rem_euclid(std::f64::consts::TAU);
             let off = (turns - phase / std::f64::consts::TAU).rem_euclid(1.0);
-            assert!(off < 1e-9 || off > 1.0 - 1e-9, "{deg}: {turns} turns is out of phase");
+            assert!(
+                off < 1e-9 || off > 1.0 - 1e-9,
+                "{deg}: {turns} turns is out of phase"
+            );
         }
     }
     use crate::frame::position;

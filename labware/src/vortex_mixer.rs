@@ -275,7 +275,9 @@ mod tests {
         let p = Params::default();
         let set = rpm_to_rad_s(p.speed_rpm);
         let run = |rate: f64| {
-            let mut logic = p.reset(&BTreeMap::from([(POWER.into(), "on".into())])).logic;
+            let mut logic = p
+                .reset(&BTreeMap::from([(POWER.into(), "on".into())]))
+                .logic;
             let mut out = Effects::default();
             for i in 0..50 {
                 let joints = BTreeMap::from([

@@ -29,7 +29,9 @@ pub enum PlanError {
     NoSlot(String),
     #[error("a slot is targeted, but the step carries nothing to seat")]
     NothingCarried,
-    #[error("a carry target is resolved from where the tool is, in a motion; it has no pose of its own")]
+    #[error(
+        "a carry target is resolved from where the tool is, in a motion; it has no pose of its own"
+    )]
     CarryFromNowhere,
     #[error("a turn back with no turn before it in the step to undo")]
     NoTurnToUndo,
@@ -349,7 +351,12 @@ impl StepFrame {
     /// After `motion` (from the tool at `tcp_now`) is under way: a [`Motion::Turn`] is noted for
     /// the step's next [`Motion::TurnBack`], which forgets it (a second turn back has nothing to
     /// undo).
-    pub fn record_turn(&mut self, motion: &Motion, lab: &Lab, tcp_now: &Pose) -> Result<(), PlanError> {
+    pub fn record_turn(
+        &mut self,
+        motion: &Motion,
+        lab: &Lab,
+        tcp_now: &Pose,
+    ) -> Result<(), PlanError> {
         match motion {
             Motion::Turn { .. } => self.turned = Some(self.turn_angle(motion, lab, tcp_now)?),
             Motion::TurnBack => self.turned = None,
@@ -485,7 +492,9 @@ impl StepFrame {
                 let lead = self.lead(thread.as_ref(), lab)?;
                 turn_path(tcp_now, self.turn_angle(motion, lab, tcp_now)?, lead)
             }
-            Motion::TurnBack => turn_path(tcp_now, -self.turned.ok_or(PlanError::NoTurnToUndo)?, 0.0),
+            Motion::TurnBack => {
+                turn_path(tcp_now, -self.turned.ok_or(PlanError::NoTurnToUndo)?, 0.0)
+            }
             Motion::Press { target, depth } => {
                 let at = self.target(target, lab)?;
                 line(tcp_now, &translated_local(&at, [0.0, 0.0, *depth]), 6)
@@ -791,7 +800,11 @@ mod tests {
         );
         frame.record_turn(&turn, &lab, &grip).unwrap();
         let turned = *frame.poses(&turn, &lab, &grip).unwrap().last().unwrap();
-        let undone = *frame.poses(&Motion::TurnBack, &lab, &turned).unwrap().last().unwrap();
+        let undone = *frame
+            .poses(&Motion::TurnBack, &lab, &turned)
+            .unwrap()
+            .last()
+            .unwrap();
         assert!(undone.rotation.angle_to(&grip.rotation) < 1e-12);
         frame.record_turn(&Motion::TurnBack, &lab, &turned).unwrap();
         assert!(frame.poses(&Motion::TurnBack, &lab, &grip).is_err());

@@ -239,14 +239,22 @@ fn with_room_to_turn(arm: &mut Arm, frame: StepFrame, motions: &[Motion], lab: &
         stop: None,
     };
     let limits = arm.kin.limits();
-    let within = |q: &[f64]| q.iter().zip(&limits).all(|(v, (lo, hi))| *v >= *lo && *v <= *hi);
+    let within = |q: &[f64]| {
+        q.iter()
+            .zip(&limits)
+            .all(|(v, (lo, hi))| *v >= *lo && *v <= *hi)
+    };
     let mut fits = |f: &StepFrame| -> Option<()> {
         // `None` where the grasp or a pose of the turn has no solution that keeps to one branch.
         let grasp = f.first_pose(motions, lab).ok()??;
         let mut q = solve_with(arm.model.ik, &mut arm.kin, &grasp, &arm.target).ok()?;
         for pose in f.poses(&turn, lab, &grasp).ok()?.iter().skip(1) {
             let next = solve_with(arm.model.ik, &mut arm.kin, pose, &q).ok()?;
-            let jump = next.iter().zip(&q).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+            let jump = next
+                .iter()
+                .zip(&q)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
             if !within(&next) || jump > TURN_STEP_JOINT {
                 return None;
             }
