@@ -224,9 +224,7 @@ fn the_cap_thread_holds_the_tube_and_unscrews_a_pitch_per_turn_at_2_ms() {
     });
     let (z0, y0) = trace[0];
     assert!(
-        trace
-            .iter()
-            .any(|t| t.1 - y0 > 1.5 * std::f64::consts::TAU),
+        trace.iter().any(|t| t.1 - y0 > 1.5 * std::f64::consts::TAU),
         "the cap turned 1.5 turns in 4 s"
     );
     // The pitch is measured over the first turn, where the nut still engages the bolt over more

@@ -417,7 +417,7 @@ mod tests {
             let phase = f64::to_radians(deg).rem_euclid(std::f64::consts::TAU);
             let off = (turns - phase / std::f64::consts::TAU).rem_euclid(1.0);
             assert!(
-                off < 1e-9 || off > 1.0 - 1e-9,
+                !(1e-9..=1.0 - 1e-9).contains(&off),
                 "{deg}: {turns} turns is out of phase"
             );
         }
