@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::{compile, run, run_with};
+use common::{compile, predicate, run, run_with};
 use scoring::expert::ExpertPolicy;
 use scoring::{Observation, Policy, PolicyError};
 
@@ -36,12 +36,7 @@ fn the_expert_picks_the_tube_up() {
     let t = compile("protocols/tube/pick_up.toml");
     let r = run(&t, 11, "expert");
     assert!(r.success, "{:#?}", r.verdict);
-    let lifted = r
-        .verdict
-        .predicates()
-        .iter()
-        .find(|p| p.text == "tube lifted 9.5 cm")
-        .unwrap();
+    let lifted = predicate(&r, "tube lifted 9.5 cm");
     assert!(lifted.value >= 0.095, "{lifted:?}");
 }
 
@@ -87,18 +82,10 @@ fn a_tube_lifted_and_then_let_go_fails_the_pick_up() {
         })
     });
     assert!(!r.success && r.error.is_none(), "{r:?}");
-    let p = |text: &str| {
-        r.verdict
-            .predicates()
-            .iter()
-            .find(|p| p.text == text)
-            .unwrap()
-            .clone()
-    };
     // The tube fell back (to the rack or the bench): well under the lift, and no finger on it.
-    let lifted = p("tube lifted 9.5 cm");
+    let lifted = predicate(&r, "tube lifted 9.5 cm");
     assert!(!lifted.holds && lifted.value < 0.05, "{lifted:?}");
-    assert!(!p("arm touches tube").holds);
+    assert!(!predicate(&r, "arm touches tube").holds);
 }
 
 /// The expert until `stop` says so of the cap's rise on its thread (m; and whether it has been
@@ -153,13 +140,7 @@ fn a_cap_turned_half_way_off_is_not_off() {
         })
     });
     assert!(!r.success && r.error.is_none(), "{r:?}");
-    let off = r
-        .verdict
-        .predicates()
-        .iter()
-        .find(|p| p.text == "tube.cap is off")
-        .unwrap()
-        .clone();
+    let off = predicate(&r, "tube.cap is off");
     // Two thirds of a turn up the thread, still on it: risen 2 to 4 mm of the 10 mm off needs.
     assert!(
         !off.holds && off.value > 0.0015 && off.value < 0.005,
@@ -194,18 +175,10 @@ fn a_cap_screwed_half_a_turn_short_is_not_on() {
         })
     });
     assert!(!r.success && r.error.is_none(), "{r:?}");
-    let p = |text: &str| {
-        r.verdict
-            .predicates()
-            .iter()
-            .find(|p| p.text == text)
-            .unwrap()
-            .clone()
-    };
-    assert!(p("tube.cap was off").holds);
+    assert!(predicate(&r, "tube.cap was off").holds);
     // Measured on the thread's travel: still over a millimetre up it and under a turn (3 mm;
     // the hand stopped mid-turn, and the cap sits back a little in the thread's play).
-    let on = p("tube.cap is on within 0.5 mm");
+    let on = predicate(&r, "tube.cap is on within 0.5 mm");
     assert!(!on.holds && on.value > 0.001 && on.value < 0.003, "{on:?}");
 }
 
@@ -215,12 +188,6 @@ fn the_expert_screws_the_cap_back_on_with_two_arms() {
     let r = run(&t, 1, "expert");
     assert!(r.success, "{:#?}", r.verdict);
     // It was off, and is seated along the thread within half a millimetre.
-    let on = r
-        .verdict
-        .predicates()
-        .iter()
-        .find(|p| p.text == "tube.cap is on within 0.5 mm")
-        .unwrap()
-        .clone();
+    let on = predicate(&r, "tube.cap is on within 0.5 mm");
     assert!(on.holds, "{on:?}");
 }

@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{compile, compile_edited, run, run_with};
+use common::{compile, compile_edited, predicate, run, run_with};
 use labware::Instrument;
 use runtime::{Env, EnvOptions};
 use scoring::expert::ExpertPolicy;
@@ -19,13 +19,7 @@ fn the_expert_holds_the_tube_in_the_cup_and_switches_the_mixer_on() {
     let t = compile(PROTOCOL);
     let r = run(&t, 3, "expert");
     assert!(r.success, "{:#?}", r.verdict);
-    let on = r
-        .verdict
-        .predicates()
-        .iter()
-        .find(|p| p.text == "vortex.power is on")
-        .unwrap()
-        .clone();
+    let on = predicate(&r, "vortex.power is on");
     // The drive's measured speed, as a fraction of the set 2,500 rpm, within 10%.
     assert!(on.holds, "{on:?}");
 }
@@ -115,17 +109,9 @@ fn a_tube_lifted_off_the_cup_while_the_mixer_runs_fails() {
         })
     });
     assert!(!r.success && r.error.is_none(), "{r:?}");
-    let p = |text: &str| {
-        r.verdict
-            .predicates()
-            .iter()
-            .find(|p| p.text == text)
-            .unwrap()
-            .clone()
-    };
     // The mixer ran at its speed, but the tube is no longer standing in the cup.
-    assert!(p("vortex.power is on").holds);
-    let cup = p("tube in vortex.cup");
+    assert!(predicate(&r, "vortex.power is on").holds);
+    let cup = predicate(&r, "tube in vortex.cup");
     let height = cup.parts.iter().find(|q| q.name == "height").unwrap();
     assert!(!cup.holds && height.value > 0.005, "{cup:?}");
 }

@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::{compile, run, run_with};
+use common::{compile, predicate, run, run_with};
 use scoring::expert::ExpertPolicy;
 use scoring::{HoldPolicy, Observation, Policy, PolicyError};
 
@@ -47,14 +47,6 @@ fn expert_until(
             keep_going,
         })
     })
-}
-
-fn predicate<'a>(r: &'a scoring::EpisodeResult, text: &str) -> &'a scoring::PredicateValue {
-    r.verdict
-        .predicates()
-        .iter()
-        .find(|p| p.text == text)
-        .unwrap_or_else(|| panic!("no `{text}` in {:#?}", r.verdict))
 }
 
 #[test]

@@ -268,6 +268,18 @@ mod tests {
         out.drives.last().map(|(_, v)| *v).unwrap_or(f64::NAN)
     }
 
+    /// A mixer at the origin whose logic state is `logic`.
+    fn at_rest(logic: Logic) -> LabwareState {
+        LabwareState {
+            name: "vortex".into(),
+            pose: Pose::identity(),
+            joints: BTreeMap::new(),
+            parts: BTreeMap::new(),
+            logic,
+            touched_by: Vec::new(),
+        }
+    }
+
     /// "On" is switched on and turning at the set speed, measured from the drive's angle: a
     /// drive held back to half speed (or still) with the switch on is not on.
     #[test]
@@ -287,15 +299,7 @@ mod tests {
                 out.clear();
                 p.step(0.002, &joints, &mut logic, &mut out);
             }
-            let s = LabwareState {
-                name: "vortex".into(),
-                pose: Pose::identity(),
-                joints: BTreeMap::new(),
-                parts: BTreeMap::new(),
-                logic,
-                touched_by: Vec::new(),
-            };
-            p.measure(POWER, "on", None, &s).unwrap()
+            p.measure(POWER, "on", None, &at_rest(logic)).unwrap()
         };
         let full = run(set);
         assert!(full.holds && (full.value - 1.0).abs() < 1e-9, "{full:?}");
@@ -314,14 +318,7 @@ mod tests {
             ]);
             p.step(0.002, &joints, &mut logic, &mut out);
         }
-        let s = LabwareState {
-            name: "vortex".into(),
-            pose: Pose::identity(),
-            joints: BTreeMap::new(),
-            parts: BTreeMap::new(),
-            logic,
-            touched_by: Vec::new(),
-        };
+        let s = at_rest(logic);
         assert!(!p.measure(POWER, "on", None, &s).unwrap().holds);
         assert!(p.measure(POWER, "off", None, &s).unwrap().holds);
         assert_eq!(p.readout(&s)["speed"], "2500 rpm");

@@ -1,11 +1,21 @@
 //! Helpers the integration tests share: compiling shipped protocols (as they are or edited),
-//! running one episode with a policy, running the `autobio` binary, scratch folders. Each test
+//! running one episode with a policy, reading a predicate's value from its verdict, running the
+//! `autobio` binary, scratch folders. Each test
 //! file uses the ones it needs.
 #![allow(dead_code)]
 
 use std::path::PathBuf;
 use std::process::{Command, Output};
 use std::sync::Arc;
+
+/// The value of the predicate written `text` in an episode's verdict.
+pub fn predicate<'a>(r: &'a scoring::EpisodeResult, text: &str) -> &'a scoring::PredicateValue {
+    r.verdict
+        .predicates()
+        .iter()
+        .find(|p| p.text == text)
+        .unwrap_or_else(|| panic!("no `{text}` in {:#?}", r.verdict))
+}
 
 /// A protocol file compiled as it is.
 pub fn compile(path: &str) -> compiler::Task {
