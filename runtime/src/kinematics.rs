@@ -16,12 +16,21 @@ impl ArmKinematics {
     pub fn new(scene: &Scene, robot: usize) -> ArmKinematics {
         let ids = scene.robots[robot].clone();
         let m = &scene.model;
+        // A joint's range, narrowed to its servo's command range where that is limited (the
+        // UR5e's wrist 3 turns over ±2π but takes commands over ±6.2831 only): what the IK may
+        // choose and the expert may command.
+        let (limited, ctrl) = (m.actuator_ctrllimited(), m.actuator_ctrlrange());
         let limits = ids
             .joints
             .iter()
-            .map(|&j| {
+            .zip(&ids.actuators)
+            .map(|(&j, &a)| {
                 let r = m.jnt_range()[j];
-                (r[0], r[1])
+                if limited[a] {
+                    (r[0].max(ctrl[a][0]), r[1].min(ctrl[a][1]))
+                } else {
+                    (r[0], r[1])
+                }
             })
             .collect();
         ArmKinematics {

@@ -221,7 +221,8 @@ impl ExpertPolicy {
                                 true
                             } else {
                                 // A spline through waypoints at a joint's limit can overshoot it
-                                // between them: the command stays inside the limits.
+                                // between them: the command stays inside the limits (each joint's
+                                // range narrowed to its servo's command range, `ArmKinematics`).
                                 let limits = self.arms[r].kin.limits();
                                 self.arms[r].target = traj
                                     .sample(t)
