@@ -123,22 +123,31 @@ impl Policy for StopAt {
     }
 }
 
-#[test]
-fn a_cap_turned_half_way_off_is_not_off() {
-    let mut t = compile("protocols/tube/unscrew_cap.toml");
-    t.time_limit_s = 25.0;
+/// Episode `seed` of `t` under the expert stopped where `stop` says (see [`StopAt`]).
+fn run_stopped(
+    t: &compiler::Task,
+    seed: u64,
+    stop: fn(f64, bool) -> bool,
+) -> scoring::EpisodeResult {
     let tube = t.labware_index("tube").unwrap();
     let model = t.labware[tube].params.clone();
-    let r = run_with(&t, 3, &Default::default(), |t, s, i| {
+    run_with(t, seed, &Default::default(), |t, s, i| {
         Box::new(StopAt {
             expert: ExpertPolicy::new(t, s, i).unwrap(),
             tube,
             model,
-            stop: |risen, _| risen >= 0.002,
+            stop,
             was_off: false,
             stopped: None,
         })
-    });
+    })
+}
+
+#[test]
+fn a_cap_turned_half_way_off_is_not_off() {
+    let mut t = compile("protocols/tube/unscrew_cap.toml");
+    t.time_limit_s = 25.0;
+    let r = run_stopped(&t, 3, |risen, _| risen >= 0.002);
     assert!(!r.success && r.error.is_none(), "{r:?}");
     let off = predicate(&r, "tube.cap is off");
     // Two thirds of a turn up the thread, still on it: risen 2 to 4 mm of the 10 mm off needs.
@@ -162,18 +171,7 @@ fn a_cap_screwed_half_a_turn_short_is_not_on() {
     let mut t = compile("protocols/tube/screw_cap.toml");
     // The expert seats the cap by 55 s (100 seeds); this one is stopped before.
     t.time_limit_s = 60.0;
-    let tube = t.labware_index("tube").unwrap();
-    let model = t.labware[tube].params.clone();
-    let r = run_with(&t, 0, &Default::default(), |t, s, i| {
-        Box::new(StopAt {
-            expert: ExpertPolicy::new(t, s, i).unwrap(),
-            tube,
-            model,
-            stop: |risen, was_off| was_off && risen <= 0.0015,
-            was_off: false,
-            stopped: None,
-        })
-    });
+    let r = run_stopped(&t, 0, |risen, was_off| was_off && risen <= 0.0015);
     assert!(!r.success && r.error.is_none(), "{r:?}");
     assert!(predicate(&r, "tube.cap was off").holds);
     // Measured on the thread's travel: still over a millimetre up it and under a turn (3 mm;
