@@ -1,63 +1,116 @@
-//! Vortex mixing with two Aloha arms on real MuJoCo: the expert holds the tube in the cup and
-//! switches the mixer on, and the check holds only for what it claims. A mixer switched on whose
-//! cup has not reached its speed is not on (the drive's speed is measured, not the switch read),
-//! and a tube lifted off the cup while the mixer runs fails, from the states MuJoCo produces.
+//! Vortex mixing with two Aloha arms on real MuJoCo: the expert holds the tube in the cup, turns
+//! the speed knob through its detent to the drawn speed and switches the mixer on, and the check
+//! holds only for what it claims. A mixer switched on whose cup has not reached its speed is not
+//! on (the drive's speed is measured, not the switch read), one switched on with its knob at 0
+//! never runs, and a tube lifted off the cup while the mixer runs fails, from the states MuJoCo
+//! produces.
 //! (The no-motion run is in tests/hold_control.rs.)
 
 mod common;
 
 use common::{compile, compile_edited, predicate, run, run_with};
 use labware::Instrument;
-use runtime::{Env, EnvOptions};
 use scoring::expert::ExpertPolicy;
 use scoring::{Observation, Policy, PolicyError};
+use std::sync::{Arc, Mutex};
 
 const PROTOCOL: &str = "protocols/vortex_mixer/mix_tube.toml";
 
 #[test]
-fn the_expert_holds_the_tube_in_the_cup_and_switches_the_mixer_on() {
+fn the_expert_turns_the_knob_to_the_drawn_speed_and_switches_the_mixer_on() {
     let t = compile(PROTOCOL);
     let r = run(&t, 3, "expert");
     assert!(r.success, "{:#?}", r.verdict);
+    // Seed 3 draws 2,000 rpm: the knob's sixth notch (2,044 rpm) is the nearest, 2.76 rad
+    // from where it starts, turned in three grips.
+    let speed = predicate(&r, "vortex.speed = 2000 rpm");
+    assert!(
+        speed.holds && (speed.value - 2044.4).abs() < 0.1,
+        "{speed:?}"
+    );
+    // The drive's measured speed, as a fraction of the knob's, within 10%.
     let on = predicate(&r, "vortex.power is on");
-    // The drive's measured speed, as a fraction of the set 2,500 rpm, within 10%.
-    assert!(on.holds, "{on:?}");
+    assert!(on.holds && (on.value - 1.0).abs() <= 0.1, "{on:?}");
+}
+
+/// The expert, noting at every control step whether the mixer is switched on and what the
+/// judge's "power on" measures then.
+struct Watch {
+    expert: ExpertPolicy,
+    mixer: usize,
+    model: labware::vortex_mixer::Params,
+    seen: Arc<Mutex<Vec<(f64, bool, labware::Measure)>>>,
+}
+
+impl Policy for Watch {
+    fn name(&self) -> String {
+        "watch".into()
+    }
+
+    fn act(&mut self, obs: &Observation) -> Result<Vec<Vec<f64>>, PolicyError> {
+        let state = &obs.privileged.labware[self.mixer];
+        let on = self.model.measure("power", "on", None, state).unwrap();
+        self.seen
+            .lock()
+            .unwrap()
+            .push((obs.time, state.flag("power"), on));
+        self.expert.act(obs)
+    }
+}
+
+/// Runs the expert on `task` (seed 3), watching the mixer.
+fn watched(task: &compiler::Task) -> (scoring::EpisodeResult, Vec<(f64, bool, labware::Measure)>) {
+    let mixer = task.labware_index("vortex").unwrap();
+    let labware::Model::VortexMixer(model) = &task.labware[mixer].params else {
+        panic!("a vortex mixer")
+    };
+    let seen = Arc::new(Mutex::new(Vec::new()));
+    let log = seen.clone();
+    let model = model.clone();
+    let r = run_with(task, 3, &Default::default(), move |t, s, i| {
+        Box::new(Watch {
+            expert: ExpertPolicy::new(t, s, i).unwrap(),
+            mixer,
+            model,
+            seen: log,
+        })
+    });
+    let seen = seen.lock().unwrap().clone();
+    (r, seen)
 }
 
 #[test]
 fn a_mixer_switched_on_is_not_on_until_its_cup_orbits_at_speed() {
-    // Switched on from the start, nobody pressing anything.
+    let (r, seen) = watched(&compile(PROTOCOL));
+    assert!(r.success, "{:#?}", r.verdict);
+    let switched = seen.iter().position(|(_, s, _)| *s).expect("switched on");
+    // Never on before the switch; at the switch the drive is far below the knob's speed.
+    assert!(seen[..switched].iter().all(|(_, _, m)| !m.holds));
+    let (t0, _, first) = &seen[switched];
+    assert!(!first.holds && first.value < 0.5, "{first:?}");
+    // 1.5 s later it turns at the knob's speed.
+    let later = seen.iter().find(|(t, ..)| *t >= t0 + 1.5).unwrap();
+    assert!(
+        later.2.holds && (later.2.value - 1.0).abs() <= 0.1,
+        "{later:?}"
+    );
+}
+
+#[test]
+fn a_mixer_switched_on_with_its_knob_at_zero_does_not_run() {
+    // Nobody turns the knob: it stays in its first notch, which stops the motor, and the press
+    // switches the mixer on. The speed is not asked for, so the plan proves "on".
     let t = compile_edited(PROTOCOL, |s| {
-        let s = s.replace(
-            r#"state = { power = "off" }"#,
-            r#"state = { power = "on" }"#,
-        );
+        let knob = s.find("[[steps]]\ndo = \"set_parameter\"").unwrap();
         let press = s.find("[[steps]]\ndo = \"press\"").unwrap();
-        let success = s.find("[success]").unwrap();
-        format!("{}{}", &s[..press], &s[success..])
+        format!("{}{}", &s[..knob], &s[press..]).replace(r#""vortex.speed = {rpm} rpm", "#, "")
     });
-    let mut env = Env::make(&t, 0, EnvOptions::default()).unwrap();
-    let i = t.labware_index("vortex").unwrap();
-    let labware::Model::VortexMixer(mixer) = &t.labware[i].params else {
-        panic!("a vortex mixer")
-    };
-    let hold = env.episode().ctrl();
-    let on = |env: &Env| {
-        let state = &env.episode().labware_state()[i];
-        (
-            state.flag("power"),
-            mixer.measure("power", "on", None, state).unwrap(),
-        )
-    };
-    env.step(&hold).unwrap();
-    let (switched, first) = on(&env);
-    // Switched on, but 20 ms into its spin-up the drive is far below its speed.
-    assert!(switched && !first.holds && first.value < 0.5, "{first:?}");
-    for _ in 0..75 {
-        env.step(&hold).unwrap();
-    }
-    let (_, later) = on(&env);
-    assert!(later.holds && (later.value - 1.0).abs() <= 0.1, "{later:?}");
+    let (r, seen) = watched(&t);
+    assert!(!r.success && r.error.is_none(), "{r:?}");
+    assert!(seen.last().unwrap().1, "switched on");
+    // Switched on, and the cup still: the drive measured at rest the whole episode.
+    assert!(seen.iter().all(|(_, _, m)| !m.holds && m.value.abs() < 1.0));
+    assert!(!predicate(&r, "vortex.power is on").holds);
 }
 
 /// The expert, until the mixer is switched on; from then on the holder's shoulder is raised

@@ -102,6 +102,18 @@ pub enum Motion {
     /// Turn the tool back in place by what the step's last `Turn` turned (an open hand returning
     /// to where it gripped, to grip again).
     TurnBack,
+    /// Turn the gripped dial of `labware` that sets panel value `param` in place, from its live
+    /// angle toward the notch nearest `value` (a quantity as the step renders it), in as few
+    /// equal grips of at most `per_grip` rad as it takes: the tool turns about its approach axis, which lies along the dial's. Where
+    /// more is left, the expert lets go, turns back, grips again and turns on, as a hand does;
+    /// the step's grasp is taken half a grip back, so each grip sweeps the hand evenly either
+    /// side of where it came in.
+    TurnDial {
+        labware: String,
+        param: String,
+        value: String,
+        per_grip: f64,
+    },
 }
 
 impl Motion {
@@ -121,6 +133,7 @@ impl Motion {
             Motion::Retreat { .. } => "retreat",
             Motion::Turn { .. } => "turn",
             Motion::TurnBack => "turn back",
+            Motion::TurnDial { .. } => "turn dial",
         }
     }
 

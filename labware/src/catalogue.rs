@@ -68,7 +68,7 @@ pub struct Slots {
     pub accepts: &'static [&'static str],
 }
 
-/// A value shown on an instrument's display and set by its buttons.
+/// A value shown on an instrument's display (or dial) and set by its buttons or by turning its dial.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PanelParam {
     pub name: &'static str,
@@ -81,11 +81,19 @@ pub struct PanelParam {
     pub initial: f64,
     /// A held button steps the value once every this many seconds (the panel's auto-repeat).
     pub repeat_s: f64,
+    /// The knob (its joint role and affordance name) whose notches set the value, for a value
+    /// set with a dial rather than buttons: `step` is then the speed between notches, any target
+    /// in range is turned to the nearest notch, and `initial` is the dial's rest (its stop may lie
+    /// below `min`).
+    pub dial: Option<&'static str>,
 }
 
 impl PanelParam {
-    /// Seconds a button must be held to step the value from `from` to `to`.
+    /// Seconds a button must be held to step the value from `from` to `to` (none for a dial).
     pub fn hold_seconds(&self, from: f64, to: f64) -> f64 {
+        if self.dial.is_some() {
+            return 0.0;
+        }
         ((to - from).abs() / self.step).round() * self.repeat_s
     }
 }
@@ -217,6 +225,10 @@ const TUBE_PRIMITIVES: &[&str] = &[
 ];
 /// Slot tolerances (m): in-plane distance to the slot centre, height above its seat.
 const SLOT_TOLERANCES: &[(&str, f64)] = &[("slot_xy", 0.015), ("slot_z", 0.005)];
+/// The vortex mixer's cup, and its dial read to half a notch (144.4 rpm, rounded up): a speed of
+/// `x rpm` holds in the notch nearest `x`.
+const VORTEX_TOLERANCES: &[(&str, f64)] =
+    &[("slot_xy", 0.015), ("slot_z", 0.005), ("display", 145.0)];
 /// `cap_on`: how far (m) a cap may stand from its seat, along the tube's axis, and count as on.
 const TUBE_TOLERANCES: &[(&str, f64)] = &[
     ("cap_on", 0.002),
@@ -420,6 +432,7 @@ pub const KINDS: &[LabwareKind] = &[
                 step: 50.0,
                 initial: 900.0,
                 repeat_s: 0.25,
+                dial: None,
             },
             PanelParam {
                 name: "temperature",
@@ -429,6 +442,7 @@ pub const KINDS: &[LabwareKind] = &[
                 step: 1.0,
                 initial: 25.0,
                 repeat_s: 0.25,
+                dial: None,
             },
             PanelParam {
                 name: "time",
@@ -438,6 +452,7 @@ pub const KINDS: &[LabwareKind] = &[
                 step: 5.0,
                 initial: 60.0,
                 repeat_s: 0.25,
+                dial: None,
             },
         ],
         buttons: &[
@@ -491,7 +506,7 @@ pub const KINDS: &[LabwareKind] = &[
     },
     LabwareKind {
         name: "vortex_mixer",
-        description: "vortex mixer with a power switch and one cup (Scientific Industries Vortex-Genie 2)",
+        description: "vortex mixer with a power switch, a speed knob and one cup (Scientific Industries Vortex-Genie 2)",
         parts: &[PartState {
             part: "power",
             states: &["off", "on"],
@@ -503,7 +518,17 @@ pub const KINDS: &[LabwareKind] = &[
         }),
         capacity_ul: None,
         movable: false,
-        panel: &[],
+        // The knob's notches: 0 stops, 1..10 run at 600..3,200 rpm in nine equal steps.
+        panel: &[PanelParam {
+            name: "speed",
+            unit: "rpm",
+            min: 600.0,
+            max: 3200.0,
+            step: 2600.0 / 9.0,
+            initial: 0.0,
+            repeat_s: 0.0,
+            dial: Some("knob"),
+        }],
         buttons: &[Button {
             name: "switch",
             effect: ButtonEffect::Toggle {
@@ -513,8 +538,8 @@ pub const KINDS: &[LabwareKind] = &[
             },
         }],
         joints: &[],
-        tolerances: SLOT_TOLERANCES,
-        primitives: &["press"],
+        tolerances: VORTEX_TOLERANCES,
+        primitives: &["press", "set_parameter"],
         liquid_tool: false,
     },
     rack(
@@ -606,7 +631,9 @@ mod tests {
                 }
             }
             for p in k.panel {
-                assert!(p.min <= p.initial && p.initial <= p.max, "{}", p.name);
+                // A dial may rest at its stop, below the speeds it sets.
+                let floor = if p.dial.is_some() { 0.0 } else { p.min };
+                assert!(floor <= p.initial && p.initial <= p.max, "{}", p.name);
             }
         }
     }

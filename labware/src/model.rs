@@ -272,6 +272,14 @@ pub trait Instrument {
         None
     }
 
+    /// The dial that sets panel value `param` (a knob on a detent): its joint's role and the
+    /// joint angle that sets the value nearest `target`. The dial's affordance has the role's name
+    /// and its approach axis along the joint's axis, so that turning the tool right-handed about
+    /// its approach turns the joint's angle up. `None` for a value set with buttons.
+    fn dial_toward(&self, _param: &str, _target: f64) -> Option<(&'static str, f64)> {
+        None
+    }
+
     /// The displays the item draws, in the order [`Instrument::draw_display`] numbers them.
     fn displays(&self, _name: &str) -> Vec<Display> {
         Vec::new()

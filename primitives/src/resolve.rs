@@ -4,7 +4,8 @@
 //! a whole step (which of an affordance's symmetric grasps to use, how a carried item sits in the
 //! hand) are made once, at the step's start, in a [`StepFrame`]. A carry target (a held part's
 //! affordance brought onto another's) is resolved from where the tool is, and a turn follows a
-//! thread's lead up to its stop; a turn back undoes the step's last turn.
+//! thread's lead up to its stop; a dial is turned from its live angle to a value's notch; a turn
+//! back undoes the step's last turn.
 
 use compiler::motion::{Goals, Motion, Target};
 use compiler::params::{Bindings, render};
@@ -37,6 +38,12 @@ pub enum PlanError {
     NoTurnToUndo,
     #[error("`{labware}` has no button that sets `{param}` toward `{value}`")]
     NoButton {
+        labware: String,
+        param: String,
+        value: String,
+    },
+    #[error("`{labware}` has no dial that sets `{param}` to `{value}`")]
+    NoDial {
         labware: String,
         param: String,
         value: String,
@@ -140,6 +147,21 @@ impl<'a> Lab<'a> {
         self.affordance(labware, &name, state)
     }
 
+    /// How far the dial that sets a panel value must turn from its live angle to the notch
+    /// nearest `value` (rad, right-handed about the dial's affordance's approach axis).
+    pub fn dial_turn(&self, labware: &str, param: &str, value: &str) -> Result<f64, PlanError> {
+        let (model, state) = self.item(labware)?;
+        let no_dial = || PlanError::NoDial {
+            labware: labware.into(),
+            param: param.into(),
+            value: value.into(),
+        };
+        let target =
+            compiler::predicates::panel_quantity(value, self.params).ok_or_else(no_dial)?;
+        let (role, angle) = model.dial_toward(param, target).ok_or_else(no_dial)?;
+        Ok(angle - state.joint(role))
+    }
+
     /// The value a panel shows now, and the target `value` (a quantity) read in its unit.
     pub fn panel(&self, labware: &str, param: &str, value: &str) -> Option<(f64, f64)> {
         let (model, state) = self.item(labware).ok()?;
@@ -201,7 +223,9 @@ impl StepFrame {
             carried: None,
             finger_reach,
             enclose,
-            regrasp_nearest: motions.iter().any(|m| matches!(m, Motion::Turn { .. })),
+            regrasp_nearest: motions
+                .iter()
+                .any(|m| matches!(m, Motion::Turn { .. } | Motion::TurnDial { .. })),
             half_turn: false,
             round: false,
             turned: None,
@@ -328,6 +352,18 @@ impl StepFrame {
     /// The angle a [`Motion::Turn`] turns from the tool at `tcp_now` (0 for any other motion):
     /// its own, or less where advancing along its thread would carry the tool past its `stop`.
     pub fn turn_angle(&self, motion: &Motion, lab: &Lab, tcp_now: &Pose) -> Result<f64, PlanError> {
+        if let Motion::TurnDial {
+            labware,
+            param,
+            value,
+            per_grip,
+        } = motion
+        {
+            // What is left, in as few equal grips as `per_grip` allows.
+            let left = lab.dial_turn(labware, param, value)?;
+            let grips = (left.abs() / per_grip - 1e-9).ceil().max(1.0);
+            return Ok(left / grips);
+        }
         let Motion::Turn {
             angle,
             thread,
@@ -358,7 +394,9 @@ impl StepFrame {
         tcp_now: &Pose,
     ) -> Result<(), PlanError> {
         match motion {
-            Motion::Turn { .. } => self.turned = Some(self.turn_angle(motion, lab, tcp_now)?),
+            Motion::Turn { .. } | Motion::TurnDial { .. } => {
+                self.turned = Some(self.turn_angle(motion, lab, tcp_now)?)
+            }
             Motion::TurnBack => self.turned = None,
             _ => {}
         }
@@ -491,6 +529,9 @@ impl StepFrame {
             Motion::Turn { thread, .. } => {
                 let lead = self.lead(thread.as_ref(), lab)?;
                 turn_path(tcp_now, self.turn_angle(motion, lab, tcp_now)?, lead)
+            }
+            Motion::TurnDial { .. } => {
+                turn_path(tcp_now, self.turn_angle(motion, lab, tcp_now)?, 0.0)
             }
             Motion::TurnBack => {
                 turn_path(tcp_now, -self.turned.ok_or(PlanError::NoTurnToUndo)?, 0.0)
@@ -835,5 +876,58 @@ mod tests {
         let path = frame.poses(&loosen, &lab, &above).unwrap();
         let rise = path.last().unwrap().translation.vector.z - above.translation.vector.z;
         assert!((rise - p.pitch / 2.0).abs() < 1e-12, "rose {rise}");
+    }
+
+    /// A dial is turned from its live angle to the target's notch in as few equal grips as the
+    /// motion's most per grip allows; each turn is the tool turned in place about its axis.
+    #[test]
+    fn a_dial_turns_from_where_it_is_to_the_notch_in_equal_grips() {
+        let mixer = labware::Model::for_kind("vortex_mixer").unwrap();
+        let model = mixer.instrument().unwrap();
+        let at = |knob: f64| LabwareState {
+            name: "vortex".into(),
+            pose: Pose::identity(),
+            joints: BTreeMap::from([("knob".into(), knob)]),
+            parts: BTreeMap::new(),
+            logic: BTreeMap::new(),
+            touched_by: Vec::new(),
+        };
+        let params = Bindings::from([("rpm".to_string(), "2000".to_string())]);
+        let turn = |knob: f64, per_grip: f64| {
+            let s = at(knob);
+            let lab = Lab {
+                items: vec![("vortex", model, &s)],
+                params: &params,
+            };
+            let dial = Motion::TurnDial {
+                labware: "vortex".into(),
+                param: "speed".into(),
+                value: "{rpm} rpm".into(),
+                per_grip,
+            };
+            let frame = StepFrame::new(&[], &lab, &Pose::identity(), None, 0.0, 0.0).unwrap();
+            let angle = frame.turn_angle(&dial, &lab, &Pose::identity()).unwrap();
+            let path = frame.poses(&dial, &lab, &Pose::identity()).unwrap();
+            (angle, path)
+        };
+        // 2,000 rpm: the sixth notch (2,044 rpm), 2.76 rad from the stop: three grips of 0.92.
+        let (angle, path) = turn(0.0, 1.2);
+        assert!((angle - 0.92).abs() < 1e-9, "{angle}");
+        let end = path.last().unwrap().rotation * Vector3::x();
+        assert!((end.y.atan2(end.x) - 0.92).abs() < 1e-9);
+        assert!(path.iter().all(|p| p.translation.vector.norm() < 1e-12));
+        // From past the notch it turns back, in one grip.
+        assert!((turn(3.0, 1.2).0 - (2.76 - 3.0)).abs() < 1e-9);
+        // A large enough grip turns it all at once.
+        assert!((turn(0.0, 3.0).0 - 2.76).abs() < 1e-9);
+        let s = at(0.0);
+        let lab = Lab {
+            items: vec![("vortex", model, &s)],
+            params: &params,
+        };
+        assert!(matches!(
+            lab.dial_turn("vortex", "time", "{rpm} rpm"),
+            Err(PlanError::NoDial { .. })
+        ));
     }
 }

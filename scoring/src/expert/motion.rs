@@ -162,6 +162,29 @@ impl ExpertPolicy {
             },
         };
         lane.step_moved = true;
+        // A dial with more to turn than one grip: let go, turn back, grip again and turn on.
+        if let Motion::TurnDial {
+            labware,
+            param,
+            value,
+            per_grip,
+        } = &q.motion
+        {
+            let left = lab
+                .dial_turn(labware, param, value)
+                .map_err(|e| planning(context.clone(), e))?;
+            // More than one grip's worth: this grip turns a share of it (`StepFrame::turn_angle`).
+            if left.abs() > *per_grip {
+                for motion in [
+                    q.motion.clone(),
+                    Motion::Grasp,
+                    Motion::TurnBack,
+                    Motion::Release,
+                ] {
+                    lane.queue.push_front(Queued { motion, ..q });
+                }
+            }
+        }
         // A turn is noted for the turn back that undoes it (on the frame the path was solved
         // with: the other grasp's, where that one was taken).
         if let Some((_, f)) = lane.frame.as_mut() {
@@ -221,14 +244,20 @@ const GRASP_TURNS: [f64; 12] = [
 /// that tears the part from the thread instead of turning it.
 const TURN_STEP_JOINT: f64 = 0.5;
 
-/// For a step that turns a round part in the hand (`Motion::Turn`), the grasp about the part's
+/// For a step that turns a round part in the hand (`Motion::Turn`, `Motion::TurnDial`), the grasp about the part's
 /// axis nearest the step's own from which the arm makes the step's first turn within its joint
 /// limits and on one IK branch: the closest grasp can leave a wrist joint a few degrees short of
 /// the turn, and the arm then tears the part off its thread. Any other step, or a step for which
 /// no grasp has the room, keeps its frame.
 fn with_room_to_turn(arm: &mut Arm, frame: StepFrame, motions: &[Motion], lab: &Lab) -> StepFrame {
-    let Some(angle) = motions.iter().find_map(|m| match m {
-        Motion::Turn { angle, .. } => Some(*angle),
+    let Some((angle, centre)) = motions.iter().find_map(|m| match m {
+        Motion::Turn { angle, .. } => Some((*angle, 0.0)),
+        // From the dial's live angle (the tool's pose plays no part), each grip taken half a
+        // grip back so that the hand sweeps evenly either side of where it came in.
+        Motion::TurnDial { .. } => frame
+            .turn_angle(m, lab, &labware::Pose::identity())
+            .ok()
+            .map(|a| (a, -a / 2.0)),
         _ => None,
     }) else {
         return frame;
@@ -264,7 +293,7 @@ fn with_room_to_turn(arm: &mut Arm, frame: StepFrame, motions: &[Motion], lab: &
     };
     GRASP_TURNS
         .iter()
-        .filter_map(|deg| frame.grasp_turned(deg.to_radians()))
+        .filter_map(|deg| frame.grasp_turned(centre + deg.to_radians()))
         .find(|f| fits(f).is_some())
         .unwrap_or(frame)
 }
