@@ -3,10 +3,10 @@
 //! speed and the cup orbits; off, or on with the knob at its stop, the motor is commanded to rest
 //! and the drive stays still. The robot holds still in all three.
 
-use runtime::{Episode, Scene};
-use std::sync::Arc;
+use runtime::{Env, EnvOptions};
 
-fn vortex_protocol(power: &str) -> compiler::Task {
+/// A mixer starting in `state` (a TOML table's body), and a press of its switch to do.
+fn vortex_protocol(state: &str) -> compiler::Task {
     let text = format!(
         r#"format = 1
 
@@ -24,7 +24,7 @@ base = {{ pos_m = [0.0, 0.5, 0.824] }}
 [labware.vortex]
 kind = "vortex_mixer"
 pose = {{ pos_m = [0.0, 0.0, 0.824] }}
-state = {{ power = "{power}" }}
+state = {{ {state} }}
 
 [[steps]]
 do = "press"
@@ -35,56 +35,43 @@ with = "arm"
 [success]
 all = ["vortex.power is {goal}"]
 "#,
-        goal = if power == "on" { "off" } else { "on" }
+        goal = if state.contains(r#"power = "on""#) {
+            "off"
+        } else {
+            "on"
+        }
     );
     let (task, diags) = compiler::compile_source(&text, "vortex.toml");
     task.unwrap_or_else(|| panic!("{diags:#?}"))
 }
 
-/// The drive's angle after `seconds` of the robot holding still with the speed knob in `notch`,
-/// and the motor's command.
-fn spin(power: &str, notch: f64, seconds: f64) -> (f64, f64) {
-    let task = vortex_protocol(power);
-    let instance = task.sample(0);
-    let scene = Arc::new(Scene::build(&task, &instance).unwrap());
-    let mut episode = Episode::new(scene.clone(), &task, &instance);
-    // The knob as a hand leaves it, in its notch (the notches are 0.46 rad apart); the state's
-    // first value is the time, then qpos.
-    let vortex = &scene.labware[0];
-    let knob = vortex
-        .joints
-        .iter()
-        .find(|(role, _)| *role == "knob")
-        .unwrap()
-        .1;
-    let mut state = episode.physics_state();
-    state[1 + knob] = notch * 0.46;
-    let logic = episode.logic().to_vec();
-    episode.restore(&state, logic).unwrap();
-    let hold = episode.ctrl();
+/// The drive's angle after `seconds` of the robot holding still, and the motor's command.
+fn spin(state: &str, seconds: f64) -> (f64, f64) {
+    let task = vortex_protocol(state);
+    let mut env = Env::make(&task, 0, EnvOptions::default()).unwrap();
+    let hold = env.episode().ctrl();
     let period = task.physics.timestep_s * task.physics.substeps as f64;
     for _ in 0..(seconds / period).round() as usize {
-        episode.apply(&hold).unwrap();
-        episode.control_step().unwrap();
+        env.step(&hold).unwrap();
     }
-    let state = episode.labware_state();
-    let motor = vortex.actuators[0].1;
-    (state[0].joint("drive"), episode.data.ctrl()[motor])
+    let state = env.episode().labware_state();
+    let motor = env.scene().labware[0].actuators[0].1;
+    (state[0].joint("drive"), env.episode().data.ctrl()[motor])
 }
 
 #[test]
 fn the_mixers_logic_drives_its_motor_from_the_power_switch_at_the_knobs_speed() {
-    // The sixth notch: 600 + 5/9 of 2,600 rpm.
-    let (on_angle, on_command) = spin("on", 6.0, 1.0);
+    // The knob starts turned to the notch nearest 2,000 rpm, the sixth: 600 + 5/9 of 2,600 rpm.
+    let (on_angle, on_command) = spin(r#"power = "on", speed = "2000 rpm""#, 1.0);
     let speed = physics::eccentric::rpm_to_rad_s(600.0 + 2600.0 * 5.0 / 9.0);
     assert!((on_command - speed).abs() < 1e-9, "{on_command}");
     // 2,044 rpm is 214 rad/s: after a second's spin-up the drive has turned many times.
     assert!(on_angle > 20.0 * std::f64::consts::TAU, "{on_angle} rad");
-    let (off_angle, off_command) = spin("off", 6.0, 1.0);
+    let (off_angle, off_command) = spin(r#"power = "off", speed = "2000 rpm""#, 1.0);
     assert_eq!(off_command, 0.0);
     assert!(off_angle.abs() < 1e-3, "{off_angle} rad");
-    // Switched on with the knob at its stop, the motor is commanded to rest.
-    let (stopped_angle, stopped_command) = spin("on", 0.0, 1.0);
+    // Switched on with the knob at its stop (where it starts unless told), the motor rests.
+    let (stopped_angle, stopped_command) = spin(r#"power = "on""#, 1.0);
     assert_eq!(stopped_command, 0.0);
     assert!(stopped_angle.abs() < 1e-3, "{stopped_angle} rad");
 }

@@ -33,13 +33,23 @@ fn the_expert_turns_the_knob_to_the_drawn_speed_and_switches_the_mixer_on() {
     assert!(on.holds && (on.value - 1.0).abs() <= 0.1, "{on:?}");
 }
 
-/// The expert, noting at every control step whether the mixer is switched on and what the
-/// judge's "power on" measures then.
+/// What the mixer was at one control step: the time, whether it is switched on, the speed its
+/// knob sets (rpm), the drive's measured speed (rad/s), and what the judge's "power on" measures.
+#[derive(Clone, Debug)]
+struct Seen {
+    time: f64,
+    switched: bool,
+    knob_rpm: f64,
+    drive_rad_s: f64,
+    on: labware::Measure,
+}
+
+/// The expert, noting the mixer at every control step.
 struct Watch {
     expert: ExpertPolicy,
     mixer: usize,
     model: labware::vortex_mixer::Params,
-    seen: Arc<Mutex<Vec<(f64, bool, labware::Measure)>>>,
+    seen: Arc<Mutex<Vec<Seen>>>,
 }
 
 impl Policy for Watch {
@@ -49,17 +59,20 @@ impl Policy for Watch {
 
     fn act(&mut self, obs: &Observation) -> Result<Vec<Vec<f64>>, PolicyError> {
         let state = &obs.privileged.labware[self.mixer];
-        let on = self.model.measure("power", "on", None, state).unwrap();
-        self.seen
-            .lock()
-            .unwrap()
-            .push((obs.time, state.flag("power"), on));
+        let seen = Seen {
+            time: obs.time,
+            switched: state.flag("power"),
+            knob_rpm: self.model.panel_value("speed", state).unwrap(),
+            drive_rad_s: state.logic["drive_rad_s"],
+            on: self.model.measure("power", "on", None, state).unwrap(),
+        };
+        self.seen.lock().unwrap().push(seen);
         self.expert.act(obs)
     }
 }
 
 /// Runs the expert on `task` (seed 3), watching the mixer.
-fn watched(task: &compiler::Task) -> (scoring::EpisodeResult, Vec<(f64, bool, labware::Measure)>) {
+fn watched(task: &compiler::Task) -> (scoring::EpisodeResult, Vec<Seen>) {
     let mixer = task.labware_index("vortex").unwrap();
     let labware::Model::VortexMixer(model) = &task.labware[mixer].params else {
         panic!("a vortex mixer")
@@ -83,23 +96,24 @@ fn watched(task: &compiler::Task) -> (scoring::EpisodeResult, Vec<(f64, bool, la
 fn a_mixer_switched_on_is_not_on_until_its_cup_orbits_at_speed() {
     let (r, seen) = watched(&compile(PROTOCOL));
     assert!(r.success, "{:#?}", r.verdict);
-    let switched = seen.iter().position(|(_, s, _)| *s).expect("switched on");
-    // Never on before the switch; at the switch the drive is far below the knob's speed.
-    assert!(seen[..switched].iter().all(|(_, _, m)| !m.holds));
-    let (t0, _, first) = &seen[switched];
-    assert!(!first.holds && first.value < 0.5, "{first:?}");
+    let switched = seen.iter().position(|s| s.switched).expect("switched on");
+    // The knob was in its notch (2,044 rpm for seed 3's 2,000) before the switch was pressed;
+    // at the switch the drive is far below that speed, and not on.
+    let first = &seen[switched];
+    assert!((first.knob_rpm - 2044.4).abs() < 0.1, "{first:?}");
+    assert!(!first.on.holds && first.on.value < 0.5, "{first:?}");
     // 1.5 s later it turns at the knob's speed.
-    let later = seen.iter().find(|(t, ..)| *t >= t0 + 1.5).unwrap();
+    let later = seen.iter().find(|s| s.time >= first.time + 1.5).unwrap();
     assert!(
-        later.2.holds && (later.2.value - 1.0).abs() <= 0.1,
+        later.on.holds && (later.on.value - 1.0).abs() <= 0.1,
         "{later:?}"
     );
 }
 
 #[test]
 fn a_mixer_switched_on_with_its_knob_at_zero_does_not_run() {
-    // Nobody turns the knob: it stays in its first notch, which stops the motor, and the press
-    // switches the mixer on. The speed is not asked for, so the plan proves "on".
+    // Nobody turns the knob: it stays at its stop, and the press switches the mixer on. The
+    // speed is not asked for, so the plan proves "on".
     let t = compile_edited(PROTOCOL, |s| {
         let knob = s.find("[[steps]]\ndo = \"set_parameter\"").unwrap();
         let press = s.find("[[steps]]\ndo = \"press\"").unwrap();
@@ -107,9 +121,18 @@ fn a_mixer_switched_on_with_its_knob_at_zero_does_not_run() {
     });
     let (r, seen) = watched(&t);
     assert!(!r.success && r.error.is_none(), "{r:?}");
-    assert!(seen.last().unwrap().1, "switched on");
-    // Switched on, and the cup still: the drive measured at rest the whole episode.
-    assert!(seen.iter().all(|(_, _, m)| !m.holds && m.value.abs() < 1.0));
+    let switched = seen.iter().position(|s| s.switched).expect("switched on");
+    // Switched on for the rest of the episode, the cup still: never on.
+    assert!(seen[switched..].len() > 500, "on for over 10 s");
+    assert!(
+        seen[switched..]
+            .iter()
+            .all(|s| s.switched && s.knob_rpm == 0.0)
+    );
+    assert!(
+        seen.iter()
+            .all(|s| !s.on.holds && s.drive_rad_s.abs() < 1.0)
+    );
     assert!(!predicate(&r, "vortex.power is on").holds);
 }
 

@@ -311,15 +311,25 @@ pub fn catalogue() -> String {
             let _ = writeln!(w, "      holds up to {} µL", format_number(c));
         }
         for p in k.panel {
+            let set_by = match p.dial {
+                Some(knob) => format!(
+                    "set with the dial `{knob}`, its notches {} {} apart (a target goes to the nearest), starts at its stop",
+                    format_number((p.step * 10.0).round() / 10.0),
+                    p.unit
+                ),
+                None => format!(
+                    "in steps of {}, starts {}",
+                    format_number(p.step),
+                    format_number(p.initial)
+                ),
+            };
             let _ = writeln!(
                 w,
-                "      panel {}: {}..{} {} in steps of {}, starts {}",
+                "      panel {}: {}..{} {} {set_by}",
                 p.name,
                 format_number(p.min),
                 format_number(p.max),
                 p.unit,
-                format_number(p.step),
-                format_number(p.initial)
             );
         }
         if !k.buttons.is_empty() {

@@ -99,8 +99,8 @@ pub enum Motion {
         thread: Option<Target>,
         stop: Option<Target>,
     },
-    /// Turn the tool back in place by what the step's last `Turn` turned (an open hand returning
-    /// to where it gripped, to grip again).
+    /// Turn the tool back in place by what the step's last `Turn` or `TurnDial` turned (an open
+    /// hand returning to where it gripped, to grip again).
     TurnBack,
     /// Turn the gripped dial of `labware` that sets panel value `param` in place, from its live
     /// angle toward the notch nearest `value` (a quantity as the step renders it), in as few

@@ -135,7 +135,8 @@ fn initial_world(cx: &mut Cx, scene: &ProofScene, bound: &Bindings) -> Option<Wo
                 continue;
             };
             if let Ok(x) = predicates::quantity(v, bound, primitives::panel_dimension(p.unit)) {
-                w.panel.insert((spec.name.clone(), param.clone()), x);
+                w.panel
+                    .insert((spec.name.clone(), param.clone()), p.set_value(x));
             }
         }
     }

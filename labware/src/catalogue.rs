@@ -89,6 +89,22 @@ pub struct PanelParam {
 }
 
 impl PanelParam {
+    /// The value a set `target` leaves the panel at: a dial rests in the notch nearest it (half
+    /// way between two, the higher), within its range; buttons step to the target itself. The
+    /// one rule the compiler's world and the dial's model (`Instrument::dial_toward`) share.
+    pub fn set_value(&self, target: f64) -> f64 {
+        match self.dial {
+            Some(_) => {
+                let notches = ((self.max - self.min) / self.step).round();
+                let k = ((target - self.min) / self.step)
+                    .round()
+                    .clamp(0.0, notches);
+                self.min + k * self.step
+            }
+            None => target,
+        }
+    }
+
     /// Seconds a button must be held to step the value from `from` to `to` (none for a dial).
     pub fn hold_seconds(&self, from: f64, to: f64) -> f64 {
         if self.dial.is_some() {

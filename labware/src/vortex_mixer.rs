@@ -303,14 +303,15 @@ impl Instrument for Params {
             return None;
         }
         // On: switched on and the drive really turning at the knob's speed (within 10%),
-        // measured; with the knob at 0 nothing runs, and the value is the speed in rad/s.
+        // measured, as a fraction of that speed; with the knob at its stop nothing may run, and
+        // the value is 0.
         let switched = s.flag(POWER);
         if state == "on" {
             let set = rpm_to_rad_s(self.set_rpm(&s.logic));
             let speed = s.logic.get(DRIVE_SPEED).copied().unwrap_or(0.0);
             let running = set > 0.0 && (speed - set).abs() <= SPEED_TOLERANCE * set;
             return Some(Measure {
-                value: if set > 0.0 { speed / set } else { speed },
+                value: if set > 0.0 { speed / set } else { 0.0 },
                 target: 1.0,
                 tolerance: SPEED_TOLERANCE,
                 holds: switched && running,
@@ -330,18 +331,18 @@ impl Instrument for Params {
         (param == SPEED).then(|| self.set_rpm(&s.logic))
     }
 
-    /// The knob angle whose notch sets the speed nearest `target` (rpm).
+    /// The knob angle of the running notch whose speed is nearest `target` (rpm).
     fn dial_toward(&self, param: &str, target: f64) -> Option<(&'static str, f64)> {
         if param != SPEED {
             return None;
         }
-        let nearest = (0..self.knob_notches)
-            .min_by(|a, b| {
-                let d = |n: u32| (self.notch_rpm(n) - target).abs();
-                d(*a).total_cmp(&d(*b))
-            })
-            .unwrap_or(0);
-        Some((KNOB_ROLE, f64::from(nearest) * self.notch_angle()))
+        // The running notch nearest the target, half way between two the higher: the
+        // catalogue's rule (`PanelParam::set_value`), on the same 600..3,200 rpm.
+        let spacing = (self.speed_max_rpm - self.speed_min_rpm) / f64::from(self.knob_notches - 2);
+        let nearest = ((target - self.speed_min_rpm) / spacing + 1.0)
+            .round()
+            .clamp(1.0, f64::from(self.knob_notches - 1));
+        Some((KNOB_ROLE, nearest * self.notch_angle()))
     }
 
     /// The switch's position, the knob's notch and speed, and the drive's measured speed:
@@ -514,6 +515,23 @@ mod tests {
         );
         assert!((p.dial_toward(SPEED, 600.0).unwrap().1 - 0.46).abs() < 1e-9);
         assert_eq!(p.dial_toward("temperature", 1.0), None);
+        // The dial's model and the catalogue (what the compiler proves with) agree on every
+        // target's notch, midway ones (1,900 rpm: between the fifth and sixth) included.
+        let kind = crate::catalogue::KINDS
+            .iter()
+            .find(|k| k.name == "vortex_mixer")
+            .unwrap();
+        let speed = kind.panel_param(SPEED).unwrap();
+        for target in 600..=3200 {
+            let target = f64::from(target);
+            let angle = p.dial_toward(SPEED, target).unwrap().1;
+            let model = p.notch_rpm(p.notch(angle));
+            assert!(
+                (model - speed.set_value(target)).abs() < 1e-9,
+                "{target} rpm"
+            );
+        }
+        assert!((speed.set_value(1900.0) - p.notch_rpm(6)).abs() < 1e-9);
         let mut logic = p.reset(&BTreeMap::new()).logic;
         let joints = BTreeMap::from([(KNOB_ROLE.to_string(), 6.0 * 0.46 + 0.1)]);
         p.step(0.002, &joints, &mut logic, &mut Effects::default());

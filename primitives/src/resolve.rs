@@ -48,6 +48,13 @@ pub enum PlanError {
         param: String,
         value: String,
     },
+    #[error("`{labware}`'s dial did not reach `{param}` = `{value}` in {grips} grips")]
+    DialStuck {
+        labware: String,
+        param: String,
+        value: String,
+        grips: usize,
+    },
 }
 
 /// The labware as the expert sees it at one moment: each item's model and live state, and the
@@ -200,8 +207,8 @@ pub struct StepFrame {
     half_turn: bool,
     /// Whether the first affordance is round (any turn about its axis grasps it the same).
     round: bool,
-    /// The angle the step's last [`Motion::Turn`] turned (rad), until a [`Motion::TurnBack`]
-    /// undoes it.
+    /// The angle the step's last [`Motion::Turn`] or [`Motion::TurnDial`] turned (rad), until a
+    /// [`Motion::TurnBack`] undoes it.
     turned: Option<f64>,
 }
 
@@ -349,8 +356,9 @@ impl StepFrame {
         })
     }
 
-    /// The angle a [`Motion::Turn`] turns from the tool at `tcp_now` (0 for any other motion):
-    /// its own, or less where advancing along its thread would carry the tool past its `stop`.
+    /// The angle a [`Motion::Turn`] turns from the tool at `tcp_now`: its own, or less where
+    /// advancing along its thread would carry the tool past its `stop`. A [`Motion::TurnDial`]'s
+    /// is one grip's share of what is left of the dial's turn; any other motion's is 0.
     pub fn turn_angle(&self, motion: &Motion, lab: &Lab, tcp_now: &Pose) -> Result<f64, PlanError> {
         if let Motion::TurnDial {
             labware,
@@ -384,7 +392,8 @@ impl StepFrame {
         }
     }
 
-    /// After `motion` (from the tool at `tcp_now`) is under way: a [`Motion::Turn`] is noted for
+    /// After `motion` (from the tool at `tcp_now`) is under way: a [`Motion::Turn`] (or
+    /// [`Motion::TurnDial`]) is noted for
     /// the step's next [`Motion::TurnBack`], which forgets it (a second turn back has nothing to
     /// undo).
     pub fn record_turn(
@@ -418,7 +427,7 @@ impl StepFrame {
         })
     }
 
-    /// For a step that turns a round part in the hand (`Turn` motions), the same step with its
+    /// For a step that turns a round part in the hand (`Turn` or `TurnDial` motions), the same step with its
     /// grasp turned a further `angle` (rad) about the part's axis; `None` for any other step.
     /// The expert's choice where the closest grasp leaves the wrist short of the turn.
     pub fn grasp_turned(&self, angle: f64) -> Option<StepFrame> {

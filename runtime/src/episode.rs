@@ -177,12 +177,28 @@ impl Episode {
     }
 
     /// Panel values a protocol starts away from the kind's defaults (`[labware.x] state`), rendered
-    /// for this instance.
+    /// for this instance: a value set with a dial starts with the dial turned to it (its joint),
+    /// any other in the item's logic.
     fn apply_panel_start(&mut self, instance: &SceneInstance) {
+        let scene = self.scene.clone();
         for (i, spec) in self.task.labware.iter().enumerate() {
             for (param, text) in &spec.panel {
-                if let Some(v) = compiler::predicates::panel_quantity(text, &instance.params) {
-                    labware::model::set(&mut self.logic[i], param, v);
+                let Some(v) = compiler::predicates::panel_quantity(text, &instance.params) else {
+                    continue;
+                };
+                let dial =
+                    instrument(&self.task, i)
+                        .dial_toward(param, v)
+                        .and_then(|(role, angle)| {
+                            let joints = &scene.labware[i].joints;
+                            joints
+                                .iter()
+                                .find(|(r, _)| *r == role)
+                                .map(|(_, a)| (*a, angle))
+                        });
+                match dial {
+                    Some((adr, angle)) => self.data.qpos_mut()[adr] = angle,
+                    None => labware::model::set(&mut self.logic[i], param, v),
                 }
             }
         }

@@ -21,7 +21,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
         },
     ],
     requires: "the hand is empty; the target is within the panel's range and on its button grid (a dial takes any target in range, to its nearest notch)",
-    leaves: "the panel value at the target",
+    leaves: "the panel value at the target (a dial's at the notch nearest it)",
     effect,
     motions: Some(motions),
 };
@@ -63,8 +63,8 @@ fn motions(step: &MotionStep) -> Vec<Motion> {
 }
 
 /// How far one grip turns a dial (rad): the hand sweeps half of it either side of where it came
-/// in. A parallel gripper round a knob low on an instrument's front (the vortex mixer's, 62 mm
-/// above the bench) strikes something past about 0.7 rad either way.
+/// in. A parallel gripper round a knob low on an instrument's front (62 mm above the bench, the
+/// lowest dial in the catalogue) strikes something past about 0.7 rad either way.
 const DIAL_PER_GRIP: f64 = 1.2;
 
 fn dial_motions(step: &MotionStep, knob: &str) -> Vec<Motion> {
@@ -131,10 +131,7 @@ fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
         });
     }
     // A dial rests in the notch nearest the target.
-    let value = match p.dial {
-        Some(_) => p.min + ((value - p.min) / p.step).round() * p.step,
-        None => value,
-    };
+    let value = p.set_value(value);
     let key = (lw.clone(), pname.to_string());
     let from = w.panel.get(&key).copied().unwrap_or(p.initial);
     w.panel_hold_s += p.hold_seconds(from, value);

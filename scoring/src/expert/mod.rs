@@ -51,6 +51,8 @@ struct Lane {
     frame: Option<(usize, StepFrame)>,
     /// Whether the current step has moved along a path yet (its grasp is then committed).
     step_moved: bool,
+    /// Grips the current step has taken on a dial.
+    dial_grips: usize,
 }
 
 impl Lane {

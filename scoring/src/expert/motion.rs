@@ -4,7 +4,8 @@
 //! routed around obstacles in free space, timed by TOPP under the model's limits). A robot whose
 //! free-space motions go in joint space has only their end pose solved; a step that turns a round
 //! part in the hand takes the grasp about its axis from which the arm can make the turn
-//! (`with_room_to_turn`). A new motion
+//! (`with_room_to_turn`); a dial is turned a grip at a time and looked at again after each grip,
+//! let go, turned back and gripped again until it rests in its notch. A new motion
 //! kind is a `compiler::motion::Motion` variant and its arm here (or in `primitives::resolve` for
 //! its poses).
 
@@ -73,6 +74,7 @@ impl ExpertPolicy {
             let frame = with_room_to_turn(arm, frame, &step.motions, &lab);
             lane.frame = Some((q.step, frame));
             lane.step_moved = false;
+            lane.dial_grips = 0;
             self.events.push(StageEvent {
                 time: obs.time,
                 label: step.label.clone(),
@@ -82,6 +84,40 @@ impl ExpertPolicy {
             time: obs.time,
             label: q.motion.label().to_string(),
         });
+        if let Motion::TurnDial {
+            labware,
+            param,
+            value,
+            ..
+        } = &q.motion
+        {
+            // Where the dial is now decides: in its notch, nothing is left to do; short of it
+            // with the hand open (let go after a grip), turn back and grip again; gripped, turn
+            // (below), at most `MAX_DIAL_GRIPS` times in one step.
+            let left = lab
+                .dial_turn(labware, param, value)
+                .map_err(|e| planning(context.clone(), e))?;
+            let now = Active::Hold { until: obs.time };
+            if left.abs() < DIAL_DONE {
+                return Ok(now);
+            }
+            if arm.gripper == arm.model.gripper.open {
+                for motion in [q.motion.clone(), Motion::Grasp, Motion::TurnBack] {
+                    lane.queue.push_front(Queued { motion, ..q });
+                }
+                return Ok(now);
+            }
+            lane.dial_grips += 1;
+            if lane.dial_grips > MAX_DIAL_GRIPS {
+                let stuck = primitives::PlanError::DialStuck {
+                    labware: labware.clone(),
+                    param: param.clone(),
+                    value: value.clone(),
+                    grips: MAX_DIAL_GRIPS,
+                };
+                return Err(planning(context, stuck));
+            }
+        }
         let gripper = arm.model.gripper;
         match q.motion {
             Motion::Grasp | Motion::Release => {
@@ -162,27 +198,10 @@ impl ExpertPolicy {
             },
         };
         lane.step_moved = true;
-        // A dial with more to turn than one grip: let go, turn back, grip again and turn on.
-        if let Motion::TurnDial {
-            labware,
-            param,
-            value,
-            per_grip,
-        } = &q.motion
-        {
-            let left = lab
-                .dial_turn(labware, param, value)
-                .map_err(|e| planning(context.clone(), e))?;
-            // More than one grip's worth: this grip turns a share of it (`StepFrame::turn_angle`).
-            if left.abs() > *per_grip {
-                for motion in [
-                    q.motion.clone(),
-                    Motion::Grasp,
-                    Motion::TurnBack,
-                    Motion::Release,
-                ] {
-                    lane.queue.push_front(Queued { motion, ..q });
-                }
+        // A dial is looked at again once the hand has let go of it.
+        if matches!(q.motion, Motion::TurnDial { .. }) {
+            for motion in [q.motion.clone(), Motion::Release] {
+                lane.queue.push_front(Queued { motion, ..q });
             }
         }
         // A turn is noted for the turn back that undoes it (on the frame the path was solved
@@ -238,6 +257,13 @@ impl ExpertPolicy {
 const GRASP_TURNS: [f64; 12] = [
     0.0, 30.0, -30.0, 60.0, -60.0, 90.0, -90.0, 120.0, -120.0, 150.0, -150.0, 180.0,
 ];
+
+/// What is left of a dial's turn (rad) that counts as none: the detent holds it in its notch.
+const DIAL_DONE: f64 = 0.1;
+
+/// Grips a step may take to turn a dial: more is a hand slipping on it, which turning on would
+/// not mend.
+const MAX_DIAL_GRIPS: usize = 8;
 
 /// Largest joint change (rad) between two of a turn's poses (0.1 rad apart) that still follows
 /// one IK branch; more is a jump to another, which the arm would make in a straight joint line
