@@ -32,7 +32,7 @@ pub fn check(front: &Front, a: &CheckArgs) -> Result<ExitCode> {
     let (mut failed, mut unreadable) = (false, false);
     for f in &a.files {
         // A file that cannot be read is reported, and the others are still checked.
-        let checked = match compiler::check_file(f, front.root.as_deref()) {
+        let mut checked = match compiler::check_file(f, front.root.as_deref()) {
             Ok(c) => c,
             Err(e) => {
                 errln!("error: {e}");
@@ -40,6 +40,8 @@ pub fn check(front: &Front, a: &CheckArgs) -> Result<ExitCode> {
                 continue;
             }
         };
+        // What the language cannot see: whether each step's robot reaches its target.
+        scoring::reach::check(&mut checked);
         failed |= checked.diagnostics.iter().any(|d| d.is_error());
         if a.json {
             for d in &checked.diagnostics {

@@ -88,6 +88,8 @@ pub enum Code {
     E0034,
     /// An unknown or ill-typed tolerance.
     E0035,
+    /// A step whose robot cannot reach its target.
+    E0036,
     /// The success condition already holds at the start.
     W0001,
     /// The state proof sampled parameter combinations.
@@ -139,6 +141,7 @@ impl Code {
             Code::E0033 => "E0033",
             Code::E0034 => "E0034",
             Code::E0035 => "E0035",
+            Code::E0036 => "E0036",
             Code::W0001 => "W0001",
             Code::W0002 => "W0002",
             Code::W0003 => "W0003",
@@ -151,7 +154,7 @@ impl Code {
         }
     }
 
-    pub const ALL: [Code; 37] = [
+    pub const ALL: [Code; 38] = [
         Code::E0001,
         Code::E0002,
         Code::E0003,
@@ -180,6 +183,7 @@ impl Code {
         Code::E0033,
         Code::E0034,
         Code::E0035,
+        Code::E0036,
         Code::W0001,
         Code::W0002,
         Code::W0003,
@@ -228,6 +232,7 @@ impl Code {
             Code::E0033 => "the plan does not reach the success condition",
             Code::E0034 => "a chain stage that does not fit the chain's scene",
             Code::E0035 => "an unknown or ill-typed tolerance",
+            Code::E0036 => "a step whose robot cannot reach its target",
             Code::W0001 => "the success condition already holds at the start",
             Code::W0002 => "the state proof sampled parameter combinations",
             Code::W0003 => "a position far outside any bench",
@@ -324,6 +329,9 @@ impl Code {
             }
             Code::E0035 => {
                 "`[tolerances]` names a tolerance no predicate of this protocol uses, or gives it a unit of the\nwrong dimension; a predicate's `within` must match what the predicate measures."
+            }
+            Code::E0036 => {
+                "The robot a step names cannot bring its tool to the step's first target (the grasp, press or\ndial frame the expert aims at): its inverse kinematics, from the robot's start pose and from its\nhome, in either grasp of a symmetric target, find no solution, in the layout the task's first\nseed draws. The hint names the nearest base position, at the same height and heading, from\nwhich every target checked for that robot solves with 10 cm to spare. `autobio check` tests each step's first\ntarget only; slot seats, paths between targets and a lid's whole arc are not tested yet."
             }
             Code::W0001 => {
                 "Every success predicate is already true in the initial state, so an episode succeeds before the\nrobot moves. Usually an initial `state` or a predicate is wrong. A round trip (open a lid, then\nclose it) is written with `was` (`cycler.lid was open` beside `cycler.lid is closed`) or as a chain. `eval` and `demo` refuse the task unless `--allow-trivial`."

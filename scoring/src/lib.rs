@@ -11,6 +11,7 @@ pub mod eval;
 pub mod expert;
 pub mod policies;
 pub mod policy;
+pub mod reach;
 pub mod remote;
 pub mod replay;
 pub mod route;

@@ -1,0 +1,321 @@
+//! Reach before any episode (`autobio check`): whether each step's robot can bring its tool to
+//! the step's first target, the grasp, press or dial frame the expert aims at, in the layout the
+//! task's first seed draws. The target comes from the labware models as the expert resolves it
+//! (`primitives::StepFrame`), and is solved by the robot model's IK from the robot's start pose
+//! and from its home, in either of a symmetric target's grasps. A target none of these solve is
+//! E0036 at the step's `with`, saying how close the best solve came, with a hint: the nearest
+//! base position (the same height and heading) from which every target this pass checked for
+//! that robot solves, found by moving the targets instead of the base (a base shift is the
+//! targets' opposite shift to the arm) on rings around it.
+//!
+//! It does not check slot seats or hand-overs (where they are depends on how the carried item
+//! sits in the hand), the paths between targets, a lid's whole arc, other seeds' layouts, or a
+//! chain's later stages, and it skips a step acting on an item an earlier step moved (its target
+//! is not where it starts). A task whose scene cannot be built is left to the runtime's refusal.
+
+use compiler::motion::{Motion, MotionStep, Target};
+use compiler::params::render;
+use compiler::{Checked, Task};
+use dsl::ast::Document;
+use dsl::{Code, Diagnostic};
+use labware::Pose;
+use primitives::{Lab, StepFrame, solve_with};
+use runtime::kinematics::ArmKinematics;
+use runtime::{Episode, Scene};
+use std::collections::{BTreeMap, BTreeSet};
+use std::sync::Arc;
+
+/// One step's target that no start solves.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Unreachable {
+    /// The step's index in the plan (from 0).
+    pub step: usize,
+    pub robot: String,
+    /// What the step aims at, e.g. "`tube`'s `grasp`".
+    pub target: String,
+    /// The target's position (m, world frame).
+    pub at: [f64; 3],
+    /// How close the best solve came (m), where the IK says.
+    pub short_by: Option<f64>,
+    /// A base position (m) from which every checked target of the robot solves, if one was found.
+    pub base_hint: Option<[f64; 3]>,
+    /// The robot's base now (m).
+    pub base: [f64; 3],
+}
+
+/// Rings searched for a base hint: every `HINT_STEP` metres out to `HINT_RADIUS`, in
+/// `HINT_DIRECTIONS` directions each.
+const HINT_STEP: f64 = 0.025;
+const HINT_RADIUS: f64 = 0.6;
+const HINT_DIRECTIONS: usize = 16;
+/// How much farther out than each target (m, in the plane, away from the base) the hinted base
+/// must still reach.
+const HINT_MARGIN: f64 = 0.1;
+
+/// A checked target of one robot: the step it belongs to and the tool poses that reach it (its
+/// grasps).
+struct Aim {
+    step: usize,
+    robot: usize,
+    target: String,
+    grasps: Vec<Pose>,
+}
+
+/// Every step of `task` (a single stage) whose first target its robot cannot reach in seed 0's
+/// layout; empty when all are reached, or when the pass does not apply (a chain, a scene the
+/// runtime cannot build).
+pub fn unreachable(task: &Task) -> Vec<Unreachable> {
+    if task.stages.len() != 1 {
+        return Vec::new();
+    }
+    let instance = task.sample(0);
+    let Ok(scene) = Scene::build(task, &instance) else {
+        return Vec::new();
+    };
+    let scene = Arc::new(scene);
+    let episode = Episode::new(scene.clone(), task, &instance);
+    let states = episode.labware_state();
+    let lab = Lab::new(task, &states, &instance.params);
+    let mut kins: Vec<ArmKinematics> = (0..scene.robots.len())
+        .map(|r| ArmKinematics::new(&scene, r))
+        .collect();
+    let aims = aims(
+        task,
+        &scene,
+        &lab,
+        &instance.params,
+        &mut kins,
+        &instance.robot_q,
+    );
+    let mut out = Vec::new();
+    for aim in &aims {
+        let model = scene.robots[aim.robot].model;
+        let starts = [instance.robot_q[aim.robot].clone(), model.home.to_vec()];
+        let kin = &mut kins[aim.robot];
+        let mut short_by: Option<f64> = None;
+        let solved = aim.grasps.iter().any(|pose| {
+            starts
+                .iter()
+                .any(|seed| match solve_with(model.ik, kin, pose, seed) {
+                    Ok(_) => true,
+                    Err(primitives::ik::IkError::NoConvergence { pos_err, .. }) => {
+                        short_by = Some(short_by.map_or(pos_err, |s: f64| s.min(pos_err)));
+                        false
+                    }
+                    Err(_) => false,
+                })
+        });
+        if solved {
+            continue;
+        }
+        let base = task.robots[aim.robot].base.translation.vector;
+        let base = [base.x, base.y, base.z];
+        let mine: Vec<&Aim> = aims.iter().filter(|a| a.robot == aim.robot).collect();
+        let shift =
+            base_shift(&mine, model, kin, base).map(|d| [base[0] + d[0], base[1] + d[1], base[2]]);
+        let p = aim.grasps[0].translation.vector;
+        out.push(Unreachable {
+            step: aim.step,
+            robot: task.robots[aim.robot].name.clone(),
+            target: aim.target.clone(),
+            at: [p.x, p.y, p.z],
+            short_by,
+            base_hint: shift,
+            base,
+        });
+    }
+    out
+}
+
+/// The first target of each step the pass checks, with its grasps.
+fn aims(
+    task: &Task,
+    scene: &Scene,
+    lab: &Lab,
+    params: &compiler::params::Bindings,
+    kins: &mut [ArmKinematics],
+    start: &[Vec<f64>],
+) -> Vec<Aim> {
+    let mut moved = BTreeSet::new();
+    let mut out = Vec::new();
+    for (i, (_, step)) in task.steps().enumerate() {
+        let Some(robot) = task.robot_index(&step.robot) else {
+            continue;
+        };
+        let Some(expand) = compiler::primitives::primitive(&step.primitive).and_then(|p| p.motions)
+        else {
+            continue;
+        };
+        let args: BTreeMap<String, String> = step
+            .args
+            .iter()
+            .map(|(k, v)| (k.clone(), render(v, params).unwrap_or_else(|_| v.clone())))
+            .collect();
+        let on = args.get("on").cloned();
+        let kind = on
+            .as_ref()
+            .and_then(|on| task.labware.iter().find(|l| &l.name == on))
+            .and_then(|l| labware::kind(&l.kind));
+        let motions = expand(&MotionStep { args: &args, kind });
+        let moves = motions.iter().any(|m| {
+            matches!(
+                m,
+                Motion::Lift { .. }
+                    | Motion::Reach {
+                        target: Target::Seat { .. }
+                    }
+                    | Motion::Transit {
+                        target: Target::Seat { .. }
+                    }
+            )
+        });
+        let untouched = on.as_ref().is_none_or(|item| !moved.contains(item));
+        if moves && let Some(item) = &on {
+            moved.insert(item.clone());
+        }
+        if !untouched {
+            continue;
+        }
+        let model = scene.robots[robot].model;
+        let g = model.gripper;
+        let tcp = primitives::Kinematics::tcp(&mut kins[robot], &start[robot]);
+        let Ok(frame) = StepFrame::new(
+            &motions,
+            lab,
+            &tcp,
+            on.as_deref(),
+            g.finger_reach,
+            g.enclose,
+        ) else {
+            continue;
+        };
+        let Ok(Some(pose)) = frame.first_pose(&motions, lab) else {
+            continue;
+        };
+        let mut grasps = vec![pose];
+        if let Some(Ok(Some(other))) = frame.other_grasp().map(|f| f.first_pose(&motions, lab)) {
+            grasps.push(other);
+        }
+        out.push(Aim {
+            step: i,
+            robot,
+            target: target_name(&motions),
+            grasps,
+        });
+    }
+    out
+}
+
+/// What a step's motions aim at first, for a reader.
+fn target_name(motions: &[Motion]) -> String {
+    let target = motions.iter().find_map(|m| match m {
+        Motion::Approach { target, .. }
+        | Motion::Reach { target }
+        | Motion::Enclose { target }
+        | Motion::Transit { target }
+        | Motion::Press { target, .. } => Some(target),
+        _ => None,
+    });
+    match target {
+        Some(Target::Affordance { labware, name, .. }) => format!("`{labware}`'s `{name}`"),
+        Some(Target::Button { labware, param, .. }) => {
+            format!("the button that sets `{labware}.{param}`")
+        }
+        Some(Target::Seat { location, .. }) => format!("the seat `{location}`"),
+        Some(Target::Carry { labware, to, .. }) => format!("`{labware}`'s `{to}`"),
+        None => "its target".into(),
+    }
+}
+
+/// The nearest shift (m, in the plane) of the robot's base from which every one of its `aims`
+/// solves (one grasp of each, from its home) with `HINT_MARGIN` to spare (the grasp moved that
+/// much farther out from the base solves too), searched ring by ring; `None` within the search.
+/// The margin is the expert's room around a grasp: the approach before it, the lift after it.
+fn base_shift(
+    aims: &[&Aim],
+    model: &robots::RobotModel,
+    kin: &mut ArmKinematics,
+    base: [f64; 3],
+) -> Option<[f64; 2]> {
+    let home = model.home.to_vec();
+    let rings = (HINT_RADIUS / HINT_STEP).round() as usize;
+    (1..=rings)
+        .flat_map(|k| {
+            (0..HINT_DIRECTIONS).map(move |j| {
+                let a = std::f64::consts::TAU * j as f64 / HINT_DIRECTIONS as f64;
+                let r = k as f64 * HINT_STEP;
+                [r * a.cos(), r * a.sin()]
+            })
+        })
+        .find(|d| {
+            // The base moved by d reaches what the base where it is reaches moved by -d.
+            let back = labware::frame::translation([-d[0], -d[1], 0.0]);
+            aims.iter().all(|aim| {
+                aim.grasps.iter().any(|pose| {
+                    let near = back * pose;
+                    let p = near.translation.vector;
+                    let out = nalgebra::Vector2::new(p.x - base[0], p.y - base[1]);
+                    let out = out.try_normalize(1e-9).unwrap_or_default() * HINT_MARGIN;
+                    let far = labware::frame::translation([out.x, out.y, 0.0]) * near;
+                    [near, far]
+                        .iter()
+                        .all(|q| solve_with(model.ik, kin, q, &home).is_ok())
+                })
+            })
+        })
+}
+
+/// E0036 for every unreachable step of a single protocol file that checked clean, at the step's
+/// `with`; appended to `checked`, whose task is then dropped, as for any other error.
+pub fn check(checked: &mut Checked) {
+    let Some(task) = &checked.task else {
+        return;
+    };
+    let missed = unreachable(task);
+    if missed.is_empty() {
+        return;
+    }
+    let (doc, _) = dsl::parse(&checked.source);
+    let steps = match &doc {
+        Document::Protocol(p) => &p.steps,
+        _ => return,
+    };
+    for m in &missed {
+        let Some(step) = steps.get(m.step) else {
+            continue;
+        };
+        let span = step.with.as_ref().map(|w| w.span).unwrap_or(step.span);
+        let [x, y, z] = m.at;
+        let how = match m.short_by {
+            Some(e) => format!(", the closest solve {:.0} mm off", e * 1000.0),
+            None => String::new(),
+        };
+        let mut d = Diagnostic::new(
+            Code::E0036,
+            span,
+            format!(
+                "`{}` cannot reach step {}'s target, {} at ({x:.3}, {y:.3}, {z:.3}) m{how}",
+                m.robot,
+                m.step + 1,
+                m.target
+            ),
+        )
+        .with_note("checked in seed 0's layout, from the robot's start pose and its home");
+        d = match m.base_hint {
+            Some([hx, hy, hz]) => {
+                let [bx, by, _] = m.base;
+                let dist = ((hx - bx).powi(2) + (hy - by).powi(2)).sqrt();
+                d.with_hint(format!(
+                    "stand `{}` at pos_m = [{hx:.3}, {hy:.3}, {hz:.3}] ({dist:.3} m from where it is): every target checked for it solves from there",
+                    m.robot
+                ))
+            }
+            None => d.with_hint(format!(
+                "no base within {HINT_RADIUS} m of `{}`'s reaches every target checked for it; move the labware or the robot",
+                m.robot
+            )),
+        };
+        checked.diagnostics.push(d);
+    }
+    checked.task = None;
+}
