@@ -1,14 +1,15 @@
 //! Reach before any episode (`scoring::reach`, E0036), on the real robot models and MuJoCo: every
-//! shipped protocol's steps are reached; a robot stood too far from its work gets the error at
-//! the step, and the base its hint names makes the protocol check clean and the expert win it,
-//! for an arm with a closed-form IK (the ViperX) and one solved by the QP (the UR5e).
+//! shipped protocol's steps are reached; a robot stood too far from its work, or a slot placed out
+//! of its reach, gets the error at the step, and the base its hint names makes the protocol check
+//! clean and the expert win it, for an arm with a closed-form IK (the ViperX) and one solved by
+//! the QP (the UR5e).
 
 mod common;
 
 use common::run;
 use std::path::Path;
 
-/// The protocol at `path` with its first robot's base line replaced, checked as `autobio check`
+/// The protocol at `path` with the line `from` replaced by `to`, checked as `autobio check`
 /// checks it.
 fn checked(path: &str, from: &str, to: &str, tag: &str) -> compiler::Checked {
     let source = std::fs::read_to_string(path).unwrap();
@@ -52,28 +53,37 @@ fn every_shipped_protocol_reaches_its_targets() {
     }
 }
 
-/// Stood `far`, the arm misses step 1's grasp; stood where the hint says, the protocol checks
-/// clean and the expert wins seed 0.
-fn the_hint_fixes(path: &str, base: &str, far: &str, tag: &str) {
-    let too_far = checked(path, base, far, &format!("{tag}-far"));
+/// With `from` written `far`, the arm misses step `step`'s target; stood where the hint says, the
+/// protocol checks clean and the expert wins seed 0. `base` is the robot's base line.
+fn the_hint_fixes(path: &str, base: &str, (from, far): (&str, &str), step: usize, tag: &str) {
+    let too_far = checked(path, from, far, &format!("{tag}-far"));
     assert!(too_far.task.is_none());
-    let d = too_far
+    // One report at the step, saying how close the best solve came.
+    let at_step = format!("cannot reach step {step}'s target");
+    let reports: Vec<&dsl::Diagnostic> = too_far
         .diagnostics
         .iter()
-        .find(|d| d.code == dsl::Code::E0036)
-        .unwrap();
+        .filter(|d| d.code == dsl::Code::E0036 && d.message.contains(&at_step))
+        .collect();
+    assert_eq!(reports.len(), 1, "{:#?}", too_far.diagnostics);
     assert!(
-        d.message.contains("cannot reach step 1's target") && d.message.contains("mm off"),
+        reports[0].message.contains("mm off"),
         "{}",
-        d.message
+        reports[0].message
     );
     let hinted = hinted_base(&too_far);
-    let fixed = checked(
-        path,
-        base,
-        &format!("base = {{ pos_m = {hinted} }}"),
-        &format!("{tag}-hinted"),
-    );
+    // The edit that put it out of reach, and the robot where the hint stands it.
+    let stood = format!("base = {{ pos_m = {hinted} }}");
+    let source = std::fs::read_to_string(path)
+        .unwrap()
+        .replacen(from, far, 1);
+    let robot_now = if from == base { far } else { base };
+    let source = source.replacen(robot_now, &stood, 1);
+    let dir = common::scratch(&format!("reach-{tag}-hinted"));
+    let file = dir.join(Path::new(path).file_name().unwrap());
+    std::fs::write(&file, source).unwrap();
+    let mut fixed = compiler::check_file(&file, None).unwrap();
+    scoring::reach::check(&mut fixed);
     assert!(
         fixed.diagnostics.iter().all(|d| !d.is_error()),
         "{hinted}: {:#?}",
@@ -85,20 +95,30 @@ fn the_hint_fixes(path: &str, base: &str, far: &str, tag: &str) {
 
 #[test]
 fn an_aloha_stood_out_of_reach_gets_e0036_and_its_hint_base_works() {
-    the_hint_fixes(
-        "protocols/tube/pick_up.toml",
-        "base = { pos_m = [-0.1, 0.0, 0.824] }",
-        "base = { pos_m = [-0.75, 0.0, 0.824] }",
-        "aloha",
-    );
+    let base = "base = { pos_m = [-0.1, 0.0, 0.824] }";
+    let far = "base = { pos_m = [-0.75, 0.0, 0.824] }";
+    the_hint_fixes("protocols/tube/pick_up.toml", base, (base, far), 1, "aloha");
 }
 
 #[test]
 fn a_ur5e_stood_out_of_reach_gets_e0036_and_its_hint_base_works() {
+    let base = "base = { pos_m = [-0.1, 0.0, 0.824] }";
+    let far = "base = { pos_m = [-0.9, 0.0, 0.824] }";
+    the_hint_fixes("protocols/tube/transfer.toml", base, (base, far), 1, "ur5e");
+}
+
+/// The slot a tube is placed in, out of reach: the seat is solved with the tube held as the
+/// pick grasped it.
+#[test]
+fn a_place_out_of_reach_gets_e0036_at_its_step_and_its_hint_base_works() {
+    let base = "base = { pos_m = [-0.1, 0.0, 0.824] }";
+    let target = "pose = { pos_m = [0.3, 0.2, 0.854], yaw_deg = 90 }";
+    let far = "pose = { pos_m = [0.5, 0.8, 0.854], yaw_deg = 90 }";
     the_hint_fixes(
         "protocols/tube/transfer.toml",
-        "base = { pos_m = [-0.1, 0.0, 0.824] }",
-        "base = { pos_m = [-0.9, 0.0, 0.824] }",
-        "ur5e",
+        base,
+        (target, far),
+        2,
+        "seat",
     );
 }

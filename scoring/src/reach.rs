@@ -1,17 +1,19 @@
 //! Reach before any episode (`autobio check`): whether each step's robot can bring its tool to
-//! the step's first target, the grasp, press or dial frame the expert aims at, in the layout the
-//! task's first seed draws. The target comes from the labware models as the expert resolves it
+//! the step's first target, the grasp, press or dial frame the expert aims at, and to the seat
+//! (and above it) where it places an item it picked, with the item as the pick grasped it, in
+//! the layout the task's first seed draws. The target comes from the labware models as the expert resolves it
 //! (`primitives::StepFrame`), and is solved by the robot model's IK from the robot's start pose
 //! and from its home, in either of a symmetric target's grasps. A target none of these solve is
-//! E0036 at the step's `with`, saying how close the best solve came, with a hint: the nearest
+//! E0036 at the step's `with` (one per step), saying how close the best solve came, with a
+//! hint: the nearest
 //! base position (the same height and heading) from which every target this pass checked for
 //! that robot solves, found by moving the targets instead of the base (a base shift is the
 //! targets' opposite shift to the arm) on rings around it.
 //!
-//! It does not check slot seats or hand-overs (where they are depends on how the carried item
-//! sits in the hand), the paths between targets, a lid's whole arc, other seeds' layouts, or a
-//! chain's later stages, and it skips a step acting on an item an earlier step moved (its target
-//! is not where it starts). A task whose scene cannot be built is left to the runtime's refusal.
+//! It does not check hand-overs or a seat for an item another robot picked, the paths between
+//! targets, a lid's whole arc, other seeds' layouts, or a chain's later stages, and it skips a
+//! step acting on an item an earlier step put elsewhere (its target is not where it starts). A
+//! task whose scene cannot be built is left to the runtime's refusal.
 
 use compiler::motion::{Motion, MotionStep, Target};
 use compiler::params::render;
@@ -87,8 +89,12 @@ pub fn unreachable(task: &Task) -> Vec<Unreachable> {
         &mut kins,
         &instance.robot_q,
     );
-    let mut out = Vec::new();
+    let mut out: Vec<Unreachable> = Vec::new();
     for aim in &aims {
+        // One report per step: its first target out of reach.
+        if out.iter().any(|u| u.step == aim.step) {
+            continue;
+        }
         let model = scene.robots[aim.robot].model;
         let starts = [instance.robot_q[aim.robot].clone(), model.home.to_vec()];
         let kin = &mut kins[aim.robot];
@@ -127,7 +133,9 @@ pub fn unreachable(task: &Task) -> Vec<Unreachable> {
     out
 }
 
-/// The first target of each step the pass checks, with its grasps.
+/// The targets the pass checks, step by step: each step's first target where the step's item is
+/// where it started; and for an item a robot picked up, the seat it is then placed on, with the
+/// item held as the pick grasped it (the seat's tool pose depends on that).
 fn aims(
     task: &Task,
     scene: &Scene,
@@ -136,7 +144,10 @@ fn aims(
     kins: &mut [ArmKinematics],
     start: &[Vec<f64>],
 ) -> Vec<Aim> {
-    let mut moved = BTreeSet::new();
+    // Items in a hand since a pick (by which robot, grasped with the tool where), and items
+    // that have been put somewhere else.
+    let mut held: BTreeMap<String, (usize, Pose)> = BTreeMap::new();
+    let mut placed = BTreeSet::new();
     let mut out = Vec::new();
     for (i, (_, step)) in task.steps().enumerate() {
         let Some(robot) = task.robot_index(&step.robot) else {
@@ -157,27 +168,50 @@ fn aims(
             .and_then(|on| task.labware.iter().find(|l| &l.name == on))
             .and_then(|l| labware::kind(&l.kind));
         let motions = expand(&MotionStep { args: &args, kind });
-        let moves = motions.iter().any(|m| {
-            matches!(
-                m,
-                Motion::Lift { .. }
-                    | Motion::Reach {
+        let seats: Vec<&Motion> = motions
+            .iter()
+            .filter(|m| {
+                matches!(
+                    m,
+                    Motion::Reach {
+                        target: Target::Seat { .. }
+                    } | Motion::Transit {
                         target: Target::Seat { .. }
                     }
-                    | Motion::Transit {
-                        target: Target::Seat { .. }
+                )
+            })
+            .collect();
+        let lifts = motions.iter().any(|m| matches!(m, Motion::Lift { .. }));
+        let g = scene.robots[robot].model.gripper;
+        if let Some(item) = &on {
+            if placed.contains(item) {
+                continue;
+            }
+            if !seats.is_empty() {
+                placed.insert(item.clone());
+                // Placed by the robot that picked it: the seat as that grasp carries the item.
+                let Some((_, grasp)) = held.remove(item).filter(|(r, _)| *r == robot) else {
+                    continue;
+                };
+                let frame =
+                    StepFrame::new(&motions, lab, &grasp, Some(item), g.finger_reach, g.enclose);
+                let Ok(frame) = frame else { continue };
+                for m in seats {
+                    if let Ok(Some(pose)) = frame.first_pose(std::slice::from_ref(m), lab) {
+                        out.push(Aim {
+                            step: i,
+                            robot,
+                            target: target_name(std::slice::from_ref(m)),
+                            grasps: vec![pose],
+                        });
                     }
-            )
-        });
-        let untouched = on.as_ref().is_none_or(|item| !moved.contains(item));
-        if moves && let Some(item) = &on {
-            moved.insert(item.clone());
+                }
+                continue;
+            }
+            if held.contains_key(item) {
+                continue;
+            }
         }
-        if !untouched {
-            continue;
-        }
-        let model = scene.robots[robot].model;
-        let g = model.gripper;
         let tcp = primitives::Kinematics::tcp(&mut kins[robot], &start[robot]);
         let Ok(frame) = StepFrame::new(
             &motions,
@@ -192,6 +226,9 @@ fn aims(
         let Ok(Some(pose)) = frame.first_pose(&motions, lab) else {
             continue;
         };
+        if lifts && let Some(item) = &on {
+            held.insert(item.clone(), (robot, pose));
+        }
         let mut grasps = vec![pose];
         if let Some(Ok(Some(other))) = frame.other_grasp().map(|f| f.first_pose(&motions, lab)) {
             grasps.push(other);
@@ -220,6 +257,9 @@ fn target_name(motions: &[Motion]) -> String {
         Some(Target::Affordance { labware, name, .. }) => format!("`{labware}`'s `{name}`"),
         Some(Target::Button { labware, param, .. }) => {
             format!("the button that sets `{labware}.{param}`")
+        }
+        Some(Target::Seat { location, above }) if *above > 0.0 => {
+            format!("{:.0} mm above the seat `{location}`", above * 1000.0)
         }
         Some(Target::Seat { location, .. }) => format!("the seat `{location}`"),
         Some(Target::Carry { labware, to, .. }) => format!("`{labware}`'s `{to}`"),
