@@ -1,8 +1,8 @@
 //! Reach before any episode (`scoring::reach`, E0036), on the real robot models and MuJoCo: every
-//! shipped protocol's steps are reached; a robot stood too far from its work, or a slot placed out
-//! of its reach, gets the error at the step, and the base its hint names makes the protocol check
-//! clean and the expert win it, for an arm with a closed-form IK (the ViperX) and one solved by
-//! the QP (the UR5e).
+//! shipped protocol's steps are reached; a robot stood too far from its work, a slot placed out of
+//! its reach, or a lid's arc it gives out along, gets the error at the step, and the base its hint
+//! names makes the protocol check clean (and the expert win it, for the grasp and slot cases), for
+//! an arm with a closed-form IK (the ViperX) and one solved by the QP (the UR5e).
 
 mod common;
 
@@ -120,5 +120,47 @@ fn a_place_out_of_reach_gets_e0036_at_its_step_and_its_hint_base_works() {
         (target, far),
         2,
         "seat",
+    );
+}
+
+/// On a riser too low, the 5910's lid bar is reached but not its arc: E0036 at the step says
+/// where along the arc the arm gives out, and from the hinted base the protocol checks clean.
+/// (The expert then plans the run, but the key's press does not yet release the latch from
+/// there: reach is not success.)
+#[test]
+fn a_lid_arc_out_of_reach_is_found_along_the_arc_and_its_hint_base_checks_clean() {
+    let dir = common::scratch("reach-arc");
+    let riser = std::fs::read_to_string("protocols/centrifuge_5910/riser.toml").unwrap();
+    let stands = "base = { pos_m = [0.4, 0.25, 1.45], yaw_deg = -90 }";
+    assert!(riser.contains(stands));
+    std::fs::copy(
+        "protocols/centrifuge_5910/open_lid.toml",
+        dir.join("open_lid.toml"),
+    )
+    .unwrap();
+    let check = |base: &str| {
+        std::fs::write(dir.join("riser.toml"), riser.replacen(stands, base, 1)).unwrap();
+        let mut c = compiler::check_file(&dir.join("open_lid.toml"), None).unwrap();
+        scoring::reach::check(&mut c);
+        c
+    };
+    let low = check("base = { pos_m = [0.4, 0.25, 1.0], yaw_deg = -90 }");
+    let arc = low
+        .diagnostics
+        .iter()
+        .find(|d| d.code == dsl::Code::E0036 && d.message.contains("step 2's target"))
+        .unwrap_or_else(|| panic!("{:#?}", low.diagnostics));
+    assert!(
+        arc.message
+            .contains("`lid_open` and along the path it then follows, at pose"),
+        "{}",
+        arc.message
+    );
+    let hinted = hinted_base(&low);
+    let fixed = check(&format!("base = {{ pos_m = {hinted}, yaw_deg = -90 }}"));
+    assert!(
+        fixed.diagnostics.iter().all(|d| !d.is_error()),
+        "{hinted}: {:#?}",
+        fixed.diagnostics
     );
 }

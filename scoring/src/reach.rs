@@ -1,27 +1,33 @@
 //! Reach before any episode (`autobio check`): whether each step's robot can bring its tool to
-//! the step's first target, the grasp, press or dial frame the expert aims at, and to the seat
-//! (and above it) where it places an item it picked, with the item as the pick grasped it, in
-//! the layout the task's first seed draws. The target comes from the labware models as the expert resolves it
-//! (`primitives::StepFrame`), and is solved by the robot model's IK from the robot's start pose
-//! and from its home, in either of a symmetric target's grasps. A target none of these solve is
-//! E0036 at the step's `with` (one per step), saying how close the best solve came, with a
-//! hint: the nearest
-//! base position (the same height and heading) from which every target this pass checked for
-//! that robot solves, found by moving the targets instead of the base (a base shift is the
-//! targets' opposite shift to the arm) on rings around it.
+//! the step's first target (the grasp, press or dial frame the expert aims at), then along the
+//! path it follows holding a part (a lid's handle over its whole arc, each pose solved from the
+//! last as the expert solves it, from where earlier steps left the lid), and to the seat (and
+//! above it) where it places an item it picked, with the item as the pick grasped it, in the
+//! layout the task's first seed draws. Targets come from the labware models as the expert
+//! resolves them (`primitives::StepFrame`) and are solved by the robot model's IK from the
+//! robot's start pose and from its home, in either of a symmetric target's grasps. A target none
+//! of these solve is E0036 at the step's `with` (one per step), saying how close the best solve
+//! came, with a hint: the nearest base position (the same height and heading) from which every
+//! target this pass checked for that robot solves with 10 cm to spare, found by moving the
+//! targets instead of the base (a base shift is the targets' opposite shift to the arm) on rings
+//! around it, then stood up for real in a rebuilt scene, where the arm must come in to each
+//! target clear of the scene. A hinted base is reached and clear; the expert may still fail
+//! there for other reasons (a key pressed from another angle): the hint is where to start.
 //!
-//! It does not check hand-overs or a seat for an item another robot picked, the paths between
-//! targets, a lid's whole arc, other seeds' layouts, or a chain's later stages, and it skips a
-//! step acting on an item an earlier step put elsewhere (its target is not where it starts). A
-//! task whose scene cannot be built is left to the runtime's refusal.
+//! It does not check hand-overs or a seat for an item another robot picked, the free-space
+//! paths between targets, joint limits as a reason apart from distance, other seeds' layouts, or
+//! a chain's later stages, and it skips a step acting on an item an earlier step put elsewhere
+//! (its target is not where it starts). A task whose scene cannot be built is left to the
+//! runtime's refusal.
 
 use compiler::motion::{Motion, MotionStep, Target};
 use compiler::params::render;
 use compiler::{Checked, Task};
 use dsl::ast::Document;
 use dsl::{Code, Diagnostic};
-use labware::Pose;
+use labware::{LabwareState, Pose};
 use primitives::{Lab, StepFrame, solve_with};
+use runtime::clearance::Clearance;
 use runtime::kinematics::ArmKinematics;
 use runtime::{Episode, Scene};
 use std::collections::{BTreeMap, BTreeSet};
@@ -53,6 +59,10 @@ const HINT_DIRECTIONS: usize = 16;
 /// How much farther out than each target (m, in the plane, away from the base) the hinted base
 /// must still reach.
 const HINT_MARGIN: f64 = 0.1;
+/// How far back along a grasp's axis the hinted base's arm must come in clear of the scene (m),
+/// and how many reached bases are stood up and checked so before the search gives up.
+const HINT_APPROACH: f64 = 0.07;
+const HINT_CLEAR_TRIES: usize = 40;
 
 /// A checked target of one robot: the step it belongs to and the tool poses that reach it (its
 /// grasps).
@@ -61,6 +71,9 @@ struct Aim {
     robot: usize,
     target: String,
     grasps: Vec<Pose>,
+    /// Where the tool then follows a part it holds (a lid's handle along its arc), each pose
+    /// solved from the last as the expert solves it; empty for a step that follows nothing.
+    path: Vec<Pose>,
 }
 
 /// Every step of `task` (a single stage) whose first target its robot cannot reach in seed 0's
@@ -76,15 +89,14 @@ pub fn unreachable(task: &Task) -> Vec<Unreachable> {
     };
     let scene = Arc::new(scene);
     let episode = Episode::new(scene.clone(), task, &instance);
-    let states = episode.labware_state();
-    let lab = Lab::new(task, &states, &instance.params);
+    let mut states = episode.labware_state();
     let mut kins: Vec<ArmKinematics> = (0..scene.robots.len())
         .map(|r| ArmKinematics::new(&scene, r))
         .collect();
     let aims = aims(
         task,
         &scene,
-        &lab,
+        &mut states,
         &instance.params,
         &mut kins,
         &instance.robot_q,
@@ -99,31 +111,63 @@ pub fn unreachable(task: &Task) -> Vec<Unreachable> {
         let starts = [instance.robot_q[aim.robot].clone(), model.home.to_vec()];
         let kin = &mut kins[aim.robot];
         let mut short_by: Option<f64> = None;
+        // The furthest pose of its path any grasp followed to, where none followed it all.
+        let mut stopped: Option<usize> = None;
+        let mut missed = |e: &primitives::IkError| {
+            if let primitives::IkError::NoConvergence { pos_err, .. } = e {
+                short_by = Some(short_by.map_or(*pos_err, |s: f64| s.min(*pos_err)));
+            }
+        };
         let solved = aim.grasps.iter().any(|pose| {
-            starts
-                .iter()
-                .any(|seed| match solve_with(model.ik, kin, pose, seed) {
-                    Ok(_) => true,
-                    Err(primitives::ik::IkError::NoConvergence { pos_err, .. }) => {
-                        short_by = Some(short_by.map_or(pos_err, |s: f64| s.min(pos_err)));
-                        false
+            starts.iter().any(|seed| {
+                let mut q = match solve_with(model.ik, kin, pose, seed) {
+                    Ok(q) => q,
+                    Err(e) => {
+                        missed(&e);
+                        return false;
                     }
-                    Err(_) => false,
-                })
+                };
+                for (k, at) in aim.path.iter().enumerate() {
+                    match solve_with(model.ik, kin, at, &q) {
+                        Ok(next) => q = next,
+                        Err(e) => {
+                            missed(&e);
+                            stopped = Some(stopped.map_or(k, |s| s.max(k)));
+                            return false;
+                        }
+                    }
+                }
+                true
+            })
         });
         if solved {
             continue;
         }
+        let target = match stopped {
+            Some(k) => format!(
+                "{} and along the path it then follows, at pose {} of {}",
+                aim.target,
+                k + 1,
+                aim.path.len()
+            ),
+            None => aim.target.clone(),
+        };
         let base = task.robots[aim.robot].base.translation.vector;
         let base = [base.x, base.y, base.z];
         let mine: Vec<&Aim> = aims.iter().filter(|a| a.robot == aim.robot).collect();
-        let shift =
-            base_shift(&mine, model, kin, base).map(|d| [base[0] + d[0], base[1] + d[1], base[2]]);
-        let p = aim.grasps[0].translation.vector;
+        let shift = base_shift(&mine, model, kin, base, |d| {
+            let at = [base[0] + d[0], base[1] + d[1], base[2]];
+            clear_from(task, &instance, aim.robot, at, &mine)
+        })
+        .map(|d| [base[0] + d[0], base[1] + d[1], base[2]]);
+        let p = match stopped {
+            Some(k) => aim.path[k].translation.vector,
+            None => aim.grasps[0].translation.vector,
+        };
         out.push(Unreachable {
             step: aim.step,
             robot: task.robots[aim.robot].name.clone(),
-            target: aim.target.clone(),
+            target,
             at: [p.x, p.y, p.z],
             short_by,
             base_hint: shift,
@@ -139,7 +183,7 @@ pub fn unreachable(task: &Task) -> Vec<Unreachable> {
 fn aims(
     task: &Task,
     scene: &Scene,
-    lab: &Lab,
+    states: &mut [LabwareState],
     params: &compiler::params::Bindings,
     kins: &mut [ArmKinematics],
     start: &[Vec<f64>],
@@ -168,6 +212,9 @@ fn aims(
             .and_then(|on| task.labware.iter().find(|l| &l.name == on))
             .and_then(|l| labware::kind(&l.kind));
         let motions = expand(&MotionStep { args: &args, kind });
+        // The labware as earlier steps left its joints (a lid opened).
+        let owned = states.to_vec();
+        let lab = &Lab::new(task, &owned, params);
         let seats: Vec<&Motion> = motions
             .iter()
             .filter(|m| {
@@ -203,6 +250,7 @@ fn aims(
                             robot,
                             target: target_name(std::slice::from_ref(m)),
                             grasps: vec![pose],
+                            path: Vec::new(),
                         });
                     }
                 }
@@ -233,14 +281,56 @@ fn aims(
         if let Some(Ok(Some(other))) = frame.other_grasp().map(|f| f.first_pose(&motions, lab)) {
             grasps.push(other);
         }
+        let path = follow(task, states, params, &frame, &motions, &pose);
         out.push(Aim {
             step: i,
             robot,
             target: target_name(&motions),
             grasps,
+            path,
         });
     }
     out
+}
+
+/// The tool poses of a step's `Follow` motions in order, from its grasp at `from`, each from where
+/// the one before left the labware's joints; `states` is left with the joints at the last goals.
+fn follow(
+    task: &Task,
+    states: &mut [LabwareState],
+    params: &compiler::params::Bindings,
+    frame: &StepFrame,
+    motions: &[Motion],
+    from: &Pose,
+) -> Vec<Pose> {
+    let mut path = Vec::new();
+    let mut tcp = *from;
+    for m in motions {
+        let Motion::Follow { labware, goals, .. } = m else {
+            continue;
+        };
+        let owned = states.to_vec();
+        let lab = Lab::new(task, &owned, params);
+        let Ok(poses) = frame.poses(m, &lab, &tcp) else {
+            return path;
+        };
+        path.extend(poses.iter().skip(1).copied());
+        tcp = *poses.last().unwrap_or(&tcp);
+        let Some(i) = task.labware_index(labware) else {
+            continue;
+        };
+        let Some(model) = task.labware[i].params.instrument() else {
+            continue;
+        };
+        let roles = model.joints(labware);
+        let set: Vec<(String, f64)> = goals
+            .iter()
+            .filter(|(role, _)| roles.iter().any(|(r, _)| r == role))
+            .filter_map(|(role, goal)| Some((role.clone(), model.joint_goal(role, goal)?)))
+            .collect();
+        states[i] = states[i].with_joints(&set);
+    }
+    path
 }
 
 /// What a step's motions aim at first, for a reader.
@@ -268,15 +358,18 @@ fn target_name(motions: &[Motion]) -> String {
 }
 
 /// The nearest shift (m, in the plane) of the robot's base from which every one of its `aims`
-/// solves (one grasp of each, from its home) with `HINT_MARGIN` to spare (the grasp moved that
-/// much farther out from the base solves too), searched ring by ring; `None` within the search.
+/// solves (one grasp of each, from its home, then its path) with `HINT_MARGIN` to spare (the
+/// grasp moved that much farther out from the base solves too), searched ring by ring; `None`
+/// within the search.
 /// The margin is the expert's room around a grasp: the approach before it, the lift after it.
 fn base_shift(
     aims: &[&Aim],
     model: &robots::RobotModel,
     kin: &mut ArmKinematics,
     base: [f64; 3],
+    mut clear: impl FnMut([f64; 2]) -> bool,
 ) -> Option<[f64; 2]> {
+    let mut tried = 0;
     let home = model.home.to_vec();
     let rings = (HINT_RADIUS / HINT_STEP).round() as usize;
     (1..=rings)
@@ -288,21 +381,72 @@ fn base_shift(
             })
         })
         .find(|d| {
+            if tried >= HINT_CLEAR_TRIES {
+                return false;
+            }
             // The base moved by d reaches what the base where it is reaches moved by -d.
             let back = labware::frame::translation([-d[0], -d[1], 0.0]);
-            aims.iter().all(|aim| {
+            let reached = aims.iter().all(|aim| {
                 aim.grasps.iter().any(|pose| {
                     let near = back * pose;
                     let p = near.translation.vector;
                     let out = nalgebra::Vector2::new(p.x - base[0], p.y - base[1]);
                     let out = out.try_normalize(1e-9).unwrap_or_default() * HINT_MARGIN;
                     let far = labware::frame::translation([out.x, out.y, 0.0]) * near;
-                    [near, far]
-                        .iter()
-                        .all(|q| solve_with(model.ik, kin, q, &home).is_ok())
+                    if solve_with(model.ik, kin, &far, &home).is_err() {
+                        return false;
+                    }
+                    let Ok(mut q) = solve_with(model.ik, kin, &near, &home) else {
+                        return false;
+                    };
+                    // And the path it then follows, each pose from the last.
+                    aim.path.iter().all(|at| {
+                        solve_with(model.ik, kin, &(back * at), &q)
+                            .map(|next| q = next)
+                            .is_ok()
+                    })
                 })
+            });
+            // Reached: then stood there for real, clear of the scene on the way in.
+            reached && {
+                tried += 1;
+                clear(*d)
+            }
+        })
+}
+
+/// Whether `robot` stood at `base` (the task otherwise as it is) has an IK solution clear of
+/// the scene for every aim's approach (`HINT_APPROACH` back along the grasp's axis, where the
+/// expert comes in from): a base the arm reaches from can still put its upper arm through an
+/// instrument.
+fn clear_from(
+    task: &Task,
+    instance: &compiler::SceneInstance,
+    robot: usize,
+    base: [f64; 3],
+    aims: &[&Aim],
+) -> bool {
+    let mut moved = task.clone();
+    moved.robots[robot].base.translation.vector = nalgebra::Vector3::new(base[0], base[1], base[2]);
+    let Ok(scene) = Scene::build(&moved, instance) else {
+        return false;
+    };
+    let scene = Arc::new(scene);
+    let episode = Episode::new(scene.clone(), &moved, instance);
+    let mut kin = ArmKinematics::new(&scene, robot);
+    let mut clearance = Clearance::new(&scene, robot);
+    clearance.sync(&episode.qpos(), None);
+    let model = scene.robots[robot].model;
+    let starts = [instance.robot_q[robot].clone(), model.home.to_vec()];
+    aims.iter().all(|aim| {
+        aim.grasps.iter().any(|grasp| {
+            let approach = labware::frame::translated_local(grasp, [0.0, 0.0, -HINT_APPROACH]);
+            starts.iter().any(|seed| {
+                solve_with(model.ik, &mut kin, &approach, seed)
+                    .is_ok_and(|q| clearance.is_clear(&q))
             })
         })
+    })
 }
 
 /// E0036 for every unreachable step of a single protocol file that checked clean, at the step's
@@ -334,7 +478,7 @@ pub fn check(checked: &mut Checked) {
             Code::E0036,
             span,
             format!(
-                "`{}` cannot reach step {}'s target, {} at ({x:.3}, {y:.3}, {z:.3}) m{how}",
+                "`{}` cannot reach step {}'s target, {}, at ({x:.3}, {y:.3}, {z:.3}) m{how}",
                 m.robot,
                 m.step + 1,
                 m.target
