@@ -67,7 +67,7 @@ fn the_hint_fixes(path: &str, base: &str, (from, far): (&str, &str), step: usize
         .collect();
     assert_eq!(reports.len(), 1, "{:#?}", too_far.diagnostics);
     assert!(
-        reports[0].message.contains("mm off"),
+        reports[0].message.contains(" rad off"),
         "{}",
         reports[0].message
     );
@@ -123,12 +123,13 @@ fn a_place_out_of_reach_gets_e0036_at_its_step_and_its_hint_base_works() {
     );
 }
 
-/// On a riser too low, the 5910's lid bar is reached but not its arc: E0036 at the step says
-/// where along the arc the arm gives out, and from the hinted base the protocol checks clean.
-/// (The expert then plans the run, but the key's press does not yet release the latch from
-/// there: reach is not success.)
+/// The 5910 opened from a riser moved about: too low, its lid bar is reached but not the bar's
+/// arc, and E0036 says where along the arc the arm gives out (no base at that height is clear
+/// of the centrifuge: the hint says so, as stood up for real); moved aside, the key and bar are
+/// out of reach, and from the hinted base the protocol checks clean. (The expert then plans
+/// the run, but does not yet swing the lid open from there: reach is not success.)
 #[test]
-fn a_lid_arc_out_of_reach_is_found_along_the_arc_and_its_hint_base_checks_clean() {
+fn a_lid_out_of_reach_is_found_along_its_arc_and_a_hinted_base_checks_clean() {
     let dir = common::scratch("reach-arc");
     let riser = std::fs::read_to_string("protocols/centrifuge_5910/riser.toml").unwrap();
     let stands = "base = { pos_m = [0.4, 0.25, 1.45], yaw_deg = -90 }";
@@ -156,7 +157,13 @@ fn a_lid_arc_out_of_reach_is_found_along_the_arc_and_its_hint_base_checks_clean(
         "{}",
         arc.message
     );
-    let hinted = hinted_base(&low);
+    assert!(
+        arc.hint.as_deref().unwrap().starts_with("no base found"),
+        "{arc:?}"
+    );
+    let aside = check("base = { pos_m = [0.55, 0.25, 1.45], yaw_deg = -90 }");
+    assert!(aside.task.is_none());
+    let hinted = hinted_base(&aside);
     let fixed = check(&format!("base = {{ pos_m = {hinted}, yaw_deg = -90 }}"));
     assert!(
         fixed.diagnostics.iter().all(|d| !d.is_error()),

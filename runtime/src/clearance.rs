@@ -155,6 +155,20 @@ impl Clearance {
         pairs
     }
 
+    /// How many body pairs (one moving, one not) overlapped at the last sync, the moving one on
+    /// a joint: the contacts the checks since allow. An arm stood inside something shows here;
+    /// a robot's fixed base resting on its riser or the bench does not.
+    pub fn touching_at_sync(&self) -> usize {
+        let weld = self.data.model().body_weldid();
+        self.allowed
+            .iter()
+            .filter(|(a, b)| {
+                let moving = if self.moving[*a] { *a } else { *b };
+                weld[moving] != 0
+            })
+            .count()
+    }
+
     /// Whether the arm at `q` (with what it carries) is clear of everything else.
     pub fn is_clear(&mut self, q: &[f64]) -> bool {
         self.collisions(q).is_empty()
