@@ -594,7 +594,7 @@ fn turn_path(tcp: &Pose, angle: f64, lead: f64) -> Vec<Pose> {
 }
 
 /// The step's first target that the tool goes to.
-fn first_target(motions: &[Motion]) -> Option<&Target> {
+pub fn first_target(motions: &[Motion]) -> Option<&Target> {
     motions.iter().find_map(|m| match m {
         Motion::Approach { target, .. }
         | Motion::Reach { target }

@@ -26,6 +26,7 @@ use compiler::{Checked, Task};
 use dsl::ast::Document;
 use dsl::{Code, Diagnostic};
 use labware::{LabwareState, Pose};
+use primitives::resolve::first_target;
 use primitives::{Lab, StepFrame, solve_with};
 use runtime::clearance::Clearance;
 use runtime::kinematics::ArmKinematics;
@@ -412,18 +413,6 @@ fn set_goals(
         .filter_map(|(role, goal)| Some((role.clone(), model.joint_goal(role, goal)?)))
         .collect();
     states[i] = states[i].with_joints(&set);
-}
-
-/// The first target a step's motions aim at.
-fn first_target(motions: &[Motion]) -> Option<&Target> {
-    motions.iter().find_map(|m| match m {
-        Motion::Approach { target, .. }
-        | Motion::Reach { target }
-        | Motion::Enclose { target }
-        | Motion::Transit { target }
-        | Motion::Press { target, .. } => Some(target),
-        _ => None,
-    })
 }
 
 /// What a step's motions aim at first, for a reader.
