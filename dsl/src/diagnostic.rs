@@ -108,6 +108,8 @@ pub enum Code {
     W0008,
     /// A panel value the instrument cannot reach within the time limit.
     W0009,
+    /// A step its robot reaches in some sampled layouts only.
+    W0010,
 }
 
 impl Code {
@@ -151,10 +153,11 @@ impl Code {
             Code::W0007 => "W0007",
             Code::W0008 => "W0008",
             Code::W0009 => "W0009",
+            Code::W0010 => "W0010",
         }
     }
 
-    pub const ALL: [Code; 38] = [
+    pub const ALL: [Code; 39] = [
         Code::E0001,
         Code::E0002,
         Code::E0003,
@@ -193,6 +196,7 @@ impl Code {
         Code::W0007,
         Code::W0008,
         Code::W0009,
+        Code::W0010,
     ];
 
     pub fn from_name(name: &str) -> Option<Code> {
@@ -242,6 +246,7 @@ impl Code {
             Code::W0007 => "a start state the simulator cannot set up yet",
             Code::W0008 => "a later chain stage's declaration that the chain ignores",
             Code::W0009 => "a panel value the instrument cannot reach within the time limit",
+            Code::W0010 => "a step its robot reaches in some sampled layouts only",
         }
     }
 
@@ -359,6 +364,9 @@ impl Code {
             }
             Code::W0009 => {
                 "`set_parameter` sets a panel's target; the instrument then ramps towards it at its own rate\n(a block heats a few degrees a second). The value set here is not reached within the task's\ntime limit even if the step ran at once, so a predicate on the measured value cannot hold.\nThe hint gives the time it needs: raise `time_limit`, or set a value nearer the start."
+            }
+            Code::W0010 => {
+                "The step's robot reaches its targets (as E0036 checks them) in the layout the task's first\nseed draws, but not in some of the next seven: another slot drawn, labware placed elsewhere\nwithin its randomisation. The task checks and runs; those seeds' episodes will fail at\nplanning. The note gives what the first such seed draws; narrow the draws or move the robot."
             }
         }
     }

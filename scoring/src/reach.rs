@@ -18,7 +18,9 @@
 //! paths between targets, joint limits as a reason apart from distance, other seeds' layouts, or
 //! a chain's later stages, and it skips a step acting on an item an earlier step put elsewhere
 //! (its target is not where it starts). A task whose scene cannot be built is left to the
-//! runtime's refusal.
+//! runtime's refusal. The next seven seeds' layouts are checked too, without hints: a step
+//! reached in seed 0's but not in some of them is W0010 (the task checks; some of its episodes
+//! will fail at planning).
 
 use compiler::motion::{Motion, MotionStep, Target};
 use compiler::params::render;
@@ -86,10 +88,35 @@ struct Aim {
 /// layout; empty when all are reached, or when the pass does not apply (a chain, a scene the
 /// runtime cannot build).
 pub fn unreachable(task: &Task) -> Vec<Unreachable> {
+    misses(task, 0, true)
+}
+
+/// Layouts the pass samples: seed 0's (E0036) and the next ones (W0010).
+pub const SAMPLED_LAYOUTS: u64 = 8;
+
+/// For each step its robot reaches in seed 0's layout but not in some of the next
+/// `SAMPLED_LAYOUTS - 1` seeds' (other slots drawn, labware placed elsewhere in its
+/// randomisation), those seeds, in order; steps missed in seed 0 are E0036's, not listed.
+pub fn partly_unreachable(task: &Task) -> BTreeMap<usize, Vec<u64>> {
+    let first: BTreeSet<usize> = misses(task, 0, false).iter().map(|u| u.step).collect();
+    let mut out: BTreeMap<usize, Vec<u64>> = BTreeMap::new();
+    for seed in 1..SAMPLED_LAYOUTS {
+        for u in misses(task, seed, false) {
+            if !first.contains(&u.step) {
+                out.entry(u.step).or_default().push(seed);
+            }
+        }
+    }
+    out
+}
+
+/// The steps whose targets their robots miss in seed `seed`'s layout, with base hints where
+/// `hint` asks for them.
+fn misses(task: &Task, seed: u64, hint: bool) -> Vec<Unreachable> {
     if task.stages.len() != 1 {
         return Vec::new();
     }
-    let instance = task.sample(0);
+    let instance = task.sample(seed);
     let Ok(scene) = Scene::build(task, &instance) else {
         return Vec::new();
     };
@@ -129,14 +156,19 @@ pub fn unreachable(task: &Task) -> Vec<Unreachable> {
             Err(miss) => {
                 let base = task.robots[aim.robot].base.translation.vector;
                 let base = [base.x, base.y, base.z];
-                let hint = *hints.entry(aim.robot).or_insert_with(|| {
-                    let mine: Vec<&Aim> = aims.iter().filter(|a| a.robot == aim.robot).collect();
-                    base_shift(&mine, model, kin, base, |d| {
-                        let at = [base[0] + d[0], base[1] + d[1], base[2]];
-                        clear_from(task, &instance, aim.robot, at, &mine)
+                let hint = hint
+                    .then(|| {
+                        *hints.entry(aim.robot).or_insert_with(|| {
+                            let mine: Vec<&Aim> =
+                                aims.iter().filter(|a| a.robot == aim.robot).collect();
+                            base_shift(&mine, model, kin, base, |d| {
+                                let at = [base[0] + d[0], base[1] + d[1], base[2]];
+                                clear_from(task, &instance, aim.robot, at, &mine)
+                            })
+                            .map(|d| [base[0] + d[0], base[1] + d[1], base[2]])
+                        })
                     })
-                    .map(|d| [base[0] + d[0], base[1] + d[1], base[2]])
-                });
+                    .flatten();
                 let (target, p) = match miss.stopped {
                     Some(k) => (
                         format!(
@@ -544,6 +576,7 @@ pub fn check(checked: &mut Checked) {
     let steps = &protocol.steps;
     let missed = unreachable(task);
     if missed.is_empty() {
+        partly(checked, steps);
         return;
     }
     for m in &missed {
@@ -587,4 +620,46 @@ pub fn check(checked: &mut Checked) {
         checked.diagnostics.push(d);
     }
     checked.task = None;
+}
+
+/// W0010 for every step reached in seed 0's layout but not in some of the next ones, at the
+/// step's `with`: the task checks, but some episodes will fail at planning.
+fn partly(checked: &mut Checked, steps: &[dsl::ast::Step]) {
+    let Some(task) = &checked.task else {
+        return;
+    };
+    let planned: Vec<&compiler::PlannedStep> = task.steps().map(|(_, s)| s).collect();
+    for (i, seeds) in partly_unreachable(task) {
+        let (Some(step), Some(planned)) = (steps.get(i), planned.get(i)) else {
+            continue;
+        };
+        let span = step.with.as_ref().map(|w| w.span).unwrap_or(step.span);
+        let list: Vec<String> = seeds.iter().map(u64::to_string).collect();
+        let first = seeds[0];
+        let drawn: Vec<String> = task
+            .sample(first)
+            .params
+            .iter()
+            .map(|(k, v)| format!("{k} = {v}"))
+            .collect();
+        let mut d = Diagnostic::new(
+            Code::W0010,
+            span,
+            format!(
+                "`{}` reaches step {}'s target in seed 0's layout but not in {} of the next {} (seeds {})",
+                planned.robot,
+                i + 1,
+                seeds.len(),
+                SAMPLED_LAYOUTS - 1,
+                list.join(", ")
+            ),
+        );
+        if !drawn.is_empty() {
+            d = d.with_note(format!("seed {first} draws {}", drawn.join(", ")));
+        }
+        checked.diagnostics.push(d.with_hint(format!(
+            "narrow what the seeds draw (`[params]`, `[randomise]`) or stand `{}` nearer; `autobio render FILE --seed {first}` draws that layout",
+            planned.robot
+        )));
+    }
 }
