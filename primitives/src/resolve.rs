@@ -91,7 +91,7 @@ impl<'a> Lab<'a> {
     /// The live state of an item with some joints set to named goals. A goal for a role the
     /// item has no joint for is skipped: the lid primitives also move the lever that only some
     /// lids have (a lidded instrument without one is moved by its lid alone).
-    fn at_goals(&self, labware: &str, goals: &Goals) -> Result<LabwareState, PlanError> {
+    pub fn at_goals(&self, labware: &str, goals: &Goals) -> Result<LabwareState, PlanError> {
         let (model, state) = self.item(labware)?;
         let roles = model.joints(labware);
         let joints = goals

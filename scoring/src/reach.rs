@@ -99,6 +99,11 @@ pub const SAMPLED_LAYOUTS: u64 = 8;
 /// randomisation), those seeds, in order; steps missed in seed 0 are E0036's, not listed.
 pub fn partly_unreachable(task: &Task) -> BTreeMap<usize, Vec<u64>> {
     let first: BTreeSet<usize> = misses(task, 0, false).iter().map(|u| u.step).collect();
+    beyond_seed_0(task, &first)
+}
+
+/// The steps not in `first` (those missed in seed 0's layout) that the next seeds miss.
+fn beyond_seed_0(task: &Task, first: &BTreeSet<usize>) -> BTreeMap<usize, Vec<u64>> {
     let mut out: BTreeMap<usize, Vec<u64>> = BTreeMap::new();
     for seed in 1..SAMPLED_LAYOUTS {
         for u in misses(task, seed, false) {
@@ -369,7 +374,7 @@ fn aims(
         }
         // The lid (and lever) where the grip takes it, then each grasp's path.
         if let Some(Target::Affordance { labware, goals, .. }) = first_target(&motions) {
-            set_goals(task, states, labware, goals);
+            set_goals(task, states, params, labware, goals);
         }
         let as_started = !moved_joints && held.values().all(|(r, _)| *r != robot);
         let mut grasps = vec![(pose, follow(task, states, params, &frame, &motions, &pose))];
@@ -381,7 +386,7 @@ fn aims(
         // Where the step leaves the labware's joints, for the steps after it.
         for m in &motions {
             if let Motion::Follow { labware, goals, .. } = m {
-                set_goals(task, states, labware, goals);
+                set_goals(task, states, params, labware, goals);
                 moved_joints = true;
             }
         }
@@ -419,32 +424,27 @@ fn follow(
         };
         path.extend(poses.iter().skip(1).copied());
         tcp = *poses.last().unwrap_or(&tcp);
-        set_goals(task, &mut states, labware, goals);
+        set_goals(task, &mut states, params, labware, goals);
     }
     path
 }
 
-/// Sets `labware`'s joints that have a role among `goals` to those goals (roles it lacks, a
-/// lever on a lid without one, are skipped, as the expert skips them).
+/// Sets `labware`'s joints to `goals` as the expert resolves them (`Lab::at_goals`: roles it
+/// lacks, a lever on a lid without one, are skipped); a goal it cannot resolve leaves it as is.
 fn set_goals(
     task: &Task,
     states: &mut [LabwareState],
+    params: &compiler::params::Bindings,
     labware: &str,
     goals: &compiler::motion::Goals,
 ) {
     let Some(i) = task.labware_index(labware) else {
         return;
     };
-    let Some(model) = task.labware[i].params.instrument() else {
-        return;
-    };
-    let roles = model.joints(labware);
-    let set: Vec<(String, f64)> = goals
-        .iter()
-        .filter(|(role, _)| roles.iter().any(|(r, _)| r == role))
-        .filter_map(|(role, goal)| Some((role.clone(), model.joint_goal(role, goal)?)))
-        .collect();
-    states[i] = states[i].with_joints(&set);
+    let owned = states.to_vec();
+    if let Ok(at) = Lab::new(task, &owned, params).at_goals(labware, goals) {
+        states[i] = at;
+    }
 }
 
 /// What a step's motions aim at first, for a reader.
@@ -629,7 +629,8 @@ fn partly(checked: &mut Checked, steps: &[dsl::ast::Step]) {
         return;
     };
     let planned: Vec<&compiler::PlannedStep> = task.steps().map(|(_, s)| s).collect();
-    for (i, seeds) in partly_unreachable(task) {
+    // Called where seed 0's layout misses nothing: only the next seeds are left to solve.
+    for (i, seeds) in beyond_seed_0(task, &BTreeSet::new()) {
         let (Some(step), Some(planned)) = (steps.get(i), planned.get(i)) else {
             continue;
         };
