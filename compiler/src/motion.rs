@@ -77,6 +77,8 @@ pub enum Motion {
         value: String,
         timeout_s: f64,
     },
+    /// Back to the robot model's home pose, in joint space (routed around obstacles).
+    Home,
     /// Keep the tool still for `seconds` (a key held down).
     Wait { seconds: f64 },
     /// Close the gripper and wait for it to settle.
@@ -134,14 +136,18 @@ impl Motion {
             Motion::Turn { .. } => "turn",
             Motion::TurnBack => "turn back",
             Motion::TurnDial { .. } => "turn dial",
+            Motion::Home => "home",
         }
     }
 
-    /// Whether the motion moves through free space between affordances (approach, transit):
+    /// Whether the motion moves through free space between affordances (approach, transit, home):
     /// the expert keeps it clear of the scene, going around what its straight path would hit.
     /// The others end in contact, or leave it, on purpose.
     pub fn through_free_space(&self) -> bool {
-        matches!(self, Motion::Approach { .. } | Motion::Transit { .. })
+        matches!(
+            self,
+            Motion::Approach { .. } | Motion::Transit { .. } | Motion::Home
+        )
     }
 }
 

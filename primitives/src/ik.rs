@@ -82,6 +82,49 @@ pub fn solve_with(
     }
 }
 
+/// The distinct joint solutions for `target` within the joint limits that the robot model's
+/// method finds: an analytic arm's every branch (each joint taken nearest the first seed), a
+/// numeric one's solve from each of `seeds`. Nearest the first seed first. The expert's goal
+/// region where the solution nearest the arm leads into an obstacle or a dead end.
+pub fn solutions(
+    method: robots::IkMethod,
+    kin: &mut dyn Kinematics,
+    target: &Pose,
+    seeds: &[Vec<f64>],
+) -> Vec<Vec<f64>> {
+    let Some(first) = seeds.first() else {
+        return Vec::new();
+    };
+    let mut found: Vec<Vec<f64>> = Vec::new();
+    let mut keep = |q: Vec<f64>, kin: &mut dyn Kinematics| {
+        let (pos, rot) = error_norms(&pose_error(target, &kin.tcp(&q)));
+        let opt = IkOptions::default();
+        let new = found
+            .iter()
+            .all(|f| f.iter().zip(&q).any(|(a, b)| (a - b).abs() > 1e-3));
+        if pos < opt.pos_tol && rot < opt.rot_tol && new {
+            found.push(q);
+        }
+    };
+    if let robots::IkMethod::Analytic(arm) = method {
+        let local = analytic_ik::base_frame(&arm, kin).inverse() * target;
+        for c in analytic_ik::candidates(&arm, &local, first) {
+            if let Some(q) = analytic_ik::best_within(&[c], &kin.limits(), first) {
+                keep(q, kin);
+            }
+        }
+    }
+    for seed in seeds {
+        if let Ok(q) = solve_with(method, kin, target, seed) {
+            keep(q, kin);
+        }
+    }
+    let distance =
+        |q: &Vec<f64>| -> f64 { q.iter().zip(first).map(|(a, b)| (a - b).powi(2)).sum() };
+    found.sort_by(|a, b| distance(a).total_cmp(&distance(b)));
+    found
+}
+
 /// Solves for joint angles reaching `target`, starting from `seed`.
 pub fn solve_ik(
     kin: &mut dyn Kinematics,

@@ -13,7 +13,7 @@ pub mod resolve;
 pub mod spline;
 pub mod topp;
 
-pub use ik::{IkError, solve_ik, solve_with};
+pub use ik::{IkError, solutions, solve_ik, solve_with};
 pub use resolve::{Lab, PlanError, StepFrame};
 pub use topp::{Limits, Trajectory, plan_trajectory};
 

@@ -210,6 +210,12 @@ pub struct StepFrame {
     /// The angle the step's last [`Motion::Turn`] or [`Motion::TurnDial`] turned (rad), until a
     /// [`Motion::TurnBack`] undoes it.
     turned: Option<f64>,
+    /// Whether the carried item is round (its grasp turns freely about its axis), so that it may
+    /// go into its seat at any heading.
+    carried_round: bool,
+    /// A turn (rad) about the seat's axis added to the heading the carried item has now, for
+    /// the motion that brings it over its seat (see [`Self::seat_turned`]).
+    seat_turn: f64,
 }
 
 impl StepFrame {
@@ -236,6 +242,8 @@ impl StepFrame {
             half_turn: false,
             round: false,
             turned: None,
+            carried_round: false,
+            seat_turn: 0.0,
         };
         match first_target(motions) {
             Some(Target::Affordance {
@@ -272,6 +280,10 @@ impl StepFrame {
         if seats {
             let item = carried.ok_or(PlanError::NothingCarried)?;
             frame.carried = Some((item.to_string(), tcp_now.inverse() * lab.pose_of(item)?));
+            frame.carried_round = lab.item(item).is_ok_and(|(_, live)| {
+                lab.affordance(item, "grasp", live)
+                    .is_ok_and(|a| a.symmetry == Symmetry::Axial)
+            });
         }
         Ok(frame)
     }
@@ -296,7 +308,7 @@ impl StepFrame {
                 let seat = lab.seat(location)?;
                 let now = lab.pose_of(item)?.rotation;
                 let x = seat.rotation.inverse() * (now * nalgebra::Vector3::x());
-                let heading = axis_angle([0.0, 0.0, 1.0], x.y.atan2(x.x));
+                let heading = axis_angle([0.0, 0.0, 1.0], x.y.atan2(x.x) + self.seat_turn);
                 let target = translated_local(&seat, [0.0, 0.0, *above]);
                 let target = labware::frame::pose(position(&target), seat.rotation * heading);
                 Ok(target * item_in_tool.inverse())
@@ -431,8 +443,28 @@ impl StepFrame {
     /// grasp turned a further `angle` (rad) about the part's axis; `None` for any other step.
     /// The expert's choice where the closest grasp leaves the wrist short of the turn.
     pub fn grasp_turned(&self, angle: f64) -> Option<StepFrame> {
-        (self.regrasp_nearest && self.round).then(|| StepFrame {
+        self.regrasp_nearest
+            .then(|| self.turned_about_axis(angle))
+            .flatten()
+    }
+
+    /// The same step with its grasp turned a further `angle` (rad) about a round first
+    /// affordance's axis (a tube taken from another side); `None` where it is not round. The
+    /// expert's choice where the grasp closest to the tool as it is cannot be reached on.
+    pub fn turned_about_axis(&self, angle: f64) -> Option<StepFrame> {
+        self.round.then(|| StepFrame {
             turn: self.turn * axis_angle([0.0, 0.0, 1.0], angle),
+            ..self.clone()
+        })
+    }
+
+    /// The same step bringing its carried item over the seat turned a further `angle` (rad) about
+    /// the seat's axis from the heading it has now; `None` unless the item is round. For the one
+    /// motion that brings it there: the motions after it keep the heading it then has. The
+    /// expert's choice where every arm pose over the seat at the item's heading is blocked.
+    pub fn seat_turned(&self, angle: f64) -> Option<StepFrame> {
+        (self.carried_round && self.carried.is_some()).then(|| StepFrame {
+            seat_turn: angle,
             ..self.clone()
         })
     }
@@ -549,25 +581,48 @@ impl StepFrame {
                 let at = self.target(target, lab)?;
                 line(tcp_now, &translated_local(&at, [0.0, 0.0, *depth]), 6)
             }
-            Motion::Grasp | Motion::Release | Motion::HoldUntil { .. } | Motion::Wait { .. } => {
-                Vec::new()
-            }
+            Motion::Grasp
+            | Motion::Release
+            | Motion::HoldUntil { .. }
+            | Motion::Wait { .. }
+            | Motion::Home => Vec::new(),
         })
     }
 }
 
 impl StepFrame {
     /// Other tool paths that do what `motion` is for, tried in order when its own path cannot be
-    /// solved. Only a retreat has such freedom: the hand has let go and needs only to be clear of
+    /// solved. A retreat has such freedom: the hand has let go and needs only to be clear of
     /// what it held, so where backing off along the tool runs out of reach (a lid's grip at the
-    /// top of its arc) it may rise, or back off and rise, instead. Empty for every other motion.
-    pub fn fallback_poses(&self, motion: &Motion, tcp_now: &Pose) -> Vec<Vec<Pose>> {
+    /// top of its arc) it may rise, or back off and rise, instead. So has a reach to a round
+    /// part: any turn about its axis grasps it, and where the step's choice (made when the step
+    /// began, from the part's heading then) cannot be reached, the turn nearest the tool as it
+    /// is now is taken (a tube that turned in its rack while the arm came). Empty for every
+    /// other motion.
+    pub fn fallback_poses(
+        &self,
+        motion: &Motion,
+        lab: &Lab,
+        tcp_now: &Pose,
+    ) -> Result<Vec<Vec<Pose>>, PlanError> {
+        if let Motion::Reach {
+            target: Target::Affordance { labware, name, .. },
+        } = motion
+        {
+            let (_, live) = lab.item(labware)?;
+            let a = lab.affordance(labware, name, live)?;
+            return Ok(if a.symmetry == Symmetry::Axial {
+                vec![line(tcp_now, &(a.pose * closest_turn(&a, tcp_now)), 6)]
+            } else {
+                Vec::new()
+            });
+        }
         let Motion::Retreat { distance } = motion else {
-            return Vec::new();
+            return Ok(Vec::new());
         };
         let up = |d: f64| translation([0.0, 0.0, d]) * tcp_now;
         let half = distance * std::f64::consts::FRAC_1_SQRT_2;
-        vec![
+        Ok(vec![
             line(tcp_now, &up(*distance), 6),
             line(
                 tcp_now,
@@ -575,7 +630,7 @@ impl StepFrame {
                 6,
             ),
             line(tcp_now, &up(-distance), 6),
-        ]
+        ])
     }
 }
 

@@ -89,6 +89,7 @@ mod pick;
 mod place;
 mod press;
 mod release;
+mod retract;
 mod screw_cap;
 mod set_parameter;
 mod unlock;
@@ -121,6 +122,7 @@ pub const CATALOGUE: &[&LabPrimitive] = &[
     &set_parameter::PRIMITIVE,
     &hold::PRIMITIVE,
     &release::PRIMITIVE,
+    &retract::PRIMITIVE,
     &hand_over::PRIMITIVE,
 ];
 
@@ -379,10 +381,10 @@ mod tests {
     fn every_primitive_has_an_effect_and_a_kind() {
         for p in CATALOGUE.iter() {
             let used = labware::KINDS.iter().any(|k| k.supports(p.name));
-            // `release` takes no `on`; `lock` is for a latch locked by hand apart from closing,
-            // which no kind has yet (the catalogue says so).
+            // `release` and `retract` take no `on`; `lock` is for a latch locked by hand apart
+            // from closing, which no kind has yet (the catalogue says so).
             assert!(
-                used || ["release", "lock"].contains(&p.name),
+                used || ["release", "retract", "lock"].contains(&p.name),
                 "{} is used by no kind",
                 p.name
             );

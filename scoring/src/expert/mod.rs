@@ -152,6 +152,7 @@ impl ExpertPolicy {
                 clearance: Clearance::new(scene, r),
                 target: instance.robot_q[r].clone(),
                 gripper: ids.model.gripper.open,
+                start: instance.robot_q[r].clone(),
             })
             .collect();
         Ok(ExpertPolicy {

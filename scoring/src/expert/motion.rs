@@ -14,7 +14,7 @@ use crate::policy::{Observation, PlanFailure, PolicyError, StageEvent};
 use crate::route::{Route, route};
 use compiler::motion::Motion;
 use primitives::topp::{Limits, Trajectory, plan_trajectory};
-use primitives::{Kinematics, Lab, StepFrame, solve_with};
+use primitives::{Kinematics, Lab, StepFrame, solutions, solve_with};
 use robots::RobotModel;
 use runtime::clearance::Clearance;
 use runtime::kinematics::ArmKinematics;
@@ -44,6 +44,9 @@ pub(super) struct Arm {
     pub clearance: Clearance,
     pub target: Vec<f64>,
     pub gripper: f64,
+    /// The arm's joints when the episode began (its drawn start pose): a seed for another IK
+    /// branch where the one the arm is on leads nowhere.
+    pub start: Vec<f64>,
 }
 
 impl ExpertPolicy {
@@ -175,7 +178,8 @@ impl ExpertPolicy {
         let waypoints = match solve_path(arm, &poses) {
             Ok(w) => w,
             Err(first) => match frame
-                .fallback_poses(&q.motion, &tcp_now)
+                .fallback_poses(&q.motion, &lab, &tcp_now)
+                .map_err(|e| planning(context.clone(), e))?
                 .iter()
                 .find_map(|p| solve_path(arm, p).ok())
             {
@@ -184,18 +188,67 @@ impl ExpertPolicy {
                     let other = (!lane.step_moved)
                         .then(|| frame.other_grasp())
                         .flatten()
-                        .ok_or_else(|| planning(context.clone(), first.clone()))?;
-                    let poses = ends(
-                        other
-                            .poses(&q.motion, &lab, &tcp_now)
-                            .map_err(|e| planning(context.clone(), e))?,
-                    );
-                    let w =
-                        solve_path(arm, &poses).map_err(|_| planning(context.clone(), first))?;
-                    lane.frame = Some((q.step, other));
-                    w
+                        .and_then(|other| {
+                            let poses = ends(other.poses(&q.motion, &lab, &tcp_now).ok()?);
+                            solve_path(arm, &poses).ok().map(|w| (other, w))
+                        });
+                    match other {
+                        Some((other, w)) => {
+                            lane.frame = Some((q.step, other));
+                            w
+                        }
+                        // Last, a free-space path whose line the arm cannot follow (through
+                        // a singularity, past a joint's range midway) goes in joint space.
+                        None => q
+                            .motion
+                            .through_free_space()
+                            .then(|| in_joint_space(arm, &poses))
+                            .flatten()
+                            .ok_or_else(|| planning(context.clone(), first))?,
+                    }
                 }
             },
+        };
+        // A free-space motion's end decides the IK branch the step's next straight motion starts
+        // from: where that motion cannot be solved from the end this path arrives at, the end is
+        // taken on a branch from which it can.
+        let next = lane
+            .queue
+            .front()
+            .filter(|n| n.step == q.step && is_straight(&n.motion))
+            .map(|n| n.motion.clone());
+        let waypoints = match &next {
+            Some(next) if q.motion.through_free_space() => {
+                let frame = &lane.frame.as_ref().expect("set above").1;
+                let end = poses.last().copied();
+                match with_room_for_next(arm, frame, next, &lab, waypoints.clone(), end) {
+                    Some(w) => w,
+                    // Before the step has moved, a round part may be taken from another side.
+                    None if !lane.step_moved => {
+                        let turned = GRASP_TURNS.iter().skip(1).find_map(|deg| {
+                            let f = frame.turned_about_axis(deg.to_radians())?;
+                            let poses = ends(f.poses(&q.motion, &lab, &tcp_now).ok()?);
+                            let w = solve_path(arm, &poses).ok()?;
+                            let end = poses.last().copied();
+                            with_room_for_next(arm, &f, next, &lab, w, end).map(|w| (f, w))
+                        });
+                        match turned {
+                            Some((f, w)) => {
+                                lane.frame = Some((q.step, f));
+                                w
+                            }
+                            None => waypoints,
+                        }
+                    }
+                    None => waypoints,
+                }
+            }
+            _ => waypoints,
+        };
+        // Home has no tool path: the arm goes to the model's home joints.
+        let waypoints = match q.motion {
+            Motion::Home => vec![arm.target.clone(), arm.model.home.to_vec()],
+            _ => waypoints,
         };
         lane.step_moved = true;
         // A dial is looked at again once the hand has let go of it.
@@ -221,14 +274,63 @@ impl ExpertPolicy {
             let seed = planner::mix(self.seed, self.routed);
             self.routed += 1;
             let joint_limits = arm.kin.limits();
-            let routed = route(
+            let end = waypoints.last().map(|q| arm.kin.tcp(q));
+            let routed = match route(
                 &mut arm.clearance,
                 &joint_limits,
                 limits.check_step,
                 waypoints,
                 seed,
-            )
-            .map_err(|e| planning(context.clone(), e))?;
+            ) {
+                Ok(routed) => routed,
+                Err(blocked) => route_to_other_end(
+                    arm,
+                    frame,
+                    next.as_ref(),
+                    &lab,
+                    end,
+                    limits.check_step,
+                    seed,
+                )
+                .or_else(|| {
+                    // A round item may go over its seat at another heading: the arm's poses
+                    // there are others.
+                    GRASP_TURNS.iter().skip(1).find_map(|deg| {
+                        let f = frame.seat_turned(deg.to_radians())?;
+                        let poses = ends(f.poses(&q.motion, &lab, &tcp_now).ok()?);
+                        let w = solve_path(arm, &poses)
+                            .ok()
+                            .or_else(|| in_joint_space(arm, &poses))?;
+                        let w = match &next {
+                            Some(n) => {
+                                with_room_for_next(arm, &f, n, &lab, w, poses.last().copied())?
+                            }
+                            None => w,
+                        };
+                        let end = w.last().map(|q| arm.kin.tcp(q));
+                        route(
+                            &mut arm.clearance,
+                            &joint_limits,
+                            limits.check_step,
+                            w,
+                            seed,
+                        )
+                        .ok()
+                        .or_else(|| {
+                            route_to_other_end(
+                                arm,
+                                &f,
+                                next.as_ref(),
+                                &lab,
+                                end,
+                                limits.check_step,
+                                seed,
+                            )
+                        })
+                    })
+                })
+                .ok_or_else(|| planning(context.clone(), blocked))?,
+            };
             match routed {
                 Route::Straight(path) => path,
                 Route::Planned { path, hits, checks } => {
@@ -324,11 +426,118 @@ fn with_room_to_turn(arm: &mut Arm, frame: StepFrame, motions: &[Motion], lab: &
         .unwrap_or(frame)
 }
 
+/// Motions that go in a straight line from where the tool is to a target (down to a grasp, in to
+/// a button): solved pose by pose from the joints they start at, so those joints decide whether
+/// they can be made.
+fn is_straight(motion: &Motion) -> bool {
+    matches!(
+        motion,
+        Motion::Reach { .. } | Motion::Enclose { .. } | Motion::Press { .. }
+    )
+}
+
+/// Whether `next` (a straight motion) can be solved pose by pose with the arm at `q`.
+fn solves_next(arm: &mut Arm, frame: &StepFrame, next: &Motion, lab: &Lab, q: &[f64]) -> bool {
+    let tcp = arm.kin.tcp(q);
+    frame
+        .poses(next, lab, &tcp)
+        .is_ok_and(|poses| solve_path_from(arm, q, &poses).is_ok())
+}
+
+/// The IK solutions of a free-space path's `end` pose other than where its waypoints arrive:
+/// every branch the robot model's method finds, seeded from where the arm is, its home pose and
+/// the episode's start pose, nearest the arm first (the goal region).
+fn other_ends(arm: &mut Arm, end: &labware::Pose) -> Vec<Vec<f64>> {
+    let seeds = [
+        arm.target.clone(),
+        arm.model.home.to_vec(),
+        arm.start.clone(),
+    ];
+    solutions(arm.model.ik, &mut arm.kin, end, &seeds)
+}
+
+/// A free-space path's `waypoints` ending where the step's `next` straight motion can be solved
+/// from. The path as solved ends on the branch the arm is on; where `next` cannot be made from
+/// there (an elbow up over a rack beside the arm's own base, after opening a lid far from it),
+/// the nearest other solution of the path's `end` from which `next` solves is taken, the arm
+/// going there in joint space (routed around obstacles like any free-space path). `None` where
+/// no end serves.
+fn with_room_for_next(
+    arm: &mut Arm,
+    frame: &StepFrame,
+    next: &Motion,
+    lab: &Lab,
+    waypoints: Vec<Vec<f64>>,
+    end: Option<labware::Pose>,
+) -> Option<Vec<Vec<f64>>> {
+    let last = waypoints.last().cloned()?;
+    if solves_next(arm, frame, next, lab, &last) {
+        return Some(waypoints);
+    }
+    other_ends(arm, &end?)
+        .into_iter()
+        .find(|q| solves_next(arm, frame, next, lab, q))
+        .map(|q| vec![arm.target.clone(), q])
+}
+
+/// A route to another solution of a free-space path's `end` where the one its waypoints arrive
+/// at is blocked for good (the forearm in an instrument's housing): the nearest solution clear
+/// of the scene from which the step's `next` straight motion (if any) solves and to which a
+/// route is found.
+#[allow(clippy::too_many_arguments)]
+fn route_to_other_end(
+    arm: &mut Arm,
+    frame: &StepFrame,
+    next: Option<&Motion>,
+    lab: &Lab,
+    end: Option<labware::Pose>,
+    check_step: f64,
+    seed: u64,
+) -> Option<Route> {
+    let joint_limits = arm.kin.limits();
+    for q in other_ends(arm, &end?) {
+        if !arm.clearance.is_clear(&q) || next.is_some_and(|n| !solves_next(arm, frame, n, lab, &q))
+        {
+            continue;
+        }
+        let path = vec![arm.target.clone(), q];
+        if let Ok(r) = route(&mut arm.clearance, &joint_limits, check_step, path, seed) {
+            return Some(r);
+        }
+    }
+    None
+}
+
+/// A joint-space path to the last of `poses`: from where the arm is to the end pose solved from
+/// there, else from the home pose, else from the episode's start pose (routed around obstacles
+/// like any free-space path). `None` where the end has no solution.
+fn in_joint_space(arm: &mut Arm, poses: &[labware::Pose]) -> Option<Vec<Vec<f64>>> {
+    let end = poses.last()?;
+    [
+        arm.target.clone(),
+        arm.model.home.to_vec(),
+        arm.start.clone(),
+    ]
+    .iter()
+    .find_map(|seed| solve_with(arm.model.ik, &mut arm.kin, end, seed).ok())
+    .map(|q| vec![arm.target.clone(), q])
+}
+
 /// Joint waypoints through `poses` (the first is where the arm's target is), each solved by the
 /// robot model's IK method from the last.
 fn solve_path(arm: &mut Arm, poses: &[labware::Pose]) -> Result<Vec<Vec<f64>>, PlanFailure> {
-    let mut waypoints = vec![arm.target.clone()];
-    let mut seed = arm.target.clone();
+    let from = arm.target.clone();
+    solve_path_from(arm, &from, poses)
+}
+
+/// As [`solve_path`], with the arm at `from` (the first of `poses` is its tool pose there).
+fn solve_path_from(
+    arm: &mut Arm,
+    from: &[f64],
+    poses: &[labware::Pose],
+) -> Result<Vec<Vec<f64>>, PlanFailure> {
+    let mut waypoints = vec![from.to_vec()];
+    let mut seed = from.to_vec();
     let of = poses.len().saturating_sub(1);
     for (i, pose) in poses.iter().enumerate().skip(1) {
         let qn = solve_with(arm.model.ik, &mut arm.kin, pose, &seed)
