@@ -84,8 +84,13 @@ struct Row {
     hold: EvalReport,
 }
 
+/// Where a workflow's stage protocols live, next to the chains that use them.
+const STAGES_FOLDER: &str = "stages";
+
 /// Every protocol file under `dirs` (one level of subfolders, as `protocols/` is laid out); scene
-/// files, which are no tasks, left out.
+/// files, which are no tasks, left out, and so is a folder named `stages`: the protocols a
+/// workflow chain is made of (`protocols/workflows/stages/`) each run alone, but the task is the
+/// chain, and measuring each stage too would only repeat its figures.
 fn protocol_files(dirs: &[PathBuf]) -> Result<Vec<PathBuf>> {
     let mut out = Vec::new();
     for dir in dirs {
@@ -96,6 +101,9 @@ fn protocol_files(dirs: &[PathBuf]) -> Result<Vec<PathBuf>> {
             {
                 let path = entry?.path();
                 if path.is_dir() {
+                    if path.file_name().is_some_and(|n| n == STAGES_FOLDER) {
+                        continue;
+                    }
                     walk.push(path);
                 } else if path.extension().is_some_and(|e| e == "toml")
                     && !std::fs::read_to_string(&path).is_ok_and(|t| compiler::is_scene_file(&t))

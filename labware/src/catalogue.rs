@@ -434,9 +434,12 @@ pub const KINDS: &[LabwareKind] = &[
     ),
     LabwareKind {
         name: "thermal_mixer",
-        description: "thermal mixer whose speed, temperature and time are set with up/down buttons (Eppendorf ThermoMixer C)",
+        description: "thermal mixer with a 24-well block for 1.5 mL tubes, whose speed, temperature and time are set with up/down buttons (Eppendorf ThermoMixer C)",
         parts: &[],
-        slots: None,
+        slots: Some(Slots {
+            layout: SlotLayout::Grid { rows: 4, cols: 6 },
+            accepts: &["tube_1_5ml"],
+        }),
         capacity_ul: None,
         movable: false,
         panel: &[

@@ -104,39 +104,55 @@ impl Params {
         }
         bars
     }
-}
 
-impl Instrument for Params {
-    fn fragment(&self, name: &str, placement: &Pose) -> Fragment {
+    /// The rack's geoms (base plate, top bars, end walls) with its centre at `centre` in the frame
+    /// of the body they go in, named `{prefix}/...`: a rack on its own, or a block of wells built
+    /// into an instrument (the thermal mixer's thermoblock).
+    pub fn geoms(&self, prefix: &str, centre: Vec3) -> String {
         let [l, w, h] = self.size;
+        let at = |p: Vec3| v3([p[0] + centre[0], p[1] + centre[1], p[2] + centre[2]]);
         let colour = crate::mjcf::rgba(self.rgba);
         let mut geoms = format!(
-            r#"  <geom name="{name}/base_plate" type="box" size="{} {} {}" pos="0 0 {}" rgba="{colour}"/>
+            r#"  <geom name="{prefix}/base_plate" type="box" size="{} {} {}" pos="{}" rgba="{colour}"/>
 "#,
             l / 2.0,
             w / 2.0,
             self.plate / 2.0,
-            -h / 2.0 + self.plate / 2.0
+            at([0.0, 0.0, -h / 2.0 + self.plate / 2.0])
         );
         for (i, (c, s)) in self.bars().iter().enumerate() {
             geoms += &format!(
-                r#"  <geom name="{name}/bar{i}" type="box" size="{}" pos="{}" rgba="{colour}"/>
+                r#"  <geom name="{prefix}/bar{i}" type="box" size="{}" pos="{}" rgba="{colour}"/>
 "#,
                 v3(*s),
-                v3(*c)
+                at(*c)
             );
         }
         // End walls carry the top plate (visual only: nothing reaches under the plate).
         for sx in [-1.0, 1.0] {
             geoms += &format!(
-                r#"  <geom type="box" size="{} {} {}" pos="{} 0 0" rgba="{colour}" contype="0" conaffinity="0"/>
+                r#"  <geom type="box" size="{} {} {}" pos="{}" rgba="{colour}" contype="0" conaffinity="0"/>
 "#,
                 self.plate / 2.0,
                 w / 2.0,
                 h / 2.0 - self.plate,
-                sx * (l / 2.0 - self.plate / 2.0)
+                at([sx * (l / 2.0 - self.plate / 2.0), 0.0, 0.0])
             );
         }
+        geoms
+    }
+
+    /// Where a tube stands in `slot`, in the rack's own frame (centre of its footprint at
+    /// mid-height).
+    pub fn seat_in_rack(&self, slot: &str) -> Option<Vec3> {
+        let (x, y) = self.slot_xy(slot)?;
+        Some([x, y, self.seat_z()])
+    }
+}
+
+impl Instrument for Params {
+    fn fragment(&self, name: &str, placement: &Pose) -> Fragment {
+        let geoms = self.geoms(name, [0.0; 3]);
         Fragment {
             worldbody: format!(
                 "<body name=\"{name}/base\" {}>\n{geoms}</body>\n",
@@ -147,8 +163,7 @@ impl Instrument for Params {
     }
 
     fn slot_seat(&self, slot: &str, s: &LabwareState) -> Option<Pose> {
-        let (x, y) = self.slot_xy(slot)?;
-        Some(s.pose * translation([x, y, self.seat_z()]))
+        Some(s.pose * translation(self.seat_in_rack(slot)?))
     }
 }
 

@@ -62,6 +62,9 @@ pub struct Params {
     pub press_force: f64,
     pub repeat_s: f64,
     pub settings: Vec<Setting>,
+    /// The thermoblock on the deck behind the panel: 4 x 6 wells for 1.5 mL tubes (slots `A1` ..
+    /// `D6`, rows towards the panel, column 1 at the instrument's +x), built as a rack of wells.
+    pub block: crate::rack::Params,
 }
 
 impl Default for Params {
@@ -102,6 +105,18 @@ impl Default for Params {
             // The catalogue's panel auto-repeat, which the compiler times set_parameter steps by.
             repeat_s: kind.panel[0].repeat_s,
             settings,
+            // The SmartBlock 1.5 mL's well grid (17.69 x 18.14 mm pitch) in a 22 mm deep block:
+            // a seated tube stands 18 mm proud of it, for a gripper to take.
+            block: crate::rack::Params {
+                size: [0.132, 0.104, 0.022],
+                rows: 4,
+                cols: 6,
+                col_pitch: 0.01769,
+                row_pitch: 0.01814,
+                hole: 0.0112,
+                plate: 0.003,
+                rgba: BLOCK,
+            },
         }
     }
 }
@@ -117,6 +132,16 @@ const DISPLAY_INK: Rgb = [20, 24, 28];
 const DISPLAY_PAPER: Rgb = [236, 240, 236];
 
 impl Params {
+    /// Centre of the thermoblock in the instrument's frame: on the deck, behind the panel.
+    fn block_centre(&self) -> Vec3 {
+        let h = self.half;
+        [
+            0.0,
+            (self.panel_back_y - h[1]) / 2.0 - 0.005,
+            2.0 * h[2] + self.block.size[2] / 2.0,
+        ]
+    }
+
     fn panel(&self) -> Panel {
         let top = 2.0 * self.half[2];
         let (dy, dz) = (self.half[1] - self.panel_back_y, top - self.panel_front_z);
@@ -266,7 +291,6 @@ impl Names {
 const HOUSING: [f64; 4] = [0.94, 0.94, 0.92, 1.0];
 const PANEL: [f64; 4] = [0.62, 0.64, 0.67, 1.0];
 const BLOCK: [f64; 4] = [0.76, 0.77, 0.8, 1.0];
-const WELL: [f64; 4] = [0.2, 0.2, 0.22, 1.0];
 const ACCENT: [f64; 4] = [0.12, 0.32, 0.62, 1.0];
 const KEY: [f64; 4] = [0.3, 0.32, 0.36, 1.0];
 const MARK: [f64; 4] = [0.95, 0.95, 0.95, 1.0];
@@ -344,26 +368,12 @@ impl Instrument for Params {
             pose_attrs(&bezel),
             b = n.base
         ));
-        // The thermoblock: a silver plate with 4 x 6 wells for 1.5 mL tubes.
-        let block_c = [0.0, (self.panel_back_y - h[1]) / 2.0 - 0.005, top + 0.002];
-        geom(format!(
-            "  <geom name=\"{b}/block\" type=\"box\" size=\"0.066 0.052 0.002\" pos=\"{}\" rgba=\"{}\"/>\n",
-            v3(block_c),
-            rgba(BLOCK),
-            b = n.base
-        ));
-        for row in 0..4 {
-            for col in 0..6 {
-                let x = (col as f64 - 2.5) * 0.01769;
-                let y = block_c[1] + (row as f64 - 1.5) * 0.01814;
-                geom(format!(
-                    "  <geom name=\"{b}/well{row}{col}\" type=\"cylinder\" size=\"0.0052 0.0003\" pos=\"{x:.5} {y:.5} {}\" rgba=\"{}\" contype=\"0\" conaffinity=\"0\"/>\n",
-                    top + 0.0041,
-                    rgba(WELL),
-                    b = n.base
-                ));
-            }
-        }
+        // The thermoblock: wells for 1.5 mL tubes, collided with as a rack's plates and bars.
+        body.push_str(
+            &self
+                .block
+                .geoms(&format!("{}/block", n.base), self.block_centre()),
+        );
         let mut buttons = String::new();
         for (button, _, sign, at) in self.buttons() {
             let b = Names::button(name, &button);
@@ -500,6 +510,12 @@ impl Instrument for Params {
                 (set.param.clone(), format!("{v} {}", set.unit))
             })
             .collect()
+    }
+
+    fn slot_seat(&self, slot: &str, s: &LabwareState) -> Option<Pose> {
+        let [x, y, z] = self.block.seat_in_rack(slot)?;
+        let [cx, cy, cz] = self.block_centre();
+        Some(s.pose * translation([cx + x, cy + y, cz + z]))
     }
 
     fn affordance(&self, name: &str, s: &LabwareState) -> Option<Affordance> {
