@@ -223,18 +223,32 @@ impl ExpertPolicy {
                 let end = poses.last().copied();
                 match with_room_for_next(arm, frame, next, &lab, waypoints.clone(), end) {
                     Some(w) => w,
-                    // Before the step has moved, a round part may be taken from another side.
+                    // Before the step has moved, a round part may be taken from another side
+                    // (the step keeps that grasp), or a round carried item brought over its
+                    // seat at another heading (the motions after this one keep the heading the
+                    // item then has).
                     None if !lane.step_moved => {
-                        let turned = GRASP_TURNS.iter().skip(1).find_map(|deg| {
-                            let f = frame.turned_about_axis(deg.to_radians())?;
+                        let alternatives = GRASP_TURNS.iter().skip(1).flat_map(|deg| {
+                            let a = deg.to_radians();
+                            [
+                                frame.turned_about_axis(a).map(|f| (f, true)),
+                                frame.seat_turned(a).map(|f| (f, false)),
+                            ]
+                        });
+                        let turned = alternatives.flatten().find_map(|(f, keep)| {
                             let poses = ends(f.poses(&q.motion, &lab, &tcp_now).ok()?);
-                            let w = solve_path(arm, &poses).ok()?;
+                            let w = solve_path(arm, &poses)
+                                .ok()
+                                .or_else(|| in_joint_space(arm, &poses))?;
                             let end = poses.last().copied();
-                            with_room_for_next(arm, &f, next, &lab, w, end).map(|w| (f, w))
+                            with_room_for_next(arm, &f, next, &lab, w, end)
+                                .map(|w| (keep.then_some(f), w))
                         });
                         match turned {
                             Some((f, w)) => {
-                                lane.frame = Some((q.step, f));
+                                if let Some(f) = f {
+                                    lane.frame = Some((q.step, f));
+                                }
                                 w
                             }
                             None => waypoints,

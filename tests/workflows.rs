@@ -1,0 +1,129 @@
+//! Workflows (issue 26): chains of stages across instruments on one bench, and what the expert
+//! needs for them. The centrifuge run's lid swings shut only once the loading arm has stood back
+//! (`retract`), and fails to latch with the loader's hand left where it placed the tube; the
+//! expert finds a way where its first plan has none (a round tube carried over its seat at
+//! another heading, on a seed where every arm pose at the tube's own heading hits the housing);
+//! the task table measures the workflows, not the stage files they are made of; a workflow
+//! reports each stage's completion.
+
+mod common;
+
+use common::{compile, compile_edited, run};
+
+const LOAD: &str = "protocols/workflows/stages/centrifuge_load.toml";
+
+/// The load stage with the lid closed after it by the other arm, with or without the loader
+/// standing back first.
+fn load_then_close(retract: bool) -> compiler::Task {
+    compile_edited(LOAD, |s| {
+        let s = if retract {
+            s
+        } else {
+            s.replace("[[steps]]\ndo = \"retract\"\nwith = \"loader\"\n\n", "")
+        };
+        assert_eq!(s.contains("do = \"retract\""), retract, "the edit took");
+        s.replace(
+            "[success]\nall = [",
+            "[[steps]]\ndo = \"close_lid\"\non = \"centrifuge\"\nwith = \"lidder\"\n\n[success]\nall = [\"centrifuge.lid is locked\", ",
+        )
+        .replace("time_limit = \"30 s\"", "time_limit = \"60 s\"")
+    })
+}
+
+#[test]
+fn the_lid_latches_only_once_the_loading_arm_has_stood_back() {
+    let stood_back = run(&load_then_close(true), 0, "expert");
+    assert!(stood_back.success, "{:#?}", stood_back.verdict);
+
+    let left_in = run(&load_then_close(false), 0, "expert");
+    assert!(
+        !left_in.success,
+        "the loader's hand is where the lid swings"
+    );
+    let lid = common::predicate(&left_in, "centrifuge.lid is locked");
+    assert!(!lid.holds, "{lid:?}");
+    let tube = left_in
+        .verdict
+        .predicates()
+        .iter()
+        .find(|p| p.text.starts_with("tube in centrifuge."))
+        .unwrap();
+    assert!(
+        tube.holds,
+        "the tube went in; only the lid failed: {tube:?}"
+    );
+}
+
+#[test]
+fn a_round_tube_goes_over_its_seat_at_another_heading_where_its_own_is_blocked() {
+    // Seed 97 draws slot 28: at the tube's heading every arm pose over the slot hits the
+    // housing (the expert used to stop there: "the goal configuration collides").
+    let r = run(
+        &compile("protocols/centrifuge/insert_symmetric.toml"),
+        97,
+        "expert",
+    );
+    assert!(r.error.is_none(), "{:?}", r.error);
+    assert!(r.success, "{:#?}", r.verdict);
+}
+
+#[test]
+fn a_workflow_reports_each_stage_as_it_completes() {
+    let r = run(&compile("protocols/workflows/bench_run.toml"), 0, "expert");
+    assert!(r.success, "{:#?}", r.verdict);
+    let stages = &r.verdict.stages;
+    let ids: Vec<&str> = stages.iter().map(|s| s.id.as_str()).collect();
+    assert_eq!(
+        ids,
+        [
+            "workflows.cycler_open",
+            "workflows.mixer_load",
+            "workflows.mixer_set",
+            "workflows.cycler_close"
+        ]
+    );
+    let times: Vec<f64> = stages.iter().map(|s| s.completed_at_s.unwrap()).collect();
+    assert!(times.windows(2).all(|w| w[0] < w[1]), "{times:?}");
+
+    // Motionless, the first stage never completes and nothing after it starts.
+    let hold = run(&compile("protocols/workflows/bench_run.toml"), 0, "hold");
+    assert!(!hold.success);
+    assert!(
+        hold.verdict
+            .stages
+            .iter()
+            .all(|s| s.completed_at_s.is_none()),
+        "{:#?}",
+        hold.verdict
+    );
+}
+
+#[test]
+fn the_task_table_measures_workflows_not_their_stage_files() {
+    let out = common::scratch("workflow_table");
+    let table = out.join("tasks.md");
+    common::autobio_ok(&[
+        "tasks",
+        "protocols/workflows",
+        "--episodes",
+        "1",
+        "--out",
+        table.to_str().unwrap(),
+    ]);
+    let text = std::fs::read_to_string(&table).unwrap();
+    for id in [
+        "workflows.bench_run",
+        "workflows.centrifuge_run",
+        "workflows.mixer_run",
+    ] {
+        assert!(
+            text.contains(&format!("| `{id}` |")),
+            "{id} missing:\n{text}"
+        );
+    }
+    assert!(
+        !text.contains("workflows.mixer_load"),
+        "a stage measured alone:\n{text}"
+    );
+    assert!(!text.contains("lab_bench"), "a scene file listed:\n{text}");
+}
