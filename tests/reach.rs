@@ -195,3 +195,49 @@ fn a_slot_out_of_reach_in_some_layouts_is_a_warning_naming_the_seeds_that_fail()
     assert!(!run(task, 4, "expert").success);
     assert!(run(task, 1, "expert").success);
 }
+
+/// The 5430's opening with its arm stood `y` metres from the centrifuge's centre line: the lid
+/// task's own files, copied with the scene's base moved.
+fn opening_from(y: f64) -> compiler::Task {
+    let dir = common::scratch(&format!("margin-{y}"));
+    for f in ["scene.toml", "open_lid.toml"] {
+        let text = std::fs::read_to_string(format!("protocols/centrifuge_5430/{f}")).unwrap();
+        let from = "base = { pos_m = [0.0, 0.5, 0.824] }";
+        let text = if f == "scene.toml" {
+            assert!(text.contains(from));
+            text.replace(from, &format!("base = {{ pos_m = [0.0, {y}, 0.824] }}"))
+        } else {
+            text
+        };
+        std::fs::write(dir.join(f), text).unwrap();
+    }
+    compiler::check_file(&dir.join("open_lid.toml"), None)
+        .unwrap()
+        .task
+        .unwrap()
+}
+
+#[test]
+fn a_steps_reach_margin_shrinks_as_its_robot_stands_back_and_is_none_out_of_reach() {
+    // `describe`'s figure for step 2 (the lid lifted along its arc): the 5430's own layout has
+    // its arc at the edge of the arm's reach.
+    let margin = |y: f64| {
+        let m = scoring::reach::margins(&opening_from(y));
+        assert_eq!(m.len(), 2, "{m:?}");
+        assert_eq!((m[1].step, m[1].robot.as_str()), (1, "arm"));
+        m[1].margin
+    };
+    let near = margin(0.4).expect("reached from 0.4 m");
+    let shipped = margin(0.5).expect("reached from the shipped 0.5 m");
+    assert!(near > shipped + 0.05, "{near} vs {shipped}");
+    assert!(
+        shipped < 0.05,
+        "the shipped arc is near the edge: {shipped}"
+    );
+    assert_eq!(margin(0.6), None, "out of reach from 0.6 m");
+    // And the step the arm reaches easily (the key on the panel) keeps room at any of these.
+    let key = scoring::reach::margins(&opening_from(0.6))[0]
+        .margin
+        .unwrap();
+    assert!(key > 0.1, "{key}");
+}

@@ -14,6 +14,9 @@
 //! anything and must come in to each target that stands as the scene starts clear of it. A hinted base is reached and clear; the expert may still fail
 //! there for other reasons (a key pressed from another angle): the hint is where to start.
 //!
+//! [`margins`] gives each step's reach margin for `autobio describe`: how far its targets could
+//! move away from the robot and still be reached.
+//!
 //! It does not check hand-overs or a seat for an item another robot picked, the free-space
 //! paths between targets, joint limits as a reason apart from distance, other seeds' layouts, or
 //! a chain's later stages, and it skips a step acting on an item an earlier step put elsewhere
@@ -115,30 +118,143 @@ fn beyond_seed_0(task: &Task, first: &BTreeSet<usize>) -> BTreeMap<usize, Vec<u6
     out
 }
 
+/// One step's reach margin (`autobio describe`): how far its targets could all move away from
+/// its robot, in the plane, and still be reached as the pass reaches them, in seed 0's layout.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Margin {
+    /// Index into the plan (0-based).
+    pub step: usize,
+    pub robot: String,
+    /// Metres, in `MARGIN_STEP`s up to `MARGIN_MAX` (a margin of `MARGIN_MAX` is "at least");
+    /// `None` where a target is out of reach as it stands (E0036).
+    pub margin: Option<f64>,
+}
+
+/// The margin search: targets moved out in steps of this (m), up to this.
+pub const MARGIN_STEP: f64 = 0.01;
+pub const MARGIN_MAX: f64 = 0.3;
+
+/// Every checked step's reach margin, in plan order: each of its targets (its grasp and the path
+/// it then follows) moved away from the robot's base along the line from the base, until one no
+/// longer solves from the robot's start pose, its home or its last solution. Empty where the pass
+/// does not apply (a chain, a scene the runtime cannot build).
+pub fn margins(task: &Task) -> Vec<Margin> {
+    let Some(mut layout) = Layout::of(task, 0) else {
+        return Vec::new();
+    };
+    let mut out: Vec<Margin> = Vec::new();
+    let mut last: Vec<Option<Vec<f64>>> = vec![None; layout.scene.robots.len()];
+    let steps: BTreeSet<usize> = layout.aims.iter().map(|a| a.step).collect();
+    for step in steps {
+        let aims: Vec<&Aim> = layout.aims.iter().filter(|a| a.step == step).collect();
+        let robot = aims[0].robot;
+        let model = layout.scene.robots[robot].model;
+        let base = task.robots[robot].base.translation.vector;
+        let mut starts = vec![layout.instance.robot_q[robot].clone(), model.home.to_vec()];
+        starts.extend(last[robot].clone());
+        let kin = &mut layout.kins[robot];
+        let reached_at = |d: f64, kin: &mut ArmKinematics| -> Option<Vec<f64>> {
+            let mut q = None;
+            for aim in &aims {
+                let moved = aim.moved_out([base.x, base.y], d);
+                q = Some(reach(model, kin, &moved, &starts).ok()?);
+            }
+            q
+        };
+        let Some(q) = reached_at(0.0, kin) else {
+            out.push(Margin {
+                step,
+                robot: task.robots[robot].name.clone(),
+                margin: None,
+            });
+            continue;
+        };
+        last[robot] = Some(q);
+        let steps = (MARGIN_MAX / MARGIN_STEP).round() as usize;
+        let room = (1..=steps)
+            .take_while(|k| reached_at(*k as f64 * MARGIN_STEP, kin).is_some())
+            .count();
+        out.push(Margin {
+            step,
+            robot: task.robots[robot].name.clone(),
+            margin: Some(room as f64 * MARGIN_STEP),
+        });
+    }
+    out
+}
+
+impl Aim {
+    /// The aim with every pose moved `d` metres away from `base` in the plane, along the line
+    /// from the base to its first grasp.
+    fn moved_out(&self, base: [f64; 2], d: f64) -> Aim {
+        let p = self.grasps[0].0.translation.vector;
+        let out = nalgebra::Vector2::new(p.x - base[0], p.y - base[1]);
+        let out = out.try_normalize(1e-9).unwrap_or_default() * d;
+        let shift = labware::frame::translation([out.x, out.y, 0.0]);
+        Aim {
+            step: self.step,
+            robot: self.robot,
+            target: self.target.clone(),
+            grasps: self
+                .grasps
+                .iter()
+                .map(|(g, path)| (shift * g, path.iter().map(|p| shift * p).collect()))
+                .collect(),
+            as_started: self.as_started,
+        }
+    }
+}
+
+/// Seed `seed`'s layout as the pass sees it: the drawn scene, built, and its aims.
+struct Layout {
+    instance: compiler::SceneInstance,
+    scene: Arc<Scene>,
+    kins: Vec<ArmKinematics>,
+    aims: Vec<Aim>,
+}
+
+impl Layout {
+    /// `None` for a chain or a scene the runtime cannot build.
+    fn of(task: &Task, seed: u64) -> Option<Layout> {
+        if task.stages.len() != 1 {
+            return None;
+        }
+        let instance = task.sample(seed);
+        let scene = Arc::new(Scene::build(task, &instance).ok()?);
+        let episode = Episode::new(scene.clone(), task, &instance);
+        let mut states = episode.labware_state();
+        let mut kins: Vec<ArmKinematics> = (0..scene.robots.len())
+            .map(|r| ArmKinematics::new(&scene, r))
+            .collect();
+        let aims = aims(
+            task,
+            &scene,
+            &mut states,
+            &instance.params,
+            &mut kins,
+            &instance.robot_q,
+        );
+        Some(Layout {
+            instance,
+            scene,
+            kins,
+            aims,
+        })
+    }
+}
+
 /// The steps whose targets their robots miss in seed `seed`'s layout, with base hints where
 /// `hint` asks for them.
 fn misses(task: &Task, seed: u64, hint: bool) -> Vec<Unreachable> {
-    if task.stages.len() != 1 {
-        return Vec::new();
-    }
-    let instance = task.sample(seed);
-    let Ok(scene) = Scene::build(task, &instance) else {
+    let Some(Layout {
+        instance,
+        scene,
+        mut kins,
+        aims,
+    }) = Layout::of(task, seed)
+    else {
         return Vec::new();
     };
-    let scene = Arc::new(scene);
-    let episode = Episode::new(scene.clone(), task, &instance);
-    let mut states = episode.labware_state();
-    let mut kins: Vec<ArmKinematics> = (0..scene.robots.len())
-        .map(|r| ArmKinematics::new(&scene, r))
-        .collect();
-    let aims = aims(
-        task,
-        &scene,
-        &mut states,
-        &instance.params,
-        &mut kins,
-        &instance.robot_q,
-    );
     let mut out: Vec<Unreachable> = Vec::new();
     // The arm's last solution per robot (a seed as good as the expert's, which comes from the
     // step before), and the hint per robot, searched once.
