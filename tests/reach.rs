@@ -39,9 +39,22 @@ fn hinted_base(c: &compiler::Checked) -> String {
 
 #[test]
 fn every_shipped_protocol_reaches_its_targets_in_every_sampled_layout() {
-    for dir in std::fs::read_dir("protocols").unwrap() {
-        for f in std::fs::read_dir(dir.unwrap().path()).unwrap() {
+    // Every file under `protocols/`, the workflows' stage files and scenes included.
+    let mut files = Vec::new();
+    let mut dirs = vec![std::path::PathBuf::from("protocols")];
+    while let Some(d) = dirs.pop() {
+        for f in std::fs::read_dir(d).unwrap() {
             let path = f.unwrap().path();
+            if path.is_dir() {
+                dirs.push(path);
+            } else {
+                files.push(path);
+            }
+        }
+    }
+    assert!(files.len() > 30, "{files:?}");
+    {
+        for path in files {
             let mut c = compiler::check_file(&path, None).unwrap();
             scoring::reach::check(&mut c);
             let missed: Vec<_> = c
@@ -240,4 +253,33 @@ fn a_steps_reach_margin_shrinks_as_its_robot_stands_back_and_is_none_out_of_reac
         .margin
         .unwrap();
     assert!(key > 0.1, "{key}");
+}
+
+#[test]
+fn a_target_in_reach_only_past_a_joint_range_names_the_joint_and_a_lower_shelf_checks_clean() {
+    // The rack on a shelf above the bench, close in front of the ViperX: coming down onto the
+    // tube needs the wrist bent past its range, which is the reason given, not a distance.
+    let shelf = "pose = { pos_m = [0.15, 0.0, 1.15], yaw_deg = 90 }";
+    let rack = "pose = { pos_m = [0.3, 0.0, 0.854], yaw_deg = 90 }";
+    let high = checked("protocols/tube/pick_up.toml", rack, shelf, "joint-high");
+    let e = high
+        .diagnostics
+        .iter()
+        .find(|d| d.code == dsl::Code::E0036)
+        .unwrap_or_else(|| panic!("{:#?}", high.diagnostics));
+    assert!(
+        e.message
+            .contains("within the arm's reach, but only past joint `wrist_angle`'s range"),
+        "{}",
+        e.message
+    );
+    assert!(!e.message.contains("closest solve"), "{}", e.message);
+    // 18 cm lower the wrist has room, for the grasp, the way in and the lift: clean.
+    let lower = "pose = { pos_m = [0.15, 0.0, 0.97], yaw_deg = 90 }";
+    let low = checked("protocols/tube/pick_up.toml", rack, lower, "joint-low");
+    assert!(
+        !low.diagnostics.iter().any(|d| d.code == dsl::Code::E0036),
+        "{:#?}",
+        low.diagnostics
+    );
 }

@@ -1,29 +1,32 @@
 //! Reach before any episode (`autobio check`): whether each step's robot can bring its tool to
-//! the step's first target (the grasp, press or dial frame the expert aims at), then along the
-//! path it follows holding a part (a lid's handle over its whole arc, each pose solved from the
-//! last as the expert solves it, from where earlier steps left the lid), and to the seat (and
-//! above it) where it places an item it picked, with the item as the pick grasped it, in the
-//! layout the task's first seed draws. Targets come from the labware models as the expert
+//! the step's first target (the grasp, press or dial frame the expert aims at) and to the point
+//! it comes in from (the approach's standoff back along the target's axis), then along the path
+//! it follows holding a part (a lid's handle over its whole arc, each pose solved from the last
+//! as the expert solves it, from where earlier steps left the lid; a pick's lift), and to the
+//! seat (and above it) where it places an item it picked, with the item as the pick grasped it,
+//! in the layout the task's first seed draws. Targets come from the labware models as the expert
 //! resolves them (`primitives::StepFrame`) and are solved by the robot model's IK from the
 //! robot's start pose and from its home, in either of a symmetric target's grasps. A target none
-//! of these solve is E0036 at the step's `with` (one per step), saying how close the best solve
-//! came, with a hint: the nearest base position (the same height and heading) from which every
-//! target this pass checked for that robot solves with 10 cm to spare, found by moving the
-//! targets instead of the base (a base shift is the targets' opposite shift to the arm) on rings
-//! around it, then stood up for real in a rebuilt scene, where the arm must not start inside
-//! anything and must come in to each target that stands as the scene starts clear of it. A hinted base is reached and clear; the expert may still fail
+//! of these solve is E0036 at the step's `with` (one per step), saying why: past a joint's range
+//! (the pose solves with the ranges widened: which joint, the angle it would need, its range), or
+//! out of reach (how close the best solve came); with a hint: the nearest base position (the
+//! same height and heading) from which every target this pass checked for that robot solves with
+//! 10 cm to spare, found by moving the targets instead of the base (a base shift is the targets'
+//! opposite shift to the arm) on rings around it, then stood up for real in a rebuilt scene,
+//! where the arm must not start inside anything and must come in to each target that stands as
+//! the scene starts clear of it. A hinted base is reached and clear; the expert may still fail
 //! there for other reasons (a key pressed from another angle): the hint is where to start.
 //!
 //! [`margins`] gives each step's reach margin for `autobio describe`: how far its targets could
 //! move away from the robot and still be reached.
 //!
 //! It does not check hand-overs or a seat for an item another robot picked, the free-space
-//! paths between targets, joint limits as a reason apart from distance, other seeds' layouts, or
-//! a chain's later stages, and it skips a step acting on an item an earlier step put elsewhere
-//! (its target is not where it starts). A task whose scene cannot be built is left to the
-//! runtime's refusal. The next seven seeds' layouts are checked too, without hints: a step
-//! reached in seed 0's but not in some of them is W0010 (the task checks; some of its episodes
-//! will fail at planning).
+//! paths between targets (the expert routes those, `crate::route`), the straight lines between
+//! checked poses, or a chain's later stages, and it skips a step acting on an item an earlier
+//! step put elsewhere (its target is not where it starts). A task whose scene cannot be built is
+//! left to the runtime's refusal. The next seven seeds' layouts are checked too, without hints: a
+//! step reached in seed 0's but not in some of them is W0010 (the task checks; some of its
+//! episodes will fail at planning).
 
 use compiler::motion::{Motion, MotionStep, Target};
 use compiler::params::render;
@@ -52,6 +55,8 @@ pub struct Unreachable {
     pub at: [f64; 3],
     /// How close the best solve came (m, rad), where the IK says.
     pub short_by: Option<(f64, f64)>,
+    /// Where the target is in reach but only past a joint's range: which, and how far.
+    pub limit: Option<JointLimit>,
     /// A base position (m) from which every checked target of the robot solves, if one was found.
     pub base_hint: Option<[f64; 3]>,
     /// The robot's base now (m).
@@ -308,6 +313,7 @@ fn misses(task: &Task, seed: u64, hint: bool) -> Vec<Unreachable> {
                     target,
                     at: [p.x, p.y, p.z],
                     short_by: miss.short_by,
+                    limit: miss.limit,
                     base_hint: hint,
                     base,
                 });
@@ -322,6 +328,69 @@ fn misses(task: &Task, seed: u64, hint: bool) -> Vec<Unreachable> {
 struct Miss {
     short_by: Option<(f64, f64)>,
     stopped: Option<usize>,
+    /// Where the target is within the arm's reach but only past a joint's range.
+    limit: Option<JointLimit>,
+}
+
+/// A joint a target needs past its range: the arm reaches the pose, but not within its limits.
+#[derive(Clone, Debug, PartialEq)]
+pub struct JointLimit {
+    pub joint: String,
+    /// The angle the solve with the ranges widened needs (rad).
+    pub needed: f64,
+    pub range: (f64, f64),
+}
+
+/// How far past its range the unbounded solve may take a joint (rad): half a turn.
+const LIMIT_SLACK: f64 = std::f64::consts::PI;
+
+/// The arm's kinematics with every joint's range widened by [`LIMIT_SLACK`]: where the arm
+/// solves a pose this way but not within its ranges, a joint limit is why.
+struct Widened<'a>(&'a mut ArmKinematics);
+
+impl primitives::Kinematics for Widened<'_> {
+    fn dof(&self) -> usize {
+        self.0.dof()
+    }
+    fn limits(&self) -> Vec<(f64, f64)> {
+        self.0
+            .limits()
+            .into_iter()
+            .map(|(lo, hi)| (lo - LIMIT_SLACK, hi + LIMIT_SLACK))
+            .collect()
+    }
+    fn tcp(&mut self, q: &[f64]) -> Pose {
+        self.0.tcp(q)
+    }
+    fn jacobian(&mut self, q: &[f64]) -> (Pose, Vec<[f64; 6]>) {
+        self.0.jacobian(q)
+    }
+}
+
+/// The joint furthest past its range in a solve of `pose` with the ranges widened, from the
+/// first of `seeds` that solves so; `None` where none does (the pose is out of reach itself) or
+/// the solve keeps within the ranges.
+fn past_limit(
+    model: &robots::RobotModel,
+    kin: &mut ArmKinematics,
+    pose: &Pose,
+    seeds: &[Vec<f64>],
+) -> Option<JointLimit> {
+    let limits = primitives::Kinematics::limits(kin);
+    let q = seeds
+        .iter()
+        .find_map(|seed| solve_with(model.ik, &mut Widened(kin), pose, seed).ok())?;
+    let (i, excess) = q
+        .iter()
+        .zip(&limits)
+        .map(|(v, (lo, hi))| (lo - v).max(v - hi))
+        .enumerate()
+        .max_by(|a, b| a.1.total_cmp(&b.1))?;
+    (excess > 1e-6).then(|| JointLimit {
+        joint: model.arm_joints[i].to_string(),
+        needed: q[i],
+        range: limits[i],
+    })
 }
 
 /// The arm's solution at the end of `aim` (its grasp, then its path, each pose from the last),
@@ -337,6 +406,7 @@ fn reach(
     let mut miss = Miss {
         short_by: None,
         stopped: None,
+        limit: None,
     };
     let note = |e: &primitives::IkError, miss: &mut Miss| {
         if let primitives::IkError::NoConvergence { pos_err, rot_err } = e {
@@ -355,6 +425,9 @@ fn reach(
                 Ok(q) => q,
                 Err(e) => {
                     note(&e, &mut miss);
+                    if g == 0 && miss.limit.is_none() {
+                        miss.limit = past_limit(model, kin, grasp, starts);
+                    }
                     continue;
                 }
             };
@@ -366,6 +439,9 @@ fn reach(
                     Err(e) => {
                         note(&e, &mut miss);
                         if g == 0 {
+                            if miss.stopped.is_none_or(|s| k > s) {
+                                miss.limit = past_limit(model, kin, at, &[q.clone()]);
+                            }
                             miss.stopped = Some(miss.stopped.map_or(k, |s| s.max(k)));
                         }
                         followed = false;
@@ -493,11 +569,24 @@ fn aims(
             set_goals(task, states, params, labware, goals);
         }
         let as_started = !moved_joints && held.values().all(|(r, _)| *r != robot);
-        let mut grasps = vec![(pose, follow(task, states, params, &frame, &motions, &pose))];
+        // A pick's lift: straight up from the grasp, holding the item.
+        let lift = motions.iter().find_map(|m| match m {
+            Motion::Lift { height } => Some(*height),
+            _ => None,
+        });
+        let lifted = |at: &Pose, mut path: Vec<Pose>| {
+            path.extend(lift.map(|h| labware::frame::translation([0.0, 0.0, h]) * at));
+            path
+        };
+        let mut grasps = vec![(
+            pose,
+            lifted(&pose, follow(task, states, params, &frame, &motions, &pose)),
+        )];
         if let Some(other) = frame.other_grasp()
             && let Ok(Some(at)) = other.first_pose(&motions, lab)
         {
-            grasps.push((at, follow(task, states, params, &other, &motions, &at)));
+            let path = follow(task, states, params, &other, &motions, &at);
+            grasps.push((at, lifted(&at, path)));
         }
         // Where the step leaves the labware's joints, for the steps after it.
         for m in &motions {
@@ -506,6 +595,26 @@ fn aims(
                 moved_joints = true;
             }
         }
+        // Where the arm comes in from: the standoff back along the target's axis (4 cm above a
+        // tube's grasp), for each grasp.
+        let standoff = motions.iter().find_map(|m| match m {
+            Motion::Approach { standoff, .. } => Some(*standoff),
+            _ => None,
+        });
+        let approach = standoff.map(|d| {
+            let back = labware::frame::translation([0.0, 0.0, -d]);
+            Aim {
+                step: i,
+                robot,
+                target: format!(
+                    "{} (coming in {:.0} cm back along it)",
+                    target_name(&motions),
+                    d * 100.0
+                ),
+                grasps: grasps.iter().map(|(g, _)| (g * back, Vec::new())).collect(),
+                as_started,
+            }
+        });
         out.push(Aim {
             step: i,
             robot,
@@ -513,6 +622,7 @@ fn aims(
             grasps,
             as_started,
         });
+        out.extend(approach);
     }
     out
 }
@@ -701,12 +811,16 @@ pub fn check(checked: &mut Checked) {
         };
         let span = step.with.as_ref().map(|w| w.span).unwrap_or(step.span);
         let [x, y, z] = m.at;
-        let how = match m.short_by {
-            Some((p, r)) => format!(
+        let how = match (&m.limit, m.short_by) {
+            (Some(l), _) => format!(
+                ": within the arm's reach, but only past joint `{}`'s range (it would need {:.2} rad; its range is {:.2}..{:.2} rad)",
+                l.joint, l.needed, l.range.0, l.range.1
+            ),
+            (None, Some((p, r))) => format!(
                 ", the closest solve {:.0} mm and {r:.2} rad off",
                 p * 1000.0
             ),
-            None => String::new(),
+            (None, None) => String::new(),
         };
         let mut d = Diagnostic::new(
             Code::E0036,
