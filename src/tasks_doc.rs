@@ -87,7 +87,7 @@ struct Row {
 /// Where a workflow's stage protocols live, next to the chains that use them.
 const STAGES_FOLDER: &str = "stages";
 
-/// Every protocol file under `dirs` (one level of subfolders, as `protocols/` is laid out); scene
+/// Every protocol file under `dirs` and their subfolders (as `protocols/` is laid out); scene
 /// files, which are no tasks, left out, and so is a folder named `stages`: the protocols a
 /// workflow chain is made of (`protocols/workflows/stages/`) each run alone, but the task is the
 /// chain, and measuring each stage too would only repeat its figures.

@@ -102,6 +102,9 @@ fn every_simulated_task_scores_zero_without_motion() {
             "tube.unscrew_cap",
             "two_arm.close_lid_and_transfer",
             "vortex_mixer.mix_tube",
+            "workflows.bench_run",
+            "workflows.centrifuge_run",
+            "workflows.mixer_run",
         ]
     );
 }

@@ -57,6 +57,12 @@ fn every_shipped_protocol_reaches_its_targets_in_every_sampled_layout() {
         for path in files {
             let mut c = compiler::check_file(&path, None).unwrap();
             scoring::reach::check(&mut c);
+            let errors: Vec<_> = c
+                .diagnostics
+                .iter()
+                .filter(|d| d.code.as_str().starts_with('E'))
+                .collect();
+            assert!(errors.is_empty(), "{}: {errors:#?}", path.display());
             let missed: Vec<_> = c
                 .diagnostics
                 .iter()

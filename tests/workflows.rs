@@ -40,6 +40,11 @@ fn the_lid_latches_only_once_the_loading_arm_has_stood_back() {
         !left_in.success,
         "the loader's hand is where the lid swings"
     );
+    assert!(
+        left_in.error.is_none(),
+        "planned, ran out of time: {:?}",
+        left_in.error
+    );
     let lid = common::predicate(&left_in, "centrifuge.lid is locked");
     assert!(!lid.holds, "{lid:?}");
     let tube = left_in
@@ -62,6 +67,14 @@ fn a_round_tube_goes_over_its_seat_at_another_heading_where_its_own_is_blocked()
         &compile("protocols/centrifuge/insert_symmetric.toml"),
         97,
         "expert",
+    );
+    assert!(
+        r.verdict
+            .predicates()
+            .iter()
+            .any(|p| p.text == "tube in centrifuge.28"),
+        "seed 97 no longer draws slot 28: {:#?}",
+        r.verdict
     );
     assert!(r.error.is_none(), "{:?}", r.error);
     assert!(r.success, "{:#?}", r.verdict);
@@ -125,5 +138,8 @@ fn the_task_table_measures_workflows_not_their_stage_files() {
         !text.contains("workflows.mixer_load"),
         "a stage measured alone:\n{text}"
     );
-    assert!(!text.contains("lab_bench"), "a scene file listed:\n{text}");
+    assert!(
+        !text.contains("workflows.cycler_open"),
+        "a stage measured alone:\n{text}"
+    );
 }

@@ -2,7 +2,7 @@
 //! the step's first target (the grasp, press or dial frame the expert aims at) and to the point
 //! it comes in from (the approach's standoff back along the target's axis), then along the path
 //! it follows holding a part (a lid's handle over its whole arc, each pose solved from the last
-//! as the expert solves it, from where earlier steps left the lid; a pick's lift), and to the
+//! as the expert solves it, from where earlier steps left the lid; a lift after the grasp), and to the
 //! seat (and above it) where it places an item it picked, with the item as the pick grasped it,
 //! in the layout the task's first seed draws. Targets come from the labware models as the expert
 //! resolves them (`primitives::StepFrame`) and are solved by the robot model's IK from the
@@ -569,7 +569,7 @@ fn aims(
             set_goals(task, states, params, labware, goals);
         }
         let as_started = !moved_joints && held.values().all(|(r, _)| *r != robot);
-        // A pick's lift: straight up from the grasp, holding the item.
+        // A lift after the grasp (a pick's, a cap's): straight up, holding what was gripped.
         let lift = motions.iter().find_map(|m| match m {
             Motion::Lift { height } => Some(*height),
             _ => None,
@@ -615,6 +615,9 @@ fn aims(
                 as_started,
             }
         });
+        // The way in first, as the arm comes: the target's aim is then the arm's last solution
+        // for the steps after it (the end of its arc or lift).
+        out.extend(approach);
         out.push(Aim {
             step: i,
             robot,
@@ -622,7 +625,6 @@ fn aims(
             grasps,
             as_started,
         });
-        out.extend(approach);
     }
     out
 }

@@ -179,7 +179,7 @@ impl ExpertPolicy {
             Ok(w) => w,
             Err(first) => match frame
                 .fallback_poses(&q.motion, &lab, &tcp_now)
-                .map_err(|e| planning(context.clone(), e))?
+                .unwrap_or_default()
                 .iter()
                 .find_map(|p| solve_path(arm, p).ok())
             {
@@ -217,6 +217,9 @@ impl ExpertPolicy {
             .front()
             .filter(|n| n.step == q.step && is_straight(&n.motion))
             .map(|n| n.motion.clone());
+        // A seat-turned frame the free-space path below was planned with (not kept for the
+        // step: the motions after it take the heading the item then has).
+        let mut seat_frame: Option<StepFrame> = None;
         let waypoints = match &next {
             Some(next) if q.motion.through_free_space() => {
                 let frame = &lane.frame.as_ref().expect("set above").1;
@@ -241,13 +244,14 @@ impl ExpertPolicy {
                                 .ok()
                                 .or_else(|| in_joint_space(arm, &poses))?;
                             let end = poses.last().copied();
-                            with_room_for_next(arm, &f, next, &lab, w, end)
-                                .map(|w| (keep.then_some(f), w))
+                            with_room_for_next(arm, &f, next, &lab, w, end).map(|w| (f, keep, w))
                         });
                         match turned {
-                            Some((f, w)) => {
-                                if let Some(f) = f {
+                            Some((f, keep, w)) => {
+                                if keep {
                                     lane.frame = Some((q.step, f));
+                                } else {
+                                    seat_frame = Some(f);
                                 }
                                 w
                             }
@@ -280,7 +284,9 @@ impl ExpertPolicy {
         // TOPP's grid: 200 intervals, and for a planned route (~100 waypoints) 8 per waypoint.
         let mut grid = 200;
         let waypoints = if q.motion.through_free_space() {
-            let frame = &lane.frame.as_ref().expect("set above").1;
+            let frame = seat_frame
+                .as_ref()
+                .unwrap_or(&lane.frame.as_ref().expect("set above").1);
             let carried = frame
                 .carried()
                 .and_then(|item| self.task.labware.iter().position(|l| l.name == item));
@@ -297,6 +303,10 @@ impl ExpertPolicy {
                 seed,
             ) {
                 Ok(routed) => routed,
+                // Home is the model's home joints, not another pose of its tool.
+                Err(blocked) if matches!(q.motion, Motion::Home) => {
+                    return Err(planning(context.clone(), blocked));
+                }
                 Err(blocked) => route_to_other_end(
                     arm,
                     frame,
@@ -451,16 +461,20 @@ fn is_straight(motion: &Motion) -> bool {
 }
 
 /// Whether `next` (a straight motion) can be solved pose by pose with the arm at `q`.
+/// Its own fallback paths count, as they will when it runs (a round part reached at the turn
+/// nearest the tool).
 fn solves_next(arm: &mut Arm, frame: &StepFrame, next: &Motion, lab: &Lab, q: &[f64]) -> bool {
     let tcp = arm.kin.tcp(q);
-    frame
-        .poses(next, lab, &tcp)
-        .is_ok_and(|poses| solve_path_from(arm, q, &poses).is_ok())
+    let own = frame.poses(next, lab, &tcp).into_iter();
+    let fallbacks = frame.fallback_poses(next, lab, &tcp).unwrap_or_default();
+    own.chain(fallbacks)
+        .any(|poses| solve_path_from(arm, q, &poses).is_ok())
 }
 
-/// The IK solutions of a free-space path's `end` pose other than where its waypoints arrive:
-/// every branch the robot model's method finds, seeded from where the arm is, its home pose and
-/// the episode's start pose, nearest the arm first (the goal region).
+/// The IK solutions of a free-space path's `end` pose: every branch the robot model's method
+/// finds, seeded from where the arm is, its home pose and the episode's start pose, nearest the
+/// arm first (the goal region; where the path's own end is among them, trying it again costs a
+/// check).
 fn other_ends(arm: &mut Arm, end: &labware::Pose) -> Vec<Vec<f64>> {
     let seeds = [
         arm.target.clone(),
