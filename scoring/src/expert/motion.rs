@@ -169,10 +169,7 @@ impl ExpertPolicy {
         // rolled half a turn, leaving its wrist no room for a cap's turn).
         let limits = arm.model.expert_limits;
         let direct = q.motion.through_free_space() && limits.joint_space_transits;
-        let ends = |poses: Vec<labware::Pose>| match (poses.first(), poses.last()) {
-            (Some(a), Some(b)) if direct && poses.len() > 2 => vec![*a, *b],
-            _ => poses,
-        };
+        let ends = |poses: Vec<labware::Pose>| path_ends(poses, direct);
         let poses = ends(poses);
         // Before the step's first path, the other symmetric grasp is a second try.
         let waypoints = match solve_path(arm, &poses) {
@@ -239,12 +236,9 @@ impl ExpertPolicy {
                             ]
                         });
                         let turned = alternatives.flatten().find_map(|(f, keep)| {
-                            let poses = ends(f.poses(&q.motion, &lab, &tcp_now).ok()?);
-                            let w = solve_path(arm, &poses)
-                                .ok()
-                                .or_else(|| in_joint_space(arm, &poses))?;
-                            let end = poses.last().copied();
-                            with_room_for_next(arm, &f, next, &lab, w, end).map(|w| (f, keep, w))
+                            let w =
+                                free_path(arm, &f, &q.motion, &lab, &tcp_now, Some(next), direct)?;
+                            Some((f, keep, w))
                         });
                         match turned {
                             Some((f, keep, w)) => {
@@ -321,16 +315,8 @@ impl ExpertPolicy {
                     // there are others.
                     GRASP_TURNS.iter().skip(1).find_map(|deg| {
                         let f = frame.seat_turned(deg.to_radians())?;
-                        let poses = ends(f.poses(&q.motion, &lab, &tcp_now).ok()?);
-                        let w = solve_path(arm, &poses)
-                            .ok()
-                            .or_else(|| in_joint_space(arm, &poses))?;
-                        let w = match &next {
-                            Some(n) => {
-                                with_room_for_next(arm, &f, n, &lab, w, poses.last().copied())?
-                            }
-                            None => w,
-                        };
+                        let w =
+                            free_path(arm, &f, &q.motion, &lab, &tcp_now, next.as_ref(), direct)?;
                         let end = w.last().map(|q| arm.kin.tcp(q));
                         route(
                             &mut arm.clearance,
@@ -448,6 +434,37 @@ fn with_room_to_turn(arm: &mut Arm, frame: StepFrame, motions: &[Motion], lab: &
         .filter_map(|deg| frame.grasp_turned(centre + deg.to_radians()))
         .find(|f| fits(f).is_some())
         .unwrap_or(frame)
+}
+
+/// A free-space motion's tool poses as the arm follows them: where the robot crosses free space
+/// in joint space (`direct`), only the first and the last.
+fn path_ends(poses: Vec<labware::Pose>, direct: bool) -> Vec<labware::Pose> {
+    match (poses.first(), poses.last()) {
+        (Some(a), Some(b)) if direct && poses.len() > 2 => vec![*a, *b],
+        _ => poses,
+    }
+}
+
+/// Joint waypoints for free-space `motion` planned with frame `f` (one of a step's alternative
+/// grasps or seat headings): its path solved pose by pose, else in joint space, ending where the
+/// step's `next` straight motion (if any) solves from. `None` where it has none.
+fn free_path(
+    arm: &mut Arm,
+    f: &StepFrame,
+    motion: &Motion,
+    lab: &Lab,
+    tcp_now: &labware::Pose,
+    next: Option<&Motion>,
+    direct: bool,
+) -> Option<Vec<Vec<f64>>> {
+    let poses = path_ends(f.poses(motion, lab, tcp_now).ok()?, direct);
+    let w = solve_path(arm, &poses)
+        .ok()
+        .or_else(|| in_joint_space(arm, &poses))?;
+    match next {
+        Some(n) => with_room_for_next(arm, f, n, lab, w, poses.last().copied()),
+        None => Some(w),
+    }
 }
 
 /// Motions that go in a straight line from where the tool is to a target (down to a grasp, in to
