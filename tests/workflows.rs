@@ -143,3 +143,25 @@ fn the_task_table_measures_workflows_not_their_stage_files() {
         "a stage measured alone:\n{text}"
     );
 }
+
+#[test]
+fn a_pick_after_a_button_press_opens_the_hand_first() {
+    // The panel's buttons are pressed with the fingers closed as one finger; the pick after it
+    // used to come down on the tube with the hand still closed, carry nothing, and fail to plan
+    // the place ("ik did not converge") on every seed.
+    let task = compile_edited("protocols/workflows/stages/mixer_set.toml", |s| {
+        let s = s.replace(
+            "[success]\nall = [\"tube in mixer.{well}\", ",
+            "[[steps]]\ndo = \"pick\"\non = \"tube\"\nwith = \"mixer_arm\"\n\n\
+             [[steps]]\ndo = \"place\"\non = \"tube\"\nto = \"rack.B2\"\nwith = \"mixer_arm\"\n\n\
+             [success]\nall = [\"tube in rack.B2\", ",
+        );
+        assert!(s.contains("to = \"rack.B2\""), "the edit took");
+        s.replace("time_limit = \"30 s\"", "time_limit = \"60 s\"")
+    });
+    let r = run(&task, 0, "expert");
+    assert!(r.error.is_none(), "{:?}", r.error);
+    assert!(r.success, "{:#?}", r.verdict);
+    let tube = common::predicate(&r, "tube in rack.B2");
+    assert!(tube.holds, "{tube:?}");
+}

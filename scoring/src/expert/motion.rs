@@ -82,6 +82,20 @@ impl ExpertPolicy {
                 time: obs.time,
                 label: step.label.clone(),
             });
+            // A step that goes to grasp something needs an open hand: the step before may have
+            // left the fingers closed (a button pressed with them as one finger).
+            let g = arm.model.gripper;
+            if arm.gripper != g.open && grasps_after_moving(&step.motions) {
+                arm.gripper = g.open;
+                self.events.push(StageEvent {
+                    time: obs.time,
+                    label: Motion::Release.label().to_string(),
+                });
+                lane.queue.push_front(q);
+                return Ok(Active::Hold {
+                    until: obs.time + g.settle_s,
+                });
+            }
         }
         self.events.push(StageEvent {
             time: obs.time,
@@ -465,6 +479,17 @@ fn free_path(
         Some(n) => with_room_for_next(arm, f, n, lab, w, poses.last().copied()),
         None => Some(w),
     }
+}
+
+/// Whether a step moves the hand to something before its first grasp or release, and that first
+/// one is a grasp (a pick's way down to the item): such a step must start with the hand open. A
+/// step whose first motion is the grasp (a button pressed with the fingers closed as one finger)
+/// closes the hand where it is.
+fn grasps_after_moving(motions: &[Motion]) -> bool {
+    let first = motions
+        .iter()
+        .position(|m| matches!(m, Motion::Grasp | Motion::Release));
+    matches!(first, Some(i) if i > 0 && matches!(motions[i], Motion::Grasp))
 }
 
 /// Motions that go in a straight line from where the tool is to a target (down to a grasp, in to
