@@ -18,6 +18,7 @@ mod picture;
 mod progress;
 mod replay;
 mod submissions;
+mod synth;
 mod tasks_doc;
 
 use anyhow::{Result, bail};
@@ -85,6 +86,10 @@ enum Command {
     Tasks(tasks_doc::TasksArgs),
     /// Measure throughput: physics steps/s (harness vs bare mj_step), rendered frames/s, expert episodes/min
     Bench(bench::BenchArgs),
+    /// Write random long-horizon protocols made of the steps given protocols show on their
+    /// benches, each proven (state proof) and reach-checked: a training suite whose every task
+    /// is possible
+    Synth(synth::SynthArgs),
 }
 
 fn main() -> ExitCode {
@@ -122,5 +127,6 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Render(a) => picture::run(&front, a),
         Command::Tasks(a) => tasks_doc::run_cli(a),
         Command::Bench(a) => bench::run_cli(&front, a),
+        Command::Synth(a) => synth::run(a),
     }
 }

@@ -16,6 +16,7 @@ pub mod remote;
 pub mod replay;
 pub mod route;
 pub mod stage_time;
+pub mod synth;
 
 /// Profiles and verdicts live in `results` (no simulator needed to read them).
 pub use results::{profile, verdict};

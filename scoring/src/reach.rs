@@ -99,6 +99,12 @@ pub fn unreachable(task: &Task) -> Vec<Unreachable> {
     misses(task, 0, true)
 }
 
+/// Whether every step of `task` is reached in each sampled layout (what [`check`] would say
+/// nothing about), without searching for a base hint where one is not: synthesis's test.
+pub fn reached_everywhere(task: &Task) -> bool {
+    misses(task, 0, false).is_empty() && beyond_seed_0(task, &BTreeSet::new()).is_empty()
+}
+
 /// Layouts the pass samples: seed 0's (E0036) and the next ones (W0010).
 pub const SAMPLED_LAYOUTS: u64 = 8;
 

@@ -1,0 +1,154 @@
+//! A walk written as a protocol file: the scene file it stands on, its start, its steps, one
+//! instruction made of each step's phrase, a time limit from the steps' budgets, and success as
+//! every fact the walk leaves changed (where each moved item ends, each part state and panel
+//! value that differs from the start). The text is what `autobio check` then reads; nothing
+//! here decides whether it is valid.
+
+use super::walk::{Step, Walk};
+use compiler::params::format_number;
+use compiler::world::{Location, World};
+use labware::LabwareKind;
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+
+/// How much more than the sum of its steps' budgets a protocol is given: its steps start from
+/// where the step before left the arm, not from the pose their sources started at.
+const TIME_FACTOR: f64 = 1.25;
+
+pub struct Header<'a> {
+    pub id: &'a str,
+    pub scene: &'a str,
+    pub comment: &'a str,
+}
+
+pub fn protocol(h: &Header, walk: &Walk, kinds: &BTreeMap<String, &'static LabwareKind>) -> String {
+    let mut s = String::new();
+    for line in h.comment.lines() {
+        let _ = writeln!(s, "# {line}");
+    }
+    let _ = writeln!(s, "format = 1\nscene = {}\n", quoted(h.scene));
+    let instruction: Vec<String> = walk.steps.iter().map(phrase).collect();
+    let budget: f64 = walk.steps.iter().map(|s| s.template.budget_s).sum();
+    let limit = (budget * TIME_FACTOR * 2.0).ceil() / 2.0;
+    let _ = writeln!(
+        s,
+        "[protocol]\nid = {}\nlevel = \"hard\"\ninstruction = {}\ntime_limit = \"{} s\"\n",
+        quoted(h.id),
+        quoted(&instruction.join(", then ")),
+        format_number(limit)
+    );
+    let items: std::collections::BTreeSet<&String> = walk
+        .start
+        .states
+        .keys()
+        .chain(walk.start.at.keys())
+        .collect();
+    for item in items {
+        let _ = writeln!(s, "[labware.{item}]");
+        if let Some(at) = walk.start.at.get(item) {
+            let _ = writeln!(s, "at = {}", quoted(at));
+        }
+        if let Some(states) = walk.start.states.get(item).filter(|m| !m.is_empty()) {
+            let parts: Vec<String> = states
+                .iter()
+                .map(|(p, v)| format!("{p} = {}", quoted(v)))
+                .collect();
+            let _ = writeln!(s, "state = {{ {} }}", parts.join(", "));
+        }
+        s.push('\n');
+    }
+    for step in &walk.steps {
+        let _ = writeln!(s, "[[steps]]\ndo = \"{}\"", step.template.primitive.name);
+        for (k, v) in &step.args {
+            let _ = writeln!(s, "{k} = {}", quoted(v));
+        }
+        let _ = writeln!(s, "with = {}\n", quoted(&step.template.robot));
+    }
+    let checks: Vec<String> = success(&walk.first, &walk.last, kinds)
+        .iter()
+        .map(|c| quoted(c))
+        .collect();
+    let _ = writeln!(s, "[success]\nall = [{}]", checks.join(", "));
+    s
+}
+
+/// Every fact that differs between the start and the end, as success predicates.
+pub fn success(
+    first: &World,
+    last: &World,
+    kinds: &BTreeMap<String, &'static LabwareKind>,
+) -> Vec<String> {
+    let mut out = Vec::new();
+    for (item, loc) in &last.locations {
+        if first.locations.get(item) == Some(loc) {
+            continue;
+        }
+        if let Location::Slot { holder, slot } = loc {
+            out.push(format!("{item} in {holder}.{slot}"));
+        }
+    }
+    for ((item, part), state) in &last.parts {
+        if first.part(item, part) != Some(state.as_str()) {
+            out.push(format!("{item}.{part} is {state}"));
+        }
+    }
+    for ((item, param), value) in &last.panel {
+        let spec = kinds.get(item).and_then(|k| k.panel_param(param));
+        let unit = spec.map(|p| p.unit).unwrap_or_default();
+        let was = first
+            .panel
+            .get(&(item.clone(), param.clone()))
+            .copied()
+            .or(spec.map(|p| p.initial));
+        if was != Some(*value) {
+            out.push(format!("{item}.{param} = {} {unit}", format_number(*value)));
+        }
+    }
+    out
+}
+
+/// One step in the instruction's words.
+fn phrase(step: &Step) -> String {
+    let arg = |k: &str| step.args.get(k).cloned().unwrap_or_default();
+    let on = arg("on");
+    match step.template.primitive.name {
+        "pick" => format!("pick up the {on}"),
+        "place" => {
+            let to = arg("to");
+            let (holder, slot) = to.split_once('.').unwrap_or((&to, ""));
+            format!("put the {on} in slot {slot} of the {holder}")
+        }
+        "open_lid" => format!("open the lid of the {on}"),
+        "close_lid" => format!("close the lid of the {on}"),
+        "lock" => format!("lock the lid of the {on}"),
+        "unlock" => format!("release the lid of the {on}"),
+        "set_parameter" => format!("set the {on}'s {} to {}", arg("param"), arg("value")),
+        "press" => format!("press the {} button of the {on}", arg("button")),
+        "retract" => format!(
+            "bring the {} arm back to its rest pose",
+            step.template.robot
+        ),
+        "hold" => format!("hold the {on} steady"),
+        "release" => format!("let go of the {on}"),
+        "hand_over" => format!("hand the {on} to the {} arm", arg("to")),
+        "screw_cap" => format!("screw the cap onto the {on}"),
+        "unscrew_cap" => format!("unscrew the cap of the {on}"),
+        other => format!("{} the {on}", other.replace('_', " ")),
+    }
+}
+
+/// A TOML basic string.
+fn quoted(s: &str) -> String {
+    let mut out = String::with_capacity(s.len() + 2);
+    out.push('"');
+    for c in s.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            c if c.is_control() => out.push_str(&format!("\\u{:04X}", c as u32)),
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}

@@ -1,0 +1,214 @@
+//! The random walk that makes one protocol: a start drawn from what the bench's sources start
+//! with, then step after step drawn from the bench's step shapes, each kept only if its
+//! primitive's own precondition holds on the abstract world (the state proof's rule, run forward)
+//! and it leads somewhere new. A walk never comes back to a state it has been in (so no step
+//! undoes the one before, and the protocol ends somewhere other than its start), and it ends
+//! with every hand empty (an item carried is put down before the last step is out). All draws
+//! come from the one generator it is given.
+//!
+//! It knows nothing of geometry: reach is the caller's check on the written protocol.
+
+use super::vocabulary::{Bench, Start, Template, world_at};
+use compiler::params::{draw_all, render};
+use compiler::primitives::{ArgKind, BoundStep, Env};
+use compiler::world::{Hand, Location, World};
+use rand_chacha::ChaCha8Rng;
+use rand_core::RngCore;
+use std::collections::BTreeMap;
+
+/// One drawn step: its shape and arguments as they will be written.
+#[derive(Clone, Debug)]
+pub struct Step {
+    pub template: Template,
+    pub args: BTreeMap<String, String>,
+}
+
+/// A finished walk.
+#[derive(Clone, Debug)]
+pub struct Walk {
+    pub start: Start,
+    pub first: World,
+    pub steps: Vec<Step>,
+    pub last: World,
+}
+
+/// Why a walk stopped short.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Stuck {
+    /// No step shape could go on from where the walk was.
+    NoStep,
+    /// No start could be drawn (a holder with no free slot for an item).
+    NoStart,
+}
+
+/// Tries per step shape at one point of the walk (each draws its values and slot anew).
+const TRIES_PER_SHAPE: usize = 4;
+
+pub fn walk(bench: &Bench, n: usize, rng: &mut ChaCha8Rng) -> Result<Walk, Stuck> {
+    let start = draw_start(bench, rng).ok_or(Stuck::NoStart)?;
+    let first = world_at(&bench.kinds, &bench.robots, &start);
+    let env = Env {
+        kinds: &bench.kinds,
+        robots: &bench.robots,
+    };
+    let mut seen = vec![first.clone()];
+    let mut world = first.clone();
+    let mut steps: Vec<Step> = Vec::with_capacity(n);
+    while steps.len() < n {
+        let mut order: Vec<usize> = (0..bench.templates.len()).collect();
+        shuffle(&mut order, rng);
+        let next = order.iter().find_map(|&t| {
+            let template = &bench.templates[t];
+            let size = 1 + template.then.len();
+            let left = (n - steps.len()).checked_sub(size)?;
+            // A step on an item standing in a holder is taken only where its sources showed
+            // it there (a tube is picked from the rack it was shown picked from, not from a
+            // rotor sleeve it was only ever put into).
+            let on_holder = template
+                .args
+                .get("on")
+                .and_then(|on| match world.locations.get(on) {
+                    Some(Location::Slot { holder, .. }) => Some(holder),
+                    _ => None,
+                });
+            if on_holder.is_some_and(|h| !template.from.contains(h)) {
+                return None;
+            }
+            (0..TRIES_PER_SHAPE).find_map(|_| {
+                let args = instantiate(bench, template, &world, rng)?;
+                let mut after = world.clone();
+                let mut taken = vec![Step {
+                    template: template.clone(),
+                    args,
+                }];
+                for (primitive, robot) in &template.then {
+                    taken.push(Step {
+                        template: Template {
+                            primitive,
+                            robot: robot.clone(),
+                            args: BTreeMap::new(),
+                            params: Vec::new(),
+                            budget_s: template.budget_s,
+                            then: Vec::new(),
+                            from: Default::default(),
+                        },
+                        args: BTreeMap::new(),
+                    });
+                }
+                for step in &taken {
+                    let bound = BoundStep {
+                        primitive: step.template.primitive,
+                        robot: &step.template.robot,
+                        args: &step.args,
+                    };
+                    compiler::primitives::apply(&mut after, &env, &bound).ok()?;
+                }
+                let new = !seen.iter().any(|w| same_state(w, &after));
+                (new && busy_hands(&after) <= left).then_some((taken, after))
+            })
+        });
+        let (taken, after) = next.ok_or(Stuck::NoStep)?;
+        seen.push(after.clone());
+        world = after;
+        steps.extend(taken);
+    }
+    Ok(Walk {
+        start,
+        first,
+        steps,
+        last: world,
+    })
+}
+
+/// A start: each item's part states from one of the starts its sources declare, and each
+/// movable item with holders in a free slot of one of them.
+fn draw_start(bench: &Bench, rng: &mut ChaCha8Rng) -> Option<Start> {
+    let mut start = Start {
+        states: BTreeMap::new(),
+        at: BTreeMap::new(),
+    };
+    for (item, seen) in &bench.starts {
+        start
+            .states
+            .insert(item.clone(), seen[below(rng, seen.len())].clone());
+    }
+    for (item, holders) in &bench.holders {
+        let holders: Vec<&String> = holders.iter().collect();
+        let holder = holders[below(rng, holders.len())];
+        let taken: Vec<&str> = start
+            .at
+            .values()
+            .filter_map(|a| a.strip_prefix(&format!("{holder}.")))
+            .collect();
+        let free: Vec<&String> = bench
+            .slots
+            .get(holder)?
+            .iter()
+            .filter(|s| !taken.contains(&s.as_str()))
+            .collect();
+        if free.is_empty() {
+            return None;
+        }
+        let slot = free[below(rng, free.len())];
+        start.at.insert(item.clone(), format!("{holder}.{slot}"));
+    }
+    Some(start)
+}
+
+/// A template's arguments for one step: its source's parameters drawn and rendered in, and a
+/// place's slot drawn among its holder's free slots.
+fn instantiate(
+    bench: &Bench,
+    t: &Template,
+    world: &World,
+    rng: &mut ChaCha8Rng,
+) -> Option<BTreeMap<String, String>> {
+    let bound = draw_all(&t.params, rng)?;
+    let mut args = BTreeMap::new();
+    for (name, text) in &t.args {
+        let kind = t.primitive.args.iter().find(|a| a.name == name.as_str());
+        let value = render(text, &bound).ok()?;
+        let value = match kind.map(|a| a.kind) {
+            Some(ArgKind::Location) => {
+                let (holder, _) = value.split_once('.')?;
+                let free: Vec<&String> = bench
+                    .slots
+                    .get(holder)?
+                    .iter()
+                    .filter(|s| world.occupant(holder, s).is_none())
+                    .collect();
+                if free.is_empty() {
+                    return None;
+                }
+                format!("{holder}.{}", free[below(rng, free.len())])
+            }
+            _ => value,
+        };
+        args.insert(name.clone(), value);
+    }
+    Some(args)
+}
+
+/// The facts two worlds differ in, less the bookkeeping of panel holding time.
+fn same_state(a: &World, b: &World) -> bool {
+    a.parts == b.parts
+        && a.locations == b.locations
+        && a.volumes == b.volumes
+        && a.panel == b.panel
+        && a.hands == b.hands
+}
+
+fn busy_hands(w: &World) -> usize {
+    w.hands.values().filter(|h| **h != Hand::Empty).count()
+}
+
+/// Uniform in `0..n` (`n > 0`), by 128-bit multiply (bias below 2^-64).
+pub(super) fn below(rng: &mut ChaCha8Rng, n: usize) -> usize {
+    ((rng.next_u64() as u128 * n as u128) >> 64) as usize
+}
+
+fn shuffle<T>(v: &mut [T], rng: &mut ChaCha8Rng) {
+    for i in (1..v.len()).rev() {
+        v.swap(i, below(rng, i + 1));
+    }
+}
