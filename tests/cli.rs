@@ -46,6 +46,10 @@ fn every_subcommand_says_what_it_was_doing_once_on_a_missing_file() {
             format!("cannot read protocol {missing}: {os}"),
         ),
         (
+            &["synth", "--from", missing, "--out", "out/never"],
+            format!("cannot read protocol {missing}: {os}"),
+        ),
+        (
             &["replay", "no_such_recording.mcap"],
             format!("cannot replay no_such_recording.mcap: cannot read the recording: {os}"),
         ),

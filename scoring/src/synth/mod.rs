@@ -65,7 +65,7 @@ pub enum SynthError {
         "no protocol under {0} names a scene file (`scene = \"..\"`): synthesis recombines the steps of protocols that share a bench"
     )]
     NoSources(String),
-    #[error("cannot read {path}: {source}")]
+    #[error("cannot read protocol {path}: {source}")]
     Read {
         path: String,
         source: std::io::Error,
