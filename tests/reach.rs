@@ -1,7 +1,8 @@
 //! Reach before any episode (`scoring::reach`, E0036), on the real robot models and MuJoCo: every
 //! shipped protocol's steps are reached; a robot stood too far from its work, a slot placed out of
 //! its reach, or a lid's arc it gives out along, gets the error at the step, and the base its hint
-//! names makes the protocol check clean (and the expert win it, for the grasp and slot cases), for
+//! names makes the protocol check clean (and the expert win it, for the grasp, slot and press
+//! point cases), for
 //! an arm with a closed-form IK (the ViperX) and one solved by the QP (the UR5e). A slot out of
 //! reach in only some layouts is W0010, naming the seeds whose episodes then fail at planning.
 
@@ -140,6 +141,23 @@ fn a_place_out_of_reach_gets_e0036_at_its_step_and_its_hint_base_works() {
         (target, far),
         2,
         "seat",
+    );
+}
+
+/// The thermal mixer stood past the arm's reach: the first button the panel steps need (the
+/// press point, and the point 4 cm back along it where the finger comes in from) is out of
+/// reach, E0036 says so at that step, and from the hinted base the panel is set.
+#[test]
+fn a_press_point_out_of_reach_gets_e0036_and_its_hint_base_works() {
+    let base = "base = { pos_m = [0.0, 0.5, 0.824] }";
+    let target = "pose = { pos_m = [-0.05, 0.0, 0.824], yaw_deg = 180 }";
+    let far = "pose = { pos_m = [-0.05, -0.35, 0.824], yaw_deg = 180 }";
+    the_hint_fixes(
+        "protocols/thermal_mixer/set_parameters.toml",
+        base,
+        (target, far),
+        1,
+        "press",
     );
 }
 

@@ -65,15 +65,15 @@ pub enum SynthError {
         "no protocol under {0} names a scene file (`scene = \"..\"`): synthesis recombines the steps of protocols that share a bench"
     )]
     NoSources(String),
-    #[error("cannot read protocol {path}: {source}")]
+    #[error("cannot read protocol {path}: {error}")]
     Read {
         path: String,
-        source: std::io::Error,
+        error: std::io::Error,
     },
-    #[error("cannot write {path}: {source}")]
+    #[error("cannot write {path}: {error}")]
     Write {
         path: String,
-        source: std::io::Error,
+        error: std::io::Error,
     },
     #[error("protocol {index}: no candidate in {tries} checked clean (dropped: {reasons})")]
     Exhausted {
@@ -105,15 +105,15 @@ pub fn synthesize(
         .iter()
         .map(|b| (b.name.clone(), b.sources.len(), b.templates.len()))
         .collect();
-    std::fs::create_dir_all(&opts.out).map_err(|source| SynthError::Write {
+    std::fs::create_dir_all(&opts.out).map_err(|error| SynthError::Write {
         path: opts.out.display().to_string(),
-        source,
+        error,
     })?;
     for b in &benches {
         let to = opts.out.join(format!("{}.toml", b.name));
-        std::fs::copy(&b.scene, &to).map_err(|source| SynthError::Write {
+        std::fs::copy(&b.scene, &to).map_err(|error| SynthError::Write {
             path: to.display().to_string(),
-            source,
+            error,
         })?;
     }
     let next = AtomicUsize::new(0);
@@ -190,9 +190,9 @@ fn one(
         };
         let body = text::protocol(&header, &walk, &bench.kinds);
         let path = opts.out.join(format!("{stem}.toml"));
-        std::fs::write(&path, &body).map_err(|source| SynthError::Write {
+        std::fs::write(&path, &body).map_err(|error| SynthError::Write {
             path: path.display().to_string(),
-            source,
+            error,
         })?;
         match verdict(&path) {
             None => {
@@ -246,9 +246,9 @@ fn load_sources(
     let mut out = Vec::new();
     for f in files {
         let file = f.display().to_string();
-        let text = std::fs::read_to_string(&f).map_err(|source| SynthError::Read {
+        let text = std::fs::read_to_string(&f).map_err(|error| SynthError::Read {
             path: file.clone(),
-            source,
+            error,
         })?;
         let Ok(doc) = text.parse::<toml::Table>() else {
             skipped.push((file, "not TOML".into()));
@@ -289,9 +289,9 @@ fn load_sources(
 }
 
 fn collect(p: &Path, files: &mut Vec<PathBuf>) -> Result<(), SynthError> {
-    let read = |source| SynthError::Read {
+    let read = |error| SynthError::Read {
         path: p.display().to_string(),
-        source,
+        error,
     };
     if p.is_dir() {
         for e in std::fs::read_dir(p).map_err(read)? {
