@@ -104,6 +104,7 @@ fn every_simulated_task_scores_zero_without_motion() {
             "vortex_mixer.mix_tube",
             "workflows.bench_run",
             "workflows.centrifuge_run",
+            "workflows.mixer_cycle",
             "workflows.mixer_run",
         ]
     );

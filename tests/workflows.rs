@@ -127,6 +127,7 @@ fn the_task_table_measures_workflows_not_their_stage_files() {
     for id in [
         "workflows.bench_run",
         "workflows.centrifuge_run",
+        "workflows.mixer_cycle",
         "workflows.mixer_run",
     ] {
         assert!(
