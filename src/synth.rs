@@ -28,8 +28,11 @@ pub struct SynthArgs {
     workers: u32,
 }
 
+/// Longest protocol `--steps` may ask for.
+const MAX_STEPS: usize = 64;
+
 fn parse_steps(s: &str) -> Result<RangeInclusive<usize>, String> {
-    let bad = || format!("`{s}`: expected N or A..B with 1 <= A <= B, e.g. 4..8");
+    let bad = || format!("`{s}`: expected N or A..B with 1 <= A <= B <= {MAX_STEPS}, e.g. 4..8");
     let (a, b) = match s.split_once("..") {
         Some((a, b)) => (a, b.trim_start_matches('=')),
         None => (s, s),
@@ -38,7 +41,7 @@ fn parse_steps(s: &str) -> Result<RangeInclusive<usize>, String> {
         a.trim().parse().map_err(|_| bad())?,
         b.trim().parse().map_err(|_| bad())?,
     );
-    if a == 0 || a > b {
+    if a == 0 || a > b || b > MAX_STEPS {
         return Err(bad());
     }
     Ok(a..=b)
@@ -81,5 +84,12 @@ pub fn run(a: &SynthArgs) -> Result<ExitCode> {
     for (why, n) in &report.rejected {
         outln!("  dropped {n}: {why}");
     }
-    Ok(ExitCode::SUCCESS)
+    for (index, why) in &report.unmade {
+        errln!("error: protocol {index} not made: {why}");
+    }
+    Ok(if report.unmade.is_empty() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
 }

@@ -16,6 +16,7 @@ mod text;
 pub mod vocabulary;
 mod walk;
 
+use compiler::world::World;
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 use std::collections::BTreeMap;
@@ -47,6 +48,8 @@ pub struct Report {
     pub skipped: Vec<(String, String)>,
     /// Candidates dropped, by reason (a diagnostic's code, "reach", a walk that stuck).
     pub rejected: BTreeMap<String, usize>,
+    /// Protocols that could not be made (index, why): the rest are written.
+    pub unmade: Vec<(usize, String)>,
 }
 
 #[derive(Clone, Debug)]
@@ -66,15 +69,11 @@ pub enum SynthError {
     )]
     NoSources(String),
     #[error("cannot read protocol {path}: {error}")]
-    Read {
-        path: String,
-        error: std::io::Error,
-    },
+    Read { path: String, error: std::io::Error },
     #[error("cannot write {path}: {error}")]
-    Write {
-        path: String,
-        error: std::io::Error,
-    },
+    Write { path: String, error: std::io::Error },
+    #[error("{0} is another file: write the protocols to a folder where the scene's copy can go")]
+    Occupied(String),
     #[error("protocol {index}: no candidate in {tries} checked clean (dropped: {reasons})")]
     Exhausted {
         index: usize,
@@ -111,7 +110,17 @@ pub fn synthesize(
     })?;
     for b in &benches {
         let to = opts.out.join(format!("{}.toml", b.name));
-        std::fs::copy(&b.scene, &to).map_err(|error| SynthError::Write {
+        let scene = std::fs::read(&b.scene).map_err(|error| SynthError::Read {
+            path: b.scene.display().to_string(),
+            error,
+        })?;
+        // Never over another file: a folder of sources given as --out keeps its scene as it is.
+        match std::fs::read(&to) {
+            Ok(there) if there == scene => continue,
+            Ok(_) => return Err(SynthError::Occupied(to.display().to_string())),
+            Err(_) => {}
+        }
+        std::fs::write(&to, &scene).map_err(|error| SynthError::Write {
             path: to.display().to_string(),
             error,
         })?;
@@ -144,9 +153,22 @@ pub fn synthesize(
     report.rejected = rejected.into_inner().expect("threads joined");
     let mut written = Vec::new();
     for r in results.into_inner().expect("threads joined") {
-        written.push(r?);
+        match r {
+            Ok(w) => written.push(w),
+            // The others are still written; the caller says which could not be made.
+            Err(SynthError::Exhausted {
+                index,
+                tries,
+                reasons,
+            }) => report.unmade.push((
+                index,
+                format!("no candidate in {tries} checked clean (dropped: {reasons})"),
+            )),
+            Err(e) => return Err(e),
+        }
     }
     written.sort_by(|a, b| a.path.cmp(&b.path));
+    report.unmade.sort();
     report.written = written;
     Ok(report)
 }
@@ -188,13 +210,17 @@ fn one(
             scene: &format!("{}.toml", bench.name),
             comment: &comment,
         };
+        if text::success(&walk.first, &walk.last, &bench.kinds).is_empty() {
+            *dropped.entry("nothing changed".into()).or_default() += 1;
+            continue;
+        }
         let body = text::protocol(&header, &walk, &bench.kinds);
         let path = opts.out.join(format!("{stem}.toml"));
         std::fs::write(&path, &body).map_err(|error| SynthError::Write {
             path: path.display().to_string(),
             error,
         })?;
-        match verdict(&path) {
+        match verdict(&path, &walk.first) {
             None => {
                 return Ok(Written {
                     path,
@@ -206,7 +232,10 @@ fn one(
             }
             Some(reason) => {
                 *dropped.entry(reason).or_default() += 1;
-                let _ = std::fs::remove_file(&path);
+                std::fs::remove_file(&path).map_err(|error| SynthError::Write {
+                    path: path.display().to_string(),
+                    error,
+                })?;
             }
         }
     }
@@ -218,9 +247,10 @@ fn one(
     })
 }
 
-/// Why a written candidate is dropped: its first diagnostic's code, or "reach" for a step out of
-/// reach in some sampled layout; `None`: it stays.
-fn verdict(path: &Path) -> Option<String> {
+/// Why a written candidate is dropped: its first diagnostic's code, a success predicate that
+/// already holds where the walk starts (a motionless robot would pass it), or "reach" for a step
+/// out of reach in some sampled layout; `None`: it stays.
+fn verdict(path: &Path, first: &World) -> Option<String> {
     let checked = match compiler::check_file(path, None) {
         Ok(c) => c,
         Err(e) => return Some(format!("unreadable: {e}")),
@@ -228,7 +258,18 @@ fn verdict(path: &Path) -> Option<String> {
     if let Some(d) = checked.diagnostics.first() {
         return Some(d.code.to_string());
     }
-    let task = checked.task.as_ref()?;
+    let Some(task) = checked.task.as_ref() else {
+        return Some("does not compile".into());
+    };
+    let bound = compiler::params::Bindings::new();
+    let holds_at_start = task
+        .stages
+        .iter()
+        .flat_map(|s| &s.success)
+        .any(|p| p.check.eval_abstract(first, &bound) == Some(true));
+    if holds_at_start {
+        return Some("a success predicate holds at the start".into());
+    }
     (!crate::reach::reached_everywhere(task)).then(|| "reach".to_string())
 }
 

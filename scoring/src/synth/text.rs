@@ -88,9 +88,16 @@ pub fn success(
         }
     }
     for ((item, part), state) in &last.parts {
-        if first.part(item, part) != Some(state.as_str()) {
-            out.push(format!("{item}.{part} is {state}"));
+        let was = first.part(item, part);
+        if was == Some(state.as_str()) {
+            continue;
         }
+        // A locked lid is also closed: a lid unlocked but still shut is told by "unlocked".
+        let word = match (was, state.as_str()) {
+            (Some("locked"), "closed") => "unlocked",
+            (_, s) => s,
+        };
+        out.push(format!("{item}.{part} is {word}"));
     }
     for ((item, param), value) in &last.panel {
         let spec = kinds.get(item).and_then(|k| k.panel_param(param));

@@ -3,10 +3,11 @@
 //! labware where they stand); protocols that name the same scene file share one. A step shape
 //! (primitive, robot, the item acted on, the panel value set) is taken from its first source,
 //! with the source's parameters, which say what values that step was shown with (a panel target's
-//! range and grid). Where an item may stand is what the sources start it in or put it into: a
-//! holder's slots are those a source draws (the author's statement of which slots work), or
-//! every slot of a holder no source draws from (the reach check then drops the slots an arm
-//! cannot reach).
+//! range and grid). Where an item may start is where the sources start it, and where it may be
+//! put is where they put it, each apart: a holder's slots are those a source draws for that use
+//! (the author's statement of which slots work: a rotor's balancing slots are where a tube goes,
+//! its other slots where the loaded one starts), or every slot of a holder no source draws from
+//! for that use (the reach check then drops the slots an arm cannot reach).
 //!
 //! A step that takes no arguments (`retract`) changes nothing in the abstract world, so no walk
 //! would choose it for itself; yet a source that follows a step with one needs it (the loading
@@ -42,8 +43,11 @@ pub struct Bench {
     pub holders: BTreeMap<String, BTreeSet<String>>,
     /// Holders each movable item is put into.
     pub places: BTreeMap<String, BTreeSet<String>>,
-    /// The slots of each holder an item may go to.
-    pub slots: BTreeMap<String, Vec<String>>,
+    /// The slots of each holder an item may start in.
+    pub start_slots: BTreeMap<String, Vec<String>>,
+    /// The slots of each holder an item may be put into: those the sources draw for a place
+    /// (a rotor's balancing slots, not the slots its loaded tube starts in).
+    pub place_slots: BTreeMap<String, Vec<String>>,
     /// The source protocols' files.
     pub sources: Vec<String>,
 }
@@ -66,8 +70,16 @@ pub struct Template {
 }
 
 impl Template {
-    /// What makes two steps the same shape: the primitive, robot, item and the panel value or
-    /// button named; not the target value or slot, which synthesis draws.
+    fn kind_of(&self, arg: &str) -> Option<ArgKind> {
+        self.primitive
+            .args
+            .iter()
+            .find(|a| a.name == arg)
+            .map(|a| a.kind)
+    }
+
+    /// What makes two steps the same shape: the primitive, robot, item, the holder it goes to
+    /// and the panel value or button named; not the target value or slot, which synthesis draws.
     fn shape(&self) -> String {
         let fixed: Vec<String> = self
             .args
@@ -77,9 +89,15 @@ impl Template {
                     .args
                     .iter()
                     .find(|a| a.name == k.as_str())
-                    .is_some_and(|a| !matches!(a.kind, ArgKind::Location | ArgKind::PanelValue))
+                    .is_some_and(|a| a.kind != ArgKind::PanelValue)
             })
-            .map(|(k, v)| format!("{k}={v}"))
+            .map(|(k, v)| match self.kind_of(k) {
+                // Where to is the holder; the slot is drawn.
+                Some(ArgKind::Location) => {
+                    format!("{k}={}.*", v.split_once('.').map_or(v.as_str(), |(h, _)| h))
+                }
+                _ => format!("{k}={v}"),
+            })
             .collect();
         let then: Vec<String> = self
             .then
@@ -118,27 +136,36 @@ pub fn benches(sources: &[Source]) -> Vec<Bench> {
         gather(&mut out[i], s);
     }
     for b in &mut out {
-        let drawn = b.slots.clone();
-        for (item, holders) in b.holders.iter().chain(&b.places) {
-            let Some(kind) = b.kinds.get(item) else {
-                continue;
-            };
-            for h in holders {
-                if drawn.contains_key(h) {
-                    continue;
-                }
-                let all = b
-                    .kinds
-                    .get(h)
-                    .and_then(|k| k.slots)
-                    .filter(|s| s.accepts.contains(&kind.name))
-                    .map(|s| s.layout.names())
-                    .unwrap_or_default();
-                b.slots.insert(h.clone(), all);
-            }
-        }
+        let kinds = b.kinds.clone();
+        fill(&kinds, &b.holders, &mut b.start_slots);
+        fill(&kinds, &b.places, &mut b.place_slots);
     }
     out
+}
+
+/// Every slot (that takes the item) of each holder in `holders` no source draws slots of.
+fn fill(
+    kinds: &BTreeMap<String, &'static LabwareKind>,
+    holders: &BTreeMap<String, BTreeSet<String>>,
+    slots: &mut BTreeMap<String, Vec<String>>,
+) {
+    for (item, hs) in holders {
+        let Some(kind) = kinds.get(item) else {
+            continue;
+        };
+        for h in hs {
+            if slots.contains_key(h) {
+                continue;
+            }
+            let all = kinds
+                .get(h)
+                .and_then(|k| k.slots)
+                .filter(|s| s.accepts.contains(&kind.name))
+                .map(|s| s.layout.names())
+                .unwrap_or_default();
+            slots.insert(h.clone(), all);
+        }
+    }
 }
 
 fn new_bench(s: &Source, others: &[Bench]) -> Bench {
@@ -166,7 +193,8 @@ fn new_bench(s: &Source, others: &[Bench]) -> Bench {
         starts: BTreeMap::new(),
         holders: BTreeMap::new(),
         places: BTreeMap::new(),
-        slots: BTreeMap::new(),
+        start_slots: BTreeMap::new(),
+        place_slots: BTreeMap::new(),
         sources: Vec::new(),
     }
 }
@@ -174,6 +202,12 @@ fn new_bench(s: &Source, others: &[Bench]) -> Bench {
 fn gather(b: &mut Bench, s: &Source) {
     b.sources.push(s.file.clone());
     let task = &s.task;
+    // Every source's labware: one may declare an item the others do not.
+    for l in &task.labware {
+        if let Some(kind) = labware::catalogue::kind(&l.kind) {
+            b.kinds.entry(l.name.clone()).or_insert(kind);
+        }
+    }
     let bound = draw_all(&task.params, &mut ChaCha8Rng::seed_from_u64(0)).unwrap_or_default();
     let mut start = Start::default();
     for l in &task.labware {
@@ -225,7 +259,10 @@ fn gather(b: &mut Bench, s: &Source) {
             // The source is proven; a step it cannot take here leaves the trace as it was.
             let _ = apply(&mut world, &env, &bound_step);
         }
-        if is_follow_up(step) {
+        // A step that starts together with the next, or with the one before, is half of a
+        // pair the walk could split: neither is recombined.
+        let paired = step.together || stage.plan.get(i + 1).is_some_and(|n| n.together);
+        if is_follow_up(step) || paired {
             continue;
         }
         let Some(mut t) = template(step, &task.params, budget_s) else {
@@ -274,8 +311,8 @@ fn step_location(t: &Template) -> Option<String> {
         .and_then(|a| t.args.get(a.name).cloned())
 }
 
-/// Notes that `item` may start in (or, `put`, be put into) `at`'s holder and, where `at` draws its slot from a parameter,
-/// which slots the source allows there.
+/// Notes that `item` may start in (or, `put`, be put into) `at`'s holder and, where `at` draws
+/// its slot from a parameter, which slots the source allows there.
 fn note_place(b: &mut Bench, item: &str, at: &str, params: &[ParamSpec], put: bool) {
     let Some((holder, slot)) = at.split_once('.') else {
         return;
@@ -292,7 +329,12 @@ fn note_place(b: &mut Bench, item: &str, at: &str, params: &[ParamSpec], put: bo
     if drawn.is_empty() {
         return;
     }
-    let slots = b.slots.entry(holder.to_string()).or_default();
+    let slots = if put {
+        &mut b.place_slots
+    } else {
+        &mut b.start_slots
+    };
+    let slots = slots.entry(holder.to_string()).or_default();
     for s in drawn {
         if !slots.contains(&s) {
             slots.push(s);

@@ -1,7 +1,8 @@
 //! The random walk that makes one protocol: a start drawn from what the bench's sources start
 //! with, then step after step drawn from the bench's step shapes, each kept only if its
 //! primitive's own precondition holds on the abstract world (the state proof's rule, run forward)
-//! and it leads somewhere new. A walk never comes back to a state it has been in (so no step
+//! and it leads somewhere new; a walk that cannot go on backs up and tries another shape (a
+//! bounded depth-first search). A walk never comes back to a state it has been in (so no step
 //! undoes the one before, and the protocol ends somewhere other than its start), and it ends
 //! with every hand empty (an item carried is put down before the last step is out). All draws
 //! come from the one generator it is given.
@@ -12,6 +13,7 @@ use super::vocabulary::{Bench, Start, Template, world_at};
 use compiler::params::{draw_all, render};
 use compiler::primitives::{ArgKind, BoundStep, Env};
 use compiler::world::{Hand, Location, World};
+use labware::LabwareKind;
 use rand_chacha::ChaCha8Rng;
 use rand_core::RngCore;
 use std::collections::BTreeMap;
@@ -44,80 +46,128 @@ pub enum Stuck {
 /// Tries per step shape at one point of the walk (each draws its values and slot anew).
 const TRIES_PER_SHAPE: usize = 4;
 
+/// Step shapes a walk may try in all, backtracking included, before it gives up on its start.
+const EXPANSIONS: usize = 400;
+
 pub fn walk(bench: &Bench, n: usize, rng: &mut ChaCha8Rng) -> Result<Walk, Stuck> {
     let start = draw_start(bench, rng).ok_or(Stuck::NoStart)?;
     let first = world_at(&bench.kinds, &bench.robots, &start);
-    let env = Env {
-        kinds: &bench.kinds,
-        robots: &bench.robots,
+    let mut search = Search {
+        bench,
+        env: Env {
+            kinds: &bench.kinds,
+            robots: &bench.robots,
+        },
+        n,
+        seen: vec![first.clone()],
+        steps: Vec::with_capacity(n),
+        left: EXPANSIONS,
     };
-    let mut seen = vec![first.clone()];
-    let mut world = first.clone();
-    let mut steps: Vec<Step> = Vec::with_capacity(n);
-    while steps.len() < n {
-        let mut order: Vec<usize> = (0..bench.templates.len()).collect();
-        shuffle(&mut order, rng);
-        let next = order.iter().find_map(|&t| {
-            let template = &bench.templates[t];
-            let size = 1 + template.then.len();
-            let left = (n - steps.len()).checked_sub(size)?;
-            // A step on an item standing in a holder is taken only where its sources showed
-            // it there (a tube is picked from the rack it was shown picked from, not from a
-            // rotor sleeve it was only ever put into).
-            let on_holder = template
-                .args
-                .get("on")
-                .and_then(|on| match world.locations.get(on) {
-                    Some(Location::Slot { holder, .. }) => Some(holder),
-                    _ => None,
-                });
-            if on_holder.is_some_and(|h| !template.from.contains(h)) {
-                return None;
-            }
-            (0..TRIES_PER_SHAPE).find_map(|_| {
-                let args = instantiate(bench, template, &world, rng)?;
-                let mut after = world.clone();
-                let mut taken = vec![Step {
-                    template: template.clone(),
-                    args,
-                }];
-                for (primitive, robot) in &template.then {
-                    taken.push(Step {
-                        template: Template {
-                            primitive,
-                            robot: robot.clone(),
-                            args: BTreeMap::new(),
-                            params: Vec::new(),
-                            budget_s: template.budget_s,
-                            then: Vec::new(),
-                            from: Default::default(),
-                        },
-                        args: BTreeMap::new(),
-                    });
-                }
-                for step in &taken {
-                    let bound = BoundStep {
-                        primitive: step.template.primitive,
-                        robot: &step.template.robot,
-                        args: &step.args,
-                    };
-                    compiler::primitives::apply(&mut after, &env, &bound).ok()?;
-                }
-                let new = !seen.iter().any(|w| same_state(w, &after));
-                (new && busy_hands(&after) <= left).then_some((taken, after))
-            })
-        });
-        let (taken, after) = next.ok_or(Stuck::NoStep)?;
-        seen.push(after.clone());
-        world = after;
-        steps.extend(taken);
-    }
+    let last = search.extend(first.clone(), rng).ok_or(Stuck::NoStep)?;
     Ok(Walk {
         start,
         first,
-        steps,
-        last: world,
+        steps: search.steps,
+        last,
     })
+}
+
+/// A depth-first walk: at each point the shapes in a random order, each taken if it can go on
+/// from where it leads, else the next (a walk that would end with a hand full or nowhere new
+/// backs up instead of giving up).
+struct Search<'a> {
+    bench: &'a Bench,
+    env: Env<'a>,
+    n: usize,
+    seen: Vec<World>,
+    steps: Vec<Step>,
+    left: usize,
+}
+
+impl Search<'_> {
+    /// Extends the walk from `world` to `n` steps; the world it ends in.
+    fn extend(&mut self, world: World, rng: &mut ChaCha8Rng) -> Option<World> {
+        if self.steps.len() == self.n {
+            return Some(world);
+        }
+        let mut order: Vec<usize> = (0..self.bench.templates.len()).collect();
+        shuffle(&mut order, rng);
+        for t in order {
+            self.left = self.left.checked_sub(1)?;
+            let Some((taken, after)) = self.take(&self.bench.templates[t], &world, rng) else {
+                continue;
+            };
+            let size = taken.len();
+            self.seen.push(after.clone());
+            self.steps.extend(taken);
+            if let Some(last) = self.extend(after, rng) {
+                return Some(last);
+            }
+            self.steps.truncate(self.steps.len() - size);
+            self.seen.pop();
+        }
+        None
+    }
+
+    /// The steps shape `template` makes from `world` (it and its follow-ups) and the world they
+    /// lead to, if they may be taken there.
+    fn take(
+        &self,
+        template: &Template,
+        world: &World,
+        rng: &mut ChaCha8Rng,
+    ) -> Option<(Vec<Step>, World)> {
+        let size = 1 + template.then.len();
+        let left = (self.n - self.steps.len()).checked_sub(size)?;
+        // A step on an item standing in a holder is taken only where its sources showed it
+        // there (a tube is picked from the rack it was shown picked from, not from a rotor
+        // sleeve it was only ever put into).
+        let on_holder = template
+            .args
+            .get("on")
+            .and_then(|on| match world.locations.get(on) {
+                Some(Location::Slot { holder, .. }) => Some(holder),
+                _ => None,
+            });
+        if on_holder.is_some_and(|h| !template.from.contains(h)) {
+            return None;
+        }
+        (0..TRIES_PER_SHAPE).find_map(|_| {
+            let args = instantiate(self.bench, template, world, rng)?;
+            let mut after = world.clone();
+            let mut taken = vec![Step {
+                template: template.clone(),
+                args,
+            }];
+            for (primitive, robot) in &template.then {
+                taken.push(Step {
+                    template: Template {
+                        primitive,
+                        robot: robot.clone(),
+                        args: BTreeMap::new(),
+                        params: Vec::new(),
+                        budget_s: template.budget_s,
+                        then: Vec::new(),
+                        from: Default::default(),
+                    },
+                    args: BTreeMap::new(),
+                });
+            }
+            for step in &taken {
+                let bound = BoundStep {
+                    primitive: step.template.primitive,
+                    robot: &step.template.robot,
+                    args: &step.args,
+                };
+                compiler::primitives::apply(&mut after, &self.env, &bound).ok()?;
+            }
+            let new = !self
+                .seen
+                .iter()
+                .any(|w| same_state(&self.bench.kinds, w, &after));
+            (new && busy_hands(&after) <= left).then_some((taken, after))
+        })
+    }
 }
 
 /// A start: each item's part states from one of the starts its sources declare, and each
@@ -141,7 +191,7 @@ fn draw_start(bench: &Bench, rng: &mut ChaCha8Rng) -> Option<Start> {
             .filter_map(|a| a.strip_prefix(&format!("{holder}.")))
             .collect();
         let free: Vec<&String> = bench
-            .slots
+            .start_slots
             .get(holder)?
             .iter()
             .filter(|s| !taken.contains(&s.as_str()))
@@ -172,7 +222,7 @@ fn instantiate(
             Some(ArgKind::Location) => {
                 let (holder, _) = value.split_once('.')?;
                 let free: Vec<&String> = bench
-                    .slots
+                    .place_slots
                     .get(holder)?
                     .iter()
                     .filter(|s| world.occupant(holder, s).is_none())
@@ -189,13 +239,25 @@ fn instantiate(
     Some(args)
 }
 
-/// The facts two worlds differ in, less the bookkeeping of panel holding time.
-fn same_state(a: &World, b: &World) -> bool {
+/// Whether two worlds hold the same facts: the bookkeeping of panel holding time aside, and a
+/// panel value not yet set the same as one set to its starting value.
+fn same_state(kinds: &BTreeMap<String, &'static LabwareKind>, a: &World, b: &World) -> bool {
+    let panel = |w: &World, key: &(String, String)| {
+        w.panel.get(key).copied().or_else(|| {
+            kinds
+                .get(&key.0)
+                .and_then(|k| k.panel_param(&key.1))
+                .map(|p| p.initial)
+        })
+    };
     a.parts == b.parts
         && a.locations == b.locations
         && a.volumes == b.volumes
-        && a.panel == b.panel
         && a.hands == b.hands
+        && a.panel
+            .keys()
+            .chain(b.panel.keys())
+            .all(|k| panel(a, k) == panel(b, k))
 }
 
 fn busy_hands(w: &World) -> usize {
