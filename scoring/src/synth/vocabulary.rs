@@ -70,6 +70,19 @@ pub struct Template {
 }
 
 impl Template {
+    /// Its follow-ups as steps of their own (no arguments, the step's budget each).
+    pub fn follow_ups(&self) -> impl Iterator<Item = Template> + '_ {
+        self.then.iter().map(|(primitive, robot)| Template {
+            primitive,
+            robot: robot.clone(),
+            args: BTreeMap::new(),
+            params: Vec::new(),
+            budget_s: self.budget_s,
+            then: Vec::new(),
+            from: BTreeSet::new(),
+        })
+    }
+
     fn kind_of(&self, arg: &str) -> Option<ArgKind> {
         self.primitive
             .args

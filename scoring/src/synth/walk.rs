@@ -139,20 +139,10 @@ impl Search<'_> {
                 template: template.clone(),
                 args,
             }];
-            for (primitive, robot) in &template.then {
-                taken.push(Step {
-                    template: Template {
-                        primitive,
-                        robot: robot.clone(),
-                        args: BTreeMap::new(),
-                        params: Vec::new(),
-                        budget_s: template.budget_s,
-                        then: Vec::new(),
-                        from: Default::default(),
-                    },
-                    args: BTreeMap::new(),
-                });
-            }
+            taken.extend(template.follow_ups().map(|template| Step {
+                template,
+                args: BTreeMap::new(),
+            }));
             for step in &taken {
                 let bound = BoundStep {
                     primitive: step.template.primitive,
