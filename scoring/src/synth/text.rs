@@ -4,6 +4,7 @@
 //! value that differs from the start). The text is what `autobio check` then reads; nothing
 //! here decides whether it is valid.
 
+use super::vocabulary::panel_value;
 use super::walk::{Step, Walk};
 use compiler::params::format_number;
 use compiler::world::{Location, World};
@@ -99,15 +100,14 @@ pub fn success(
         };
         out.push(format!("{item}.{part} is {word}"));
     }
-    for ((item, param), value) in &last.panel {
-        let spec = kinds.get(item).and_then(|k| k.panel_param(param));
-        let unit = spec.map(|p| p.unit).unwrap_or_default();
-        let was = first
-            .panel
-            .get(&(item.clone(), param.clone()))
-            .copied()
-            .or(spec.map(|p| p.initial));
-        if was != Some(*value) {
+    for (key, value) in &last.panel {
+        let (item, param) = key;
+        let unit = kinds
+            .get(item)
+            .and_then(|k| k.panel_param(param))
+            .map(|p| p.unit)
+            .unwrap_or_default();
+        if panel_value(kinds, first, key) != Some(*value) {
             out.push(format!("{item}.{param} = {} {unit}", format_number(*value)));
         }
     }

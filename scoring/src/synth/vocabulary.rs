@@ -418,3 +418,17 @@ pub(super) fn world_at(
     }
     w
 }
+
+/// A panel value as the world shows it: the value set, or its kind's start value while unset.
+pub(super) fn panel_value(
+    kinds: &BTreeMap<String, &'static LabwareKind>,
+    w: &World,
+    key: &(String, String),
+) -> Option<f64> {
+    w.panel.get(key).copied().or_else(|| {
+        kinds
+            .get(&key.0)
+            .and_then(|k| k.panel_param(&key.1))
+            .map(|p| p.initial)
+    })
+}

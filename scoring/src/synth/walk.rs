@@ -9,7 +9,7 @@
 //!
 //! It knows nothing of geometry: reach is the caller's check on the written protocol.
 
-use super::vocabulary::{Bench, Start, Template, world_at};
+use super::vocabulary::{Bench, Start, Template, panel_value, world_at};
 use compiler::params::{draw_all, render};
 use compiler::primitives::{ArgKind, BoundStep, Env};
 use compiler::world::{Hand, Location, World};
@@ -232,14 +232,6 @@ fn instantiate(
 /// Whether two worlds hold the same facts: the bookkeeping of panel holding time aside, and a
 /// panel value not yet set the same as one set to its starting value.
 fn same_state(kinds: &BTreeMap<String, &'static LabwareKind>, a: &World, b: &World) -> bool {
-    let panel = |w: &World, key: &(String, String)| {
-        w.panel.get(key).copied().or_else(|| {
-            kinds
-                .get(&key.0)
-                .and_then(|k| k.panel_param(&key.1))
-                .map(|p| p.initial)
-        })
-    };
     a.parts == b.parts
         && a.locations == b.locations
         && a.volumes == b.volumes
@@ -247,7 +239,7 @@ fn same_state(kinds: &BTreeMap<String, &'static LabwareKind>, a: &World, b: &Wor
         && a.panel
             .keys()
             .chain(b.panel.keys())
-            .all(|k| panel(a, k) == panel(b, k))
+            .all(|k| panel_value(kinds, a, k) == panel_value(kinds, b, k))
 }
 
 fn busy_hands(w: &World) -> usize {
