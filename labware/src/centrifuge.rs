@@ -85,6 +85,9 @@ pub struct Params {
 /// slide in at its lean.
 const SLEEVE_HALF: f64 = 0.0062;
 
+/// The thickness of the lid's top plate over the rotor chamber (m); below it the lid is hollow.
+const LID_PLATE: f64 = 0.006;
+
 /// How far past the shut lid's face the expert's push goes (m).
 const PRESS_PAST: f64 = 0.02;
 
@@ -311,6 +314,48 @@ impl Params {
         ];
         let tool = crate::frame::from_axes([1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]);
         self.lid_frame(placement, lid) * pose(at, tool)
+    }
+
+    /// The lid's collision shell (in the lid body's frame, closed geometry): a plate
+    /// `LID_PLATE` thick on top and, below it, a skirt around the rotor chamber's footprint, so
+    /// that the shut lid is hollow over the chamber, as a real centrifuge's lid is, and clears
+    /// the tubes standing out of the rotor's slots (a flat slab pressed on their caps and tipped
+    /// them in their slots once it latched).
+    fn lid_shell(&self, lid: &str) -> String {
+        let (w, d, t) = (
+            self.lid_half_width,
+            self.lid_depth,
+            2.0 * self.lid_half_thickness,
+        );
+        let hollow = t - LID_PLATE;
+        let [cx, ay] = self.rotor_axis;
+        let (cy, r) = (ay - self.hinge[0], self.bowl_radius);
+        let skirt = |name: &str, x: [f64; 2], y: [f64; 2]| {
+            let c = [(x[0] + x[1]) / 2.0, (y[0] + y[1]) / 2.0, hollow / 2.0];
+            let h = [(x[1] - x[0]) / 2.0, (y[1] - y[0]) / 2.0, hollow / 2.0];
+            (name.to_string(), c, h)
+        };
+        let parts = [
+            (
+                "shell".to_string(),
+                [0.0, d / 2.0, hollow + LID_PLATE / 2.0],
+                [w, d / 2.0, LID_PLATE / 2.0],
+            ),
+            skirt("skirt_back", [-w, w], [0.0, cy - r]),
+            skirt("skirt_front", [-w, w], [cy + r, d]),
+            skirt("skirt_left", [-w, cx - r], [cy - r, cy + r]),
+            skirt("skirt_right", [cx + r, w], [cy - r, cy + r]),
+        ];
+        parts
+            .iter()
+            .map(|(name, c, h)| {
+                format!(
+                    "    <geom name=\"{lid}/{name}\" type=\"box\" size=\"{}\" pos=\"{}\" rgba=\"0.84 0.85 0.87 1\"/>\n",
+                    v3(*h),
+                    v3(*c)
+                )
+            })
+            .collect()
     }
 
     /// The floor of the rotor chamber: a rotor's tubes hang into it.
@@ -556,8 +601,7 @@ impl Instrument for Params {
   <body name="{lid}" {lidframe}>
     <joint name="{lidj}" type="hinge" axis="1 0 0" range="{lo} {hi}" damping="{lidd}" stiffness="{lidk}" springref="{open}" solreflimit="0.004 1" solimplimit="0.95 0.99 0.0005"/>
     <inertial pos="{lidc}" mass="{lidm}" diaginertia="{lidi}"/>
-    <geom name="{lid}/shell" type="box" size="{lidh}" pos="{lidc}" rgba="0.84 0.85 0.87 1"/>
-    <geom name="{lid}/window" type="cylinder" size="{win} 0.001" pos="{rx} {winy} {winz}" rgba="0.15 0.2 0.28 0.85" contype="0" conaffinity="0"/>
+{shell}    <geom name="{lid}/window" type="cylinder" size="{win} 0.001" pos="{rx} {winy} {winz}" rgba="0.15 0.2 0.28 0.85" contype="0" conaffinity="0"/>
     <geom name="{lid}/label" type="box" size="{labw} 0.012 0.001" pos="0 {laby} {winz}" rgba="0.15 0.3 0.6 1" contype="0" conaffinity="0"/>
     <geom name="{lid}/post_l" type="cylinder" size="0.007 {posth}" pos="{postx} {posty} {postz}" rgba="0.3 0.31 0.33 1"/>
     <geom name="{lid}/post_r" type="cylinder" size="0.007 {posth}" pos="-{postx} {posty} {postz}" rgba="0.3 0.31 0.33 1"/>
@@ -583,7 +627,7 @@ impl Instrument for Params {
             lidc = v3(lid_c),
             lidm = self.lid_mass,
             lidi = v3(box_inertia(self.lid_mass, lid_half)),
-            lidh = v3(lid_half),
+            shell = self.lid_shell(&n.lid.body),
             win = 0.65 * self.bowl_radius,
             winy = ry - self.hinge[0],
             winz = 2.0 * self.lid_half_thickness + 0.001,
@@ -855,6 +899,31 @@ mod tests {
         assert!(!holds(p.lid_closed + 0.05, false, "closed"));
         assert!(holds(p.lid_open, false, "open"));
         assert_eq!(p.readout(&state(p.lid_closed, true))["lid"], "locked");
+    }
+
+    #[test]
+    fn the_shut_lid_is_hollow_over_the_rotor_and_clears_a_seated_tubes_cap() {
+        let p = Params::eppendorf_5430();
+        let s = state(p.lid_closed, true);
+        let tube = crate::tube::Params::microtube();
+        let underside = p.hinge[1] + 2.0 * p.lid_half_thickness - LID_PLATE;
+        for k in 1..=30 {
+            let seat = p.slot_seat(&k.to_string(), &s).unwrap();
+            let axis = seat.rotation * nalgebra::Vector3::z();
+            let top = seat.translation.vector + axis * tube.capped_height();
+            // The highest point of the cap's top rim.
+            let rim = top.z + tube.cap_radius * (1.0 - axis.z * axis.z).sqrt();
+            // The caps stand above the body's top: a flat lid would press on them.
+            assert!(rim > p.hinge[1], "slot {k}: {rim}");
+            assert!(underside - rim > 0.005, "slot {k}: {rim} under {underside}");
+        }
+        // The hollow is inside the lid: the skirt around it is there on every side.
+        let (cy, r) = (p.rotor_axis[1] - p.hinge[0], p.bowl_radius);
+        assert!(cy - r > 0.0 && cy + r < p.lid_depth && r < p.lid_half_width);
+        let xml = p.fragment("c", &Pose::identity()).worldbody;
+        for part in ["shell", "skirt_back", "skirt_front", "skirt_left", "skirt_right"] {
+            assert!(xml.contains(&format!("c/lid/{part}\"")), "{part}");
+        }
     }
 
     #[test]

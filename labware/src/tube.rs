@@ -108,6 +108,14 @@ impl Params {
         self.bolt_z() + self.pitch / 2.0 + 0.005
     }
 
+    /// How far the cap's top stands above its body's origin (the cap shell reaches this far up).
+    const CAP_TOP_ABOVE_ORIGIN: f64 = 0.004;
+
+    /// The capped tube's height: from its base to the top of its screwed-on cap (m).
+    pub fn capped_height(&self) -> f64 {
+        self.cap_seat_z() + Self::CAP_TOP_ABOVE_ORIGIN
+    }
+
     /// Radius of the hidden core on the tube's neck that keeps the cap centred.
     fn core_radius(&self) -> f64 {
         self.thread_radius - 0.0012
@@ -156,7 +164,7 @@ impl Instrument for Params {
         let body_i = cylinder_inertia(self.mass, r, h / 2.0);
         let cap_i = cylinder_inertia(self.cap_mass, self.cap_radius, self.cap_height / 2.0);
         let cap_pose = placement * translation([0.0, 0.0, self.cap_seat_z()]);
-        let cap_z = -self.cap_height / 2.0 + 0.004;
+        let cap_z = -self.cap_height / 2.0 + Self::CAP_TOP_ABOVE_ORIGIN;
         let (tube_c, cap_c) = (
             crate::mjcf::rgba(self.rgba),
             crate::mjcf::rgba(self.cap_rgba),
