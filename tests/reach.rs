@@ -5,6 +5,8 @@
 //! point cases), for
 //! an arm with a closed-form IK (the ViperX) and one solved by the QP (the UR5e). A slot out of
 //! reach in only some layouts is W0010, naming the seeds whose episodes then fail at planning.
+//! The corpus's reach cases (arc, joint limit, partial range; slot and press point above) each
+//! get a hinted base from which the file checks with no reach diagnostic and the expert wins.
 
 mod common;
 
@@ -163,8 +165,8 @@ fn a_press_point_out_of_reach_gets_e0036_and_its_hint_base_works() {
 
 /// The 5910 opened from a riser moved about: too low, its lid bar is reached but not the bar's
 /// arc, and E0036 says where along the arc the arm gives out (no base at that height is clear
-/// of the centrifuge: the hint says so, as stood up for real); moved aside, the key and bar are
-/// out of reach, and from the hinted base the protocol checks clean. (The expert then plans
+/// of the centrifuge: the hint raises the arm, and from there the protocol checks clean); moved
+/// aside, the key and bar are out of reach, and from the hinted base the protocol checks clean. (The expert then plans
 /// the run, but does not yet swing the lid open from there: reach is not success.)
 #[test]
 fn a_lid_out_of_reach_is_found_along_its_arc_and_a_hinted_base_checks_clean() {
@@ -195,9 +197,18 @@ fn a_lid_out_of_reach_is_found_along_its_arc_and_a_hinted_base_checks_clean() {
         "{}",
         arc.message
     );
+    // No base at that height is clear of the centrifuge: the hint raises the arm, and stood
+    // there the protocol checks clean.
     assert!(
-        arc.hint.as_deref().unwrap().starts_with("no base found"),
+        arc.hint.as_deref().unwrap().contains("higher: on a riser"),
         "{arc:?}"
+    );
+    let raised = hinted_base(&low);
+    let up = check(&format!("base = {{ pos_m = {raised}, yaw_deg = -90 }}"));
+    assert!(
+        up.diagnostics.iter().all(|d| !d.is_error()),
+        "{raised}: {:#?}",
+        up.diagnostics
     );
     let aside = check("base = { pos_m = [0.55, 0.25, 1.45], yaw_deg = -90 }");
     assert!(aside.task.is_none());
@@ -305,5 +316,86 @@ fn a_target_in_reach_only_past_a_joint_range_names_the_joint_and_a_lower_shelf_c
         !low.diagnostics.iter().any(|d| d.code == dsl::Code::E0036),
         "{:#?}",
         low.diagnostics
+    );
+}
+
+/// The corpus case at `path` (one robot) gets `code` with a hinted base; with the robot's base
+/// line rewritten to it, the file checks with no error and no reach warning at all (the hint
+/// covers every sampled layout), and the expert wins each of `seeds`.
+fn the_corpus_hint_fixes(path: &str, code: dsl::Code, seeds: &[u64], tag: &str) -> String {
+    let source = std::fs::read_to_string(path).unwrap();
+    let mut c = compiler::check_file(Path::new(path), None).unwrap();
+    scoring::reach::check(&mut c);
+    let d = c
+        .diagnostics
+        .iter()
+        .find(|d| d.code == code)
+        .unwrap_or_else(|| panic!("no {code:?} in {:#?}", c.diagnostics));
+    let hint = d.hint.clone().unwrap();
+    let start = hint
+        .find("pos_m = [")
+        .unwrap_or_else(|| panic!("no base in the hint: {hint}"))
+        + "pos_m = ".len();
+    let hinted = &hint[start..start + hint[start..].find(']').unwrap() + 1];
+    let line = source
+        .lines()
+        .find(|l| l.starts_with("base = { pos_m = ["))
+        .unwrap();
+    let stood = source.replacen(line, &format!("base = {{ pos_m = {hinted} }}"), 1);
+    let dir = common::scratch(&format!("reach-corpus-{tag}"));
+    let file = dir.join(Path::new(path).file_name().unwrap());
+    std::fs::write(&file, stood).unwrap();
+    let mut fixed = compiler::check_file(&file, None).unwrap();
+    scoring::reach::check(&mut fixed);
+    assert!(
+        fixed
+            .diagnostics
+            .iter()
+            .all(|d| !d.is_error() && d.code != dsl::Code::W0010),
+        "{hinted}: {:#?}",
+        fixed.diagnostics
+    );
+    let task = fixed.task.as_ref().unwrap();
+    for &seed in seeds {
+        let r = run(task, seed, "expert");
+        assert!(r.success, "seed {seed} from {hinted}: {:#?}", r.verdict);
+    }
+    hint
+}
+
+/// The arc case: the 5430's lid bar is taken but its arc runs out of reach; from the hinted base
+/// the file checks clean and the expert opens the lid.
+#[test]
+fn the_arc_corpus_case_hints_a_base_from_which_the_lid_is_opened() {
+    the_corpus_hint_fixes(
+        "tests/corpus/faulty/lid_arc_out_of_reach.toml",
+        dsl::Code::E0036,
+        &[0],
+        "arc",
+    );
+}
+
+/// The joint-limit case: no base at the arm's height brings the wrist within its range over the
+/// shelf, so the hint raises the arm (a riser), from where the expert picks the tube up.
+#[test]
+fn the_joint_limit_corpus_case_hints_a_raised_base_from_which_the_tube_is_picked() {
+    let hint = the_corpus_hint_fixes(
+        "tests/corpus/faulty/step_past_joint_limit.toml",
+        dsl::Code::E0036,
+        &[0],
+        "joint",
+    );
+    assert!(hint.contains("higher: on a riser"), "{hint}");
+}
+
+/// The partial-range case: W0010's hint names a base from which the slots every sampled layout
+/// draws are reached, and the expert wins the seeds that failed at planning before.
+#[test]
+fn the_partial_range_corpus_case_hints_a_base_that_reaches_every_layout() {
+    the_corpus_hint_fixes(
+        "tests/corpus/warnings/place_partly_out_of_reach.toml",
+        dsl::Code::W0010,
+        &[4, 5],
+        "partial",
     );
 }

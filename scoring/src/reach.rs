@@ -10,12 +10,14 @@
 //! of these solve is E0036 at the step's `with` (one per step), saying why: past a joint's range
 //! (the pose solves with the ranges widened: which joint, the angle it would need, its range), or
 //! out of reach (how close the best solve came); with a hint: the nearest base position (the
-//! same height and heading) from which every target this pass checked for that robot solves with
-//! 10 cm to spare, found by moving the targets instead of the base (a base shift is the targets'
-//! opposite shift to the arm) on rings around it, then stood up for real in a rebuilt scene,
-//! where the arm must not start inside anything and must come in to each target that stands as
-//! the scene starts clear of it. A hinted base is reached and clear; the expert may still fail
-//! there for other reasons (a key pressed from another angle): the hint is where to start.
+//! same heading) from which every target this pass checks for that robot, in every sampled
+//! layout, solves with 10 cm to spare, found by moving the targets instead of the base (a base
+//! shift is the targets' opposite shift to the arm) on rings around it at its height, then, where
+//! none serves (a wrist past its range over a high shelf), on rings around raised heights (a
+//! riser); each found base is stood up for real in each layout's rebuilt scene, where the arm
+//! must not start inside anything and must come in to each target that stands as the scene
+//! starts clear of it. A hinted base is reached and clear; the expert may still fail there for
+//! other reasons (a key pressed from another angle): the hint is where to start.
 //!
 //! [`margins`] gives each step's reach margin for `autobio describe`: how far its targets could
 //! move away from the robot and still be reached.
@@ -24,9 +26,9 @@
 //! paths between targets (the expert routes those, `crate::route`), the straight lines between
 //! checked poses, or a chain's later stages, and it skips a step acting on an item an earlier
 //! step put elsewhere (its target is not where it starts). A task whose scene cannot be built is
-//! left to the runtime's refusal. The next seven seeds' layouts are checked too, without hints: a
-//! step reached in seed 0's but not in some of them is W0010 (the task checks; some of its
-//! episodes will fail at planning).
+//! left to the runtime's refusal. The next seven seeds' layouts are checked too: a step reached in
+//! seed 0's but not in some of them is W0010 (the task checks; some of its episodes will fail at
+//! planning), with the same hint where a base serves every layout.
 
 use compiler::motion::{Motion, MotionStep, Target};
 use compiler::params::render;
@@ -66,7 +68,7 @@ pub struct Unreachable {
 /// Rings searched for a base hint: every `HINT_STEP` metres out to `HINT_RADIUS`, in
 /// `HINT_DIRECTIONS` directions each.
 const HINT_STEP: f64 = 0.025;
-const HINT_RADIUS: f64 = 0.6;
+const HINT_RADIUS: f64 = 0.8;
 const HINT_DIRECTIONS: usize = 16;
 /// How much farther out than each target (m, in the plane, away from the base) the hinted base
 /// must still reach.
@@ -74,7 +76,12 @@ const HINT_MARGIN: f64 = 0.1;
 /// How far back along a grasp's axis the hinted base's arm must come in clear of the scene (m),
 /// and how many reached bases are stood up and checked so before the search gives up.
 const HINT_APPROACH: f64 = 0.07;
-const HINT_CLEAR_TRIES: usize = 60;
+const HINT_CLEAR_TRIES: usize = 120;
+/// Where no base at the robot's height serves (a target high above it, reached only with a
+/// joint past its range), raised bases are searched too: `HINT_RISE` metres at a time, up to
+/// `HINT_RISES` times (a riser under the robot, as `protocols/centrifuge_5910/riser.toml`).
+const HINT_RISE: f64 = 0.05;
+const HINT_RISES: usize = 10;
 
 /// A checked target of one robot: the step it belongs to and the tool poses that reach it (its
 /// grasps).
@@ -290,15 +297,9 @@ fn misses(task: &Task, seed: u64, hint: bool) -> Vec<Unreachable> {
                 let base = [base.x, base.y, base.z];
                 let hint = hint
                     .then(|| {
-                        *hints.entry(aim.robot).or_insert_with(|| {
-                            let mine: Vec<&Aim> =
-                                aims.iter().filter(|a| a.robot == aim.robot).collect();
-                            base_shift(&mine, model, kin, base, |d| {
-                                let at = [base[0] + d[0], base[1] + d[1], base[2]];
-                                clear_from(task, &instance, aim.robot, at, &mine)
-                            })
-                            .map(|d| [base[0] + d[0], base[1] + d[1], base[2]])
-                        })
+                        *hints
+                            .entry(aim.robot)
+                            .or_insert_with(|| base_for_every_layout(task, aim.robot))
                     })
                     .flatten();
                 let (target, p) = match miss.stopped {
@@ -697,35 +698,42 @@ fn target_name(motions: &[Motion]) -> String {
     }
 }
 
-/// The nearest shift (m, in the plane) of the robot's base from which every one of its `aims`
-/// solves (one grasp of each, from its home, then its path) with `HINT_MARGIN` to spare (the
-/// grasp moved that much farther out from the base solves too), searched ring by ring; `None`
-/// within the search.
-/// The margin is the expert's room around a grasp: the approach before it, the lift after it.
+/// The nearest base (m) for the robot, now at `base`, from which every one of its `aims` solves
+/// (one grasp of each, from its home, then its path) with `HINT_MARGIN` to spare (the grasp
+/// moved that much farther out from the base solves too) and which `clear` accepts, searched
+/// ring by ring in the plane at the base's height, then on rings around each raised height in
+/// turn; `None` within the search. The margin is the expert's room around a grasp: the approach
+/// before it, the lift after it.
 fn base_shift(
     aims: &[&Aim],
     model: &robots::RobotModel,
     kin: &mut ArmKinematics,
     base: [f64; 3],
-    mut clear: impl FnMut([f64; 2]) -> bool,
-) -> Option<[f64; 2]> {
+    mut clear: impl FnMut([f64; 3]) -> bool,
+) -> Option<[f64; 3]> {
     let mut tried = 0;
     let home = model.home.to_vec();
     let rings = (HINT_RADIUS / HINT_STEP).round() as usize;
-    (1..=rings)
-        .flat_map(|k| {
-            (0..HINT_DIRECTIONS).map(move |j| {
+    let around = |rise: f64, first: usize| {
+        (first..=rings).flat_map(move |k| {
+            let directions = if k == 0 { 1 } else { HINT_DIRECTIONS };
+            (0..directions).map(move |j| {
                 let a = std::f64::consts::TAU * j as f64 / HINT_DIRECTIONS as f64;
                 let r = k as f64 * HINT_STEP;
-                [r * a.cos(), r * a.sin()]
+                [r * a.cos(), r * a.sin(), rise]
             })
         })
+    };
+    let level = around(0.0, 1);
+    let raised = (1..=HINT_RISES).flat_map(|k| around(k as f64 * HINT_RISE, 0));
+    level
+        .chain(raised)
         .find(|d| {
             if tried >= HINT_CLEAR_TRIES {
                 return false;
             }
             // The base moved by d reaches what the base where it is reaches moved by -d.
-            let back = labware::frame::translation([-d[0], -d[1], 0.0]);
+            let back = labware::frame::translation([-d[0], -d[1], -d[2]]);
             let reached = aims.iter().all(|aim| {
                 aim.grasps.iter().any(|(pose, path)| {
                     let near = back * pose;
@@ -750,9 +758,10 @@ fn base_shift(
             // Reached: then stood there for real, clear of the scene on the way in.
             reached && {
                 tried += 1;
-                clear(*d)
+                clear([base[0] + d[0], base[1] + d[1], base[2] + d[2]])
             }
         })
+        .map(|d| [base[0] + d[0], base[1] + d[1], base[2] + d[2]])
 }
 
 /// Whether `robot` stood at `base` (the task otherwise as it is) has an IK solution clear of
@@ -842,22 +851,60 @@ pub fn check(checked: &mut Checked) {
         )
         .with_note("checked in seed 0's layout, from the robot's start pose and its home");
         d = match m.base_hint {
-            Some([hx, hy, hz]) => {
-                let [bx, by, _] = m.base;
-                let dist = ((hx - bx).powi(2) + (hy - by).powi(2)).sqrt();
-                d.with_hint(format!(
-                    "stand `{}` at pos_m = [{hx:.3}, {hy:.3}, {hz:.3}] ({dist:.3} m from where it is): every target checked for it solves from there",
-                    m.robot
-                ))
-            }
+            Some(hint) => d.with_hint(format!(
+                "stand `{}` at {}: every target checked for it, in all {SAMPLED_LAYOUTS} sampled layouts, solves from there",
+                m.robot,
+                stand_at(hint, m.base)
+            )),
             None => d.with_hint(format!(
-                "no base found within {HINT_RADIUS} m of `{}`'s that reaches every target checked for it; move the labware or the robot",
-                m.robot
+                "no base found within {HINT_RADIUS} m of `{}`'s (or up to {:.1} m above it) that reaches every target checked for it; move the labware or the robot",
+                m.robot,
+                HINT_RISE * HINT_RISES as f64
             )),
         };
         checked.diagnostics.push(d);
     }
     checked.task = None;
+}
+
+/// A hinted base as the hint writes it: the position, how far it is from `base` in the plane,
+/// and how much higher, where it is.
+fn stand_at([hx, hy, hz]: [f64; 3], [bx, by, bz]: [f64; 3]) -> String {
+    // To the millimetre written, without a "-0.000".
+    let mm = |v: f64| (v * 1000.0).round() / 1000.0 + 0.0;
+    let (hx, hy, hz) = (mm(hx), mm(hy), mm(hz));
+    let dist = ((hx - bx).powi(2) + (hy - by).powi(2)).sqrt();
+    let rise = hz - bz;
+    let raised = if rise > 1e-9 {
+        format!(", {rise:.2} m higher: on a riser")
+    } else {
+        String::new()
+    };
+    format!("pos_m = [{hx:.3}, {hy:.3}, {hz:.3}] ({dist:.3} m from where it is{raised})")
+}
+
+/// The nearest base for `robot` from which its targets in every sampled layout solve (as
+/// [`base_shift`] searches) and its arm comes in clear in each: W0010's hint.
+fn base_for_every_layout(task: &Task, robot: usize) -> Option<[f64; 3]> {
+    let mut layouts: Vec<Layout> = (0..SAMPLED_LAYOUTS)
+        .filter_map(|seed| Layout::of(task, seed))
+        .collect();
+    let mut kin = layouts.first_mut()?.kins.swap_remove(robot);
+    let model = layouts[0].scene.robots[robot].model;
+
+    let all: Vec<&Aim> = layouts.iter().flat_map(|l| mine(l, robot)).collect();
+    let base = task.robots[robot].base.translation.vector;
+    let base = [base.x, base.y, base.z];
+    base_shift(&all, model, &mut kin, base, |at| {
+        layouts
+            .iter()
+            .all(|l| clear_from(task, &l.instance, robot, at, &mine(l, robot)))
+    })
+}
+
+/// `robot`'s aims in `layout`.
+fn mine(layout: &Layout, robot: usize) -> Vec<&Aim> {
+    layout.aims.iter().filter(|a| a.robot == robot).collect()
 }
 
 /// W0010 for every step reached in seed 0's layout but not in some of the next ones, at the
@@ -868,6 +915,7 @@ fn partly(checked: &mut Checked, steps: &[dsl::ast::Step]) {
     };
     let planned: Vec<&compiler::PlannedStep> = task.steps().map(|(_, s)| s).collect();
     // Called where seed 0's layout misses nothing: only the next seeds are left to solve.
+    let mut hints: BTreeMap<usize, Option<[f64; 3]>> = BTreeMap::new();
     for (i, seeds) in beyond_seed_0(task, &BTreeSet::new()) {
         let (Some(step), Some(planned)) = (steps.get(i), planned.get(i)) else {
             continue;
@@ -896,9 +944,27 @@ fn partly(checked: &mut Checked, steps: &[dsl::ast::Step]) {
         if !drawn.is_empty() {
             d = d.with_note(format!("seed {first} draws {}", drawn.join(", ")));
         }
-        checked.diagnostics.push(d.with_hint(format!(
-            "narrow what the seeds draw (`[params]`, `[randomise]`) or stand `{}` nearer; `autobio render FILE --seed {first}` draws that layout",
-            planned.robot
-        )));
+        let robot = task.robots.iter().position(|r| r.name == planned.robot);
+        let found = robot.and_then(|r| {
+            let hint = *hints
+                .entry(r)
+                .or_insert_with(|| base_for_every_layout(task, r));
+            hint.map(|h| (r, h))
+        });
+        let hint = match found {
+            Some((r, hint)) => {
+                let base = task.robots[r].base.translation.vector;
+                format!(
+                    "stand `{}` at {}: its targets in all {SAMPLED_LAYOUTS} sampled layouts solve from there; or narrow what the seeds draw (`[params]`, `[randomise]`); `autobio render FILE --seed {first}` draws that layout",
+                    planned.robot,
+                    stand_at(hint, [base.x, base.y, base.z])
+                )
+            }
+            None => format!(
+                "narrow what the seeds draw (`[params]`, `[randomise]`) or stand `{}` nearer; `autobio render FILE --seed {first}` draws that layout",
+                planned.robot
+            ),
+        };
+        checked.diagnostics.push(d.with_hint(hint));
     }
 }
