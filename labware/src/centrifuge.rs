@@ -316,12 +316,27 @@ impl Params {
         self.lid_frame(placement, lid) * pose(at, tool)
     }
 
-    /// The lid's collision shell (in the lid body's frame, closed geometry): a plate
-    /// `LID_PLATE` thick on top and, below it, a skirt around the rotor chamber's footprint, so
-    /// that the shut lid is hollow over the chamber, as a real centrifuge's lid is, and clears
-    /// the tubes standing out of the rotor's slots (a flat slab pressed on their caps and tipped
-    /// them in their slots once it latched).
+    /// The lid's collision shell (in the lid body's frame, closed geometry). Over a fixed-angle
+    /// rotor: a plate `LID_PLATE` thick on top and, below it, a skirt around the rotor chamber's
+    /// footprint, so that the shut lid is hollow over the chamber, as a real centrifuge's lid is,
+    /// and clears the tubes standing out of the rotor's slots (a flat slab pressed on their caps
+    /// and tipped them in their slots once it latched). Over a swing-bucket rotor, whose buckets
+    /// hang below the body's top, one slab.
     fn lid_shell(&self, lid: &str) -> String {
+        // A swing-bucket rotor's buckets hang below the body's top: its lid stays one slab.
+        if !matches!(self.rotor, Rotor::FixedAngle { .. }) {
+            let half = [
+                self.lid_half_width,
+                self.lid_depth / 2.0,
+                self.lid_half_thickness,
+            ];
+            let c = [0.0, self.lid_depth / 2.0, self.lid_half_thickness];
+            return format!(
+                "    <geom name=\"{lid}/shell\" type=\"box\" size=\"{}\" pos=\"{}\" rgba=\"0.84 0.85 0.87 1\"/>\n",
+                v3(half),
+                v3(c)
+            );
+        }
         let (w, d, t) = (
             self.lid_half_width,
             self.lid_depth,
@@ -921,9 +936,20 @@ mod tests {
         let (cy, r) = (p.rotor_axis[1] - p.hinge[0], p.bowl_radius);
         assert!(cy - r > 0.0 && cy + r < p.lid_depth && r < p.lid_half_width);
         let xml = p.fragment("c", &Pose::identity()).worldbody;
-        for part in ["shell", "skirt_back", "skirt_front", "skirt_left", "skirt_right"] {
+        for part in [
+            "shell",
+            "skirt_back",
+            "skirt_front",
+            "skirt_left",
+            "skirt_right",
+        ] {
             assert!(xml.contains(&format!("c/lid/{part}\"")), "{part}");
         }
+        // The 5910's buckets hang below its body's top: its lid is one slab.
+        let slab = Params::eppendorf_5910()
+            .fragment("c", &Pose::identity())
+            .worldbody;
+        assert!(slab.contains("c/lid/shell\"") && !slab.contains("skirt"));
     }
 
     #[test]
