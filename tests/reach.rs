@@ -5,8 +5,9 @@
 //! point cases), for
 //! an arm with a closed-form IK (the ViperX) and one solved by the QP (the UR5e). A slot out of
 //! reach in only some layouts is W0010, naming the seeds whose episodes then fail at planning.
-//! The corpus's reach cases (arc, joint limit, partial range; slot and press point above) each
-//! get a hinted base from which the file checks with no reach diagnostic and the expert wins.
+//! The corpus's arc, joint-limit and partial-range cases (and the shipped protocols edited out of
+//! reach for a grasp, a slot and a press point above) each get a hinted base from which the file
+//! checks with no reach diagnostic and the expert wins.
 
 mod common;
 

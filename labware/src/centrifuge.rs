@@ -316,43 +316,33 @@ impl Params {
         self.lid_frame(placement, lid) * pose(at, tool)
     }
 
-    /// The lid's collision shell (in the lid body's frame, closed geometry). Over a fixed-angle
-    /// rotor: a plate `LID_PLATE` thick on top and, below it, a skirt around the rotor chamber's
-    /// footprint, so that the shut lid is hollow over the chamber, as a real centrifuge's lid is,
-    /// and clears the tubes standing out of the rotor's slots (a flat slab pressed on their caps
-    /// and tipped them in their slots once it latched). Over a swing-bucket rotor, whose buckets
-    /// hang below the body's top, one slab.
-    fn lid_shell(&self, lid: &str) -> String {
-        // A swing-bucket rotor's buckets hang below the body's top: its lid stays one slab.
-        if !matches!(self.rotor, Rotor::FixedAngle { .. }) {
-            let half = [
-                self.lid_half_width,
-                self.lid_depth / 2.0,
-                self.lid_half_thickness,
-            ];
-            let c = [0.0, self.lid_depth / 2.0, self.lid_half_thickness];
-            return format!(
-                "    <geom name=\"{lid}/shell\" type=\"box\" size=\"{}\" pos=\"{}\" rgba=\"0.84 0.85 0.87 1\"/>\n",
-                v3(half),
-                v3(c)
-            );
-        }
+    /// The lid's collision shell as boxes (name, centre, half extents), in the lid body's frame
+    /// (closed geometry: x along the hinge, y from the hinge to the front edge, z up). Over a
+    /// fixed-angle rotor: a plate `LID_PLATE` thick on top and, below it, a skirt around the
+    /// rotor chamber's footprint, so that the shut lid is hollow over the chamber, as a real
+    /// centrifuge's lid is, and clears the tubes standing out of the rotor's slots (a flat slab
+    /// pressed on their caps and tipped them in their slots once it latched). Over a swing-bucket
+    /// rotor, whose buckets hang below the body's top, one slab.
+    fn lid_boxes(&self) -> Vec<(&'static str, Vec3, Vec3)> {
         let (w, d, t) = (
             self.lid_half_width,
             self.lid_depth,
             2.0 * self.lid_half_thickness,
         );
+        if !matches!(self.rotor, Rotor::FixedAngle { .. }) {
+            return vec![("shell", [0.0, d / 2.0, t / 2.0], [w, d / 2.0, t / 2.0])];
+        }
         let hollow = t - LID_PLATE;
         let [cx, ay] = self.rotor_axis;
         let (cy, r) = (ay - self.hinge[0], self.bowl_radius);
-        let skirt = |name: &str, x: [f64; 2], y: [f64; 2]| {
+        let skirt = |name: &'static str, x: [f64; 2], y: [f64; 2]| {
             let c = [(x[0] + x[1]) / 2.0, (y[0] + y[1]) / 2.0, hollow / 2.0];
             let h = [(x[1] - x[0]) / 2.0, (y[1] - y[0]) / 2.0, hollow / 2.0];
-            (name.to_string(), c, h)
+            (name, c, h)
         };
-        let parts = [
+        vec![
             (
-                "shell".to_string(),
+                "shell",
                 [0.0, d / 2.0, hollow + LID_PLATE / 2.0],
                 [w, d / 2.0, LID_PLATE / 2.0],
             ),
@@ -360,8 +350,12 @@ impl Params {
             skirt("skirt_front", [-w, w], [cy + r, d]),
             skirt("skirt_left", [-w, cx - r], [cy - r, cy + r]),
             skirt("skirt_right", [cx + r, w], [cy - r, cy + r]),
-        ];
-        parts
+        ]
+    }
+
+    /// The lid's collision geoms ([`Params::lid_boxes`]) for the body `lid`.
+    fn lid_shell(&self, lid: &str) -> String {
+        self.lid_boxes()
             .iter()
             .map(|(name, c, h)| {
                 format!(
@@ -921,35 +915,47 @@ mod tests {
         let p = Params::eppendorf_5430();
         let s = state(p.lid_closed, true);
         let tube = crate::tube::Params::microtube();
-        let underside = p.hinge[1] + 2.0 * p.lid_half_thickness - LID_PLATE;
+        // Shut, the lid body's frame is the instrument's moved to the hinge.
+        let boxes = p.lid_boxes();
+        let [hy, hz] = p.hinge;
+        let clearance = |at: nalgebra::Vector3<f64>| -> f64 {
+            let q = [at.x, at.y - hy, at.z - hz];
+            boxes
+                .iter()
+                .map(|(_, c, h)| {
+                    (0..3)
+                        .map(|i| (q[i] - c[i]).abs() - h[i])
+                        .fold(f64::MIN, f64::max)
+                })
+                .fold(f64::MAX, f64::min)
+        };
+        let mut closest = f64::MAX;
         for k in 1..=30 {
             let seat = p.slot_seat(&k.to_string(), &s).unwrap();
             let axis = seat.rotation * nalgebra::Vector3::z();
             let top = seat.translation.vector + axis * tube.capped_height();
-            // The highest point of the cap's top rim.
-            let rim = top.z + tube.cap_radius * (1.0 - axis.z * axis.z).sqrt();
+            // The highest point of the cap's top rim: towards the axis's upward tilt.
+            let up = (nalgebra::Vector3::z() - axis * axis.z).normalize();
+            let rim = top + up * tube.cap_radius;
             // The caps stand above the body's top: a flat lid would press on them.
-            assert!(rim > p.hinge[1], "slot {k}: {rim}");
-            assert!(underside - rim > 0.005, "slot {k}: {rim} under {underside}");
+            assert!(rim.z > hz, "slot {k}: {}", rim.z);
+            for point in [top, rim] {
+                closest = closest.min(clearance(point));
+            }
         }
-        // The hollow is inside the lid: the skirt around it is there on every side.
+        assert!(closest > 0.005, "a cap within {closest} m of the lid");
+        // The skirt stands on every side of the hollow, inside the lid's outline.
         let (cy, r) = (p.rotor_axis[1] - p.hinge[0], p.bowl_radius);
         assert!(cy - r > 0.0 && cy + r < p.lid_depth && r < p.lid_half_width);
         let xml = p.fragment("c", &Pose::identity()).worldbody;
-        for part in [
-            "shell",
-            "skirt_back",
-            "skirt_front",
-            "skirt_left",
-            "skirt_right",
-        ] {
+        for (part, ..) in &boxes {
             assert!(xml.contains(&format!("c/lid/{part}\"")), "{part}");
         }
         // The 5910's buckets hang below its body's top: its lid is one slab.
-        let slab = Params::eppendorf_5910()
-            .fragment("c", &Pose::identity())
-            .worldbody;
-        assert!(slab.contains("c/lid/shell\"") && !slab.contains("skirt"));
+        let slab = Params::eppendorf_5910();
+        assert_eq!(slab.lid_boxes().len(), 1);
+        let xml = slab.fragment("c", &Pose::identity()).worldbody;
+        assert!(xml.contains("c/lid/shell\"") && !xml.contains("skirt"));
     }
 
     #[test]

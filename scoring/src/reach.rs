@@ -711,7 +711,8 @@ fn base_shift(
     base: [f64; 3],
     mut clear: impl FnMut([f64; 3]) -> bool,
 ) -> Option<[f64; 3]> {
-    let mut tried = 0;
+    // Reached bases stood up and checked, per height: the raised search gets its own budget.
+    let mut tried: BTreeMap<u64, usize> = BTreeMap::new();
     let home = model.home.to_vec();
     let rings = (HINT_RADIUS / HINT_STEP).round() as usize;
     let around = |rise: f64, first: usize| {
@@ -729,7 +730,8 @@ fn base_shift(
     level
         .chain(raised)
         .find(|d| {
-            if tried >= HINT_CLEAR_TRIES {
+            let height = tried.entry(d[2].to_bits()).or_default();
+            if *height >= HINT_CLEAR_TRIES {
                 return false;
             }
             // The base moved by d reaches what the base where it is reaches moved by -d.
@@ -757,7 +759,7 @@ fn base_shift(
             });
             // Reached: then stood there for real, clear of the scene on the way in.
             reached && {
-                tried += 1;
+                *tried.entry(d[2].to_bits()).or_default() += 1;
                 clear([base[0] + d[0], base[1] + d[1], base[2] + d[2]])
             }
         })
@@ -857,7 +859,7 @@ pub fn check(checked: &mut Checked) {
                 stand_at(hint, m.base)
             )),
             None => d.with_hint(format!(
-                "no base found within {HINT_RADIUS} m of `{}`'s (or up to {:.1} m above it) that reaches every target checked for it; move the labware or the robot",
+                "no base found within {HINT_RADIUS} m of `{}`'s (or up to {:.1} m above it) that reaches every target checked for it in all {SAMPLED_LAYOUTS} sampled layouts; move the labware or the robot",
                 m.robot,
                 HINT_RISE * HINT_RISES as f64
             )),
@@ -870,11 +872,11 @@ pub fn check(checked: &mut Checked) {
 /// A hinted base as the hint writes it: the position, how far it is from `base` in the plane,
 /// and how much higher, where it is.
 fn stand_at([hx, hy, hz]: [f64; 3], [bx, by, bz]: [f64; 3]) -> String {
+    let dist = ((hx - bx).powi(2) + (hy - by).powi(2)).sqrt();
+    let rise = hz - bz;
     // To the millimetre written, without a "-0.000".
     let mm = |v: f64| (v * 1000.0).round() / 1000.0 + 0.0;
     let (hx, hy, hz) = (mm(hx), mm(hy), mm(hz));
-    let dist = ((hx - bx).powi(2) + (hy - by).powi(2)).sqrt();
-    let rise = hz - bz;
     let raised = if rise > 1e-9 {
         format!(", {rise:.2} m higher: on a riser")
     } else {
@@ -884,7 +886,7 @@ fn stand_at([hx, hy, hz]: [f64; 3], [bx, by, bz]: [f64; 3]) -> String {
 }
 
 /// The nearest base for `robot` from which its targets in every sampled layout solve (as
-/// [`base_shift`] searches) and its arm comes in clear in each: W0010's hint.
+/// [`base_shift`] searches) and its arm comes in clear in each: the hint of E0036 and of W0010.
 fn base_for_every_layout(task: &Task, robot: usize) -> Option<[f64; 3]> {
     let mut layouts: Vec<Layout> = (0..SAMPLED_LAYOUTS)
         .filter_map(|seed| Layout::of(task, seed))
@@ -892,18 +894,18 @@ fn base_for_every_layout(task: &Task, robot: usize) -> Option<[f64; 3]> {
     let mut kin = layouts.first_mut()?.kins.swap_remove(robot);
     let model = layouts[0].scene.robots[robot].model;
 
-    let all: Vec<&Aim> = layouts.iter().flat_map(|l| mine(l, robot)).collect();
+    let all: Vec<&Aim> = layouts.iter().flat_map(|l| aims_of(l, robot)).collect();
     let base = task.robots[robot].base.translation.vector;
     let base = [base.x, base.y, base.z];
     base_shift(&all, model, &mut kin, base, |at| {
         layouts
             .iter()
-            .all(|l| clear_from(task, &l.instance, robot, at, &mine(l, robot)))
+            .all(|l| clear_from(task, &l.instance, robot, at, &aims_of(l, robot)))
     })
 }
 
 /// `robot`'s aims in `layout`.
-fn mine(layout: &Layout, robot: usize) -> Vec<&Aim> {
+fn aims_of(layout: &Layout, robot: usize) -> Vec<&Aim> {
     layout.aims.iter().filter(|a| a.robot == robot).collect()
 }
 
