@@ -30,15 +30,24 @@ fn checked(path: &str, from: &str, to: &str, tag: &str) -> compiler::Checked {
 
 /// The base the hint of `c`'s E0036 names, as written in it.
 fn hinted_base(c: &compiler::Checked) -> String {
+    hint_of(c, dsl::Code::E0036).1
+}
+
+/// The hint of `c`'s first `code` diagnostic, and the base it names as written in it.
+fn hint_of(c: &compiler::Checked, code: dsl::Code) -> (String, String) {
     let d = c
         .diagnostics
         .iter()
-        .find(|d| d.code == dsl::Code::E0036)
-        .unwrap_or_else(|| panic!("no E0036 in {:#?}", c.diagnostics));
-    let hint = d.hint.as_deref().unwrap();
-    let start = hint.find("pos_m = [").unwrap() + "pos_m = ".len();
+        .find(|d| d.code == code)
+        .unwrap_or_else(|| panic!("no {code:?} in {:#?}", c.diagnostics));
+    let hint = d.hint.clone().unwrap();
+    let start = hint
+        .find("pos_m = [")
+        .unwrap_or_else(|| panic!("no base in the hint: {hint}"))
+        + "pos_m = ".len();
     let end = start + hint[start..].find(']').unwrap() + 1;
-    hint[start..end].to_string()
+    let base = hint[start..end].to_string();
+    (hint, base)
 }
 
 #[test]
@@ -204,22 +213,16 @@ fn a_lid_out_of_reach_is_found_along_its_arc_and_a_hinted_base_checks_clean() {
         arc.hint.as_deref().unwrap().contains("higher: on a riser"),
         "{arc:?}"
     );
-    let raised = hinted_base(&low);
-    let up = check(&format!("base = {{ pos_m = {raised}, yaw_deg = -90 }}"));
-    assert!(
-        up.diagnostics.iter().all(|d| !d.is_error()),
-        "{raised}: {:#?}",
-        up.diagnostics
-    );
     let aside = check("base = { pos_m = [0.55, 0.25, 1.45], yaw_deg = -90 }");
     assert!(aside.task.is_none());
-    let hinted = hinted_base(&aside);
-    let fixed = check(&format!("base = {{ pos_m = {hinted}, yaw_deg = -90 }}"));
-    assert!(
-        fixed.diagnostics.iter().all(|d| !d.is_error()),
-        "{hinted}: {:#?}",
-        fixed.diagnostics
-    );
+    for hinted in [hinted_base(&low), hinted_base(&aside)] {
+        let fixed = check(&format!("base = {{ pos_m = {hinted}, yaw_deg = -90 }}"));
+        assert!(
+            fixed.diagnostics.iter().all(|d| !d.is_error()),
+            "{hinted}: {:#?}",
+            fixed.diagnostics
+        );
+    }
 }
 
 /// A target rack at the arm's edge: W0010 names the seeds whose drawn slot is out of reach, and
@@ -327,17 +330,7 @@ fn the_corpus_hint_fixes(path: &str, code: dsl::Code, seeds: &[u64], tag: &str) 
     let source = std::fs::read_to_string(path).unwrap();
     let mut c = compiler::check_file(Path::new(path), None).unwrap();
     scoring::reach::check(&mut c);
-    let d = c
-        .diagnostics
-        .iter()
-        .find(|d| d.code == code)
-        .unwrap_or_else(|| panic!("no {code:?} in {:#?}", c.diagnostics));
-    let hint = d.hint.clone().unwrap();
-    let start = hint
-        .find("pos_m = [")
-        .unwrap_or_else(|| panic!("no base in the hint: {hint}"))
-        + "pos_m = ".len();
-    let hinted = &hint[start..start + hint[start..].find(']').unwrap() + 1];
+    let (hint, hinted) = hint_of(&c, code);
     let line = source
         .lines()
         .find(|l| l.starts_with("base = { pos_m = ["))
