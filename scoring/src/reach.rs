@@ -74,7 +74,8 @@ const HINT_DIRECTIONS: usize = 16;
 /// must still reach.
 const HINT_MARGIN: f64 = 0.1;
 /// How far back along a grasp's axis the hinted base's arm must come in clear of the scene (m),
-/// and how many reached bases are stood up and checked so before the search gives up.
+/// and how many reached bases at each height are stood up and checked so before the search
+/// gives that height up.
 const HINT_APPROACH: f64 = 0.07;
 const HINT_CLEAR_TRIES: usize = 120;
 /// Where no base at the robot's height serves (a target high above it, reached only with a
