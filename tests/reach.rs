@@ -19,10 +19,14 @@ use std::path::Path;
 fn checked(path: &str, from: &str, to: &str, tag: &str) -> compiler::Checked {
     let source = std::fs::read_to_string(path).unwrap();
     assert!(source.contains(from), "{path} has no `{from}`");
-    let edited = source.replacen(from, to, 1);
-    let dir = common::scratch(&format!("reach-{tag}"));
-    let file = dir.join(Path::new(path).file_name().unwrap());
-    std::fs::write(&file, edited).unwrap();
+    check_as(path, &source.replacen(from, to, 1), &format!("reach-{tag}"))
+}
+
+/// `source` written as `path`'s file name in a scratch folder named `scratch`, checked as
+/// `autobio check` checks it (the compiler, then reach).
+fn check_as(path: &str, source: &str, scratch: &str) -> compiler::Checked {
+    let file = common::scratch(scratch).join(Path::new(path).file_name().unwrap());
+    std::fs::write(&file, source).unwrap();
     let mut c = compiler::check_file(&file, None).unwrap();
     scoring::reach::check(&mut c);
     c
@@ -112,11 +116,7 @@ fn the_hint_fixes(path: &str, base: &str, (from, far): (&str, &str), step: usize
         .replacen(from, far, 1);
     let robot_now = if from == base { far } else { base };
     let source = source.replacen(robot_now, &stood, 1);
-    let dir = common::scratch(&format!("reach-{tag}-hinted"));
-    let file = dir.join(Path::new(path).file_name().unwrap());
-    std::fs::write(&file, source).unwrap();
-    let mut fixed = compiler::check_file(&file, None).unwrap();
-    scoring::reach::check(&mut fixed);
+    let fixed = check_as(path, &source, &format!("reach-{tag}-hinted"));
     assert!(
         fixed.diagnostics.iter().all(|d| !d.is_error()),
         "{hinted}: {:#?}",
@@ -336,11 +336,7 @@ fn the_corpus_hint_fixes(path: &str, code: dsl::Code, seeds: &[u64], tag: &str) 
         .find(|l| l.starts_with("base = { pos_m = ["))
         .unwrap();
     let stood = source.replacen(line, &format!("base = {{ pos_m = {hinted} }}"), 1);
-    let dir = common::scratch(&format!("reach-corpus-{tag}"));
-    let file = dir.join(Path::new(path).file_name().unwrap());
-    std::fs::write(&file, stood).unwrap();
-    let mut fixed = compiler::check_file(&file, None).unwrap();
-    scoring::reach::check(&mut fixed);
+    let fixed = check_as(path, &stood, &format!("reach-corpus-{tag}"));
     assert!(
         fixed
             .diagnostics
