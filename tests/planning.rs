@@ -10,8 +10,9 @@ use common::{compile, run_with, scene};
 use labware::frame::{axis_angle, pose};
 use primitives::Kinematics;
 use primitives::ik::solve_ik;
-use runtime::clearance::Clearance;
+use runtime::clearance::{Clearance, KEEP};
 use runtime::kinematics::ArmKinematics;
+use runtime::scene::Owner;
 use scoring::{Observation, Policy, PolicyError, StageEvent};
 use std::sync::{Arc, Mutex};
 
@@ -86,6 +87,143 @@ fn the_check_fails_a_hand_or_a_carried_tube_pushed_into_the_bench() {
     );
     clear.sync(&qpos, None);
     assert!(clear.is_clear(&above), "{:?}", clear.collisions(&above));
+}
+
+/// The arm at `q` in the episode's configuration `qpos`: MuJoCo's own distance (no margin, the
+/// episode's model) from the arm's colliding geoms to those of the bodies `near` picks.
+fn distance_to(
+    scene: &runtime::Scene,
+    qpos: &[f64],
+    q: &[f64],
+    near: impl Fn(usize) -> bool,
+) -> f64 {
+    let mut data = mujoco_rs::prelude::MjData::new(scene.model.clone());
+    data.qpos_mut().copy_from_slice(qpos);
+    for (k, &adr) in scene.robots[0].qpos.iter().enumerate() {
+        data.qpos_mut()[adr] = q[k];
+    }
+    data.kinematics();
+    let m = &scene.model;
+    let collides = |g: usize| m.geom_contype()[g] != 0 || m.geom_conaffinity()[g] != 0;
+    let body = |g: usize| m.geom_bodyid()[g] as usize;
+    let ngeom = m.ffi().ngeom as usize;
+    let arm: Vec<usize> = (0..ngeom)
+        .filter(|&g| collides(g) && scene.body_owner[body(g)] == Some(Owner::Robot(0)))
+        .collect();
+    let other: Vec<usize> = (0..ngeom)
+        .filter(|&g| collides(g) && near(body(g)))
+        .collect();
+    let mut least = f64::INFINITY;
+    for &a in &arm {
+        for &b in &other {
+            least = least.min(data.geom_distance(a, b, 0.1, None));
+        }
+    }
+    least
+}
+
+#[test]
+fn the_check_keeps_the_hand_off_a_standing_tube_and_not_off_the_bench() {
+    let task = compile("protocols/tube/transfer.toml");
+    let (instance, scene) = scene(&task, 0);
+    let ep = runtime::Episode::new(scene.clone(), &task, &instance);
+    let qpos = ep.qpos();
+    let start = instance.robot_q[0].clone();
+    let mut kin = ArmKinematics::new(&scene, 0);
+    let tube = task.labware.iter().position(|l| l.name == "tube").unwrap();
+    let of_tube = |b: usize| scene.body_owner[b] == Some(Owner::Labware(tube));
+    let mut clear = Clearance::new(&scene, 0);
+    clear.sync(&qpos, None);
+    // The hand, pointing down, lowered 1 mm at a time from 25 cm above `xy`'s `floor` until the
+    // check first finds a collision: that pose and the bodies it names.
+    let lower = |kin: &mut ArmKinematics, clear: &mut Clearance, x: f64, y: f64, floor: f64| {
+        let mut seed = start.clone();
+        for mm in (0..250).rev() {
+            let z = floor + mm as f64 * 0.001;
+            let q = solve_ik(kin, &down([x, y, z]), &seed, &Default::default()).unwrap();
+            let hits = clear.collisions(&q);
+            if let Some(&(a, b)) = hits.first() {
+                return (q, a, b);
+            }
+            seed = q;
+        }
+        panic!("no collision down to {floor}");
+    };
+
+    // Over the tube standing in its rack, a body on a joint: stopped `KEEP` short of it.
+    let adr = scene.labware[tube].free[0].qpos;
+    let (x, y, z) = (qpos[adr], qpos[adr + 1], qpos[adr + 2]);
+    let (over_tube, a, b) = lower(&mut kin, &mut clear, x, y, z);
+    assert!(
+        of_tube(a) || of_tube(b),
+        "{} against {}",
+        clear.body_name(a),
+        clear.body_name(b)
+    );
+    let gap = distance_to(&scene, &qpos, &over_tube, of_tube);
+    assert!(
+        gap > KEEP - 0.002 && gap < KEEP + 0.0005,
+        "stopped {gap} m from the tube, for {KEEP} m kept"
+    );
+
+    // Over the bare bench, fixed: stopped only where the hand is in it (the check's tolerance
+    // of a millimetre, and the millimetre step).
+    let tcp = kin.tcp(&start);
+    let bench = instance.labware_placement[task
+        .labware
+        .iter()
+        .position(|l| l.name == "source")
+        .unwrap()]
+    .translation
+    .vector
+    .z;
+    let (x, y) = (tcp.translation.vector.x, tcp.translation.vector.y - 0.1);
+    let (in_bench, a, b) = lower(&mut kin, &mut clear, x, y, bench - 0.03);
+    let (_, obstacle) = if scene.body_owner[a] == Some(Owner::Robot(0)) {
+        (a, b)
+    } else {
+        (b, a)
+    };
+    let depth = distance_to(&scene, &qpos, &in_bench, |body| body == obstacle);
+    assert!(
+        (-0.0025..=0.0).contains(&depth),
+        "stopped {depth} m from `{}`",
+        clear.body_name(obstacle)
+    );
+
+    // Where the motion starts that near the tube, the arm may stay as near, and come no nearer.
+    let mut at = qpos.clone();
+    for (k, &adr) in scene.robots[0].qpos.iter().enumerate() {
+        at[adr] = over_tube[k];
+    }
+    clear.sync(&at, None);
+    assert!(
+        clear.is_clear(&over_tube),
+        "{:?}",
+        clear.collisions(&over_tube)
+    );
+    let tcp = kin.tcp(&over_tube).translation.vector;
+    let nearer = solve_ik(
+        &mut kin,
+        &down([tcp.x, tcp.y, tcp.z - 0.003]),
+        &over_tube,
+        &Default::default(),
+    )
+    .unwrap();
+    assert!(
+        !clear.is_clear(&nearer),
+        "3 mm nearer the tube than at the start"
+    );
+    // So may it where the motion ends there.
+    clear.sync(&qpos, None);
+    assert!(!clear.is_clear(&over_tube));
+    clear.ends_at(&start, &over_tube);
+    assert!(
+        clear.is_clear(&over_tube),
+        "{:?}",
+        clear.collisions(&over_tube)
+    );
+    assert!(!clear.is_clear(&nearer));
 }
 
 /// The expert, keeping a copy of the events it reports.

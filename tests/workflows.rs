@@ -4,7 +4,7 @@
 //! expert finds a way where its first plan has none (a round tube carried over its seat at
 //! another heading, on a seed where every arm pose at the tube's own heading hits the housing);
 //! the task table measures the workflows, not the stage files they are made of; a workflow
-//! reports each stage's completion.
+//! reports each stage's completion; the lidder leaves the open lid open on its way home.
 
 mod common;
 
@@ -165,4 +165,18 @@ fn a_pick_after_a_button_press_opens_the_hand_first() {
     assert!(r.success, "{:#?}", r.verdict);
     let tube = common::predicate(&r, "tube in rack.B2");
     assert!(tube.holds, "{tube:?}");
+}
+
+/// The lidder lets go of the 5430's lid at its open stop and goes home past it (issue 26). On
+/// these seeds the hand arrived pressing the lid against its stop, slid along the bar; let go
+/// and backed off from where it had been told to be, it stayed on the bar, and its way home,
+/// checked clear but grazing the lid, dragged the lid half shut, so that the loader then met
+/// the lid over the rotor ("the goal configuration collides").
+#[test]
+fn the_lidder_goes_home_from_the_open_lid_without_knocking_it_shut() {
+    let task = compile("protocols/workflows/centrifuge_run.toml");
+    for seed in [78, 88] {
+        let r = run(&task, seed, "expert");
+        assert!(r.success, "seed {seed}: {:?} {:#?}", r.error, r.verdict);
+    }
 }

@@ -81,6 +81,12 @@ pub enum Motion {
     Home,
     /// Keep the tool still for `seconds` (a key held down).
     Wait { seconds: f64 },
+    /// Stop pushing: the arm's target becomes where its joints are. A hand that dragged a part
+    /// to its stop lags the command it was given (the part held it back), and pressed on with
+    /// the force of that lag; let go from there, its retreat would start where the hand is not,
+    /// and the next free-space route would be checked from there too, while the real hand,
+    /// still hooked on the part, dragged it along.
+    Comply,
     /// Close the gripper and wait for it to settle.
     Grasp,
     /// Open the gripper and wait for it to settle.
@@ -129,6 +135,7 @@ impl Motion {
             Motion::Press { .. } => "press",
             Motion::HoldUntil { .. } => "hold until",
             Motion::Wait { .. } => "wait",
+            Motion::Comply => "comply",
             Motion::Grasp => "grasp",
             Motion::Release => "release",
             Motion::Lift { .. } => "lift",

@@ -585,6 +585,7 @@ impl StepFrame {
             | Motion::Release
             | Motion::HoldUntil { .. }
             | Motion::Wait { .. }
+            | Motion::Comply
             | Motion::Home => Vec::new(),
         })
     }

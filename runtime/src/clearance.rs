@@ -1,24 +1,37 @@
 //! Collision checks for the expert's planner: whether one arm, at joint angles `q`, and the item
 //! it carries are clear of everything else in the scene as it is now. Runs MuJoCo's own
-//! collision detection (the full model's collision geoms) on a private `MjData`, so the
-//! episode's state is never touched. It plans nothing (that is `planner`), and it knows no
-//! instrument or joint by name: the moving set is found by body owner.
+//! collision detection (the full model's collision geoms) on a private copy of the model and
+//! its own `MjData`, so the episode's state is never touched. It plans nothing (that is
+//! `planner`), and it knows no instrument or joint by name: the moving set is found by body
+//! owner.
 //!
 //! Contact pairs already touching when the check is synced (a gripper resting on a handle, a
 //! tube still in its slot's sleeve) are allowed for that motion, as a motion planner's
 //! allowed-collision matrix is seeded from the start state: the motion leaves those contacts,
 //! it does not cause them.
+//!
+//! The arm keeps [`KEEP`] away from what can move (a hinged lid, a standing tube: a body on a
+//! joint), as a planner pads its obstacles: the arm lags its commanded path by a few millimetres
+//! (more on a fast swing), and a path that grazed a lid open against its stop pushed it shut on
+//! the way. What the arm is nearer than that where a motion starts or ends (the hand just let
+//! go of the lid; a tube brought down over its slot in the rotor), it may come as near to on the
+//! way, not nearer. The padding is a contact margin on the check's own copy of the model; the
+//! episode's physics is untouched.
 
 use crate::scene::{LabwareIds, Owner, RobotIds, Scene};
 use labware::Pose;
 use labware::frame::{from_wxyz, wxyz};
 use mujoco_rs::prelude::*;
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::sync::Arc;
 
 /// A contact counts as a collision when the geoms overlap by more than this (m): resting
 /// contacts between stacked items sit at fractions of a millimetre.
 const PENETRATION: f64 = 0.001;
+
+/// How far the arm's own bodies keep from a body that moves (m), beyond what they were at the
+/// sync.
+pub const KEEP: f64 = 0.015;
 
 /// An item carried rigidly in the hand: each of its free joints follows the tool. Only the item
 /// the caller names is carried: anything else in the hand would stay behind as an obstacle.
@@ -39,6 +52,12 @@ pub struct Clearance {
     carried: Option<Carried>,
     /// Body pairs (lower id first) in contact at the last sync.
     allowed: BTreeSet<(usize, usize)>,
+    /// Arm body against moving body, nearer than [`KEEP`] at the last sync: how near (m).
+    near_at_sync: BTreeMap<(usize, usize), f64>,
+    /// The same at the sync or at the end of the motion now checked ([`Clearance::ends_at`]).
+    near: BTreeMap<(usize, usize), f64>,
+    /// Per body: whether it sits on a joint of an item (can be knocked).
+    movable: Vec<bool>,
     /// Validity checks since construction (a planned route reports how many it took).
     pub checks: u64,
 }
@@ -46,8 +65,20 @@ pub struct Clearance {
 impl Clearance {
     pub fn new(scene: &Scene, robot: usize) -> Clearance {
         let nbody = scene.model.ffi().nbody as usize;
+        let weld = scene.model.body_weldid();
+        let movable: Vec<bool> = (0..nbody)
+            .map(|b| weld[b] != 0 && matches!(scene.body_owner[b], Some(Owner::Labware(_))))
+            .collect();
+        // The check's own model: contacts with moving bodies are found `KEEP` before they touch.
+        let mut model = (*scene.model).clone();
+        for g in 0..model.ffi().ngeom as usize {
+            let body = model.geom_bodyid()[g] as usize;
+            if movable[body] {
+                model.geom_margin_mut()[g] = KEEP;
+            }
+        }
         Clearance {
-            data: MjData::new(scene.model.clone()),
+            data: MjData::new(Arc::new(model)),
             ids: scene.robots[robot].clone(),
             robot,
             labware: scene.labware.clone(),
@@ -55,6 +86,9 @@ impl Clearance {
             moving: vec![false; nbody],
             carried: None,
             allowed: BTreeSet::new(),
+            near_at_sync: BTreeMap::new(),
+            near: BTreeMap::new(),
+            movable,
             checks: 0,
         }
     }
@@ -85,7 +119,14 @@ impl Clearance {
                 .collect(),
         });
         self.data.collision();
-        self.allowed = self.colliding_pairs().into_iter().collect();
+        self.allowed = self
+            .contacts()
+            .filter(|c| c.depth_past(PENETRATION))
+            .map(|c| c.pair)
+            .collect();
+        self.near_at_sync = BTreeMap::new();
+        self.near_with_contacts(true);
+        self.near = self.near_at_sync.clone();
     }
 
     fn free_pose(&self, adr: usize) -> Pose {
@@ -101,24 +142,73 @@ impl Clearance {
         )
     }
 
-    /// Pairs of bodies (one moving, one not) overlapping past [`PENETRATION`] after the last
-    /// collision pass.
-    fn colliding_pairs(&self) -> Vec<(usize, usize)> {
+    /// Adds the arm's bodies nearer than [`KEEP`] to a moving body after the last collision pass
+    /// to the sync's near pairs (`at_sync`) or to the motion's.
+    fn near_with_contacts(&mut self, at_sync: bool) {
+        let found: Vec<Contact> = self.contacts().filter(|c| c.keeps_off).collect();
+        let near = if at_sync {
+            &mut self.near_at_sync
+        } else {
+            &mut self.near
+        };
+        for c in found {
+            let d = near.entry(c.pair).or_insert(c.dist);
+            *d = d.min(c.dist);
+        }
+    }
+
+    /// Checks from now on are for a motion from arm angles `start` to `end`: what the arm is
+    /// nearer than [`KEEP`] to at either, it may come as near to on the way (the pairs near at
+    /// the sync stay allowed; those of an earlier motion's ends do not).
+    pub fn ends_at(&mut self, start: &[f64], end: &[f64]) {
+        self.near = self.near_at_sync.clone();
+        for q in [start, end] {
+            self.place(q);
+            self.near_with_contacts(false);
+        }
+    }
+
+    /// Whether the arm at `q` overlaps anything beyond the allowed pairs, the padding around
+    /// moving bodies aside: whether a motion may end there.
+    pub fn may_end_at(&mut self, q: &[f64]) -> bool {
+        self.checks += 1;
+        self.place(q);
+        !self
+            .contacts()
+            .any(|c| c.depth_past(PENETRATION) && !self.allowed.contains(&c.pair))
+    }
+
+    /// The contacts of the last collision pass between a moving body and one that is not.
+    fn contacts(&self) -> impl Iterator<Item = Contact> + '_ {
         let geom_body = self.data.model().geom_bodyid();
-        let mut pairs = Vec::new();
-        for c in self.data.contact() {
-            if c.exclude != 0 || c.dist > -PENETRATION {
-                continue;
-            }
+        self.data.contact().iter().filter_map(move |c| {
             let (a, b) = (
                 geom_body[c.geom[0] as usize] as usize,
                 geom_body[c.geom[1] as usize] as usize,
             );
-            if self.moving[a] != self.moving[b] {
-                pairs.push((a.min(b), a.max(b)));
+            if c.exclude != 0 || self.moving[a] == self.moving[b] {
+                return None;
             }
-        }
-        pairs
+            let (arm, other) = if self.moving[a] { (a, b) } else { (b, a) };
+            Some(Contact {
+                pair: (a.min(b), a.max(b)),
+                dist: c.dist,
+                keeps_off: matches!(self.owner[arm], Some(Owner::Robot(_))) && self.movable[other],
+            })
+        })
+    }
+
+    /// Pairs (one moving, one not) that collide after the last collision pass: overlapping past
+    /// [`PENETRATION`], or an arm body nearer a moving one than [`KEEP`] and than at the
+    /// motion's ends.
+    fn colliding_pairs(&self) -> Vec<(usize, usize)> {
+        self.contacts()
+            .filter(|c| {
+                c.depth_past(PENETRATION)
+                    || (c.keeps_off && c.dist < self.near.get(&c.pair).map_or(KEEP, |d| d - NEARER))
+            })
+            .map(|c| c.pair)
+            .collect()
     }
 
     fn place(&mut self, q: &[f64]) {
@@ -181,5 +271,25 @@ impl Clearance {
             .id_to_name(MjtObjBase::mjOBJ_BODY, body)
             .unwrap_or("?")
             .to_string()
+    }
+}
+
+/// How much nearer than at a motion's ends an arm body may come to a moving body it already was within
+/// [`KEEP`] of (m): the check's own rounding, not room to approach.
+const NEARER: f64 = 0.0005;
+
+/// One contact of a collision pass, as the checks read it.
+struct Contact {
+    /// The two bodies, lower id first.
+    pair: (usize, usize),
+    /// Signed distance (m): negative is overlap.
+    dist: f64,
+    /// An arm body against a body that moves: kept [`KEEP`] off.
+    keeps_off: bool,
+}
+
+impl Contact {
+    fn depth_past(&self, depth: f64) -> bool {
+        self.dist < -depth
     }
 }

@@ -799,7 +799,7 @@ fn clear_from(
             let approach = labware::frame::translated_local(grasp, [0.0, 0.0, -HINT_APPROACH]);
             starts.iter().any(|seed| {
                 solve_with(model.ik, &mut kin, &approach, seed)
-                    .is_ok_and(|q| clearance.is_clear(&q))
+                    .is_ok_and(|q| clearance.may_end_at(&q))
             })
         })
     })

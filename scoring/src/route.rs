@@ -62,6 +62,7 @@ pub fn route(
     waypoints: Vec<Vec<f64>>,
     seed: u64,
 ) -> Result<Route, PlanFailure> {
+    clearance.ends_at(&waypoints[0], waypoints.last().expect("a path has a start"));
     let Some(hits) = first_hit(clearance, &waypoints, step) else {
         return Ok(Route::Straight(waypoints));
     };

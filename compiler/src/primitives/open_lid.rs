@@ -17,10 +17,17 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
 /// A lid with a lever on its handle: grip the pressed lever of the closed lid, raise it out of
 /// its notch, swing the lid open. A lid a key has released (see `unlock`): lift it by its
 /// handle from where it rests all the way open (a lid let go short of open, even past the balance
-/// of its spring, swings on into the hand that let it go).
+/// of its spring, swings on into the hand that let it go), and there stop pushing before letting
+/// go and back off 8 cm: the damped lid holds the hand back on the way, so the hand arrives
+/// pressing the lid against its open stop (the 5430's wrist lagged 0.17 rad, the hand slid up to
+/// 4 cm along the bar), and the 4 cm retreat and the route home from the commanded pose left the
+/// fingers on the bar and dragged the lid half shut (`workflows.centrifuge_run`, issue 26).
 fn motions(step: &MotionStep) -> Vec<Motion> {
     if lid::release_key(step).is_some() {
-        return lid::handle_motions(step, "lid_open", &[], &[(&[("lid", "open")], 30)], 0.04);
+        let mut m = lid::handle_motions(step, "lid_open", &[], &[(&[("lid", "open")], 30)], 0.08);
+        let release = m.iter().position(|m| matches!(m, Motion::Release));
+        m.insert(release.expect("a handle is let go"), Motion::Comply);
+        return m;
     }
     lid::handle_motions(
         step,

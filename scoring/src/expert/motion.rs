@@ -152,6 +152,10 @@ impl ExpertPolicy {
                     until: obs.time + seconds,
                 });
             }
+            Motion::Comply => {
+                arm.target = obs.privileged.robots[r].arm_q.clone();
+                return Ok(Active::Hold { until: obs.time });
+            }
             Motion::HoldUntil {
                 labware,
                 param,
@@ -566,7 +570,8 @@ fn route_to_other_end(
 ) -> Option<Route> {
     let joint_limits = arm.kin.limits();
     for q in other_ends(arm, &end?) {
-        if !arm.clearance.is_clear(&q) || next.is_some_and(|n| !solves_next(arm, frame, n, lab, &q))
+        if !arm.clearance.may_end_at(&q)
+            || next.is_some_and(|n| !solves_next(arm, frame, n, lab, &q))
         {
             continue;
         }
