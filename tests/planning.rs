@@ -122,6 +122,32 @@ fn distance_to(
     least
 }
 
+/// The arm's hand, pointing down, lowered 1 mm at a time from 25 cm above `floor` until the
+/// check first finds a collision: that pose and the bodies it names.
+fn lower(
+    kin: &mut ArmKinematics,
+    clear: &mut Clearance,
+    start: &[f64],
+    floor: [f64; 3],
+) -> (Vec<f64>, usize, usize) {
+    let mut seed = start.to_vec();
+    for mm in (0..250).rev() {
+        let z = floor[2] + mm as f64 * 0.001;
+        let q = solve_ik(
+            kin,
+            &down([floor[0], floor[1], z]),
+            &seed,
+            &Default::default(),
+        )
+        .unwrap();
+        if let Some(&(a, b)) = clear.collisions(&q).first() {
+            return (q, a, b);
+        }
+        seed = q;
+    }
+    panic!("no collision down to {floor:?}");
+}
+
 #[test]
 fn the_check_keeps_the_hand_off_a_standing_tube_and_not_off_the_bench() {
     let task = compile("protocols/tube/transfer.toml");
@@ -134,26 +160,10 @@ fn the_check_keeps_the_hand_off_a_standing_tube_and_not_off_the_bench() {
     let of_tube = |b: usize| scene.body_owner[b] == Some(Owner::Labware(tube));
     let mut clear = Clearance::new(&scene, 0);
     clear.sync(&qpos, None);
-    // The hand, pointing down, lowered 1 mm at a time from 25 cm above `xy`'s `floor` until the
-    // check first finds a collision: that pose and the bodies it names.
-    let lower = |kin: &mut ArmKinematics, clear: &mut Clearance, x: f64, y: f64, floor: f64| {
-        let mut seed = start.clone();
-        for mm in (0..250).rev() {
-            let z = floor + mm as f64 * 0.001;
-            let q = solve_ik(kin, &down([x, y, z]), &seed, &Default::default()).unwrap();
-            let hits = clear.collisions(&q);
-            if let Some(&(a, b)) = hits.first() {
-                return (q, a, b);
-            }
-            seed = q;
-        }
-        panic!("no collision down to {floor}");
-    };
-
     // Over the tube standing in its rack, a body on a joint: stopped `KEEP` short of it.
     let adr = scene.labware[tube].free[0].qpos;
     let (x, y, z) = (qpos[adr], qpos[adr + 1], qpos[adr + 2]);
-    let (over_tube, a, b) = lower(&mut kin, &mut clear, x, y, z);
+    let (over_tube, a, b) = lower(&mut kin, &mut clear, &start, [x, y, z]);
     assert!(
         of_tube(a) || of_tube(b),
         "{} against {}",
@@ -178,7 +188,7 @@ fn the_check_keeps_the_hand_off_a_standing_tube_and_not_off_the_bench() {
     .vector
     .z;
     let (x, y) = (tcp.translation.vector.x, tcp.translation.vector.y - 0.1);
-    let (in_bench, a, b) = lower(&mut kin, &mut clear, x, y, bench - 0.03);
+    let (in_bench, a, b) = lower(&mut kin, &mut clear, &start, [x, y, bench - 0.03]);
     let (_, obstacle) = if scene.body_owner[a] == Some(Owner::Robot(0)) {
         (a, b)
     } else {
@@ -210,8 +220,10 @@ fn the_check_keeps_the_hand_off_a_standing_tube_and_not_off_the_bench() {
         &Default::default(),
     )
     .unwrap();
+    let names_tube =
+        |hits: Vec<(usize, usize)>| hits.iter().any(|&(a, b)| of_tube(a) || of_tube(b));
     assert!(
-        !clear.is_clear(&nearer),
+        names_tube(clear.collisions(&nearer)),
         "3 mm nearer the tube than at the start"
     );
     // So may it where the motion ends there.
@@ -223,7 +235,41 @@ fn the_check_keeps_the_hand_off_a_standing_tube_and_not_off_the_bench() {
         "{:?}",
         clear.collisions(&over_tube)
     );
-    assert!(!clear.is_clear(&nearer));
+    assert!(names_tube(clear.collisions(&nearer)));
+}
+
+/// The padding holds for a body of many geoms too: the 5430's shut lid (top plate, skirt, posts
+/// and grip bar), which MuJoCo reaches through the body's own bounding volumes before its geoms.
+#[test]
+fn the_check_keeps_the_hand_off_a_lid_of_many_parts() {
+    let task = compile("protocols/centrifuge_5430/open_lid.toml");
+    let (instance, scene) = scene(&task, 0);
+    let qpos = runtime::Episode::new(scene.clone(), &task, &instance).qpos();
+    let lid = scene
+        .model
+        .name_to_id(mujoco_rs::prelude::MjtObjBase::mjOBJ_BODY, "centrifuge/lid")
+        .unwrap();
+    assert!(scene.model.body_geomnum()[lid] > 3, "a lid of many geoms");
+    let mut data = mujoco_rs::prelude::MjData::new(scene.model.clone());
+    data.qpos_mut().copy_from_slice(&qpos);
+    data.kinematics();
+    let [x, y, z] = data.xipos()[lid];
+    let start = instance.robot_q[0].clone();
+    let mut kin = ArmKinematics::new(&scene, 0);
+    let mut clear = Clearance::new(&scene, 0);
+    clear.sync(&qpos, None);
+    let (over_lid, a, b) = lower(&mut kin, &mut clear, &start, [x, y, z]);
+    assert!(
+        a == lid || b == lid,
+        "{} against {}",
+        clear.body_name(a),
+        clear.body_name(b)
+    );
+    let gap = distance_to(&scene, &qpos, &over_lid, |body| body == lid);
+    assert!(
+        gap > KEEP - 0.002 && gap < KEEP + 0.0005,
+        "stopped {gap} m from the lid, for {KEEP} m kept"
+    );
 }
 
 /// The expert, keeping a copy of the events it reports.

@@ -29,8 +29,8 @@ use std::sync::Arc;
 /// contacts between stacked items sit at fractions of a millimetre.
 const PENETRATION: f64 = 0.001;
 
-/// How far the arm's own bodies keep from a body that moves (m), beyond what they were at the
-/// sync.
+/// How far the arm's own bodies keep from a body that moves (m), unless they are nearer at the
+/// sync or at either end of the motion checked.
 pub const KEEP: f64 = 0.015;
 
 /// An item carried rigidly in the hand: each of its free joints follows the tool. Only the item
@@ -54,7 +54,7 @@ pub struct Clearance {
     allowed: BTreeSet<(usize, usize)>,
     /// Arm body against moving body, nearer than [`KEEP`] at the last sync: how near (m).
     near_at_sync: BTreeMap<(usize, usize), f64>,
-    /// The same at the sync or at the end of the motion now checked ([`Clearance::ends_at`]).
+    /// The same at the sync or at either end of the motion now checked ([`Clearance::ends_at`]).
     near: BTreeMap<(usize, usize), f64>,
     /// Per body: whether it sits on a joint of an item (can be knocked).
     movable: Vec<bool>,
@@ -70,11 +70,20 @@ impl Clearance {
             .map(|b| weld[b] != 0 && matches!(scene.body_owner[b], Some(Owner::Labware(_))))
             .collect();
         // The check's own model: contacts with moving bodies are found `KEEP` before they touch.
+        // A body's margin bounds its geoms' (MuJoCo tests a body's bounding volumes with it before
+        // its geoms: left at 0, a body of several geoms, the 5430's lid and its bar, would be
+        // padded only where those volumes already touch).
         let mut model = (*scene.model).clone();
         for g in 0..model.ffi().ngeom as usize {
             let body = model.geom_bodyid()[g] as usize;
             if movable[body] {
                 model.geom_margin_mut()[g] = KEEP;
+            }
+        }
+        for (body, &moves) in movable.iter().enumerate() {
+            if moves {
+                let margin = &mut model.body_margin_mut()[body];
+                *margin = margin.max(KEEP);
             }
         }
         Clearance {
@@ -96,7 +105,8 @@ impl Clearance {
     /// Takes the scene's configuration `qpos` (the episode's [`crate::Episode::qpos`]) and the
     /// item the arm carries, if any (its index in the task): each of its free bodies keeps, in
     /// every check, the pose in the tool frame it has in `qpos` (the grasp as it is, slip and
-    /// all). The contacts at this configuration become the allowed pairs.
+    /// all). The contacts at this configuration become the allowed pairs, and what the arm is
+    /// nearer than [`KEEP`] to here it may come as near to in every check until the next sync.
     pub fn sync(&mut self, qpos: &[f64], carried: Option<usize>) {
         self.data.qpos_mut().copy_from_slice(qpos);
         self.data.kinematics();

@@ -54,7 +54,8 @@ fn first_hit(clearance: &mut Clearance, waypoints: &[Vec<f64>], step: f64) -> Op
 
 /// A collision-free joint path from `waypoints[0]` to its last configuration, within `limits`,
 /// checked at least every `step` of joint travel (the arm's `ExpertLimits::check_step`).
-/// `clearance` must be synced to the scene as it is now.
+/// `clearance` must be synced to the scene as it is now; its allowances for a motion's ends are
+/// set to this path's ([`Clearance::ends_at`]), replacing an earlier route's.
 pub fn route(
     clearance: &mut Clearance,
     limits: &[(f64, f64)],
