@@ -134,9 +134,10 @@ impl Clearance {
             .filter(|c| c.depth_past(PENETRATION))
             .map(|c| c.pair)
             .collect();
-        self.near_at_sync = BTreeMap::new();
-        self.near_with_contacts(true);
-        self.near = self.near_at_sync.clone();
+        let mut near = BTreeMap::new();
+        self.add_near(&mut near);
+        self.near_at_sync = near.clone();
+        self.near = near;
     }
 
     fn free_pose(&self, adr: usize) -> Pose {
@@ -153,15 +154,9 @@ impl Clearance {
     }
 
     /// Adds the arm's bodies nearer than [`KEEP`] to a moving body after the last collision pass
-    /// to the sync's near pairs (`at_sync`) or to the motion's.
-    fn near_with_contacts(&mut self, at_sync: bool) {
-        let found: Vec<Contact> = self.contacts().filter(|c| c.keeps_off).collect();
-        let near = if at_sync {
-            &mut self.near_at_sync
-        } else {
-            &mut self.near
-        };
-        for c in found {
+    /// to `near`, keeping the nearest distance of each pair.
+    fn add_near(&self, near: &mut BTreeMap<(usize, usize), f64>) {
+        for c in self.contacts().filter(|c| c.keeps_off) {
             let d = near.entry(c.pair).or_insert(c.dist);
             *d = d.min(c.dist);
         }
@@ -171,11 +166,12 @@ impl Clearance {
     /// nearer than [`KEEP`] to at either, it may come as near to on the way (the pairs near at
     /// the sync stay allowed; those of an earlier motion's ends do not).
     pub fn ends_at(&mut self, start: &[f64], end: &[f64]) {
-        self.near = self.near_at_sync.clone();
+        let mut near = self.near_at_sync.clone();
         for q in [start, end] {
             self.place(q);
-            self.near_with_contacts(false);
+            self.add_near(&mut near);
         }
+        self.near = near;
     }
 
     /// Whether the arm at `q` overlaps anything beyond the allowed pairs, the padding around
