@@ -180,3 +180,18 @@ fn the_lidder_goes_home_from_the_open_lid_without_knocking_it_shut() {
         assert!(r.success, "seed {seed}: {:?} {:#?}", r.error, r.verdict);
     }
 }
+
+/// The loader carries a tube from the rack into a slot of the 5430's fixed-angle rotor (issue
+/// 26). On these seeds the tube, swung past the housing's rim at the millimetre the check then
+/// allowed, clipped it and turned in the hand, and came down over the slot vertically and then
+/// across to the slot's leaning axis; it met the rotor's rim and fell out of the rotor. The
+/// carried tube now keeps the planner's padding from everything, and the transit ends out
+/// along the slot's axis.
+#[test]
+fn the_loader_brings_the_tube_down_the_leaning_slot_without_knocking_it() {
+    let task = compile("protocols/workflows/centrifuge_run.toml");
+    for seed in [15, 21] {
+        let r = run(&task, seed, "expert");
+        assert!(r.success, "seed {seed}: {:?} {:#?}", r.error, r.verdict);
+    }
+}

@@ -185,6 +185,17 @@ impl<'a> Lab<'a> {
     }
 }
 
+/// How far a seat's axis must lean from vertical (its sine) to count as leaning: a rack's
+/// seats stand upright.
+const LEANING_SEAT: f64 = 0.087;
+
+/// For a seat whose axis leans (a fixed-angle rotor's slot), how far up (m) a metre out along
+/// that axis goes; `None` for an upright seat.
+fn leaning_rise(seat: &Pose) -> Option<f64> {
+    let axis = seat.rotation * nalgebra::Vector3::z();
+    (axis.x.hypot(axis.y) >= LEANING_SEAT && axis.z > 0.0).then_some(axis.z)
+}
+
 /// How far above its target a transit passes at least (m).
 const TRANSIT_CLEARANCE: f64 = 0.06;
 
@@ -342,6 +353,32 @@ impl StepFrame {
             [0.0, 0.0, -above],
         );
         Ok(goal * held.pose.inverse() * tcp_now)
+    }
+
+    /// Where a transit to `target` ends: above it at the tool's current height, or
+    /// `TRANSIT_CLEARANCE` above it when that is higher (a rotor in its housing, a rack's tubes).
+    /// Over a leaning seat (a fixed-angle rotor's slot) that clearance is taken out along the
+    /// seat's axis, so that the way in after it goes straight down that axis: come down
+    /// vertically over the slot instead, a tube's base swung across the rotor's rim to reach
+    /// the axis (knocking the tube over in the hand, seeds 15, 21 and 99 of
+    /// `workflows.centrifuge_run`), and the hand over a slot beside the housing's wall met the
+    /// wall (seed 83).
+    fn transit_goal(&self, target: &Target, lab: &Lab, tcp_now: &Pose) -> Result<Pose, PlanError> {
+        let z_now = tcp_now.translation.vector.z;
+        if let Target::Seat { location, above } = target
+            && let Some(rise) = leaning_rise(&lab.seat(location)?)
+        {
+            let out = Target::Seat {
+                location: location.clone(),
+                above: above + TRANSIT_CLEARANCE / rise,
+            };
+            let mut goal = self.target(&out, lab)?;
+            goal.translation.vector.z = z_now.max(goal.translation.vector.z);
+            return Ok(goal);
+        }
+        let mut goal = self.target(target, lab)?;
+        goal.translation.vector.z = z_now.max(goal.translation.vector.z + TRANSIT_CLEARANCE);
+        Ok(goal)
     }
 
     /// Measures again how the carried item (if any) sits in the hand, with the tool at
@@ -523,15 +560,9 @@ impl StepFrame {
                 8,
             ),
             Motion::Transit { target } => {
-                // Above the target at the current height, or `TRANSIT_CLEARANCE` above it when
-                // that is higher (a rotor in its housing, a rack's tubes), in a straight line:
-                // the expert goes around whatever that line would hit (`scoring::route`).
-                let mut goal = self.target(target, lab)?;
-                goal.translation.vector.z = tcp_now
-                    .translation
-                    .vector
-                    .z
-                    .max(goal.translation.vector.z + TRANSIT_CLEARANCE);
+                // In a straight line: the expert goes around whatever that line would hit
+                // (`scoring::route`).
+                let goal = self.transit_goal(target, lab, tcp_now)?;
                 line(tcp_now, &goal, 10)
             }
             Motion::Follow {
@@ -824,6 +855,79 @@ mod tests {
             StepFrame::new(&place, &lab, &tcp, None, 0.0, 0.0),
             Err(PlanError::NothingCarried)
         ));
+    }
+
+    /// A transit over a fixed-angle rotor's slot ends out along the slot's leaning axis, so that
+    /// the way down after it is that axis; over a rack's upright slot it ends straight above.
+    #[test]
+    fn a_transit_ends_on_a_leaning_slots_axis_and_over_an_upright_one() {
+        let centrifuge = labware::Model::for_kind("centrifuge_5430").unwrap();
+        let rack = labware::Model::for_kind("tube_rack").unwrap();
+        let tube = labware::Model::for_kind("tube_1_5ml").unwrap();
+        let centrifuge_s = LabwareState {
+            name: "centrifuge".into(),
+            pose: labware::frame::yaw([0.0, 0.0, 0.824], 0.2),
+            joints: BTreeMap::from([
+                ("lid".into(), 0.0),
+                ("open".into(), 0.0),
+                ("rotor".into(), 0.4),
+            ]),
+            parts: BTreeMap::new(),
+            logic: BTreeMap::new(),
+            touched_by: Vec::new(),
+        };
+        let rack_s = LabwareState {
+            name: "rack".into(),
+            pose: labware::frame::yaw([0.3, 0.4, 0.835], 0.0),
+            joints: BTreeMap::new(),
+            ..centrifuge_s.clone()
+        };
+        // Carried lower than either seat: the transit rises to its clearance over each.
+        let tube_s = LabwareState {
+            name: "tube".into(),
+            pose: labware::frame::pose([0.4, 0.3, 0.78], Rot::identity()),
+            ..rack_s.clone()
+        };
+        let params = Bindings::new();
+        let lab = Lab {
+            items: vec![
+                (
+                    "centrifuge",
+                    centrifuge.instrument().unwrap(),
+                    &centrifuge_s,
+                ),
+                ("rack", rack.instrument().unwrap(), &rack_s),
+                ("tube", tube.instrument().unwrap(), &tube_s),
+            ],
+            params: &params,
+        };
+        let tcp = translated_local(&tube_s.pose, [0.0, 0.0, 0.04]);
+        for location in ["centrifuge.7", "rack.B3"] {
+            let transit = [Motion::Transit {
+                target: Target::Seat {
+                    location: location.into(),
+                    above: 0.0,
+                },
+            }];
+            let frame = StepFrame::new(&transit, &lab, &tcp, Some("tube"), 0.0, 0.0).unwrap();
+            let path = frame.poses(&transit[0], &lab, &tcp).unwrap();
+            let tube_then = path.last().unwrap() * frame.carried.clone().unwrap().1;
+            let seat = lab.seat(location).unwrap();
+            let out = tube_then.translation.vector - seat.translation.vector;
+            let axis = seat.rotation * Vector3::z();
+            let leaning = location.starts_with("centrifuge");
+            assert_eq!(leaning, axis.z < 0.99, "{location}: axis {axis:?}");
+            // On the seat's axis, `TRANSIT_CLEARANCE` higher than the seat.
+            assert!(
+                out.cross(&axis).norm() < 1e-9,
+                "{location}: {out:?} off {axis:?}"
+            );
+            assert!(
+                (out.z - TRANSIT_CLEARANCE).abs() < 1e-9,
+                "{location}: {out:?}"
+            );
+            assert!(out.dot(&axis) > 0.0);
+        }
     }
 
     /// A tube held from the side is approached from where the tool comes, across its axis, and

@@ -11,11 +11,13 @@
 //! it does not cause them.
 //!
 //! The arm keeps [`KEEP`] away from what can move (a hinged lid, a standing tube: a body on a
-//! joint), as a planner pads its obstacles: the arm lags its commanded path by a few millimetres
-//! (more on a fast swing), and a path that grazed a lid open against its stop pushed it shut on
-//! the way. What the arm is nearer than that where a motion starts or ends (the hand just let
-//! go of the lid; a tube brought down over its slot in the rotor), it may come as near to on the
-//! way, not nearer. The padding is a contact margin on the check's own copy of the model; the
+//! joint), and the item it carries keeps that far from everything, as a planner pads its
+//! obstacles: the arm lags its commanded path by a few millimetres (more on a fast swing), a
+//! path that grazed a lid open against its stop pushed it shut on the way, and a tube swung
+//! past the 5430's housing at the checked millimetre clipped its rim and turned over in the
+//! hand. What the arm is nearer than that where a motion starts or ends (the hand just let go
+//! of the lid; a tube brought down over its slot in the rotor, or just lifted from its rack),
+//! it may come as near to on the way, not nearer. The padding is a contact margin on the check's own copy of the model; the
 //! episode's physics is untouched.
 
 use crate::scene::{LabwareIds, Owner, RobotIds, Scene};
@@ -29,8 +31,8 @@ use std::sync::Arc;
 /// contacts between stacked items sit at fractions of a millimetre.
 const PENETRATION: f64 = 0.001;
 
-/// How far the arm's own bodies keep from a body that moves (m), unless they are nearer at the
-/// sync or at either end of the motion checked.
+/// How far the arm's own bodies keep from a body that moves, and the carried item from anything
+/// (m), unless they are nearer at the sync or at either end of the motion checked.
 pub const KEEP: f64 = 0.015;
 
 /// An item carried rigidly in the hand: each of its free joints follows the tool. Only the item
@@ -52,7 +54,8 @@ pub struct Clearance {
     carried: Option<Carried>,
     /// Body pairs (lower id first) in contact at the last sync.
     allowed: BTreeSet<(usize, usize)>,
-    /// Arm body against moving body, nearer than [`KEEP`] at the last sync: how near (m).
+    /// Pairs kept [`KEEP`] off (see `Contact::keeps_off`) nearer than that at the last sync: how
+    /// near (m).
     near_at_sync: BTreeMap<(usize, usize), f64>,
     /// The same at the sync or at either end of the motion now checked ([`Clearance::ends_at`]).
     near: BTreeMap<(usize, usize), f64>,
@@ -105,8 +108,9 @@ impl Clearance {
     /// Takes the scene's configuration `qpos` (the episode's [`crate::Episode::qpos`]) and the
     /// item the arm carries, if any (its index in the task): each of its free bodies keeps, in
     /// every check, the pose in the tool frame it has in `qpos` (the grasp as it is, slip and
-    /// all). The contacts at this configuration become the allowed pairs, and what the arm is
-    /// nearer than [`KEEP`] to here it may come as near to in every check until the next sync.
+    /// all). The contacts at this configuration become the allowed pairs, and what the arm (or
+    /// what it carries) is nearer than [`KEEP`] to here it may come as near to in every check
+    /// until the next sync.
     pub fn sync(&mut self, qpos: &[f64], carried: Option<usize>) {
         self.data.qpos_mut().copy_from_slice(qpos);
         self.data.kinematics();
@@ -153,7 +157,7 @@ impl Clearance {
         )
     }
 
-    /// Adds the arm's bodies nearer than [`KEEP`] to a moving body after the last collision pass
+    /// Adds the pairs kept [`KEEP`] off that are nearer than that after the last collision pass
     /// to `near`, keeping the nearest distance of each pair.
     fn add_near(&self, near: &mut BTreeMap<(usize, usize), f64>) {
         for c in self.contacts().filter(|c| c.keeps_off) {
@@ -199,14 +203,19 @@ impl Clearance {
             Some(Contact {
                 pair: (a.min(b), a.max(b)),
                 dist: c.dist,
-                keeps_off: matches!(self.owner[arm], Some(Owner::Robot(_))) && self.movable[other],
+                // A carried item's bodies have the padding's margin (they are on joints), so
+                // its contacts with fixed bodies are found `KEEP` out too.
+                keeps_off: match self.owner[arm] {
+                    Some(Owner::Robot(_)) => self.movable[other],
+                    _ => true,
+                },
             })
         })
     }
 
     /// Pairs (one moving, one not) that collide after the last collision pass: overlapping past
-    /// [`PENETRATION`], or an arm body nearer a moving one than [`KEEP`] and than at the
-    /// motion's ends.
+    /// [`PENETRATION`], or a pair kept [`KEEP`] off (an arm body and a moving one, the carried
+    /// item and anything) nearer than that and than at the motion's ends.
     fn colliding_pairs(&self) -> Vec<(usize, usize)> {
         self.contacts()
             .filter(|c| {
@@ -290,7 +299,8 @@ struct Contact {
     pair: (usize, usize),
     /// Signed distance (m): negative is overlap.
     dist: f64,
-    /// An arm body against a body that moves: kept [`KEEP`] off.
+    /// An arm body against a body that moves, or the carried item against anything: kept
+    /// [`KEEP`] off.
     keeps_off: bool,
 }
 
