@@ -359,10 +359,9 @@ impl StepFrame {
     /// `TRANSIT_CLEARANCE` above it when that is higher (a rotor in its housing, a rack's tubes).
     /// Over a leaning seat (a fixed-angle rotor's slot) that clearance is taken out along the
     /// seat's axis, so that the way in after it goes straight down that axis: come down
-    /// vertically over the slot instead, a tube's base swung across the rotor's rim to reach
-    /// the axis (knocking the tube over in the hand, seeds 15, 21 and 99 of
-    /// `workflows.centrifuge_run`), and the hand over a slot beside the housing's wall met the
-    /// wall (seed 83).
+    /// vertically over the slot instead, the tube's base was swung across the rotor's rim to
+    /// reach the axis, and the tube was left a centimetre high or knocked out of the rotor
+    /// (`workflows.centrifuge_run`, seeds 18 and 75).
     fn transit_goal(&self, target: &Target, lab: &Lab, tcp_now: &Pose) -> Result<Pose, PlanError> {
         let z_now = tcp_now.translation.vector.z;
         if let Target::Seat { location, above } = target

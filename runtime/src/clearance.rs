@@ -17,8 +17,8 @@
 //! past the 5430's housing at the checked millimetre clipped its rim and turned over in the
 //! hand. What the arm is nearer than that where a motion starts or ends (the hand just let go
 //! of the lid; a tube brought down over its slot in the rotor, or just lifted from its rack),
-//! it may come as near to on the way, not nearer. The padding is a contact margin on the check's own copy of the model; the
-//! episode's physics is untouched.
+//! it may come as near to on the way, not nearer. The padding is a contact margin on the
+//! check's own copy of the model; the episode's physics is untouched.
 
 use crate::scene::{LabwareIds, Owner, RobotIds, Scene};
 use labware::Pose;
