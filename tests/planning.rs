@@ -23,22 +23,58 @@ fn down(at: [f64; 3]) -> labware::Pose {
     pose(at, axis_angle([1.0, 0.0, 0.0], std::f64::consts::PI))
 }
 
-#[test]
-fn the_check_fails_a_hand_or_a_carried_tube_pushed_into_the_bench() {
+/// `tube/transfer`'s seed 0, for checks over its bench: the arm's start joints and kinematics,
+/// the episode's configuration, the bench top's height (where the rack stands) and a point
+/// over the bare bench, 10 cm in front of the start pose's tool.
+struct OverTheBench {
+    task: compiler::Task,
+    scene: Arc<runtime::Scene>,
+    qpos: Vec<f64>,
+    start: Vec<f64>,
+    kin: ArmKinematics,
+    bench: f64,
+    x: f64,
+    y: f64,
+}
+
+fn over_the_bench() -> OverTheBench {
     let task = compile("protocols/tube/transfer.toml");
     let (instance, scene) = scene(&task, 0);
-    let ep = runtime::Episode::new(scene.clone(), &task, &instance);
+    let qpos = runtime::Episode::new(scene.clone(), &task, &instance).qpos();
     let start = instance.robot_q[0].clone();
     let mut kin = ArmKinematics::new(&scene, 0);
-    // The bench top: where the rack stands.
     let rack = task
         .labware
         .iter()
         .position(|l| l.name == "source")
         .unwrap();
     let bench = instance.labware_placement[rack].translation.vector.z;
-    let tcp = kin.tcp(&start);
-    let (x, y) = (tcp.translation.vector.x, tcp.translation.vector.y - 0.1);
+    let tcp = kin.tcp(&start).translation.vector;
+    OverTheBench {
+        task,
+        scene,
+        qpos,
+        start,
+        kin,
+        bench,
+        x: tcp.x,
+        y: tcp.y - 0.1,
+    }
+}
+
+#[test]
+fn the_check_fails_a_hand_or_a_carried_tube_pushed_into_the_bench() {
+    let OverTheBench {
+        task,
+        scene,
+        qpos: at_start,
+        start,
+        mut kin,
+        bench,
+        x,
+        y,
+        ..
+    } = over_the_bench();
     let ik = |kin: &mut ArmKinematics, z: f64| {
         solve_ik(kin, &down([x, y, z]), &start, &Default::default()).unwrap()
     };
@@ -46,7 +82,7 @@ fn the_check_fails_a_hand_or_a_carried_tube_pushed_into_the_bench() {
     let into = ik(&mut kin, bench - 0.03);
 
     let mut clear = Clearance::new(&scene, 0);
-    clear.sync(&ep.qpos(), None);
+    clear.sync(&at_start, None);
     assert!(clear.is_clear(&start), "{:?}", clear.collisions(&start));
     assert!(clear.is_clear(&above), "{:?}", clear.collisions(&above));
     let hits = clear.collisions(&into);
@@ -62,7 +98,7 @@ fn the_check_fails_a_hand_or_a_carried_tube_pushed_into_the_bench() {
     // follows the hand down to 5 cm up and goes 1 cm into the bench; not carried, it stays
     // behind and the hand alone is clear there.
     let high = ik(&mut kin, bench + 0.15);
-    let mut qpos = ep.qpos();
+    let mut qpos = at_start.clone();
     for (k, &adr) in scene.robots[0].qpos.iter().enumerate() {
         qpos[adr] = high[k];
     }
@@ -162,12 +198,17 @@ fn lower(
 
 #[test]
 fn the_check_keeps_the_hand_off_a_standing_tube_and_not_off_the_bench() {
-    let task = compile("protocols/tube/transfer.toml");
-    let (instance, scene) = scene(&task, 0);
-    let ep = runtime::Episode::new(scene.clone(), &task, &instance);
-    let qpos = ep.qpos();
-    let start = instance.robot_q[0].clone();
-    let mut kin = ArmKinematics::new(&scene, 0);
+    let OverTheBench {
+        task,
+        scene,
+        qpos,
+        start,
+        mut kin,
+        bench,
+        x: bare_x,
+        y: bare_y,
+        ..
+    } = over_the_bench();
     let tube = task.labware.iter().position(|l| l.name == "tube").unwrap();
     let of_tube = |b: usize| scene.body_owner[b] == Some(Owner::Labware(tube));
     let mut clear = Clearance::new(&scene, 0);
@@ -190,17 +231,7 @@ fn the_check_keeps_the_hand_off_a_standing_tube_and_not_off_the_bench() {
 
     // Over the bare bench, fixed: stopped only where the hand is in it (the check's tolerance
     // of a millimetre, and the millimetre step).
-    let tcp = kin.tcp(&start);
-    let bench = instance.labware_placement[task
-        .labware
-        .iter()
-        .position(|l| l.name == "source")
-        .unwrap()]
-    .translation
-    .vector
-    .z;
-    let (x, y) = (tcp.translation.vector.x, tcp.translation.vector.y - 0.1);
-    let (in_bench, a, b) = lower(&mut kin, &mut clear, &start, [x, y, bench - 0.03]);
+    let (in_bench, a, b) = lower(&mut kin, &mut clear, &start, [bare_x, bare_y, bench - 0.03]);
     let (_, obstacle) = if scene.body_owner[a] == Some(Owner::Robot(0)) {
         (a, b)
     } else {
@@ -290,19 +321,17 @@ fn the_check_keeps_the_hand_off_a_lid_of_many_parts() {
 /// seeds 15, 21 and 99). A tube held in the hand is lowered towards the bare bench.
 #[test]
 fn the_check_keeps_a_carried_tube_off_the_bench() {
-    let task = compile("protocols/tube/transfer.toml");
-    let (instance, scene) = scene(&task, 0);
-    let ep = runtime::Episode::new(scene.clone(), &task, &instance);
-    let start = instance.robot_q[0].clone();
-    let mut kin = ArmKinematics::new(&scene, 0);
-    let rack = task
-        .labware
-        .iter()
-        .position(|l| l.name == "source")
-        .unwrap();
-    let bench = instance.labware_placement[rack].translation.vector.z;
-    let tcp = kin.tcp(&start);
-    let (x, y) = (tcp.translation.vector.x, tcp.translation.vector.y - 0.1);
+    let OverTheBench {
+        task,
+        scene,
+        mut qpos,
+        start,
+        mut kin,
+        bench,
+        x,
+        y,
+        ..
+    } = over_the_bench();
     let high = solve_ik(
         &mut kin,
         &down([x, y, bench + 0.25]),
@@ -313,7 +342,6 @@ fn the_check_keeps_a_carried_tube_off_the_bench() {
     // The tube (body and cap, as they stand in the rack) held upright 4 cm under the tool's
     // centre point, the hand 25 cm up.
     let tube = task.labware.iter().position(|l| l.name == "tube").unwrap();
-    let mut qpos = ep.qpos();
     for (k, &adr) in scene.robots[0].qpos.iter().enumerate() {
         qpos[adr] = high[k];
     }
