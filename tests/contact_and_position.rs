@@ -2,8 +2,8 @@
 //! from the item's live pose, on real episodes of the tube-transfer scene: the expert's grasp makes
 //! the contact hold and a motionless robot never does; a tube carried by the expert is near where
 //! it ends up only at the end, not at the start, and a point 10 cm off is never near. Before, both
-//! predicates compiled but could never hold, so a task using them could not be won. A check the
-//! judge cannot measure in a task scene (a volume) is refused before anything runs.
+//! predicates compiled but could never hold, so a task using them could not be won. A volume is
+//! measured from the liquid the container holds.
 
 mod common;
 
@@ -103,16 +103,42 @@ fn near_measures_the_distance_from_the_live_pose() {
 }
 
 #[test]
-fn a_check_the_judge_cannot_measure_is_refused_before_running() {
-    // A volume on a simulated tube compiles (the proof traces volumes), but the task scenes do not
-    // simulate liquid: running it could never succeed, so the runtime refuses it with the reason.
-    let task = transfer("tube.volume = 0 µL", false);
-    let err = match runtime::Scene::build(&task, &task.sample(0)) {
-        Ok(_) => panic!("a task with an unmeasurable check was built"),
-        Err(e) => e.to_string(),
-    };
+fn a_volume_is_measured_from_what_the_container_holds() {
+    // The tube starts with the protocol's volume (a parameter's, rendered per episode) in its
+    // logic, and the judge reads it there.
+    let task = compile_edited(TRANSFER, |source| {
+        source
+            .replace(
+                "at = \"source.{from}\"",
+                "at = \"source.{from}\"\nstate = { volume = \"{fill} mL\" }",
+            )
+            .replace(
+                "[params.row]",
+                "[params.fill]\nint = [15, 45]\n\n[params.row]",
+            )
+            .replace(
+                "all = [\"tube in target.{row}{col}\"]",
+                "all = [\"tube in target.{row}{col}\", \"tube.volume = {fill} mL\"]",
+            )
+    });
+    let seed = 3;
+    let fill: f64 = task.sample(seed).params["fill"].parse().unwrap();
+    let expert = run(&task, seed, "expert");
+    assert!(expert.success, "{:?} {:#?}", expert.error, expert.verdict);
+    let p = &expert.verdict.predicates()[1];
+    assert!(p.holds && p.value == fill * 1000.0, "{p:?} for {fill} mL");
+    // The same episode judged against 1 mL more: the volume check fails, by 1000 µL.
+    let mut more = task.clone();
+    for c in more.stages.iter_mut().flat_map(|s| &mut s.success) {
+        if let compiler::predicates::Check::Volume { value, .. } = &mut c.check {
+            *value = format!("{} mL", fill + 1.0);
+        }
+    }
+    let hold = run(&more, seed, "hold");
+    assert!(!hold.success);
+    let p = &hold.verdict.predicates()[1];
     assert!(
-        err.contains("`tube.volume = 0 µL` cannot be measured"),
-        "{err}"
+        !p.holds && (p.target - p.value - 1000.0).abs() < 1e-9,
+        "{p:?}"
     );
 }

@@ -321,6 +321,11 @@ pub fn quantity(template: &str, bound: &Bindings, dim: Dimension) -> Result<f64,
     Ok(q.si)
 }
 
+/// A volume template (`"{fill} mL"`) rendered and read in µL.
+pub fn volume_ul(template: &str, bound: &Bindings) -> Result<f64, String> {
+    quantity(template, bound, Dimension::Volume)
+}
+
 /// A panel value template (`"37 °C"`, `"{rpm} rpm"`) rendered and read in its own unit's
 /// dimension (rpm, °C or s); `None` when it does not read as a panel quantity.
 pub fn panel_quantity(template: &str, bound: &Bindings) -> Option<f64> {

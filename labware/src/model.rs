@@ -154,9 +154,9 @@ pub struct Display {
 /// A process between items (liquid drawn into a tip), run after every physics step; the ones
 /// there are live in [`crate::process`].
 pub trait Process: std::fmt::Debug + Send {
-    /// After `dt` seconds of physics: `states` is every item's live state and `logic` every
-    /// item's logic state, both in task order; a process moves quantities by writing `logic`.
-    fn step(&mut self, dt: f64, states: &[LabwareState], logic: &mut [Logic]);
+    /// After `dt` seconds of physics: `poses` is every item's root pose and `logic` every item's
+    /// logic state, both in task order; a process moves quantities by writing `logic`.
+    fn step(&mut self, dt: f64, poses: &[Pose], logic: &mut [Logic]);
 }
 
 /// What an item's logic asks of the simulation after a step, by role: equality constraints on or
@@ -233,10 +233,22 @@ pub trait Instrument {
         Vec::new()
     }
 
-    /// Processes between this item and others that the runtime runs after every physics step
-    /// (liquid drawn into a tip), each written in the item's own model.
-    fn processes(&self, _name: &str) -> Vec<Box<dyn Process>> {
+    /// Processes between this item (index `me` in task order) and others that the runtime runs
+    /// after every physics step (a pipette's tip working among `vessels`, every item with an
+    /// [`Instrument::interior`]), each written in the item's own model.
+    fn processes(
+        &self,
+        _name: &str,
+        _me: usize,
+        _vessels: &[crate::process::Vessel],
+    ) -> Vec<Box<dyn Process>> {
         Vec::new()
+    }
+
+    /// The space inside the item that holds liquid (a tube's bore, a pipette's tip), in its root
+    /// frame; `None`: it holds none. Its volume is [`crate::process::VOLUME_UL`] in the logic.
+    fn interior(&self) -> Option<physics::liquid::Container> {
+        None
     }
 
     /// Why the model cannot start in the declared part states, if it cannot.

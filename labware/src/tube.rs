@@ -97,6 +97,16 @@ impl Params {
         }
     }
 
+    /// The bore's radius, the base's thickness and the depth of the conical bottom (m), from the
+    /// outer size: a moulded wall of 7% of the radius (at least 0.5 mm), a base twice as thick,
+    /// and a cone 1.5 radii deep (a 50 mL tube's is about 20 mm). The 50 mL tube's bore then
+    /// holds 52.7 mL to the brim (upstream's mesh: 55.65 mL).
+    pub fn bore(&self) -> (f64, f64, f64) {
+        let wall = (0.07 * self.radius).max(0.0005);
+        let radius = self.radius - wall;
+        (radius, 2.0 * wall, 1.5 * radius)
+    }
+
     /// Height of the bolt thread's axis origin on the tube (tube frame).
     fn bolt_z(&self) -> f64 {
         self.height - 0.005
@@ -340,6 +350,15 @@ impl Instrument for Params {
         })
     }
 
+    /// The bore: a cylinder on a cone, from above the base up to the mouth (see [`Params::bore`]).
+    fn interior(&self) -> Option<physics::liquid::Container> {
+        let (radius, base, cone) = self.bore();
+        Some(
+            physics::liquid::Container::tube(radius, self.height - base, cone, 48)
+                .shifted([0.0, 0.0, base]),
+        )
+    }
+
     fn unsupported_start(&self, initial: &BTreeMap<String, String>) -> Option<String> {
         (initial.get("cap").map(String::as_str) == Some("off")).then(|| {
             "a tube whose cap starts off has no place for the cap yet; declare `cap = \"on\"`"
@@ -399,6 +418,29 @@ pub fn cap_rise_and_aside(p: &Params, s: &LabwareState) -> Option<(f64, f64)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Each tube's bore holds about its nominal volume (the catalogue's capacity) to the brim:
+    /// no less than 0.9 of it and under twice it (a 1.5 mL microtube holds about 2 mL to its
+    /// brim; ours, 42.6 mm to the rim, 2.7 mL).
+    #[test]
+    fn each_bore_holds_its_nominal_volume() {
+        for kind in ["tube_50ml", "tube_15ml", "tube_1_5ml", "cryovial"] {
+            let Some(crate::Model::Tube(p)) = crate::Model::for_kind(kind) else {
+                panic!("{kind}")
+            };
+            let nominal = crate::kind(kind).unwrap().capacity_ul.unwrap();
+            let bore = p.interior().unwrap();
+            let ratio = bore.capacity() * 1e9 / nominal;
+            assert!((0.9..2.0).contains(&ratio), "{kind}: {ratio}");
+            // The bore is inside the body: above the base, within the wall, below the mouth.
+            let (lo, hi) = bore.range([0.0, 0.0, 1.0]);
+            assert!(
+                lo > 0.0 && (hi - p.height).abs() < 1e-12,
+                "{kind}: {lo} {hi}"
+            );
+            assert!(!bore.contains([p.radius * 0.99, 0.0, p.height / 2.0]));
+        }
+    }
 
     /// Set on the mouth to be screwed on, a cap stands at a height its heading fixes: one pitch
     /// higher per turn anticlockwise from the seat's heading, at most 2.3 turns up and more

@@ -97,6 +97,30 @@ impl Container {
         Container::from_mesh(vertices, triangles)
     }
 
+    /// The same interior moved by `by` (m): a tube's interior starts above its base's thickness.
+    pub fn shifted(&self, by: V3) -> Container {
+        let vertices = self
+            .vertices
+            .iter()
+            .map(|v| [v[0] + by[0], v[1] + by[1], v[2] + by[2]])
+            .collect();
+        Container::from_mesh(vertices, self.triangles.clone())
+    }
+
+    /// Whether `p` lies inside the interior (on its boundary counts), for a convex interior: on
+    /// the inner side of every face's plane. A concave mesh would need a parity count; every
+    /// container we generate (a cylinder on a cone) is convex.
+    pub fn contains(&self, p: V3) -> bool {
+        self.triangles.iter().all(|t| {
+            let (a, b, c) = (
+                self.vertices[t[0]],
+                self.vertices[t[1]],
+                self.vertices[t[2]],
+            );
+            dot(cross(sub(b, a), sub(c, a)), sub(p, a)) <= 1e-12
+        })
+    }
+
     /// Volume and cross-section area of the part with `n·x <= d` (`n` a unit vector): the
     /// divergence theorem over the clipped triangles, with the reference point on the plane so the
     /// cut face contributes no volume; the area is the cut polygon's, from the cut segments.
@@ -607,6 +631,19 @@ mod tests {
         }
         let n = s.normal();
         assert!((dot(n, g) / norm(g) - 1.0).abs() < 1e-6, "{n:?}");
+    }
+
+    #[test]
+    fn a_point_is_inside_a_shifted_tube_only_within_its_walls() {
+        let c = Container::tube(0.01, 0.1, 0.02, 32).shifted([0.0, 0.0, 0.002]);
+        assert!(c.contains([0.0, 0.0, 0.05]));
+        assert!(c.contains([0.009, 0.0, 0.05]));
+        assert!(!c.contains([0.011, 0.0, 0.05]), "outside the wall");
+        assert!(!c.contains([0.0, 0.0, 0.103]), "above the mouth");
+        assert!(c.contains([0.0, 0.0, 0.0025]), "down in the cone's point");
+        assert!(!c.contains([0.0, 0.0, 0.001]), "below the shifted bottom");
+        assert!(!c.contains([0.008, 0.0, 0.005]), "outside the cone");
+        assert!((c.capacity() - Container::tube(0.01, 0.1, 0.02, 32).capacity()).abs() < 1e-15);
     }
 
     #[test]

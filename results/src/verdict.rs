@@ -234,8 +234,28 @@ fn measure(
                 holds: (shown - target).abs() <= tolerance.value,
             })
         }
-        // Volumes need liquid the runtime does not simulate in task scenes.
-        Check::Volume { .. } => None,
+        // The liquid the container holds now (its logic's volume; none kept: empty) against
+        // the target, compared as the predicate says.
+        Check::Volume {
+            container,
+            cmp,
+            value,
+            tolerance,
+        } => {
+            let target = compiler::predicates::volume_ul(value, params).ok()?;
+            spec_of(container)?.params.instrument()?.interior()?;
+            let held = state_of(container)?
+                .logic
+                .get(labware::process::VOLUME_UL)
+                .copied()
+                .unwrap_or(0.0);
+            Some(Measure {
+                value: held,
+                target,
+                tolerance: tolerance.value,
+                holds: compiler::predicates::compare(held, *cmp, target, tolerance.value),
+            })
+        }
     }
 }
 

@@ -87,6 +87,8 @@ pub struct Episode {
     effects: Effects,
     /// Processes between items, from their models, run after each item's logic.
     processes: Vec<Box<dyn Process>>,
+    /// Every item's root pose for the processes (kept between steps to avoid allocation).
+    poses: Vec<Pose>,
     pub physics_steps: u64,
 }
 
@@ -117,6 +119,7 @@ impl Episode {
             joints: vec![BTreeMap::new(); n],
             effects: Effects::default(),
             processes: Vec::new(),
+            poses: Vec::with_capacity(n),
             physics_steps: 0,
         };
         ep.reset(instance);
@@ -169,11 +172,31 @@ impl Episode {
             }
         }
         self.apply_panel_start(instance);
+        self.start_volumes(instance);
+        let vessels: Vec<labware::process::Vessel> = (0..self.task.labware.len())
+            .filter_map(|item| {
+                let interior = instrument(&self.task, item).interior()?;
+                Some(labware::process::Vessel { item, interior })
+            })
+            .collect();
         self.processes = (0..self.task.labware.len())
-            .flat_map(|i| instrument(&self.task, i).processes(&self.task.labware[i].name))
+            .flat_map(|i| {
+                instrument(&self.task, i).processes(&self.task.labware[i].name, i, &vessels)
+            })
             .collect();
         self.run_logic(0.0);
         self.data.forward();
+    }
+
+    /// The liquid each container starts with (`[labware.x] volume`, rendered for this instance)
+    /// in its logic; a container without a declared volume starts empty (no key: read as 0).
+    fn start_volumes(&mut self, instance: &SceneInstance) {
+        for (i, spec) in self.task.labware.iter().enumerate() {
+            let Some(text) = &spec.volume else { continue };
+            if let Ok(ul) = compiler::predicates::volume_ul(text, &instance.params) {
+                labware::model::set(&mut self.logic[i], labware::process::VOLUME_UL, ul);
+            }
+        }
     }
 
     /// Panel values a protocol starts away from the kind's defaults (`[labware.x] state`), rendered
@@ -231,9 +254,12 @@ impl Episode {
             }
         }
         if !self.processes.is_empty() {
-            let states = self.labware_state();
+            self.poses.clear();
+            for ids in &scene.labware {
+                self.poses.push(self.body_pose(ids.root_body));
+            }
             for p in &mut self.processes {
-                p.step(dt, &states, &mut self.logic);
+                p.step(dt, &self.poses, &mut self.logic);
             }
         }
     }

@@ -510,7 +510,18 @@ fn check_measurable(task: &Task) -> Result<(), SceneError> {
     use compiler::predicates::Check;
     for p in task.stages.iter().flat_map(|s| &s.success) {
         let why = match &p.check {
-            Check::Volume { .. } => "liquid volumes are not simulated in task scenes",
+            Check::Volume { container, .. } => {
+                let holds = task
+                    .labware
+                    .iter()
+                    .find(|l| &l.name == container)
+                    .and_then(|l| l.params.instrument())
+                    .is_some_and(|m| m.interior().is_some());
+                if holds {
+                    continue;
+                }
+                "the container's model holds no liquid"
+            }
             Check::Panel {
                 instrument, param, ..
             } => {
