@@ -327,13 +327,13 @@ pub fn volume_ul(template: &str, bound: &Bindings) -> Result<f64, String> {
 }
 
 /// A panel value template (`"37 °C"`, `"{rpm} rpm"`) rendered and read in its own unit's
-/// dimension (rpm, °C or s); `None` when it does not read as a panel quantity.
+/// dimension (rpm, °C, s or µL); `None` when it does not read as a panel quantity.
 pub fn panel_quantity(template: &str, bound: &Bindings) -> Option<f64> {
     let text = render(template, bound).ok()?;
     let q = parse_quantity(&text).ok()?;
     matches!(
         q.dimension,
-        Dimension::Speed | Dimension::Temperature | Dimension::Time
+        Dimension::Speed | Dimension::Temperature | Dimension::Time | Dimension::Volume
     )
     .then_some(q.si)
 }

@@ -17,6 +17,7 @@ pub mod frame;
 pub mod lid;
 pub mod mjcf;
 pub mod model;
+pub mod pipette;
 pub mod process;
 pub mod rack;
 pub mod registry;

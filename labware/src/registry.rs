@@ -4,7 +4,9 @@
 //! self-contained); "has a simulation model" is [`Model::for_kind`] returning one.
 
 use crate::model::Instrument;
-use crate::{centrifuge, centrifuge_mini, rack, thermal_cycler, thermal_mixer, tube, vortex_mixer};
+use crate::{
+    centrifuge, centrifuge_mini, pipette, rack, thermal_cycler, thermal_mixer, tube, vortex_mixer,
+};
 use serde::{Deserialize, Serialize};
 
 macro_rules! registry {
@@ -61,6 +63,7 @@ registry! {
         "tube_1_5ml" => tube::Params::microtube(),
         "cryovial" => tube::Params::cryovial(),
     },
+    Pipette(pipette::Params) { "pipette" => pipette::Params::p1000() },
 }
 
 #[cfg(test)]
@@ -76,7 +79,6 @@ mod tests {
             .collect();
         assert!(simulated.contains(&"thermal_cycler") && simulated.contains(&"tube_50ml"));
         assert!(simulated.contains(&"vortex_mixer"));
-        assert!(!simulated.contains(&"pipette"));
         for k in simulated {
             let m = Model::for_kind(k).unwrap();
             let back: Model = serde_json::from_value(serde_json::to_value(&m).unwrap()).unwrap();

@@ -369,6 +369,7 @@ pub fn panel_dimension(unit: &str) -> Dimension {
     match unit {
         "rpm" => Dimension::Speed,
         "°C" => Dimension::Temperature,
+        "µL" => Dimension::Volume,
         _ => Dimension::Time,
     }
 }
