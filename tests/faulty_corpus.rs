@@ -154,9 +154,12 @@ fn every_warning_file_compiles_with_its_warning_at_its_place() {
         assert!(!d.is_error(), "{}: {d:?}", path.display());
         codes.insert(d.code);
     }
+    // W0007 (a start state a model cannot set up) has no case while every shipped model sets up
+    // every start the language allows: its last one, a tube whose cap starts off, is now built
+    // open. It stays for the next model that cannot.
     let want: std::collections::BTreeSet<dsl::Code> = dsl::Code::ALL
         .into_iter()
-        .filter(|c| c.is_warning())
+        .filter(|c| c.is_warning() && *c != dsl::Code::W0007)
         .collect();
     assert_eq!(codes, want, "every warning has a case");
 }

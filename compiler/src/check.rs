@@ -541,6 +541,7 @@ fn lower_labware(cx: &mut Cx, p: &Protocol) -> (Vec<Option<LabwareSpec>>, KindMa
             for (key, value) in &l.state {
                 initial_state(cx, k, &mut spec, key, value);
             }
+            spec.params = spec.params.for_start(&spec.initial);
             // A start the language allows but the item's model cannot set up yet: said here,
             // not first by `eval` when it builds the scene.
             if let Some(why) = spec

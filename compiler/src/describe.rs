@@ -277,13 +277,13 @@ pub fn catalogue() -> String {
                 .iter()
                 .copied()
                 .filter(|st| {
+                    let one = [(p.part.to_string(), st.to_string())].into_iter().collect();
                     model
+                        .clone()
+                        .map(|m| m.for_start(&one))
                         .as_ref()
                         .and_then(|m| m.instrument())
-                        .is_some_and(|m| {
-                            let one = [(p.part.to_string(), st.to_string())].into_iter().collect();
-                            m.unsupported_start(&one).is_some()
-                        })
+                        .is_some_and(|m| m.unsupported_start(&one).is_some())
                 })
                 .collect();
             let note = if unsimulated.is_empty() {

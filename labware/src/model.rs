@@ -251,6 +251,11 @@ pub trait Instrument {
         None
     }
 
+    /// Makes the model for the declared part states where they change what is built (a tube
+    /// whose cap starts off is built without one). The compiler calls it once per item, before
+    /// [`Instrument::unsupported_start`].
+    fn start_from(&mut self, _initial: &BTreeMap<String, String>) {}
+
     /// Why the model cannot start in the declared part states, if it cannot.
     fn unsupported_start(&self, _initial: &BTreeMap<String, String>) -> Option<String> {
         None

@@ -40,6 +40,15 @@ macro_rules! registry {
                     Model::Unmodelled => None,
                 }
             }
+
+            /// The model made for the item's declared start (see [`Instrument::start_from`]).
+            pub fn for_start(mut self, initial: &std::collections::BTreeMap<String, String>) -> Model {
+                match &mut self {
+                    $(Model::$variant(p) => p.start_from(initial),)+
+                    Model::Unmodelled => {}
+                }
+                self
+            }
         }
     };
 }

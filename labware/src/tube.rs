@@ -14,6 +14,9 @@ use crate::model::{Affordance, Instrument, LabwareState, Measure, Mechanism, Sym
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
+/// Boxes in an open tube's wall.
+const OPEN_WALLS: usize = 16;
+
 /// Balls in a cap's centring bearing (two rings of four).
 const BEARING_BALLS: usize = 8;
 
@@ -34,6 +37,10 @@ pub struct Params {
     pub cap_off_rise: f64,
     pub rgba: [f64; 4],
     pub cap_rgba: [f64; 4],
+    /// Made without its cap, open (a tube whose cap starts off): its body is a hollow of walls
+    /// on a base, so that a pipette's tip goes in; no cap, no thread.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub open: bool,
 }
 
 impl Params {
@@ -50,6 +57,7 @@ impl Params {
             cap_off_rise: 0.01,
             rgba: [0.92, 0.93, 0.95, 0.7],
             cap_rgba: [0.2, 0.45, 0.85, 1.0],
+            open: false,
         }
     }
 
@@ -105,6 +113,48 @@ impl Params {
         let wall = (0.07 * self.radius).max(0.0005);
         let radius = self.radius - wall;
         (radius, 2.0 * wall, 1.5 * radius)
+    }
+
+    /// An open tube's MJCF: walls of [`OPEN_WALLS`] boxes around the bore on a solid base, no
+    /// cap and no thread.
+    fn open_fragment(&self, name: &str, placement: &Pose) -> Fragment {
+        let (bore, base, _) = self.bore();
+        let (r, h) = (self.radius, self.height);
+        let body_i = cylinder_inertia(self.mass, r, h / 2.0);
+        let half_thick = (r - bore) / 2.0;
+        let mid = (r + bore) / 2.0;
+        let half_side = r * (std::f64::consts::PI / OPEN_WALLS as f64).tan() + 0.0002;
+        let wall_hz = (h - base) / 2.0;
+        let c = crate::mjcf::rgba(self.rgba);
+        let walls: String = (0..OPEN_WALLS)
+            .map(|i| {
+                let a = std::f64::consts::TAU * i as f64 / OPEN_WALLS as f64;
+                format!(
+                    "  <geom name=\"{name}/wall{i}\" type=\"box\" size=\"{half_thick} {half_side} {wall_hz}\" pos=\"{} {} {}\" euler=\"0 0 {a}\" rgba=\"{c}\" friction=\"1 0.01 0.0001\"/>\n",
+                    mid * a.cos(),
+                    mid * a.sin(),
+                    base + wall_hz,
+                )
+            })
+            .collect();
+        let worldbody = format!(
+            r#"<body name="{name}/base" {place}>
+  <freejoint name="{name}/free"/>
+  <inertial pos="0 0 {hz}" mass="{m}" diaginertia="{bi0} {bi0} {bi2}"/>
+  <geom name="{name}/bottom" type="cylinder" size="{r} {bhz}" pos="0 0 {bhz}" rgba="{c}" friction="1 0.01 0.0001"/>
+{walls}</body>
+"#,
+            place = pose_attrs(placement),
+            hz = h / 2.0,
+            m = self.mass,
+            bi0 = body_i[0],
+            bi2 = body_i[2],
+            bhz = base / 2.0,
+        );
+        Fragment {
+            worldbody,
+            ..Default::default()
+        }
     }
 
     /// Height of the bolt thread's axis origin on the tube (tube frame).
@@ -170,6 +220,9 @@ impl Params {
 
 impl Instrument for Params {
     fn fragment(&self, name: &str, placement: &Pose) -> Fragment {
+        if self.open {
+            return self.open_fragment(name, placement);
+        }
         let (r, h) = (self.radius, self.height);
         let body_i = cylinder_inertia(self.mass, r, h / 2.0);
         let cap_i = cylinder_inertia(self.cap_mass, self.cap_radius, self.cap_height / 2.0);
@@ -241,11 +294,17 @@ impl Instrument for Params {
     }
 
     fn mechanisms(&self, name: &str) -> Vec<Mechanism> {
+        if self.open {
+            return Vec::new();
+        }
         self.threads(name).to_vec()
     }
 
     /// The tube and its cap, the cap screwed on.
     fn place(&self, name: &str, root: &Pose) -> Vec<(String, Pose)> {
+        if self.open {
+            return vec![(format!("{name}/free"), *root)];
+        }
         vec![
             (format!("{name}/free"), *root),
             (
@@ -256,6 +315,9 @@ impl Instrument for Params {
     }
 
     fn part_bodies(&self, name: &str) -> Vec<(&'static str, String)> {
+        if self.open {
+            return Vec::new();
+        }
         vec![("cap", format!("{name}/cap"))]
     }
 
@@ -269,8 +331,18 @@ impl Instrument for Params {
         if part != "cap" {
             return None;
         }
-        let (_, tilt) = cap_offset(self, s)?;
         let tolerance = tolerance.unwrap_or(0.002);
+        if self.open {
+            // No cap: off, as far as a cap can be.
+            let off = state == "off";
+            return (state == "on" || off).then_some(Measure {
+                value: f64::INFINITY,
+                target: if off { self.cap_off_rise } else { 0.0 },
+                tolerance,
+                holds: off,
+            });
+        }
+        let (_, tilt) = cap_offset(self, s)?;
         Some(match state {
             // On: screwed to its seat, measured along the thread's travel (the tube's axis),
             // coaxial within the thread's play and not crossed (tilted).
@@ -303,9 +375,10 @@ impl Instrument for Params {
     }
 
     fn readout(&self, s: &LabwareState) -> BTreeMap<String, String> {
-        let on = cap_rise_and_aside(self, s).is_none_or(|(rise, aside)| {
-            rise < self.cap_off_rise && aside < self.radius + self.cap_radius
-        });
+        let on = !self.open
+            && cap_rise_and_aside(self, s).is_none_or(|(rise, aside)| {
+                rise < self.cap_off_rise && aside < self.radius + self.cap_radius
+            });
         BTreeMap::from([("cap".into(), if on { "on" } else { "off" }.into())])
     }
 
@@ -314,9 +387,20 @@ impl Instrument for Params {
     /// `cap_start`: the grasp of a cap set coaxially on the mouth, ready to be screwed on.
     /// `cap_seated`: the grasp of a cap screwed fully on (where screwing it on stops).
     /// `hold`: the body from the side, below the cap (approach across the tube's axis, fingers
-    /// closing across the body at [`HOLD_HEIGHT`] of its height), from any side.
+    /// closing across the body at [`HOLD_HEIGHT`] of its height), from any side; an open tube
+    /// (no cap to take) is grasped the same way.
+    /// `mouth`: the centre of the open mouth, z down the axis (where a tip goes in).
     fn affordance(&self, name: &str, s: &LabwareState) -> Option<Affordance> {
-        if name == "hold" {
+        if name == "mouth" {
+            let down = crate::frame::from_axes([1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]);
+            return Some(Affordance {
+                pose: s.pose * crate::frame::pose([0.0, 0.0, self.height], down),
+                symmetry: Symmetry::Axial,
+                touch: false,
+                lead: 0.0,
+            });
+        }
+        if name == "hold" || (self.open && name == "grasp") {
             let across = crate::frame::from_axes([0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]);
             return Some(Affordance {
                 pose: s.pose * crate::frame::pose([0.0, 0.0, HOLD_HEIGHT * self.height], across),
@@ -359,8 +443,12 @@ impl Instrument for Params {
         )
     }
 
+    fn start_from(&mut self, initial: &BTreeMap<String, String>) {
+        self.open = initial.get("cap").map(String::as_str) == Some("off");
+    }
+
     fn unsupported_start(&self, initial: &BTreeMap<String, String>) -> Option<String> {
-        (initial.get("cap").map(String::as_str) == Some("off")).then(|| {
+        (!self.open && initial.get("cap").map(String::as_str) == Some("off")).then(|| {
             "a tube whose cap starts off has no place for the cap yet; declare `cap = \"on\"`"
                 .into()
         })
