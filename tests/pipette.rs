@@ -280,3 +280,58 @@ fn pressed_through_to_blow_out_over_another_tube_the_tip_empties_into_it() {
     // The judge reads it: tube `a` lost what `b` holds.
     assert!((20_000.0 - b.logic("a", VOLUME_UL) - drawn).abs() < 1e-6);
 }
+
+/// An item a hand holds from the start (`held_by`) is welded where its grasp meets the TCP: at
+/// reset and still after two seconds of a motionless arm (and the proof knows the hand is full).
+#[test]
+fn a_pipette_held_from_the_start_stays_at_the_hands_tcp() {
+    let source = PROTOCOL
+        .replace(
+            "pose = { pos_m = [0.3, 0.3, 0.9] }\nstate",
+            "held_by = \"arm\"\nstate",
+        )
+        .replace(
+            "[[steps]]\ndo = \"pick\"\non = \"pipette\"\nwith = \"arm\"\n\n",
+            "",
+        );
+    let (task, diags) = compiler::compile_source(&source, "held.toml");
+    let task = task.unwrap_or_else(|| panic!("{diags:#?}"));
+    let instance = task.sample(0);
+    let scene = Arc::new(runtime::Scene::build(&task, &instance).unwrap());
+    let mut ep = runtime::Episode::new(scene.clone(), &task, &instance);
+    let pipette = task.labware_index("pipette").unwrap();
+    let model = task.labware[pipette].params.instrument().unwrap();
+    let grasp_off_tcp = |ep: &runtime::Episode| {
+        let s = &ep.labware_state()[pipette];
+        let grasp = model.affordance("grasp", s).unwrap().pose;
+        let tcp = ep.data.site_xpos()[scene.robots[0].tcp_site];
+        let z = grasp.rotation * nalgebra::Vector3::z();
+        let tcp_z =
+            nalgebra::Matrix3::from_row_slice(&ep.data.site_xmat()[scene.robots[0].tcp_site])
+                * nalgebra::Vector3::z();
+        (
+            (grasp.translation.vector - nalgebra::Vector3::from(tcp)).norm(),
+            z.angle(&tcp_z),
+        )
+    };
+    let (d, angle) = grasp_off_tcp(&ep);
+    assert!(d < 1e-6 && angle < 1e-6, "at reset: {d} m, {angle} rad");
+    for _ in 0..100 {
+        ep.control_step().unwrap();
+    }
+    let (d, angle) = grasp_off_tcp(&ep);
+    assert!(d < 0.002 && angle < 0.02, "after 2 s: {d} m, {angle} rad");
+    // Another item in the same hand is refused by the proof.
+    let two = source.replace(
+        "[labware.pipette]",
+        "[labware.spare]\nkind = \"pipette\"\nheld_by = \"arm\"\n\n[labware.pipette]",
+    );
+    let (task, diags) = compiler::compile_source(&two, "two.toml");
+    assert!(task.is_none());
+    assert!(
+        diags
+            .iter()
+            .any(|d| d.message.contains("both start in `arm`'s hand")),
+        "{diags:#?}"
+    );
+}

@@ -316,7 +316,8 @@ fn same_scene(cx: &mut Cx, first: &Lowered, later: &Lowered, ast: &Protocol) {
                 };
                 // An item that starts in a slot is where the chain carried it (`proof`'s W0008
                 // says when a stage declares otherwise), not at a pose of the bench.
-                let placed = a.at.is_some() || b.at.is_some();
+                let placed =
+                    a.at.is_some() || b.at.is_some() || a.held_by.is_some() || b.held_by.is_some();
                 if !placed && !same_pose(&a.placement, &b.placement) {
                     moved(cx, &l.name, &l.pose, &a.placement, &b.placement);
                 }

@@ -87,7 +87,11 @@ pub(crate) fn lower<'a>(cx: &mut Cx, p: &'a Protocol, file: &str) -> Option<Lowe
         .labware
         .iter()
         .map(|l| {
-            let span = l.at.as_ref().map(|a| a.span).unwrap_or(l.name.span);
+            let span =
+                l.at.as_ref()
+                    .or(l.held_by.as_ref())
+                    .map(|a| a.span)
+                    .unwrap_or(l.name.span);
             (l.name.value.clone(), span)
         })
         .collect();
@@ -524,10 +528,38 @@ fn lower_labware(cx: &mut Cx, p: &Protocol) -> (Vec<Option<LabwareSpec>>, KindMa
                     .map(|ps| (ps.part.to_string(), ps.initial[0].to_string()))
                     .collect(),
                 at: l.at.as_ref().map(|a| a.value.clone()),
+                held_by: None,
                 volume: None,
                 panel: BTreeMap::new(),
                 params: Model::for_kind(k.name).unwrap_or(Model::Unmodelled),
             };
+            if let Some(robot) = &l.held_by {
+                let robots: Vec<&str> = p.robots.iter().map(|r| r.name.value.as_str()).collect();
+                if !robots.contains(&robot.value.as_str()) {
+                    cx.err(
+                        Code::E0013,
+                        robot.span,
+                        format!("no robot named `{}`", robot.value),
+                        Some(hint_for(&robot.value, &robots, "robots")),
+                    );
+                } else if !k.movable {
+                    cx.err(
+                        Code::E0016,
+                        robot.span,
+                        format!("`{}` (a {}) cannot be held", l.name.value, k.name),
+                        Some("place it with `pose` instead".into()),
+                    );
+                } else if l.at.is_some() {
+                    cx.err(
+                        Code::E0016,
+                        robot.span,
+                        format!("`{}` starts both in a slot and in a hand", l.name.value),
+                        Some("keep `at` or `held_by`, not both".into()),
+                    );
+                } else {
+                    spec.held_by = Some(robot.value.clone());
+                }
+            }
             if let Some(at) = &l.at
                 && !k.movable
             {

@@ -38,9 +38,10 @@ pub fn describe(task: &Task) -> String {
             state.push(format!("volume {v}"));
         }
         state.extend(l.panel.iter().map(|(k, v)| format!("{k} {v}")));
-        let place = match &l.at {
-            Some(at) => format!("in {at}"),
-            None => {
+        let place = match (&l.at, &l.held_by) {
+            (Some(at), _) => format!("in {at}"),
+            (None, Some(robot)) => format!("in {robot}'s hand"),
+            (None, None) => {
                 let p = labware::frame::position(&l.placement);
                 format!("at ({:.3}, {:.3}, {:.3}) m", p[0], p[1], p[2])
             }

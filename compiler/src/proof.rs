@@ -102,6 +102,32 @@ fn initial_world(cx: &mut Cx, scene: &ProofScene, bound: &Bindings) -> Option<Wo
                     ok = false;
                 }
             }
+        } else if let Some(robot) = &spec.held_by {
+            if let Some(other) = w.hands.get(robot).and_then(|h| match h {
+                Hand::Item(i) => Some(i.clone()),
+                _ => None,
+            }) {
+                cx.push(
+                    Diagnostic::new(
+                        Code::E0016,
+                        span,
+                        format!(
+                            "`{}` and `{other}` both start in `{robot}`'s hand",
+                            spec.name
+                        ),
+                    )
+                    .with_hint("a hand holds one item"),
+                );
+                ok = false;
+            } else {
+                w.locations.insert(
+                    spec.name.clone(),
+                    Location::Held {
+                        robot: robot.clone(),
+                    },
+                );
+                w.hands.insert(robot.clone(), Hand::Item(spec.name.clone()));
+            }
         } else if kind.movable {
             w.locations.insert(spec.name.clone(), Location::Bench);
         }
@@ -141,7 +167,7 @@ fn initial_world(cx: &mut Cx, scene: &ProofScene, bound: &Bindings) -> Option<Wo
         }
     }
     for r in &scene.robots {
-        w.hands.insert(r.clone(), Hand::Empty);
+        w.hands.entry(r.clone()).or_insert(Hand::Empty);
     }
     ok.then_some(w)
 }

@@ -130,6 +130,11 @@ pub(crate) fn merge(
                 }
                 if l.at.is_some() {
                     x.at = l.at;
+                    x.held_by = None;
+                }
+                if l.held_by.is_some() {
+                    x.held_by = l.held_by;
+                    x.at = None;
                 }
             }
             None if l.kind.is_none() => cx.push(

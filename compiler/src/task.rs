@@ -114,6 +114,9 @@ pub struct LabwareSpec {
     pub initial: BTreeMap<String, String>,
     /// Where a movable item starts (template `holder.slot`); `None`: at `placement`.
     pub at: Option<String>,
+    /// The robot whose hand holds the item at the start (welded at its grasp; `at` is then none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub held_by: Option<String>,
     /// Initial liquid volume (template quantity), for containers.
     pub volume: Option<String>,
     /// Initial panel values (template quantities) that differ from the kind's defaults.

@@ -116,6 +116,9 @@ pub struct Labware {
     pub pose: Pose,
     /// Where a movable item starts: `"<holder>.<slot>"`, may use placeholders.
     pub at: Option<Spanned<String>>,
+    /// The robot whose hand holds the item at the start (a pipette in the pipetting hand).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub held_by: Option<Spanned<String>>,
     /// Initial state, e.g. `lid = "open"`, `volume = "1 mL"`, `speed = "900 rpm"`: (key, value).
     pub state: Vec<(Spanned<String>, Spanned<Scalar>)>,
 }

@@ -119,7 +119,7 @@ const PARAM_KEYS: &[&str] = &[
 ];
 const PROTOCOL_KEYS: &[&str] = &["id", "version", "level", "instruction", "time_limit"];
 const ROBOT_KEYS: &[&str] = &["model", "base"];
-const LABWARE_KEYS: &[&str] = &["kind", "pose", "at", "state"];
+const LABWARE_KEYS: &[&str] = &["kind", "pose", "at", "held_by", "state"];
 const POSE_KEYS: &[&str] = &["pos", "yaw"];
 const RANDOM_KEYS: &[&str] = &["joints", "xy", "yaw"];
 const SUCCESS_KEYS: &[&str] = &["all", "scoring", "weights", "settle"];
@@ -618,6 +618,7 @@ impl Parser {
             kind: None,
             pose: Pose::default(),
             at: None,
+            held_by: None,
             state: Vec::new(),
         };
         for (key, value) in self.settings(t) {
@@ -625,6 +626,7 @@ impl Parser {
                 "kind" => l.kind = self.string(value, "kind"),
                 "pose" => l.pose = self.pose(value),
                 "at" => l.at = self.string(value, "at"),
+                "held_by" => l.held_by = self.string(value, "held_by"),
                 "state" => {
                     if let Some(st) = self.table(value, "`state`") {
                         for (part, s) in ordered(st) {

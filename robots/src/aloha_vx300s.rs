@@ -48,6 +48,8 @@ pub const MODEL: RobotModel = RobotModel {
         enclose: TCP_OFFSET - 0.13,
     },
     tcp_site: "tcp",
+    tcp_body: "gripper_link",
+    palm_bodies: &["gripper_link"],
     wrist_camera: "wrist_cam",
     // The ViperX faces +x at waist 0.
     mount_yaw: 0.0,

@@ -113,6 +113,11 @@ pub struct RobotModel {
     pub gripper: Gripper,
     /// The tool centre point site and the wrist camera (relative to the prefix).
     pub tcp_site: &'static str,
+    /// The body the TCP site is on, and the bodies of the hand an item held from the start sits
+    /// among (`held_by`): the item is welded to `tcp_body` at its `grasp` and collides with none
+    /// of these (relative to the prefix).
+    pub tcp_body: &'static str,
+    pub palm_bodies: &'static [&'static str],
     pub wrist_camera: &'static str,
     /// Yaw (rad) added to the mount so that a protocol's yaw 0 reaches along +x.
     pub mount_yaw: f64,

@@ -48,6 +48,8 @@ pub const MODEL: RobotModel = RobotModel {
         enclose: 0.0,
     },
     tcp_site: "tcp",
+    tcp_body: "tool",
+    palm_bodies: &["gripper/base_mount", "gripper/base"],
     wrist_camera: "wrist_cam",
     // The Menagerie UR5e faces -x at zero pan; a half turn makes a mount yaw of 0 reach along +x.
     mount_yaw: PI,

@@ -171,6 +171,7 @@ impl Episode {
                 }
             }
         }
+        self.place_held();
         self.apply_panel_start(instance);
         self.start_volumes(instance);
         let vessels: Vec<labware::process::Vessel> = (0..self.task.labware.len())
@@ -186,6 +187,30 @@ impl Episode {
             .collect();
         self.run_logic(0.0);
         self.data.forward();
+    }
+
+    /// Items a hand holds from the start go where the hand holds them (see [`Scene::held`]): on
+    /// the robots' reset pose, so after their kinematics.
+    fn place_held(&mut self) {
+        if self.scene.held.is_empty() {
+            return;
+        }
+        self.data.forward();
+        let scene = self.scene.clone();
+        for &(i, body, rel) in &scene.held {
+            let root = self.body_pose(body) * rel;
+            let ids = &scene.labware[i];
+            for (joint, pose) in instrument(&self.task, i).place(&self.task.labware[i].name, &root)
+            {
+                if let Some(f) = ids.free.iter().find(|f| f.name == joint) {
+                    let (p, q) = (position(&pose), wxyz(&pose.rotation));
+                    let qpos = self.data.qpos_mut();
+                    qpos[f.qpos..f.qpos + 3].copy_from_slice(&p);
+                    qpos[f.qpos + 3..f.qpos + 7].copy_from_slice(&q);
+                    self.data.qvel_mut()[f.dof..f.dof + 6].fill(0.0);
+                }
+            }
+        }
     }
 
     /// The liquid each container starts with (`[labware.x] volume`, rendered for this instance)

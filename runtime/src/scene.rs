@@ -98,6 +98,9 @@ pub struct Scene {
     pub placements: Vec<Pose>,
     /// Each body's owner (`None`: the world, the bench, the room), for contact predicates.
     pub body_owner: Vec<Option<Owner>>,
+    /// Items a hand holds from the start: the item, the robot's TCP body and the item's root
+    /// pose in that body's frame (where reset puts it; the weld keeps it there).
+    pub held: Vec<(usize, usize, Pose)>,
     /// What the simplified model is built from, and that model once a camera asked for it.
     task: Task,
     simplified: OnceLock<Result<Arc<MjModel>, String>>,
@@ -200,6 +203,7 @@ pub fn scene_xml(task: &Task, placements: &[Pose], detail: Detail) -> Result<Str
         );
     }
     let mut labware = Fragment::default();
+    labware.append(held_items(task)?);
     let mut plugins: Vec<(&'static str, String)> = Vec::new();
     for (l, placement) in task.labware.iter().zip(placements) {
         let model = l
@@ -268,6 +272,99 @@ pub fn scene_xml(task: &Task, placements: &[Pose], detail: Detail) -> Result<Str
             format!("  <actuator>\n{}  </actuator>\n", labware.actuator)
         },
     ))
+}
+
+/// Items a hand holds from the start (`held_by`): a weld from the robot's TCP body to the item's
+/// root at the pose that puts the item's `grasp` on the TCP, and no contact between the item's
+/// root and the hand's palm bodies (the fingers around it; a thumb that works a part on the item,
+/// a plunger, still touches that part).
+fn held_items(task: &Task) -> Result<Fragment, SceneError> {
+    let mut out = Fragment::default();
+    for l in &task.labware {
+        let Some(robot) = &l.held_by else { continue };
+        let r = task
+            .robot_index(robot)
+            .ok_or_else(|| SceneError::MissingName("robot", robot.clone()))?;
+        let model = robot_model(task, r)?;
+        let item = l
+            .params
+            .instrument()
+            .ok_or_else(|| SceneError::Unmodelled(l.name.clone(), l.kind.clone()))?;
+        let root = item.root_body(&l.name);
+        let relpose = held_pose(task, r, l)?;
+        let p = labware::frame::position(&relpose);
+        let q = labware::frame::wxyz(&relpose.rotation);
+        out.equality += &format!(
+            "<weld name=\"{}/held\" body1=\"{robot}/{}\" body2=\"{root}\" relpose=\"{} {} {} {} {} {} {}\"/>\n",
+            l.name, model.tcp_body, p[0], p[1], p[2], q[0], q[1], q[2], q[3]
+        );
+        let mut bodies = vec![model.tcp_body];
+        bodies.extend(model.palm_bodies.iter().filter(|b| **b != model.tcp_body));
+        for b in bodies {
+            out.contact += &format!("<exclude body1=\"{robot}/{b}\" body2=\"{root}\"/>\n");
+        }
+    }
+    Ok(out)
+}
+
+/// Where item `l`, held from the start by robot `r`, sits in the frame of the robot's TCP body:
+/// the item's `grasp` on the TCP site.
+pub(crate) fn held_pose(
+    task: &Task,
+    r: usize,
+    l: &compiler::LabwareSpec,
+) -> Result<Pose, SceneError> {
+    let model = robot_model(task, r)?;
+    let tcp = tcp_in_body(model)?;
+    let item = l
+        .params
+        .instrument()
+        .ok_or_else(|| SceneError::Unmodelled(l.name.clone(), l.kind.clone()))?;
+    let at_origin = LabwareState {
+        name: l.name.clone(),
+        pose: Pose::identity(),
+        joints: Default::default(),
+        parts: Default::default(),
+        logic: Default::default(),
+        touched_by: Vec::new(),
+    };
+    let grasp = item
+        .affordance("grasp", &at_origin)
+        .ok_or_else(|| SceneError::MissingName("affordance", format!("{}.grasp", l.name)))?;
+    Ok(tcp * grasp.pose.inverse())
+}
+
+/// The TCP site's pose in its body's frame, from the robot's prepared file compiled alone (once
+/// per robot model).
+fn tcp_in_body(model: &'static RobotModel) -> Result<Pose, SceneError> {
+    static CACHE: OnceLock<std::sync::Mutex<BTreeMap<&'static str, Pose>>> = OnceLock::new();
+    let cache = CACHE.get_or_init(Default::default);
+    if let Some(p) = cache
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .get(model.name)
+    {
+        return Ok(*p);
+    }
+    let file = (model.prepare)(&deps::deps_dir(), Detail::Full)?;
+    let m = MjModel::from_xml(&file).map_err(|e| SceneError::Compile(e.to_string()))?;
+    let site = id_of(&m, MjtObjBase::mjOBJ_SITE, "site", model.tcp_site)?;
+    let body = id_of(&m, MjtObjBase::mjOBJ_BODY, "body", model.tcp_body)?;
+    if m.site_bodyid()[site] as usize != body {
+        return Err(SceneError::MissingName(
+            "TCP site on the body",
+            model.tcp_body.to_string(),
+        ));
+    }
+    let pose = labware::frame::pose(
+        m.site_pos()[site],
+        labware::frame::from_wxyz(m.site_quat()[site]),
+    );
+    cache
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .insert(model.name, pose);
+    Ok(pose)
 }
 
 fn id_of(
@@ -426,7 +523,18 @@ impl Scene {
             cameras.push(id_of(m, MjtObjBase::mjOBJ_CAMERA, "camera", &name)?);
         }
         let body_owner = body_owners(m, &robots, &labware)?;
+        let mut held = Vec::new();
+        for (i, l) in task.labware.iter().enumerate() {
+            let Some(robot) = &l.held_by else { continue };
+            let r = task
+                .robot_index(robot)
+                .ok_or_else(|| SceneError::MissingName("robot", robot.clone()))?;
+            let body = format!("{robot}/{}", robot_model(task, r)?.tcp_body);
+            let body = id_of(m, MjtObjBase::mjOBJ_BODY, "body", &body)?;
+            held.push((i, body, held_pose(task, r, l)?));
+        }
         Ok(Scene {
+            held,
             model: Arc::new(model),
             robots,
             labware,
@@ -563,7 +671,7 @@ fn check_starts(task: &Task, instance: &SceneInstance) -> Result<(), SceneError>
         if let Some(why) = model.unsupported_start(&l.initial) {
             return Err(SceneError::Unsupported(l.name.clone(), why));
         }
-        if l.at.is_some() && start_seat(task, instance, i).is_none() {
+        if l.held_by.is_none() && l.at.is_some() && start_seat(task, instance, i).is_none() {
             let at = l.at.clone().unwrap_or_default();
             let at = compiler::params::render(&at, &instance.params).unwrap_or(at);
             return Err(SceneError::NoSlot(l.name.clone(), at));
