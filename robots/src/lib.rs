@@ -16,7 +16,9 @@
 pub mod aloha_vx300s;
 mod assets;
 pub mod lod;
+mod ur5e;
 pub mod ur5e_2f85;
+pub mod ur5e_inspire;
 
 pub use assets::AssetError;
 use std::path::{Path, PathBuf};
@@ -117,7 +119,7 @@ pub struct RobotModel {
     /// among (`held_by`): the item is welded to `tcp_body` at its `grasp` and collides with none
     /// of these (relative to the prefix).
     pub tcp_body: &'static str,
-    pub palm_bodies: &'static [&'static str],
+    pub hand_bodies: &'static [&'static str],
     pub wrist_camera: &'static str,
     /// Yaw (rad) added to the mount so that a protocol's yaw 0 reaches along +x.
     pub mount_yaw: f64,
@@ -160,7 +162,11 @@ impl RobotModel {
 }
 
 /// The registry: every robot a protocol may name.
-pub const MODELS: &[&RobotModel] = &[&ur5e_2f85::MODEL, &aloha_vx300s::MODEL];
+pub const MODELS: &[&RobotModel] = &[
+    &ur5e_2f85::MODEL,
+    &aloha_vx300s::MODEL,
+    &ur5e_inspire::MODEL,
+];
 
 pub fn model(name: &str) -> Option<&'static RobotModel> {
     MODELS.iter().copied().find(|m| m.name == name)

@@ -7,8 +7,8 @@
 //! action = 6 joint position targets (rad) + the fingers actuator (0 open .. 255 closed).
 
 use crate::assets::{self, AssetError};
-use crate::{Detail, ExpertLimits, Gripper, IkMethod, RobotModel, lod};
-use std::f64::consts::{FRAC_PI_2, PI};
+use crate::{Detail, Gripper, IkMethod, RobotModel, ur5e};
+use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
 /// Distance from the flange to the 2F-85's pinch point along the tool axis (m).
@@ -17,22 +17,8 @@ const TCP_OFFSET: f64 = 0.1558;
 pub const MODEL: RobotModel = RobotModel {
     name: "ur5e_2f85",
     description: "Universal Robots UR5e with a Robotiq 2F-85 gripper (MuJoCo Menagerie models)",
-    arm_joints: &[
-        "shoulder_pan_joint",
-        "shoulder_lift_joint",
-        "elbow_joint",
-        "wrist_1_joint",
-        "wrist_2_joint",
-        "wrist_3_joint",
-    ],
-    arm_actuators: &[
-        "shoulder_pan",
-        "shoulder_lift",
-        "elbow",
-        "wrist_1",
-        "wrist_2",
-        "wrist_3",
-    ],
+    arm_joints: ur5e::JOINTS,
+    arm_actuators: ur5e::ACTUATORS,
     gripper: Gripper {
         actuator: "gripper/fingers_actuator",
         driver_joint: "gripper/right_driver_joint",
@@ -49,62 +35,39 @@ pub const MODEL: RobotModel = RobotModel {
     },
     tcp_site: "tcp",
     tcp_body: "tool",
-    palm_bodies: &["gripper/base_mount", "gripper/base"],
+    hand_bodies: &["gripper/base_mount", "gripper/base"],
     wrist_camera: "wrist_cam",
     // The Menagerie UR5e faces -x at zero pan; a half turn makes a mount yaw of 0 reach along +x.
     mount_yaw: PI,
     root_body: "base",
-    home: &[
-        0.0, -FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2,
-    ],
+    home: ur5e::HOME,
     // The UR5e's rated reach (850 mm) plus the 2F-85's length to its fingertips.
     reach: 1.0,
-    // As the upstream thermal-cycler expert.
-    expert_limits: ExpertLimits {
-        vmax: 1.5,
-        amax: 1.0,
-        // At the UR5e's 0.9 m reach, 0.02 rad is about 2 cm of tool travel at worst, less than
-        // a rotor slot's width.
-        check_step: 0.02,
-        joint_space_transits: false,
-    },
+    expert_limits: ur5e::LIMITS,
     ik: IkMethod::Qp,
     prepare,
 };
 
 fn prepare(deps: &Path, detail: Detail) -> Result<PathBuf, AssetError> {
-    let ur_dir = deps.join("robots/universal_robots_ur5e");
     let gr_dir = deps.join("robots/robotiq_2f85");
-    let (ur_file, gr_file) = (ur_dir.join("ur5e.xml"), gr_dir.join("2f85.xml"));
-    if !ur_file.exists() || !gr_file.exists() {
+    let gr_file = gr_dir.join("2f85.xml");
+    if !gr_file.exists() {
         return Err(AssetError::Missing(deps.join("robots")));
     }
-    let gravcomp = |s: &str| s.replace("<body ", "<body gravcomp=\"1\" ");
-    let meshes = |dir: &Path| match detail {
-        Detail::Full => assets::absolute(&dir.join("assets")),
-        Detail::Simplified => assets::absolute(&lod::simplified_dir(
-            &dir.join("assets"),
-            &deps.join("lod"),
-        )?),
-    };
     let mut gripper = assets::read(&gr_file)?;
     gripper = assets::strip_element(&gripper, "<option", "/>");
-    gripper = gravcomp(&gripper).replace(
+    gripper = ur5e::gravcomp(&gripper).replace(
         "meshdir=\"assets\"",
-        &format!("meshdir=\"{}\"", meshes(&gr_dir)?),
+        &format!(
+            "meshdir=\"{}\"",
+            ur5e::meshes(deps, &gr_dir.join("assets"), detail)?
+        ),
     );
     if detail == Detail::Simplified {
         // Simplified meshes are OBJ files of the same names.
         gripper = gripper.replace(".stl\"", ".obj\"");
     }
-    let mut arm = assets::read(&ur_file)?;
-    arm = gravcomp(&arm).replace(
-        "meshdir=\"assets\"",
-        &format!("meshdir=\"{}\"", meshes(&ur_dir)?),
-    );
-    arm = assets::strip_element(&arm, "<keyframe>", "</keyframe>");
-    arm = assets::strip_element(&arm, "<light name=\"spotlight\"", "/>");
-    arm = assets::strip_element(&arm, "<option", "/>");
+    let mut arm = ur5e::arm(deps, detail)?;
     // The tool frame: z along the approach, fingers closing along x. The camera sits on the -y side
     // looking at the pinch point (RealSense D405-like fov).
     let tool = format!(
@@ -118,10 +81,7 @@ fn prepare(deps: &Path, detail: Detail) -> Result<PathBuf, AssetError> {
     // Named by everything written into it (the gripper's path aside, which names the folder).
     let dir = assets::content_dir("autobio-robot", &format!("{arm}{gripper}{tool}"))?;
     let gripper_path = dir.join("2f85.xml");
-    arm = arm.replace(
-        r#"<site name="attachment_site" pos="0 0.1 0" quat="-1 1 0 0"/>"#,
-        &tool,
-    );
+    arm = arm.replace(ur5e::ATTACHMENT, &tool);
     arm = arm.replace(
         "<asset>",
         &format!(

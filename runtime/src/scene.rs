@@ -299,7 +299,7 @@ fn held_items(task: &Task) -> Result<Fragment, SceneError> {
             l.name, model.tcp_body, p[0], p[1], p[2], q[0], q[1], q[2], q[3]
         );
         let mut bodies = vec![model.tcp_body];
-        bodies.extend(model.palm_bodies.iter().filter(|b| **b != model.tcp_body));
+        bodies.extend(model.hand_bodies.iter().filter(|b| **b != model.tcp_body));
         for b in bodies {
             out.contact += &format!("<exclude body1=\"{robot}/{b}\" body2=\"{root}\"/>\n");
         }
