@@ -358,7 +358,7 @@ fn the_hands_thumb_works_the_plunger_to_its_stops() {
     let mut ep = runtime::Episode::new(scene.clone(), &task, &instance);
     let pipette = task.labware_index("pipette").unwrap();
     let arm = ep.arm_q(0);
-    let mut travel = |ep: &mut runtime::Episode, thumb: f64| {
+    let travel = |ep: &mut runtime::Episode, thumb: f64| {
         let mut action = arm.clone();
         action.push(thumb);
         ep.apply(&action).unwrap();
