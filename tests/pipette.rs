@@ -180,7 +180,7 @@ fn lerp(a: [f64; 3], b: [f64; 3], t: f64) -> [f64; 3] {
 }
 
 /// A thumb that presses to the first stop and not past it (the first spring gives 3.25 N
-/// there, the second holds until 4 N).
+/// there, the second holds until 8 N).
 const FIRST_STOP_N: f64 = 3.6;
 
 #[test]
@@ -272,7 +272,7 @@ fn pressed_through_to_blow_out_over_another_tube_the_tip_empties_into_it() {
     // Over the second tube, 2 cm into it, pressed through the first stop to blow-out.
     let into = b.over(b.b, -0.02);
     b.run(1.0, &|t| (lerp(above, into, t / 0.8), 0.0));
-    let deepest = b.run(1.5, &|t| (into, 9.0 * (t / 0.3).min(1.0)));
+    let deepest = b.run(1.5, &|t| (into, 14.0 * (t / 0.3).min(1.0)));
     assert!(deepest < -0.0085, "past the first stop: {deepest} m");
     assert_eq!(b.logic("pipette", VOLUME_UL), 0.0);
     assert!((b.logic("b", VOLUME_UL) - drawn).abs() < 1e-6);

@@ -35,6 +35,17 @@ pub enum Target {
         to: String,
         above: f64,
     },
+    /// The tool pose that brings the carried item's affordance `from` (where it is now in the
+    /// hand) onto another item's affordance `to`, `above` metres back along `to`'s approach axis
+    /// (negative: on past it), keeping the carried item's heading about `to`'s axis where `to`
+    /// is round: a pipette's tip over a tube's mouth, or into its liquid.
+    Bring {
+        carried: String,
+        from: String,
+        labware: String,
+        to: String,
+        above: f64,
+    },
     /// The button that moves an instrument's panel value `param` toward `value` (a quantity as
     /// the step renders it, e.g. `"1200 rpm"`), chosen from the live value.
     Button {
@@ -77,6 +88,17 @@ pub enum Motion {
         value: String,
         timeout_s: f64,
     },
+    /// Close the hand's actuated finger gradually (a thumb on a pipette's plunger) until every
+    /// joint of the held `labware` named in `goals` has reached its goal (its value at the goal,
+    /// from the side it started on), or `timeout_s` has passed; the finger then stays there.
+    PressPart {
+        labware: String,
+        goals: Goals,
+        timeout_s: f64,
+    },
+    /// Open the hand's actuated finger evenly over `seconds` (a thumb easing off a plunger, so
+    /// that what the plunger draws flows in at a thumb's pace).
+    EasePart { seconds: f64 },
     /// Back to the robot model's home pose, in joint space (routed around obstacles).
     Home,
     /// Keep the tool still for `seconds` (a key held down).
@@ -134,6 +156,8 @@ impl Motion {
             Motion::Follow { .. } => "follow",
             Motion::Press { .. } => "press",
             Motion::HoldUntil { .. } => "hold until",
+            Motion::PressPart { .. } => "press part",
+            Motion::EasePart { .. } => "ease part",
             Motion::Wait { .. } => "wait",
             Motion::Comply => "comply",
             Motion::Grasp => "grasp",
@@ -163,6 +187,8 @@ impl Motion {
 pub struct MotionStep<'a> {
     pub args: &'a BTreeMap<String, String>,
     pub kind: Option<&'static labware::LabwareKind>,
+    /// The liquid tool the step's robot carries, if any ([`crate::Task::liquid_tool`]).
+    pub tool: Option<String>,
 }
 
 impl MotionStep<'_> {

@@ -267,4 +267,36 @@ impl Task {
             .enumerate()
             .flat_map(|(i, s)| s.plan.iter().map(move |p| (i, p)))
     }
+
+    /// The liquid tool (a pipette) `robot` carries when step `before` (counted over every
+    /// stage's plan) begins: one it holds from the start, picked or was handed over since, and
+    /// has not put down. What `aspirate` and `dispense` work with (the proof has checked there
+    /// is one).
+    pub fn liquid_tool(&self, robot: &str, before: usize) -> Option<String> {
+        let is_tool = |item: &str| {
+            self.labware
+                .iter()
+                .find(|l| l.name == item)
+                .and_then(|l| labware::kind(&l.kind))
+                .is_some_and(|k| k.liquid_tool)
+        };
+        let mut carried = self
+            .labware
+            .iter()
+            .find(|l| l.held_by.as_deref() == Some(robot))
+            .map(|l| l.name.clone());
+        for (_, step) in self.steps().take(before) {
+            let on = step.labware.clone();
+            match step.primitive.as_str() {
+                "pick" if step.robot == robot => carried = on,
+                "place" if step.robot == robot => carried = None,
+                "hand_over" if step.robot == robot => carried = None,
+                "hand_over" if step.args.get("to").map(String::as_str) == Some(robot) => {
+                    carried = on
+                }
+                _ => {}
+            }
+        }
+        carried.filter(|c| is_tool(c))
+    }
 }

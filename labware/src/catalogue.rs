@@ -600,7 +600,12 @@ pub const KINDS: &[LabwareKind] = &[
     LabwareKind {
         name: "pipette",
         description: "single-channel air-displacement pipette with a 1000 µL tip",
-        parts: &[],
+        // Where its tip is: out of every container, in one, or under a liquid's surface.
+        parts: &[PartState {
+            part: "tip",
+            states: &["out", "in", "immersed"],
+            initial: &["out"],
+        }],
         slots: None,
         capacity_ul: Some(1000.0),
         movable: true,

@@ -217,6 +217,12 @@ pub trait Instrument {
         Vec::new()
     }
 
+    /// The bodies a hand that holds the item from the start (`held_by`) does not collide with:
+    /// all but the parts the hand works (a pipette's plunger button, under the thumb).
+    fn held_bodies(&self, name: &str) -> Vec<String> {
+        vec![self.root_body(name)]
+    }
+
     /// Loose parts (bodies on their own free joints) by role, whose world poses the runtime reports.
     fn part_bodies(&self, _name: &str) -> Vec<(&'static str, String)> {
         Vec::new()

@@ -1,7 +1,8 @@
 //! A single-channel air-displacement pipette (a P1000 with its tip on): a handle, a nose cone with
 //! the tip, a plunger button on two springs in series and a tip ejector on its own spring. The
-//! plunger's first spring is soft and stops at the first stop; the second is stiff and gives the
-//! blow-out travel past it, so a thumb feels the first stop as the force steps up. The set volume
+//! plunger's first spring is soft and stops at the first stop (3.25 N there); the second is stiff
+//! and already pushes 8 N at rest, so the button holds at the first stop until a thumb presses
+//! more than twice as hard, then gives the blow-out travel (13 N at its end). The set volume
 //! is the panel value `set_volume` (µL), set for the episode (our pipette has no volume knob to
 //! turn: the task's parameter sets it, as a person sets it before starting).
 //!
@@ -20,8 +21,9 @@
 
 use crate::frame::{Pose, pose};
 use crate::mjcf::{Fragment, cylinder_inertia, pose_attrs};
+use crate::model::Measure;
 use crate::model::{Affordance, Effects, Instrument, LabwareState, Logic, Symmetry, set};
-use crate::process::{PENDING_UL, Pipetting, Process, STROKE_UL, VOLUME_UL, Vessel};
+use crate::process::{PENDING_UL, Pipetting, Process, STROKE_UL, TIP_IN, VOLUME_UL, Vessel};
 use physics::liquid::Container;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -82,7 +84,7 @@ impl Params {
             first_stiffness: 300.0,
             first_preload: 1.0,
             blow_out_stiffness: 2000.0,
-            blow_out_preload: 4.0,
+            blow_out_preload: 8.0,
             ejector_travel: 0.008,
             min_ul: 100.0,
             max_ul: 1000.0,
@@ -215,6 +217,14 @@ impl Instrument for Params {
             .collect()
     }
 
+    /// All but the button, which the thumb presses.
+    fn held_bodies(&self, name: &str) -> Vec<String> {
+        ["base", "plunger", "ejector"]
+            .iter()
+            .map(|b| format!("{name}/{b}"))
+            .collect()
+    }
+
     fn place(&self, name: &str, root: &Pose) -> Vec<(String, Pose)> {
         vec![(format!("{name}/free"), *root)]
     }
@@ -247,6 +257,44 @@ impl Instrument for Params {
         set(logic, STROKE_UL, stroke);
     }
 
+    /// `plunger`: `rest`, `first_stop`; `blow_out`: `rest`, `blow_out` (its stop).
+    fn joint_goal(&self, role: &str, goal: &str) -> Option<f64> {
+        match (role, goal) {
+            ("plunger" | "blow_out", "rest") => Some(0.0),
+            ("plunger", "first_stop") => Some(-self.first_stop),
+            ("blow_out", "blow_out") => Some(-self.blow_out),
+            _ => None,
+        }
+    }
+
+    /// `tip`: `out` of every vessel, `in` one (inside it, or over its mouth where a drop falls
+    /// in), or `immersed` under a liquid's surface; the value is where it is (0, 1, 2), from what
+    /// the pipetting process found after the last physics step.
+    fn measure(
+        &self,
+        part: &str,
+        state: &str,
+        _tolerance: Option<f64>,
+        s: &LabwareState,
+    ) -> Option<Measure> {
+        if part != "tip" {
+            return None;
+        }
+        let place = s.logic.get(TIP_IN).copied().unwrap_or(0.0);
+        let (target, holds) = match state {
+            "out" => (0.0, place == 0.0),
+            "in" => (1.0, place >= 1.0),
+            "immersed" => (2.0, place == 2.0),
+            _ => return None,
+        };
+        Some(Measure {
+            value: place,
+            target,
+            tolerance: 0.0,
+            holds,
+        })
+    }
+
     fn panel_value(&self, param: &str, s: &LabwareState) -> Option<f64> {
         (param == SET_VOLUME).then(|| self.set_ul(&s.logic))
     }
@@ -264,13 +312,19 @@ impl Instrument for Params {
             "rest"
         };
         let held = s.logic.get(VOLUME_UL).copied().unwrap_or(0.0);
+        let tip = match s.logic.get(TIP_IN).copied().unwrap_or(0.0) {
+            p if p >= 2.0 => "immersed",
+            p if p >= 1.0 => "in",
+            _ => "out",
+        };
         BTreeMap::from([
             ("plunger".into(), plunger.into()),
+            ("tip".into(), tip.into()),
             (
                 SET_VOLUME.into(),
                 format!("{:.0} µL", self.set_ul(&s.logic)),
             ),
-            ("tip".into(), format!("{held:.1} µL")),
+            ("volume".into(), format!("{held:.1} µL")),
         ])
     }
 

@@ -37,6 +37,10 @@ pub const AIR_UL: &str = "air_ul";
 /// The pipette's logic: air pushed out of the tip under a liquid's surface (bubbles, µL).
 pub const BUBBLED_UL: &str = "bubbled_ul";
 
+/// The pipette's logic: where the tip's opening is: 0 out of every vessel, 1 in one (inside it,
+/// or over its mouth close enough that a drop falls in), 2 under a vessel's liquid surface.
+pub const TIP_IN: &str = "tip_in";
+
 /// How far above a vessel's mouth a drop from a tip still falls into it (m).
 const DROP_HEIGHT: f64 = 0.03;
 
@@ -219,12 +223,31 @@ fn add(logic: &mut Logic, key: &str, ul: f64) {
     }
 }
 
+impl Pipetting {
+    /// Where the opening (world) is: [`TIP_IN`]'s value.
+    fn place(&mut self, poses: &[Pose], opening: nalgebra::Point3<f64>) -> f64 {
+        let mut place: f64 = 0.0;
+        for v in &mut self.vessels {
+            let Some(at) = poses.get(v.item) else {
+                continue;
+            };
+            if v.under_surface(at, opening) {
+                return 2.0;
+            }
+            if v.catches(at, opening) {
+                place = 1.0;
+            }
+        }
+        place
+    }
+}
+
 impl Process for Pipetting {
     fn step(&mut self, dt: f64, poses: &[Pose], logic: &mut [Logic]) {
-        let pending = logic[self.pipette].get(PENDING_UL).copied().unwrap_or(0.0);
-        if pending == 0.0 {
+        let Some(at) = poses.get(self.pipette) else {
             return;
-        }
+        };
+        let opening = at * nalgebra::Point3::from(self.opening);
         // The items' logic holds the volumes (a restored state, another process's transfer):
         // this process's liquids follow it.
         let volume = |item: usize| logic[item].get(VOLUME_UL).copied().unwrap_or(0.0);
@@ -232,15 +255,17 @@ impl Process for Pipetting {
         for v in &mut self.vessels {
             v.liquid.volume = Nanolitres::from_microlitres(volume(v.item));
         }
+        let place = self.place(poses, opening);
+        set(&mut logic[self.pipette], TIP_IN, place);
+        let pending = logic[self.pipette].get(PENDING_UL).copied().unwrap_or(0.0);
+        if pending == 0.0 {
+            return;
+        }
         // The share of the pending volume that flows this step, in whole nanolitres (at least
         // one, so the flow ends; never more than is pending).
         let share = pending.abs() * (1.0 - (-dt / self.flow_time).exp());
         let whole = (pending.abs() * 1e3).round() as u64;
         let nl = ((share * 1e3).ceil() as u64).min(whole);
-        let Some(at) = poses.get(self.pipette) else {
-            return;
-        };
-        let opening = at * nalgebra::Point3::from(self.opening);
         if pending > 0.0 {
             self.take_in(poses, opening, nl, logic);
         } else {

@@ -14,6 +14,13 @@ use crate::model::{Affordance, Instrument, LabwareState, Measure, Mechanism, Sym
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
+/// How far under the liquid's surface a pipette's tip draws from (m): deep enough that the
+/// surface, falling as the tip fills (1.9 mm per mL in a 50 mL tube), stays above it.
+const DRAW_DEPTH: f64 = 0.008;
+
+/// How far off the bore's bottom a tip stays (m).
+const DRAW_CLEARANCE: f64 = 0.005;
+
 /// Boxes in an open tube's wall.
 const OPEN_WALLS: usize = 16;
 
@@ -390,7 +397,33 @@ impl Instrument for Params {
     /// closing across the body at [`HOLD_HEIGHT`] of its height), from any side; an open tube
     /// (no cap to take) is grasped the same way.
     /// `mouth`: the centre of the open mouth, z down the axis (where a tip goes in).
+    /// `draw`: where a pipette's tip draws from: on the axis [`DRAW_DEPTH`] under the surface of
+    /// the liquid the tube holds now (its logic's volume, the surface level in the tube's frame),
+    /// but no lower than [`DRAW_CLEARANCE`] off the bottom; z down the axis.
     fn affordance(&self, name: &str, s: &LabwareState) -> Option<Affordance> {
+        if name == "draw" {
+            let bore = self.interior()?;
+            let (bottom, _) = bore.range([0.0, 0.0, 1.0]);
+            let ul = s
+                .logic
+                .get(crate::process::VOLUME_UL)
+                .copied()
+                .unwrap_or(0.0);
+            let liquid = physics::liquid::Liquid::new(
+                bore,
+                physics::liquid::Nanolitres::from_microlitres(ul),
+                0.0,
+            )
+            .offset();
+            let z = (liquid - DRAW_DEPTH).max(bottom + DRAW_CLEARANCE);
+            let down = crate::frame::from_axes([1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]);
+            return Some(Affordance {
+                pose: s.pose * crate::frame::pose([0.0, 0.0, z], down),
+                symmetry: Symmetry::Axial,
+                touch: false,
+                lead: 0.0,
+            });
+        }
         if name == "mouth" {
             let down = crate::frame::from_axes([1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]);
             return Some(Affordance {

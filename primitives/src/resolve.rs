@@ -80,7 +80,8 @@ impl<'a> Lab<'a> {
         Lab { items, params }
     }
 
-    fn item(&self, name: &str) -> Result<(&'a dyn Instrument, &'a LabwareState), PlanError> {
+    /// The item's model and its live state.
+    pub fn item(&self, name: &str) -> Result<(&'a dyn Instrument, &'a LabwareState), PlanError> {
         self.items
             .iter()
             .find(|(n, ..)| *n == name)
@@ -329,13 +330,31 @@ impl StepFrame {
                 param,
                 value,
             } => Ok(self.tool_at(&lab.button(labware, param, value)?)),
-            Target::Carry { .. } => Err(PlanError::CarryFromNowhere),
+            Target::Carry { .. } | Target::Bring { .. } => Err(PlanError::CarryFromNowhere),
         }
     }
 
     /// The tool pose for a [`Target::Carry`] from the tool at `tcp_now`; other targets as
     /// [`Self::target`].
     fn target_from(&self, target: &Target, lab: &Lab, tcp_now: &Pose) -> Result<Pose, PlanError> {
+        if let Target::Bring {
+            carried,
+            from,
+            labware,
+            to,
+            above,
+        } = target
+        {
+            let (_, live) = lab.item(carried)?;
+            let held = lab.affordance(carried, from, live)?;
+            let (_, other) = lab.item(labware)?;
+            let goal = lab.affordance(labware, to, other)?;
+            let goal = translated_local(
+                &(goal.pose * closest_turn(&goal, &held.pose)),
+                [0.0, 0.0, -above],
+            );
+            return Ok(goal * held.pose.inverse() * tcp_now);
+        }
         let Target::Carry {
             labware,
             from,
@@ -375,7 +394,7 @@ impl StepFrame {
             goal.translation.vector.z = z_now.max(goal.translation.vector.z);
             return Ok(goal);
         }
-        let mut goal = self.target(target, lab)?;
+        let mut goal = self.target_from(target, lab, tcp_now)?;
         goal.translation.vector.z = z_now.max(goal.translation.vector.z + TRANSIT_CLEARANCE);
         Ok(goal)
     }
@@ -614,6 +633,8 @@ impl StepFrame {
             Motion::Grasp
             | Motion::Release
             | Motion::HoldUntil { .. }
+            | Motion::PressPart { .. }
+            | Motion::EasePart { .. }
             | Motion::Wait { .. }
             | Motion::Comply
             | Motion::Home => Vec::new(),

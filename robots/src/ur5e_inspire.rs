@@ -67,7 +67,7 @@ pub const MODEL: RobotModel = RobotModel {
 const THUMB_RANGE: f64 = 0.68;
 
 /// Upper arm up, forearm level, the wrist turned so that the held pipette points down.
-const HOME: &[f64] = &[1.603, -2.189, 2.625, -3.069, -2.785, 0.583];
+const HOME: &[f64] = &[-0.3, -1.877, 2.065, -0.64, -0.331, -2.61];
 
 /// Where the thumb's pad first meets the plunger button, in the hand file's frame (m; its fingers
 /// along -z, the palm facing -x): measured from the hand's meshes with the thumb's outer joints
@@ -200,11 +200,11 @@ fn hand(deps: &Path, detail: Detail) -> Result<String, AssetError> {
     if detail == Detail::Simplified {
         hand = hand.replace(".STL\"", ".obj\"");
     }
-    // One position servo on the thumb's flexion: 10 N·m/rad, at most 1 N·m (about 16 N at the
-    // pad, past the button's blow-out spring).
+    // One position servo on the thumb's flexion: 10 N·m/rad, at most 1.5 N·m (over 20 N at the
+    // pad, past the button's blow-out spring's 13 N).
     let actuator = format!(
         r#"  <actuator>
-        <position name="thumb" joint="joint_r_thumb_proximal_2" kp="10" ctrlrange="0 {THUMB_RANGE}" forcelimited="true" forcerange="-1 1"/>
+        <position name="thumb" joint="joint_r_thumb_proximal_2" kp="10" ctrlrange="0 {THUMB_RANGE}" forcelimited="true" forcerange="-1.5 1.5"/>
     </actuator>
 </mujoco>"#
     );
@@ -242,7 +242,7 @@ fn prepare(deps: &Path, detail: Detail) -> Result<PathBuf, AssetError> {
                       <attach model="hand" body="right_hand" prefix="hand/"/>
                     </body>
                     {}
-                    <camera name="wrist_cam" pos="0.09 0 0.03" xyaxes="0 1 0 -0.5 0 0.866" fovy="58"/>
+                    <camera name="wrist_cam" pos="0.05 -0.02 0.05" xyaxes="0 0.105 -0.995 0.954 0.298 0.031" fovy="58"/>
                   </body>"#,
         tcp()
     );

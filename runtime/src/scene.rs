@@ -295,13 +295,15 @@ fn held_items(task: &Task) -> Result<Fragment, SceneError> {
         let p = labware::frame::position(&relpose);
         let q = labware::frame::wxyz(&relpose.rotation);
         out.equality += &format!(
-            "<weld name=\"{}/held\" body1=\"{robot}/{}\" body2=\"{root}\" relpose=\"{} {} {} {} {} {} {}\"/>\n",
+            "<weld name=\"{}/held\" body1=\"{robot}/{}\" body2=\"{root}\" relpose=\"{} {} {} {} {} {} {}\" solref=\"0.004 1\"/>\n",
             l.name, model.tcp_body, p[0], p[1], p[2], q[0], q[1], q[2], q[3]
         );
         let mut bodies = vec![model.tcp_body];
         bodies.extend(model.hand_bodies.iter().filter(|b| **b != model.tcp_body));
         for b in bodies {
-            out.contact += &format!("<exclude body1=\"{robot}/{b}\" body2=\"{root}\"/>\n");
+            for held in item.held_bodies(&l.name) {
+                out.contact += &format!("<exclude body1=\"{robot}/{b}\" body2=\"{held}\"/>\n");
+            }
         }
     }
     Ok(out)

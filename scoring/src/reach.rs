@@ -505,7 +505,12 @@ fn aims(
             .as_ref()
             .and_then(|on| task.labware.iter().find(|l| &l.name == on))
             .and_then(|l| labware::kind(&l.kind));
-        let motions = expand(&MotionStep { args: &args, kind });
+        let tool = task.liquid_tool(&step.robot, i);
+        let motions = expand(&MotionStep {
+            args: &args,
+            kind,
+            tool,
+        });
         // The labware as earlier steps left its joints (a lid opened).
         let owned = states.to_vec();
         let lab = &Lab::new(task, &owned, params);
@@ -695,6 +700,13 @@ fn target_name(motions: &[Motion]) -> String {
         }
         Some(Target::Seat { location, .. }) => format!("the seat `{location}`"),
         Some(Target::Carry { labware, to, .. }) => format!("`{labware}`'s `{to}`"),
+        Some(Target::Bring {
+            carried,
+            from,
+            labware,
+            to,
+            ..
+        }) => format!("`{carried}`'s `{from}` onto `{labware}`'s `{to}`"),
         None => "its target".into(),
     }
 }

@@ -2,6 +2,7 @@
 
 use super::liquid;
 use super::prelude::*;
+use crate::motion::{Motion, MotionStep, Target, goals};
 
 pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     name: "dispense",
@@ -10,5 +11,42 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     requires: "the robot carries a pipette holding at least `volume`; `on` is open and has room for it",
     leaves: "`volume` moved from the pipette into `on`",
     effect: liquid::effect,
-    motions: None,
+    motions: Some(motions),
 };
+
+/// As a person dispenses: the tip into the container (below its mouth, against nothing), the
+/// plunger pressed through the first stop to blow-out, a moment for the last of it, the tip
+/// withdrawn with the plunger still down (so that nothing is drawn back), then the thumb off.
+fn motions(step: &MotionStep) -> Vec<Motion> {
+    let Some(tool) = step.tool.clone() else {
+        return Vec::new();
+    };
+    let on = step.arg("on");
+    let to = |name: &str, above: f64| Target::Bring {
+        carried: tool.clone(),
+        from: "opening".into(),
+        labware: on.clone(),
+        to: name.into(),
+        above,
+    };
+    vec![
+        Motion::Transit {
+            target: to("mouth", liquid::OVER_MOUTH),
+        },
+        Motion::Reach {
+            target: to("mouth", -liquid::INTO_MOUTH),
+        },
+        Motion::PressPart {
+            labware: tool.clone(),
+            goals: goals(&[("plunger", "first_stop"), ("blow_out", "blow_out")]),
+            timeout_s: liquid::PRESS_TIMEOUT_S,
+        },
+        Motion::Wait {
+            seconds: liquid::FLOW_S,
+        },
+        Motion::Reach {
+            target: to("mouth", liquid::WITHDRAW),
+        },
+        Motion::EasePart { seconds: 0.5 },
+    ]
+}

@@ -3,6 +3,20 @@
 
 use super::prelude::*;
 
+/// Where the tip waits over a container's mouth before it goes in (m above the mouth).
+pub(super) const OVER_MOUTH: f64 = 0.03;
+/// How far into a container's mouth a tip dispenses from (m).
+pub(super) const INTO_MOUTH: f64 = 0.02;
+/// Where a tip comes up to when it is done (m above the mouth: clear of the container).
+pub(super) const WITHDRAW: f64 = 0.06;
+/// The longest a press to a plunger's stop may take (s).
+pub(super) const PRESS_TIMEOUT_S: f64 = 6.0;
+/// How long the thumb takes to ease off the plunger (s): upstream's 3.2 s release.
+pub(super) const EASE_S: f64 = 3.2;
+/// How long after the plunger stops the tip waits for the liquid to finish flowing (s): five of
+/// the flow's time constants (`labware::process::Pipetting`).
+pub(super) const FLOW_S: f64 = 0.75;
+
 pub(super) fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
     let robot = step.robot;
     let name = step.primitive.name;

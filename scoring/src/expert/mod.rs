@@ -26,6 +26,15 @@ use std::collections::{BTreeMap, VecDeque};
 /// Pause after each path so the arm settles on its last waypoint (s).
 const SETTLE_S: f64 = 0.2;
 
+/// How fast a press closes the hand's actuated finger: this share of its range per second (a
+/// thumb's 0.68 rad in 6.7 s, about 0.1 rad/s: a pipette's plunger reaches its first stop in
+/// about 3 s and the press stops within a control step of it).
+const PRESS_RATE: f64 = 0.15;
+
+/// A pressed joint has reached its goal when what is left of its way there is at most this share
+/// of the way (a plunger 0.2 mm short of its first stop).
+const PRESS_SHORT: f64 = 0.03;
+
 struct Queued {
     /// Index into the plan, the group it runs in, and the stage it belongs to.
     step: usize,
@@ -118,7 +127,12 @@ impl ExpertPolicy {
                 .get("on")
                 .and_then(|on| task.labware.iter().find(|l| &l.name == on))
                 .and_then(|l| labware::kind(&l.kind));
-            let motions = expand(&MotionStep { args: &args, kind });
+            let tool = task.liquid_tool(&step.robot, i);
+            let motions = expand(&MotionStep {
+                args: &args,
+                kind,
+                tool,
+            });
             if i > 0 && !step.together {
                 group += 1;
             }
@@ -205,6 +219,34 @@ impl ExpertPolicy {
                 Some((_, active)) => {
                     let done = match active {
                         Active::Hold { until } => obs.time + 1e-9 >= *until,
+                        Active::Press {
+                            labware,
+                            joints,
+                            deadline,
+                        } => {
+                            let lab = Lab::new(&self.task, &obs.privileged.labware, &self.params);
+                            let reached = lab.item(labware).is_ok_and(|(_, live)| {
+                                joints.iter().all(|(role, start, goal)| {
+                                    let left = (goal - live.joint(role)) * (goal - start).signum();
+                                    left <= PRESS_SHORT * (goal - start).abs()
+                                })
+                            });
+                            if reached || obs.time >= *deadline {
+                                true
+                            } else {
+                                let arm = &mut self.arms[r];
+                                let g = arm.model.gripper;
+                                let step = PRESS_RATE * (g.closed - g.open) * self.control_dt;
+                                arm.gripper = g.clamp(arm.gripper + step);
+                                false
+                            }
+                        }
+                        Active::Ease { from, t0, seconds } => {
+                            let t = ((next_t - t0) / seconds).clamp(0.0, 1.0);
+                            let arm = &mut self.arms[r];
+                            arm.gripper = from + (arm.model.gripper.open - from) * t;
+                            t >= 1.0
+                        }
                         Active::Until {
                             labware,
                             param,

@@ -28,6 +28,19 @@ pub(super) enum Active {
     Hold {
         until: f64,
     },
+    /// Closing the hand's actuated finger on a part of a held item until each joint (role, where
+    /// it started, its goal) has reached its goal, or the deadline passes.
+    Press {
+        labware: String,
+        joints: Vec<(String, f64, f64)>,
+        deadline: f64,
+    },
+    /// Opening the hand's actuated finger evenly from `from` over `seconds` from `t0`.
+    Ease {
+        from: f64,
+        t0: f64,
+        seconds: f64,
+    },
     /// Still until a panel shows a value (or the deadline passes: the judge tells what came of it).
     Until {
         labware: String,
@@ -155,6 +168,34 @@ impl ExpertPolicy {
             Motion::Comply => {
                 arm.target = obs.privileged.robots[r].arm_q.clone();
                 return Ok(Active::Hold { until: obs.time });
+            }
+            Motion::PressPart {
+                labware,
+                goals,
+                timeout_s,
+            } => {
+                let (_, live) = lab
+                    .item(&labware)
+                    .map_err(|e| planning(context.clone(), e))?;
+                let at = lab
+                    .at_goals(&labware, &goals)
+                    .map_err(|e| planning(context.clone(), e))?;
+                let joints = goals
+                    .iter()
+                    .map(|(role, _)| (role.clone(), live.joint(role), at.joint(role)))
+                    .collect();
+                return Ok(Active::Press {
+                    labware,
+                    joints,
+                    deadline: obs.time + timeout_s,
+                });
+            }
+            Motion::EasePart { seconds } => {
+                return Ok(Active::Ease {
+                    from: arm.gripper,
+                    t0: obs.time,
+                    seconds,
+                });
             }
             Motion::HoldUntil {
                 labware,
@@ -299,8 +340,12 @@ impl ExpertPolicy {
             let frame = seat_frame
                 .as_ref()
                 .unwrap_or(&lane.frame.as_ref().expect("set above").1);
+            // What the hand carries moves with it: the item the step seats, else the liquid
+            // tool it works with (a pipette held from the start).
             let carried = frame
                 .carried()
+                .map(str::to_string)
+                .or_else(|| self.task.liquid_tool(&self.task.robots[r].name, q.step))
                 .and_then(|item| self.task.labware.iter().position(|l| l.name == item));
             arm.clearance.sync(&obs.privileged.qpos, carried);
             let seed = planner::mix(self.seed, self.routed);
