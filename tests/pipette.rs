@@ -5,7 +5,11 @@
 //! tip draws its set volume and the tube's level falls; released above the surface it draws air;
 //! withdrawn before the release ends it holds a short volume; pressed under the surface it
 //! bubbles and draws nothing; pressed over another tube it dispenses there. Across every run the
-//! tubes, the tip and the bench hold the starting volume to the nanolitre at every step.
+//! tubes, the tip and the bench hold the starting volume to the nanolitre at every step. Then the
+//! pipetting hand (`ur5e_inspire`) holding the pipette from the start works the plunger with its
+//! thumb, and the shipped tasks' expert aspirates and transfers.
+
+mod common;
 
 use labware::process::{AIR_UL, BUBBLED_UL, SPILT_UL, VOLUME_UL};
 use mujoco_rs::prelude::*;
@@ -401,3 +405,95 @@ fn the_hands_thumb_works_the_plunger_to_its_stops() {
 
 /// The hand's thumb command that holds the plunger at its first stop (the expert's).
 const FIRST_STOP_THUMB: f64 = 0.32;
+
+/// The shipped pipetting tasks, run by the expert with a recording: they succeed, the judge's
+/// volumes are what arrived, and over the whole episode the tubes, the tip and the bench hold the
+/// starting volume at every control step (to the nanolitre: 1e-9 of 15 mL is 0.015 nL).
+/// Dispensed into the wrong tube, the same episode fails the transfer's check.
+#[test]
+fn the_expert_transfers_the_set_volume_and_every_step_conserves_it() {
+    let task = common::compile("protocols/pipette/transfer.toml");
+    let seed = 3;
+    let params = task.sample(seed).params;
+    let volume: f64 = params["volume"].parse().unwrap();
+    let fill: f64 = params["fill"].parse().unwrap();
+    let path = common::scratch("pipette").join("transfer.mcap");
+    let opts = scoring::EpisodeOptions {
+        record: Some(path.clone()),
+        image_every: 0,
+        ..Default::default()
+    };
+    let r = common::run_with(&task, seed, &opts, |t, s, i| {
+        scoring::policies::make("expert", t, s, i).unwrap()
+    });
+    assert!(r.success, "{:?} {:#?}", r.error, r.verdict);
+    let arrived = common::predicate(&r, &format!("target.volume = {volume} µL"));
+    assert!((arrived.value - volume).abs() <= 1.0, "{arrived:?}");
+    let rec = runtime::record::read_recording(&path).unwrap();
+    let at = |name: &str| task.labware_index(name).unwrap();
+    let held = |s: &[labware::LabwareState], item: &str, key: &str| {
+        Nanolitres::from_microlitres(s[at(item)].logic.get(key).copied().unwrap_or(0.0)).0
+    };
+    let start = Nanolitres::from_microlitres(fill * 1000.0).0;
+    let mut drawn = false;
+    for (t, s) in &rec.labware_series {
+        let total = held(s, "source", VOLUME_UL)
+            + held(s, "target", VOLUME_UL)
+            + held(s, "pipette", VOLUME_UL)
+            + held(s, "pipette", SPILT_UL);
+        assert_eq!(total, start, "at t = {t:.2} s");
+        drawn |= held(s, "pipette", VOLUME_UL) > 0;
+    }
+    assert!(drawn, "the tip held liquid on the way");
+    // The same liquid put back into the source instead: the transfer's check fails, by all of it.
+    let wrong = common::compile_edited("protocols/pipette/transfer.toml", |s| {
+        s.replace(
+            "do = \"dispense\"\non = \"target\"",
+            "do = \"dispense\"\non = \"source\"",
+        )
+        .replace(
+            "all = [\"target.volume = {volume} µL\"",
+            "all = [\"source.volume = {fill} mL\"",
+        )
+    });
+    let path = common::scratch("pipette").join("wrong.mcap");
+    let opts = scoring::EpisodeOptions {
+        record: Some(path.clone()),
+        image_every: 0,
+        ..Default::default()
+    };
+    let r = common::run_with(&wrong, seed, &opts, |t, s, i| {
+        scoring::policies::make("expert", t, s, i).unwrap()
+    });
+    assert!(r.error.is_none(), "{:?}", r.error);
+    let rec = runtime::record::read_recording(&path).unwrap();
+    let v = scoring::Judge::replay(&task, &params, &rec.labware_series);
+    assert!(!v.success);
+    let p = v
+        .predicates()
+        .iter()
+        .find(|p| p.text.starts_with("target.volume"))
+        .unwrap();
+    assert!(!p.holds && p.value == 0.0, "{p:?}");
+}
+
+/// The aspirate task's expert draws the set volume from under the surface on seeds that fill
+/// the tube from near empty to near full (the tip's depth follows the level), and a motionless
+/// hand draws nothing.
+#[test]
+fn the_expert_aspirates_at_every_fill_and_a_still_hand_draws_nothing() {
+    let task = common::compile("protocols/pipette/aspirate.toml");
+    let fills: Vec<(u64, f64)> = (0..40)
+        .map(|s| (s, task.sample(s).params["fill"].parse::<f64>().unwrap()))
+        .collect();
+    let low = fills.iter().min_by(|a, b| a.1.total_cmp(&b.1)).unwrap();
+    let high = fills.iter().max_by(|a, b| a.1.total_cmp(&b.1)).unwrap();
+    assert!(low.1 <= 18.0 && high.1 >= 42.0, "{low:?} {high:?}");
+    for (seed, _) in [low, high] {
+        let r = common::run(&task, *seed, "expert");
+        assert!(r.success, "seed {seed}: {:?} {:#?}", r.error, r.verdict);
+    }
+    let r = common::run(&task, low.0, "hold");
+    assert!(!r.success);
+    assert_eq!(r.verdict.predicates()[0].value, 0.0);
+}
