@@ -53,7 +53,8 @@ pub struct BenchArgs {
             "protocols/tube/transfer.toml",
             "protocols/two_arm/close_lid_and_transfer.toml",
             "protocols/tube/unscrew_cap.toml",
-            "protocols/vortex_mixer/mix_tube.toml"
+            "protocols/vortex_mixer/mix_tube.toml",
+            "protocols/pipette/aspirate.toml"
         ]
     )]
     protocol: Vec<std::path::PathBuf>,
@@ -91,14 +92,25 @@ pub fn run(tasks: &[compiler::Task], only: &[Section]) -> Result<()> {
     {
         crate::bench_python::figures(first)?;
     }
+    // The liquid's share is of the first pipetting scene's step where one is measured (a scene
+    // with a liquid tool), else of the first scene's.
     let mut first_step_s = None;
+    let mut pipetting_step_s = None;
     if wants(Section::Scenes) {
         for task in tasks {
             outln!("scene    {}", task.id);
             let step_s = scene_figures(task)?;
             first_step_s.get_or_insert(step_s);
+            let pipetting = task
+                .labware
+                .iter()
+                .any(|l| labware::kind(&l.kind).is_some_and(|k| k.liquid_tool));
+            if pipetting {
+                pipetting_step_s.get_or_insert(step_s);
+            }
         }
     }
+    let first_step_s = pipetting_step_s.or(first_step_s);
     if wants(Section::Physics) {
         physics_figures(first_step_s)?;
     }
@@ -346,6 +358,8 @@ pub fn physics_figures(task_step_s: Option<f64>) -> Result<()> {
         ),
     );
 
+    pipetting_figure(task_step_s)?;
+
     // One surface solve: warm-started from the last offset after a small change of normal (as in
     // a step), and cold from the middle of the range.
     let normals: Vec<[f64; 3]> = (0..1000)
@@ -379,6 +393,57 @@ pub fn physics_figures(task_step_s: Option<f64>) -> Result<()> {
         iterations as f64 / normals.len() as f64,
         cold * 1e6,
         container.triangles.len()
+    );
+    Ok(())
+}
+
+/// The pipetting process's cost per physics step at its dearest: the shipped pipette's tip drawing
+/// without pause from under the surface of a shipped 50 mL tube's liquid (each step a new volume,
+/// so each step a new surface solve), as a share of a task-scene step.
+fn pipetting_figure(task_step_s: Option<f64>) -> Result<()> {
+    use labware::Instrument;
+    use labware::process::{PENDING_UL, VOLUME_UL, Vessel};
+    let (Some(labware::Model::Tube(tube)), Some(labware::Model::Pipette(pipette))) = (
+        labware::Model::for_kind("tube_50ml").map(|m| {
+            m.for_start(
+                &[("cap".to_string(), "off".to_string())]
+                    .into_iter()
+                    .collect(),
+            )
+        }),
+        labware::Model::for_kind("pipette"),
+    ) else {
+        anyhow::bail!("the catalogue has no 50 mL tube or pipette model");
+    };
+    let interior = tube
+        .interior()
+        .ok_or_else(|| anyhow::anyhow!("the tube has no bore"))?;
+    let vessels = [Vessel { item: 0, interior }];
+    let mut process = pipette.processes("pipette", 1, &vessels).remove(0);
+    // The tip's opening 20 mm above the tube's base, under 30 mL of liquid.
+    let poses = [
+        labware::Pose::identity(),
+        labware::frame::translation([0.0, 0.0, 0.02]),
+    ];
+    let mut logic = vec![labware::Logic::new(), labware::Logic::new()];
+    logic[0].insert(VOLUME_UL.into(), 30_000.0);
+    let steps = 20_000;
+    let t = Instant::now();
+    for k in 0..steps {
+        // Topped up each step, to a volume a little different each step (as a draw leaves it).
+        logic[0].insert(VOLUME_UL.into(), 30_000.0 - (k % 100) as f64);
+        logic[1].insert(PENDING_UL.into(), 1_000.0);
+        logic[1].insert(VOLUME_UL.into(), 0.0);
+        process.step(0.002, &poses, &mut logic);
+    }
+    let per_step = t.elapsed().as_secs_f64() / steps as f64;
+    outln!(
+        "liquid   pipetting      {:>10.2} µs per step drawing{} (target < 10%)",
+        per_step * 1e6,
+        match task_step_s {
+            Some(step) => format!(" = {:.1}% of a task-scene step", 100.0 * per_step / step),
+            None => String::new(),
+        }
     );
     Ok(())
 }

@@ -61,6 +61,11 @@ struct Held {
     /// The interior's top (m, item frame) and its radius there.
     mouth_z: f64,
     mouth_radius: f64,
+    /// The surface's offset as last solved, for the volume and up direction it was solved for.
+    level: Option<(Nanolitres, nalgebra::Vector3<f64>, f64)>,
+    /// How far the volume may move from the last solve before the surface is solved again (nL):
+    /// 1e-4 of the capacity, a level change of about 10 µm in a 50 mL tube.
+    resolve_nl: u64,
 }
 
 impl Held {
@@ -75,9 +80,11 @@ impl Held {
             .fold(0.0, f64::max);
         Held {
             item: v.item,
+            resolve_nl: (v.interior.capacity() * 1e8) as u64,
             liquid: Liquid::new(v.interior.clone(), Nanolitres(0), 0.0),
             mouth_z: top,
             mouth_radius,
+            level: None,
         }
     }
 
@@ -89,8 +96,23 @@ impl Held {
             return false;
         }
         let up = at.rotation.inverse() * nalgebra::Vector3::z();
-        self.liquid.surface = physics::liquid::Surface::new([up.x, up.y, up.z], 0.0);
-        up.dot(&local.coords) < self.liquid.offset()
+        let volume = self.liquid.volume;
+        let offset = match self.level {
+            // A draw changes the volume every step by a little: the level it left is re-solved
+            // once it has moved enough to matter, not every step.
+            Some((v, n, d))
+                if v.0.abs_diff(volume.0) < self.resolve_nl && (n - up).norm() < 1e-4 =>
+            {
+                d
+            }
+            _ => {
+                self.liquid.surface = physics::liquid::Surface::new([up.x, up.y, up.z], 0.0);
+                let d = self.liquid.offset();
+                self.level = Some((volume, up, d));
+                d
+            }
+        };
+        up.dot(&local.coords) < offset
     }
 
     /// Whether a drop let go at the point (world) lands in the vessel: the point is inside it,
@@ -141,20 +163,10 @@ impl Pipetting {
     }
 
     /// Takes `nl` into the tip at `opening`: liquid from the vessel it is under, else air.
-    fn take_in(
-        &mut self,
-        poses: &[Pose],
-        opening: nalgebra::Point3<f64>,
-        nl: u64,
-        logic: &mut [Logic],
-    ) {
+    fn take_in(&mut self, under: Option<usize>, nl: u64, logic: &mut [Logic]) {
         let room = self.tip.room().0;
         let mut air = nl;
-        let source = self.vessels.iter_mut().find_map(|v| {
-            let at = poses.get(v.item)?;
-            v.under_surface(at, opening).then_some(v)
-        });
-        if let Some(v) = source {
+        if let Some(v) = under.map(|i| &mut self.vessels[i]) {
             let liquid = nl.min(v.liquid.volume.0).min(room);
             if liquid > 0 && transfer(&mut v.liquid, &mut self.tip, Nanolitres(liquid)).is_ok() {
                 air -= liquid;
@@ -168,30 +180,16 @@ impl Pipetting {
     }
 
     /// Pushes `nl` out of the tip at `opening`: its liquid first, then air.
-    fn push_out(
-        &mut self,
-        poses: &[Pose],
-        opening: nalgebra::Point3<f64>,
-        nl: u64,
-        logic: &mut [Logic],
-    ) {
+    fn push_out(&mut self, at: Place, nl: u64, logic: &mut [Logic]) {
         let liquid = nl.min(self.tip.volume.0);
         let air = nl - liquid;
-        let catcher = self
-            .vessels
-            .iter_mut()
-            .find(|v| poses.get(v.item).is_some_and(|at| v.catches(at, opening)));
         let mut spilt = liquid;
-        if let Some(v) = catcher {
+        if let Some(v) = at.catching.map(|i| &mut self.vessels[i]) {
             let fits = liquid.min(v.liquid.room().0);
             if fits > 0 && transfer(&mut self.tip, &mut v.liquid, Nanolitres(fits)).is_ok() {
                 spilt -= fits;
             }
-            if air > 0
-                && poses
-                    .get(v.item)
-                    .is_some_and(|at| v.under_surface(at, opening))
-            {
+            if air > 0 && at.under.is_some() {
                 add(
                     &mut logic[self.pipette],
                     BUBBLED_UL,
@@ -223,19 +221,41 @@ fn add(logic: &mut Logic, key: &str, ul: f64) {
     }
 }
 
+/// Where the tip's opening is: the vessel whose liquid it is under, the vessel a drop from it
+/// falls into (by index among the process's vessels).
+#[derive(Clone, Copy, Debug, Default)]
+struct Place {
+    under: Option<usize>,
+    catching: Option<usize>,
+}
+
+impl Place {
+    /// [`TIP_IN`]'s value.
+    fn value(self) -> f64 {
+        match (self.under, self.catching) {
+            (Some(_), _) => 2.0,
+            (None, Some(_)) => 1.0,
+            (None, None) => 0.0,
+        }
+    }
+}
+
 impl Pipetting {
-    /// Where the opening (world) is: [`TIP_IN`]'s value.
-    fn place(&mut self, poses: &[Pose], opening: nalgebra::Point3<f64>) -> f64 {
-        let mut place: f64 = 0.0;
-        for v in &mut self.vessels {
+    /// Where the opening (world) is among the vessels.
+    fn place(&mut self, poses: &[Pose], opening: nalgebra::Point3<f64>) -> Place {
+        let mut place = Place::default();
+        for (i, v) in self.vessels.iter_mut().enumerate() {
             let Some(at) = poses.get(v.item) else {
                 continue;
             };
             if v.under_surface(at, opening) {
-                return 2.0;
+                return Place {
+                    under: Some(i),
+                    catching: Some(i),
+                };
             }
-            if v.catches(at, opening) {
-                place = 1.0;
+            if place.catching.is_none() && v.catches(at, opening) {
+                place.catching = Some(i);
             }
         }
         place
@@ -256,7 +276,7 @@ impl Process for Pipetting {
             v.liquid.volume = Nanolitres::from_microlitres(volume(v.item));
         }
         let place = self.place(poses, opening);
-        set(&mut logic[self.pipette], TIP_IN, place);
+        set(&mut logic[self.pipette], TIP_IN, place.value());
         let pending = logic[self.pipette].get(PENDING_UL).copied().unwrap_or(0.0);
         if pending == 0.0 {
             return;
@@ -267,9 +287,9 @@ impl Process for Pipetting {
         let whole = (pending.abs() * 1e3).round() as u64;
         let nl = ((share * 1e3).ceil() as u64).min(whole);
         if pending > 0.0 {
-            self.take_in(poses, opening, nl, logic);
+            self.take_in(place.under, nl, logic);
         } else {
-            self.push_out(poses, opening, nl, logic);
+            self.push_out(place, nl, logic);
         }
         let left = if nl == whole {
             0.0
