@@ -497,3 +497,34 @@ fn the_expert_aspirates_at_every_fill_and_a_still_hand_draws_nothing() {
     assert!(!r.success);
     assert_eq!(r.verdict.predicates()[0].value, 0.0);
 }
+
+/// Cameras see the liquid: the aspirate scene drawn at 224x224 with the tube's volume and drawn
+/// again with it emptied differ where the liquid stands, and more so the fuller the tube.
+#[test]
+fn cameras_see_the_liquid_and_how_high_it_stands() {
+    let task = common::compile_edited("protocols/pipette/aspirate.toml", |s| {
+        s.replace("pos_m = [1.2, 0.0, 1.35]", "pos_m = [0.25, 0.15, 1.15]")
+            .replace(
+                "look_at_m = [0.07, 0.0, 0.94]",
+                "look_at_m = [0.0, 0.0, 0.93]",
+            )
+    });
+    let instance = task.sample(0);
+    let scene = Arc::new(runtime::Scene::build(&task, &instance).unwrap());
+    let ep = runtime::Episode::new(scene.clone(), &task, &instance);
+    let mut cams =
+        runtime::render::Cameras::with_detail(&scene, 224, 224, robots::Detail::Simplified)
+            .unwrap();
+    let names = vec![task.cameras[0].name.clone()];
+    let tube = task.labware_index("tube").unwrap();
+    let mut draw = |ul: f64| {
+        let mut logic = ep.logic().to_vec();
+        logic[tube].insert(VOLUME_UL.into(), ul);
+        cams.render(&ep.data, &logic, &names).unwrap().remove(0).rgb
+    };
+    let (empty, low, high) = (draw(0.0), draw(10_000.0), draw(40_000.0));
+    let changed = |a: &[u8], b: &[u8]| a.chunks(3).zip(b.chunks(3)).filter(|(p, q)| p != q).count();
+    let (low, high) = (changed(&empty, &low), changed(&empty, &high));
+    assert!(low > 100, "10 mL changes {low} pixels");
+    assert!(high > low + 100, "40 mL changes {high} pixels, 10 mL {low}");
+}

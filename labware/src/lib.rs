@@ -15,6 +15,7 @@ pub mod centrifuge_mini;
 pub mod display;
 pub mod frame;
 pub mod lid;
+pub mod liquid_view;
 pub mod mjcf;
 pub mod model;
 pub mod pipette;

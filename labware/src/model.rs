@@ -251,6 +251,12 @@ pub trait Instrument {
         Vec::new()
     }
 
+    /// The mocap bodies that draw the surface of the liquid the item holds (see
+    /// [`crate::liquid_view`]), declared in its fragment; empty: nothing to draw.
+    fn liquid_bodies(&self, _name: &str) -> Vec<String> {
+        Vec::new()
+    }
+
     /// The space inside the item that holds liquid (a tube's bore, a pipette's tip), in its root
     /// frame; `None`: it holds none. Its volume is [`crate::process::VOLUME_UL`] in the logic.
     fn interior(&self) -> Option<physics::liquid::Container> {

@@ -198,8 +198,9 @@ impl Instrument for Params {
             ex = self.handle_radius + 0.002,
             ez = self.handle_top() + 0.004,
         );
+        let discs = crate::liquid_view::fragment(name, &self.tip_interior());
         Fragment {
-            worldbody,
+            worldbody: worldbody + &discs.worldbody,
             contact: format!(
                 r#"<exclude body1="{name}/base" body2="{name}/button"/>
 <exclude body1="{name}/base" body2="{name}/ejector"/>
@@ -215,6 +216,10 @@ impl Instrument for Params {
             .into_iter()
             .map(|role| (role, format!("{name}/{role}")))
             .collect()
+    }
+
+    fn liquid_bodies(&self, name: &str) -> Vec<String> {
+        crate::liquid_view::bodies(name)
     }
 
     /// All but the button, which the thumb presses.

@@ -21,6 +21,9 @@ const DRAW_DEPTH: f64 = 0.008;
 /// How far off the bore's bottom a tip stays (m).
 const DRAW_CLEARANCE: f64 = 0.005;
 
+/// How opaque an open tube's walls are drawn.
+const OPEN_ALPHA: f64 = 0.3;
+
 /// Boxes in an open tube's wall.
 const OPEN_WALLS: usize = 16;
 
@@ -132,7 +135,8 @@ impl Params {
         let mid = (r + bore) / 2.0;
         let half_side = r * (std::f64::consts::PI / OPEN_WALLS as f64).tan() + 0.0002;
         let wall_hz = (h - base) / 2.0;
-        let c = crate::mjcf::rgba(self.rgba);
+        // Clearer than a capped tube's body, so that cameras see the liquid inside.
+        let c = crate::mjcf::rgba([self.rgba[0], self.rgba[1], self.rgba[2], OPEN_ALPHA]);
         let walls: String = (0..OPEN_WALLS)
             .map(|i| {
                 let a = std::f64::consts::TAU * i as f64 / OPEN_WALLS as f64;
@@ -158,10 +162,14 @@ impl Params {
             bi2 = body_i[2],
             bhz = base / 2.0,
         );
-        Fragment {
+        let mut fragment = Fragment {
             worldbody,
             ..Default::default()
+        };
+        if let Some(bore) = self.interior() {
+            fragment.append(crate::liquid_view::fragment(name, &bore));
         }
+        fragment
     }
 
     /// Height of the bolt thread's axis origin on the tube (tube frame).
@@ -319,6 +327,15 @@ impl Instrument for Params {
                 root * translation([0.0, 0.0, self.cap_seat_z()]),
             ),
         ]
+    }
+
+    /// An open tube's liquid is drawn (a capped one's cannot be seen into).
+    fn liquid_bodies(&self, name: &str) -> Vec<String> {
+        if self.open {
+            crate::liquid_view::bodies(name)
+        } else {
+            Vec::new()
+        }
     }
 
     fn part_bodies(&self, name: &str) -> Vec<(&'static str, String)> {

@@ -46,9 +46,19 @@ pub struct Cameras {
     /// into (uploads read textures from it; nothing else uses it).
     screens: Vec<Screen>,
     textures: Option<MjModel>,
+    /// Items whose liquid is drawn (`labware::liquid_view`).
+    liquids: Vec<LiquidView>,
     pub detail: Detail,
     pub width: usize,
     pub height: usize,
+}
+
+/// An item whose liquid surface is drawn: its bore, its root body and its discs' mocap indices.
+struct LiquidView {
+    item: usize,
+    bore: physics::liquid::Container,
+    root: usize,
+    discs: Vec<usize>,
 }
 
 /// One instrument display: whose it is, its texture, and the values it was last drawn with.
@@ -134,6 +144,33 @@ impl Cameras {
                 });
             }
         }
+        let mut liquids = Vec::new();
+        for (item, ids) in scene.labware.iter().enumerate() {
+            let spec = &scene.task().labware[item];
+            let Some(instrument) = spec.params.instrument() else {
+                continue;
+            };
+            let (bodies, Some(bore)) =
+                (instrument.liquid_bodies(&spec.name), instrument.interior())
+            else {
+                continue;
+            };
+            let discs: Vec<usize> = bodies
+                .iter()
+                .filter_map(|b| {
+                    let body = model.name_to_id(MjtObjBase::mjOBJ_BODY, b)?;
+                    usize::try_from(model.body_mocapid()[body]).ok()
+                })
+                .collect();
+            if !discs.is_empty() {
+                liquids.push(LiquidView {
+                    item,
+                    bore,
+                    root: ids.root_body,
+                    discs,
+                });
+            }
+        }
         let textures = (!screens.is_empty()).then(|| (*model).clone());
         let mirror = MjData::new(model);
         Ok(Cameras {
@@ -142,6 +179,7 @@ impl Cameras {
             mirror,
             screens,
             textures,
+            liquids,
             detail,
             width,
             height,
@@ -198,6 +236,29 @@ impl Cameras {
         m.mocap_pos_mut().copy_from_slice(data.mocap_pos());
         m.mocap_quat_mut().copy_from_slice(data.mocap_quat());
         m.kinematics();
+        if !self.liquids.is_empty() {
+            // Each liquid's surface where its volume stands in the item as drawn.
+            for l in &self.liquids {
+                let at = labware::frame::pose(
+                    m.xpos()[l.root],
+                    labware::frame::from_wxyz(m.xquat()[l.root]),
+                );
+                let ul = logic
+                    .get(l.item)
+                    .and_then(|g| g.get(labware::process::VOLUME_UL))
+                    .copied()
+                    .unwrap_or(0.0);
+                for (&mocap, disc) in l
+                    .discs
+                    .iter()
+                    .zip(labware::liquid_view::discs(&l.bore, &at, ul))
+                {
+                    m.mocap_pos_mut()[mocap] = labware::frame::position(&disc);
+                    m.mocap_quat_mut()[mocap] = labware::frame::wxyz(&disc.rotation);
+                }
+            }
+            m.kinematics();
+        }
         m.camlight();
         Ok(())
     }
