@@ -5,7 +5,9 @@
 //!   model and initial state;
 //! - rendering: frames/s of one 224x224 camera image (both task cameras, alternating);
 //! - expert: full scripted-expert episodes per minute (no recording);
-//! - lab physics: each mechanism's scene with it and without it (ratio), and one liquid solve;
+//! - lab physics: each mechanism's scene with it and without it (ratio), one liquid solve, and
+//!   the pipetting process's cost per step while a tip draws (as a share of the pipetting
+//!   scene's step where one is measured; the pipetting scene is among the default scenes);
 //! - front end: checking a protocol whose parameter has 50,000 values and 50,000 exclusions,
 //!   against the same domain with none (the proof must stay near-linear in the domain);
 //! - harness, on the first scene: expert episodes/s with two workers against one; and with a
@@ -397,9 +399,10 @@ pub fn physics_figures(task_step_s: Option<f64>) -> Result<()> {
     Ok(())
 }
 
-/// The pipetting process's cost per physics step at its dearest: the shipped pipette's tip drawing
-/// without pause from under the surface of a shipped 50 mL tube's liquid (each step a new volume,
-/// so each step a new surface solve), as a share of a task-scene step.
+/// The pipetting process's cost per physics step while a tip draws: the shipped pipette's tip
+/// drawing without pause from under the surface of a shipped 50 mL tube's liquid, the volume
+/// changing by a microlitre a step (a fast thumb's release: a solve of the surface every five or
+/// six steps, as the level is solved again each 5 µL), as a share of a task-scene step.
 fn pipetting_figure(task_step_s: Option<f64>) -> Result<()> {
     use labware::Instrument;
     use labware::process::{PENDING_UL, VOLUME_UL, Vessel};

@@ -127,7 +127,8 @@ fn a_volume_is_measured_from_what_the_container_holds() {
     assert!(expert.success, "{:?} {:#?}", expert.error, expert.verdict);
     let p = &expert.verdict.predicates()[1];
     assert!(p.holds && p.value == fill * 1000.0, "{p:?} for {fill} mL");
-    // The same episode judged against 1 mL more: the volume check fails, by 1000 µL.
+    // A motionless episode of the task asking for 1 mL more: the volume check fails, by 1000 µL
+    // (no process runs in this scene: the judge reads the declared start volume).
     let mut more = task.clone();
     for c in more.stages.iter_mut().flat_map(|s| &mut s.success) {
         if let compiler::predicates::Check::Volume { value, .. } = &mut c.check {

@@ -445,6 +445,28 @@ fn the_expert_transfers_the_set_volume_and_every_step_conserves_it() {
         drawn |= held(s, "pipette", VOLUME_UL) > 0;
     }
     assert!(drawn, "the tip held liquid on the way");
+    // Replayed from the middle, while the tip holds liquid (a process restored from the items'
+    // logic decides as the run did): the same states, the same verdict, the same volume.
+    let mid = rec
+        .labware_series
+        .iter()
+        .position(|(_, s)| held(s, "pipette", VOLUME_UL) > 0)
+        .unwrap();
+    let recording = scoring::replay::Recording::open(&path).unwrap();
+    let again = scoring::replay::resimulate(&recording, mid).unwrap();
+    assert!(
+        again.reproduced(),
+        "diverged at {:?}",
+        again.first_divergence
+    );
+    assert!(again.verdict.success);
+    let p = again
+        .verdict
+        .predicates()
+        .iter()
+        .find(|p| p.text.starts_with("target.volume"))
+        .unwrap();
+    assert_eq!(p.value, arrived.value);
     // The same liquid put back into the source instead: the transfer's check fails, by all of it.
     let wrong = common::compile_edited("protocols/pipette/transfer.toml", |s| {
         s.replace(

@@ -357,7 +357,7 @@ impl Code {
                 "`μ` (U+03BC, GREEK SMALL LETTER MU) looks like the micro sign `µ` (U+00B5) that `µL` is\nwritten with. The unit is read as microlitres; write `µL` or `uL` to silence this."
             }
             Code::W0007 => {
-                "The language allows this start state, but the item's simulation model cannot set it up yet\n(a tube whose cap starts off: the cap has no place to lie). The protocol checks and compiles;\n`eval` and `demo` refuse to build its scene. `autobio describe --catalogue` marks such states."
+                "The language allows this start state, but the item's simulation model cannot set it up yet\n(no shipped model refuses one today: a tube whose cap starts off is built open). The protocol\nchecks and compiles; `eval` and `demo` refuse to build its scene. `autobio describe --catalogue`\nmarks such states."
             }
             Code::W0008 => {
                 "A later stage of a chain starts where the stage before it ended: the state is carried over\n(traced by the proof), the scene is drawn once from the first stage's randomisation and seen\nfrom the first stage's camera. This stage file declares a start state that differs from the one\ncarried over to it, or a randomisation or camera that differs from the first stage's; in the\nchain these are ignored. Make them agree, or leave the stage to run alone."

@@ -257,6 +257,13 @@ pub trait Instrument {
         Vec::new()
     }
 
+    /// Whether a tip can reach the liquid in its interior: an open container (a capped tube's
+    /// liquid is out of reach, and a drop over it lands on the cap). Only such items are the
+    /// vessels a pipetting process works among.
+    fn open_vessel(&self) -> bool {
+        self.interior().is_some()
+    }
+
     /// The space inside the item that holds liquid (a tube's bore, a pipette's tip), in its root
     /// frame; `None`: it holds none. Its volume is [`crate::process::VOLUME_UL`] in the logic.
     fn interior(&self) -> Option<physics::liquid::Container> {

@@ -238,6 +238,11 @@ impl Instrument for Params {
         Some(self.tip_interior())
     }
 
+    /// The tip is not a vessel another tip works in.
+    fn open_vessel(&self) -> bool {
+        false
+    }
+
     fn processes(&self, _name: &str, me: usize, vessels: &[Vessel]) -> Vec<Box<dyn Process>> {
         vec![Box::new(Pipetting::new(
             me,

@@ -44,7 +44,8 @@ pub const TIP_IN: &str = "tip_in";
 /// How far above a vessel's mouth a drop from a tip still falls into it (m).
 const DROP_HEIGHT: f64 = 0.03;
 
-/// An item whose interior holds liquid, as the runtime finds it in the scene.
+/// An item whose interior holds liquid a tip can reach (an open tube, not a capped one), as the
+/// runtime finds it in the scene ([`crate::Instrument::open_vessel`]).
 #[derive(Clone, Debug)]
 pub struct Vessel {
     /// Index in task order.
@@ -53,23 +54,27 @@ pub struct Vessel {
     pub interior: Container,
 }
 
+/// A level's rounded volume (nL) and up direction (thousandths).
+type LevelKey = (u64, [i32; 3]);
+
 /// A vessel's liquid and the mouth a drop falls in through.
 #[derive(Debug)]
-struct Held {
+struct VesselLiquid {
     item: usize,
     liquid: Liquid,
     /// The interior's top (m, item frame) and its radius there.
     mouth_z: f64,
     mouth_radius: f64,
-    /// The surface's offset as last solved, for the volume and up direction it was solved for.
-    level: Option<(Nanolitres, nalgebra::Vector3<f64>, f64)>,
-    /// How far the volume may move from the last solve before the surface is solved again (nL):
-    /// 1e-4 of the capacity, a level change of about 10 µm in a 50 mL tube.
+    /// The surface's offset as last solved, for the rounded volume and up direction it was
+    /// solved for ([`VesselLiquid::level_key`]).
+    level: Option<(LevelKey, f64)>,
+    /// The step the volume is rounded down to for the level (nL): 1e-4 of the capacity, a level
+    /// change of about 10 µm in a 50 mL tube.
     resolve_nl: u64,
 }
 
-impl Held {
-    fn new(v: &Vessel) -> Held {
+impl VesselLiquid {
+    fn new(v: &Vessel) -> VesselLiquid {
         let (_, top) = v.interior.range([0.0, 0.0, 1.0]);
         let mouth_radius = v
             .interior
@@ -78,7 +83,7 @@ impl Held {
             .filter(|p| p[2] > top - 1e-9)
             .map(|p| p[0].hypot(p[1]))
             .fold(0.0, f64::max);
-        Held {
+        VesselLiquid {
             item: v.item,
             resolve_nl: (v.interior.capacity() * 1e8) as u64,
             liquid: Liquid::new(v.interior.clone(), Nanolitres(0), 0.0),
@@ -96,23 +101,42 @@ impl Held {
             return false;
         }
         let up = at.rotation.inverse() * nalgebra::Vector3::z();
-        let volume = self.liquid.volume;
+        let key = self.level_key(up);
         let offset = match self.level {
-            // A draw changes the volume every step by a little: the level it left is re-solved
-            // once it has moved enough to matter, not every step.
-            Some((v, n, d))
-                if v.0.abs_diff(volume.0) < self.resolve_nl && (n - up).norm() < 1e-4 =>
-            {
-                d
-            }
+            // A draw changes the volume every step by a little: the level is solved again only
+            // when the rounded volume or direction changes.
+            Some((k, d)) if k == key => d,
             _ => {
-                self.liquid.surface = physics::liquid::Surface::new([up.x, up.y, up.z], 0.0);
+                let volume = self.liquid.volume;
+                self.liquid.volume = Nanolitres(key.0);
+                let n = [
+                    key.1[0] as f64 * 1e-3,
+                    key.1[1] as f64 * 1e-3,
+                    key.1[2] as f64 * 1e-3,
+                ];
+                let norm = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+                self.liquid.surface =
+                    physics::liquid::Surface::new([n[0] / norm, n[1] / norm, n[2] / norm], 0.0);
                 let d = self.liquid.offset();
-                self.level = Some((volume, up, d));
+                self.liquid.volume = volume;
+                self.level = Some((key, d));
                 d
             }
         };
         up.dot(&local.coords) < offset
+    }
+
+    /// What the level is solved for: the volume rounded down to [`VesselLiquid::resolve_nl`] and
+    /// the up direction rounded to a thousandth. The level is then a function of the items' logic
+    /// and poses alone (a replay restored from them decides as the run did), and the solve is
+    /// skipped while neither moves past its rounding.
+    fn level_key(&self, up: nalgebra::Vector3<f64>) -> LevelKey {
+        let v = self.liquid.volume.0;
+        let round = |x: f64| (x * 1e3).round() as i32;
+        (
+            v - v % self.resolve_nl.max(1),
+            [round(up.x), round(up.y), round(up.z)],
+        )
     }
 
     /// Whether a drop let go at the point (world) lands in the vessel: the point is inside it,
@@ -140,7 +164,7 @@ pub struct Pipetting {
     /// The tip's opening in the pipette's root frame (m).
     opening: [f64; 3],
     tip: Liquid,
-    vessels: Vec<Held>,
+    vessels: Vec<VesselLiquid>,
     /// Time constant of the flow (s).
     pub flow_time: f64,
 }
@@ -156,7 +180,7 @@ impl Pipetting {
             vessels: vessels
                 .iter()
                 .filter(|v| v.item != pipette)
-                .map(Held::new)
+                .map(VesselLiquid::new)
                 .collect(),
             flow_time: 0.15,
         }
@@ -205,19 +229,22 @@ impl Pipetting {
                 Nanolitres(spilt).microlitres(),
             );
         }
-        let had = logic[self.pipette].get(AIR_UL).copied().unwrap_or(0.0);
+        let had =
+            Nanolitres::from_microlitres(logic[self.pipette].get(AIR_UL).copied().unwrap_or(0.0));
         set(
             &mut logic[self.pipette],
             AIR_UL,
-            (had - Nanolitres(air).microlitres()).max(0.0),
+            Nanolitres(had.0.saturating_sub(air)).microlitres(),
         );
     }
 }
 
+/// Adds `ul` (whole nanolitres) to a tally kept in the logic, summed in nanolitres.
 fn add(logic: &mut Logic, key: &str, ul: f64) {
     if ul != 0.0 {
-        let had = logic.get(key).copied().unwrap_or(0.0);
-        set(logic, key, had + ul);
+        let had = Nanolitres::from_microlitres(logic.get(key).copied().unwrap_or(0.0));
+        let more = Nanolitres::from_microlitres(ul);
+        set(logic, key, Nanolitres(had.0 + more.0).microlitres());
     }
 }
 

@@ -329,6 +329,12 @@ impl Instrument for Params {
         ]
     }
 
+    /// Only a tube built open: a capped one's liquid is out of a tip's reach. (A cap taken off
+    /// during an episode does not open the tube to a tip: no task pipettes from one.)
+    fn open_vessel(&self) -> bool {
+        self.open
+    }
+
     /// An open tube's liquid is drawn (a capped one's cannot be seen into).
     fn liquid_bodies(&self, name: &str) -> Vec<String> {
         if self.open {
@@ -359,8 +365,9 @@ impl Instrument for Params {
         if self.open {
             // No cap: off, as far as a cap can be.
             let off = state == "off";
+            // Its value: as far as a cap can be from the seat, the tube's height.
             return (state == "on" || off).then_some(Measure {
-                value: f64::INFINITY,
+                value: self.height,
                 target: if off { self.cap_off_rise } else { 0.0 },
                 tolerance,
                 holds: off,
@@ -499,7 +506,7 @@ impl Instrument for Params {
 
     fn unsupported_start(&self, initial: &BTreeMap<String, String>) -> Option<String> {
         (!self.open && initial.get("cap").map(String::as_str) == Some("off")).then(|| {
-            "a tube whose cap starts off has no place for the cap yet; declare `cap = \"on\"`"
+            "a tube whose cap starts off is made open when its protocol compiles; this task was compiled without that: compile it again"
                 .into()
         })
     }

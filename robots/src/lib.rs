@@ -1,4 +1,5 @@
-//! Robot models: one file per robot (an arm and its gripper composed), each a [`RobotModel`] of
+//! Robot models: one file per robot (an arm and its gripper or hand composed; `ur5e.rs` holds
+//! what the two UR5e robots share), each a [`RobotModel`] of
 //! plain facts: how its MJCF is prepared from the installed packages, its joints and actuators by
 //! name, the gripper's actuator values and settle time, TCP site, wrist camera, mount facing, home
 //! pose, expert limits and IK method. [`MODELS`] is the registry: one line per robot.

@@ -113,17 +113,25 @@ fn fix_joint(
     let at = hand
         .find(&open)
         .ok_or_else(|| assets::malformed(file, &format!("no body `{body}`")))?;
-    let end = at + hand[at..].find('>').unwrap_or(0);
+    let malformed = |what: &str| assets::malformed(file, &format!("body `{body}`: {what}"));
+    let end = at
+        + hand[at..]
+            .find('>')
+            .ok_or_else(|| malformed("no end to its tag"))?;
     let tag = &hand[at..end];
     let quat: Vec<f64> = assets::between(tag, "quat=\"", "\"")
-        .unwrap_or("1 0 0 0")
+        .ok_or_else(|| malformed("no quat"))?
         .split_whitespace()
         .filter_map(|v| v.parse().ok())
         .collect();
-    let q = match quat.as_slice() {
-        [w, x, y, z] => [*w, *x, *y, *z],
-        _ => [1.0, 0.0, 0.0, 0.0],
+    let [w, x, y, z] = quat.as_slice() else {
+        return Err(malformed("a quat of other than four numbers"));
     };
+    let q = [*w, *x, *y, *z];
+    let joint_tag = format!("<joint name=\"{joint}\"");
+    if !hand[end..].contains(&joint_tag) {
+        return Err(malformed(&format!("no joint `{joint}`")));
+    }
     let turned = mul(q, [(angle / 2.0).cos(), 0.0, 0.0, (angle / 2.0).sin()]);
     let new_tag = format!(
         "{} quat=\"{} {} {} {}\"",

@@ -161,22 +161,15 @@ impl Episode {
             }
             self.logic[i] = reset.logic;
             let root = self.start_pose(i, instance);
-            for (joint, pose) in model.place(&self.task.labware[i].name, &root) {
-                if let Some(f) = ids.free.iter().find(|f| f.name == joint) {
-                    let (p, q) = (position(&pose), wxyz(&pose.rotation));
-                    let qpos = self.data.qpos_mut();
-                    qpos[f.qpos..f.qpos + 3].copy_from_slice(&p);
-                    qpos[f.qpos + 3..f.qpos + 7].copy_from_slice(&q);
-                    self.data.qvel_mut()[f.dof..f.dof + 6].fill(0.0);
-                }
-            }
+            self.place_item(i, &root);
         }
         self.place_held();
         self.apply_panel_start(instance);
         self.start_volumes(instance);
         let vessels: Vec<labware::process::Vessel> = (0..self.task.labware.len())
             .filter_map(|item| {
-                let interior = instrument(&self.task, item).interior()?;
+                let model = instrument(&self.task, item);
+                let interior = model.interior().filter(|_| model.open_vessel())?;
                 Some(labware::process::Vessel { item, interior })
             })
             .collect();
@@ -199,16 +192,22 @@ impl Episode {
         let scene = self.scene.clone();
         for &(i, body, rel) in &scene.held {
             let root = self.body_pose(body) * rel;
-            let ids = &scene.labware[i];
-            for (joint, pose) in instrument(&self.task, i).place(&self.task.labware[i].name, &root)
-            {
-                if let Some(f) = ids.free.iter().find(|f| f.name == joint) {
-                    let (p, q) = (position(&pose), wxyz(&pose.rotation));
-                    let qpos = self.data.qpos_mut();
-                    qpos[f.qpos..f.qpos + 3].copy_from_slice(&p);
-                    qpos[f.qpos + 3..f.qpos + 7].copy_from_slice(&q);
-                    self.data.qvel_mut()[f.dof..f.dof + 6].fill(0.0);
-                }
+            self.place_item(i, &root);
+        }
+    }
+
+    /// Puts movable item `i` at rest with its root at `root`: each of its free joints where its
+    /// model places it.
+    fn place_item(&mut self, i: usize, root: &Pose) {
+        let scene = self.scene.clone();
+        let ids = &scene.labware[i];
+        for (joint, pose) in instrument(&self.task, i).place(&self.task.labware[i].name, root) {
+            if let Some(f) = ids.free.iter().find(|f| f.name == joint) {
+                let (p, q) = (position(&pose), wxyz(&pose.rotation));
+                let qpos = self.data.qpos_mut();
+                qpos[f.qpos..f.qpos + 3].copy_from_slice(&p);
+                qpos[f.qpos + 3..f.qpos + 7].copy_from_slice(&q);
+                self.data.qvel_mut()[f.dof..f.dof + 6].fill(0.0);
             }
         }
     }

@@ -22,7 +22,9 @@
 //! [`margins`] gives each step's reach margin for `autobio describe`: how far its targets could
 //! move away from the robot and still be reached.
 //!
-//! It does not check hand-overs or a seat for an item another robot picked, the free-space
+//! It does not check a pipette brought to a container (`aspirate`, `dispense`: their targets are
+//! measured from where the tip is, which needs the arm's pose), hand-overs or a seat for an item
+//! another robot picked, the free-space
 //! paths between targets (the expert routes those, `crate::route`), the straight lines between
 //! checked poses, or a chain's later stages, and it skips a step acting on an item an earlier
 //! step put elsewhere (its target is not where it starts). A task whose scene cannot be built is

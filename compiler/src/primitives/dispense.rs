@@ -2,7 +2,7 @@
 
 use super::liquid;
 use super::prelude::*;
-use crate::motion::{Motion, MotionStep, Target, goals};
+use crate::motion::{Motion, MotionStep, goals};
 
 pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     name: "dispense",
@@ -22,13 +22,7 @@ fn motions(step: &MotionStep) -> Vec<Motion> {
         return Vec::new();
     };
     let on = step.arg("on");
-    let to = |name: &str, above: f64| Target::Bring {
-        carried: tool.clone(),
-        from: "opening".into(),
-        labware: on.clone(),
-        to: name.into(),
-        above,
-    };
+    let to = |name: &str, above: f64| liquid::tip_onto(&tool, &on, name, above);
     vec![
         Motion::Transit {
             target: to("mouth", liquid::OVER_MOUTH),

@@ -3,6 +3,18 @@
 
 use super::prelude::*;
 
+/// The tool pose that brings `tool`'s opening onto `on`'s affordance `to`, `above` metres back
+/// along it: what `aspirate` and `dispense` aim with.
+pub(super) fn tip_onto(tool: &str, on: &str, to: &str, above: f64) -> crate::motion::Target {
+    crate::motion::Target::Bring {
+        carried: tool.into(),
+        from: "opening".into(),
+        labware: on.into(),
+        to: to.into(),
+        above,
+    }
+}
+
 /// Where the tip waits over a container's mouth before it goes in (m above the mouth).
 pub(super) const OVER_MOUTH: f64 = 0.03;
 /// How far into a container's mouth a tip dispenses from (m).
