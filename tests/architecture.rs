@@ -100,12 +100,16 @@ fn the_docs_name_every_registered_robot_and_labware_model() {
     }
     // And the architecture's model files are the registry's: one file per registry line.
     let registry = std::fs::read_to_string(root.join("labware/src/registry.rs")).unwrap();
-    let used = registry
-        .lines()
-        .find(|l| l.starts_with("use crate::{"))
-        .expect("the registry's model modules");
-    let used = &used["use crate::{".len()..used.find('}').unwrap()];
-    let modules: Vec<&str> = used.split(',').map(str::trim).collect();
+    let start = registry
+        .find("use crate::{")
+        .expect("the registry's model modules")
+        + "use crate::{".len();
+    let used = &registry[start..start + registry[start..].find('}').unwrap()];
+    let modules: Vec<&str> = used
+        .split(',')
+        .map(str::trim)
+        .filter(|m| !m.is_empty())
+        .collect();
     assert!(modules.len() >= 7, "{modules:?}");
     for module in modules {
         assert!(registry.contains(&format!("{module}::Params")), "{module}");

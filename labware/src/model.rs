@@ -159,6 +159,16 @@ pub trait Process: std::fmt::Debug + Send {
     fn step(&mut self, dt: f64, poses: &[Pose], logic: &mut [Logic]);
 }
 
+/// An item whose interior holds liquid a tip can reach (an open tube, not a capped one), as the
+/// runtime finds it in the scene ([`Instrument::open_vessel`]).
+#[derive(Clone, Debug)]
+pub struct Vessel {
+    /// Index in task order.
+    pub item: usize,
+    /// Its interior in its root frame.
+    pub interior: physics::liquid::Container,
+}
+
 /// What an item's logic asks of the simulation after a step, by role: equality constraints on or
 /// off, and commands for the item's own actuators.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -242,12 +252,7 @@ pub trait Instrument {
     /// Processes between this item (index `me` in task order) and others that the runtime runs
     /// after every physics step (a pipette's tip working among `vessels`, every item with an
     /// [`Instrument::interior`]), each written in the item's own model.
-    fn processes(
-        &self,
-        _name: &str,
-        _me: usize,
-        _vessels: &[crate::process::Vessel],
-    ) -> Vec<Box<dyn Process>> {
+    fn processes(&self, _name: &str, _me: usize, _vessels: &[Vessel]) -> Vec<Box<dyn Process>> {
         Vec::new()
     }
 
@@ -265,7 +270,7 @@ pub trait Instrument {
     }
 
     /// The space inside the item that holds liquid (a tube's bore, a pipette's tip), in its root
-    /// frame; `None`: it holds none. Its volume is [`crate::process::VOLUME_UL`] in the logic.
+    /// frame; `None`: it holds none. Its volume is `volume_ul` in the logic.
     fn interior(&self) -> Option<physics::liquid::Container> {
         None
     }

@@ -13,8 +13,8 @@
 //! of its own (each liquid's surface) follows from them. Pure: no MuJoCo here.
 
 use crate::frame::Pose;
-pub use crate::model::Process;
 use crate::model::{Logic, set};
+pub use crate::model::{Process, Vessel};
 use physics::liquid::{Container, Liquid, Nanolitres, transfer};
 
 /// The logic key an item's liquid volume is kept under (µL): a vessel's contents, a pipette tip's.
@@ -43,16 +43,6 @@ pub const TIP_IN: &str = "tip_in";
 
 /// How far above a vessel's mouth a drop from a tip still falls into it (m).
 const DROP_HEIGHT: f64 = 0.03;
-
-/// An item whose interior holds liquid a tip can reach (an open tube, not a capped one), as the
-/// runtime finds it in the scene ([`crate::Instrument::open_vessel`]).
-#[derive(Clone, Debug)]
-pub struct Vessel {
-    /// Index in task order.
-    pub item: usize,
-    /// Its interior in its root frame.
-    pub interior: Container,
-}
 
 /// A level's rounded volume (nL) and up direction (thousandths).
 type LevelKey = (u64, [i32; 3]);
