@@ -90,6 +90,8 @@ fn every_simulated_task_scores_zero_without_motion() {
             "centrifuge_mini.close_lid",
             "centrifuge_mini.open_lid",
             "centrifuge_mini.open_then_close",
+            "pipette.aspirate",
+            "pipette.transfer",
             "thermal_cycler.close_lid",
             "thermal_cycler.close_then_open",
             "thermal_cycler.open_and_close",
