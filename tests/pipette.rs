@@ -285,11 +285,10 @@ fn pressed_through_to_blow_out_over_another_tube_the_tip_empties_into_it() {
     assert!((20_000.0 - b.logic("a", VOLUME_UL) - drawn).abs() < 1e-6);
 }
 
-/// An item a hand holds from the start (`held_by`) is welded where its grasp meets the TCP: at
-/// reset and still after two seconds of a motionless arm (and the proof knows the hand is full).
-#[test]
-fn a_pipette_held_from_the_start_stays_at_the_hands_tcp() {
-    let source = PROTOCOL
+/// [`PROTOCOL`] with its arm a `robot` that holds the pipette from the start (no pick).
+fn held_by_the_arm(robot: &str) -> String {
+    PROTOCOL
+        .replace("model = \"ur5e_2f85\"", &format!("model = \"{robot}\""))
         .replace(
             "pose = { pos_m = [0.3, 0.3, 0.9] }\nstate",
             "held_by = \"arm\"\nstate",
@@ -297,7 +296,14 @@ fn a_pipette_held_from_the_start_stays_at_the_hands_tcp() {
         .replace(
             "[[steps]]\ndo = \"pick\"\non = \"pipette\"\nwith = \"arm\"\n\n",
             "",
-        );
+        )
+}
+
+/// An item a hand holds from the start (`held_by`) is welded where its grasp meets the TCP: at
+/// reset and still after two seconds of a motionless arm (and the proof knows the hand is full).
+#[test]
+fn a_pipette_held_from_the_start_stays_at_the_hands_tcp() {
+    let source = held_by_the_arm("ur5e_2f85");
     let (task, diags) = compiler::compile_source(&source, "held.toml");
     let task = task.unwrap_or_else(|| panic!("{diags:#?}"));
     let instance = task.sample(0);
@@ -345,16 +351,7 @@ fn a_pipette_held_from_the_start_stays_at_the_hands_tcp() {
 /// plunger's travel follows it through the contact of the thumb's pad on the button.
 #[test]
 fn the_hands_thumb_works_the_plunger_to_its_stops() {
-    let source = PROTOCOL
-        .replace("model = \"ur5e_2f85\"", "model = \"ur5e_inspire\"")
-        .replace(
-            "pose = { pos_m = [0.3, 0.3, 0.9] }\nstate",
-            "held_by = \"arm\"\nstate",
-        )
-        .replace(
-            "[[steps]]\ndo = \"pick\"\non = \"pipette\"\nwith = \"arm\"\n\n",
-            "",
-        );
+    let source = held_by_the_arm("ur5e_inspire");
     let (task, diags) = compiler::compile_source(&source, "hand.toml");
     let task = task.unwrap_or_else(|| panic!("{diags:#?}"));
     let instance = task.sample(0);
