@@ -517,6 +517,28 @@ fn the_expert_aspirates_at_every_fill_and_a_still_hand_draws_nothing() {
     assert_eq!(r.verdict.predicates()[0].value, 0.0);
 }
 
+/// The aspirate task is two-armed: the same episode with the gripper's pick taken out of the
+/// compiled plan (the state proof refuses such a protocol; the hand draws the set volume from
+/// the tube where it stands in the rack) fails on the tube that was neither held nor lifted.
+#[test]
+fn aspirating_from_the_rack_without_the_lift_fails() {
+    let mut task = common::compile("protocols/pipette/aspirate.toml");
+    let plan = &mut task.stages[0].plan;
+    assert_eq!(
+        plan[0].primitive, "pick",
+        "the shipped task picks the tube first"
+    );
+    plan.remove(0);
+    let r = common::run(&task, 0, "expert");
+    assert!(!r.success, "{:#?}", r.verdict);
+    let p = r.verdict.predicates();
+    let by = |text: &str| p.iter().find(|q| q.text.starts_with(text)).unwrap();
+    assert!(by("pipette.volume").holds, "the volume was drawn: {p:#?}");
+    assert!(!by("right touches tube").holds, "{p:#?}");
+    let lifted = by("tube lifted");
+    assert!(!lifted.holds && lifted.value < 0.01, "{lifted:?}");
+}
+
 /// Cameras see the liquid: the aspirate scene drawn at 224x224 with the tube's volume and drawn
 /// again with it emptied differ where the liquid stands, and more so the fuller the tube.
 #[test]

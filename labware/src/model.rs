@@ -113,7 +113,7 @@ pub struct Measure {
 }
 
 /// How an affordance frame may be turned and still be the same grasp.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Symmetry {
     None,
     /// Turned half a turn about its z (approach) axis: a bar held with the fingers swapped.
@@ -123,6 +123,10 @@ pub enum Symmetry {
     /// Any turn about its y axis, which runs along the item: a round body gripped from the side,
     /// from whichever side the tool comes.
     AboutY,
+    /// Any turn about this axis (in the frame's own coordinates), which runs along the item: a
+    /// round body gripped from the side at a slant, from whichever side the tool comes, the
+    /// approach keeping its angle to the item.
+    About([f64; 3]),
 }
 
 /// A frame a robot tool can be brought to: z is the approach direction, x the fingers' closing

@@ -459,9 +459,21 @@ impl Instrument for Params {
         }
         if name == "hold" || (self.open && name == "grasp") {
             let across = crate::frame::from_axes([0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]);
+            let at = [0.0, 0.0, HOLD_HEIGHT * self.height];
+            if name == "hold" {
+                return Some(Affordance {
+                    pose: s.pose * crate::frame::pose(at, across),
+                    symmetry: Symmetry::AboutY,
+                    touch: false,
+                    lead: 0.0,
+                });
+            }
+            // An open tube is picked up at the same height, the approach slanted down (turned
+            // about the fingers' closing direction) so that the wrist stays high over the bench.
+            let slant = crate::frame::x_turn(PICK_SLANT);
             return Some(Affordance {
-                pose: s.pose * crate::frame::pose([0.0, 0.0, HOLD_HEIGHT * self.height], across),
-                symmetry: Symmetry::AboutY,
+                pose: s.pose * crate::frame::pose(at, across * slant),
+                symmetry: Symmetry::About([0.0, PICK_SLANT.cos(), -PICK_SLANT.sin()]),
                 touch: false,
                 lead: 0.0,
             });
@@ -517,6 +529,11 @@ impl Instrument for Params {
 /// rack's top plate (the tube stands 54 mm deep in it) and below the fingertips of a hand that
 /// grips the cap. Other tubes have no task that holds them yet.
 const HOLD_HEIGHT: f64 = 0.79;
+
+/// How far below the horizontal an open tube's pick approaches it (rad): a side grasp of a tube in
+/// a rack, approached level, brings a UR5e's wrist down to the bench (upstream's expert slants its
+/// pick by 25°).
+const PICK_SLANT: f64 = 30.0 * std::f64::consts::PI / 180.0;
 
 /// How far above its seat, in turns of the thread, a cap is set on the mouth to be screwed on, at
 /// most: the nut engages the bolt over 2.2 turns (see [`start_turns`]).

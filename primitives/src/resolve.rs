@@ -217,16 +217,21 @@ pub struct StepFrame {
     regrasp_nearest: bool,
     /// Whether the first affordance allows the grasp turned half a turn (see [`Self::other_grasp`]).
     half_turn: bool,
-    /// Whether the first affordance is round (any turn about its axis grasps it the same).
-    round: bool,
+    /// The axis (in the first affordance's frame) about which any turn grasps it the same, where
+    /// it is round: its z for a cap from above, the item's axis for a slanted side grasp.
+    round: Option<[f64; 3]>,
     /// The angle the step's last [`Motion::Turn`] or [`Motion::TurnDial`] turned (rad), until a
     /// [`Motion::TurnBack`] undoes it.
     turned: Option<f64>,
     /// Whether the carried item is round (its grasp turns freely about its axis), so that it may
     /// go into its seat at any heading.
     carried_round: bool,
+    /// Whether the step brings a held tool onto a round opening ([`Target::Bring`] to an axial
+    /// affordance: a pipette over a tube's mouth), so that it may come at any heading.
+    brings_round: bool,
     /// A turn (rad) about the seat's axis added to the heading the carried item has now, for
-    /// the motion that brings it over its seat (see [`Self::seat_turned`]).
+    /// the motion that brings it over its seat (see [`Self::seat_turned`]); likewise about a
+    /// round opening's axis for the motion that brings a held tool onto it.
     seat_turn: f64,
 }
 
@@ -252,9 +257,10 @@ impl StepFrame {
                 .iter()
                 .any(|m| matches!(m, Motion::Turn { .. } | Motion::TurnDial { .. })),
             half_turn: false,
-            round: false,
+            round: None,
             turned: None,
             carried_round: false,
+            brings_round: false,
             seat_turn: 0.0,
         };
         match first_target(motions) {
@@ -266,7 +272,11 @@ impl StepFrame {
                 let a = lab.affordance(labware, name, &lab.at_goals(labware, goals)?)?;
                 frame.turn = closest_turn(&a, tcp_now);
                 frame.half_turn = a.symmetry != Symmetry::None;
-                frame.round = a.symmetry == Symmetry::Axial;
+                frame.round = match a.symmetry {
+                    Symmetry::Axial => Some([0.0, 0.0, 1.0]),
+                    Symmetry::About(axis) => Some(axis),
+                    _ => None,
+                };
             }
             Some(Target::Button {
                 labware,
@@ -288,6 +298,18 @@ impl StepFrame {
                     target: Target::Seat { .. }
                 }
             )
+        });
+        frame.brings_round = motions.iter().any(|m| match m {
+            Motion::Approach { target, .. }
+            | Motion::Reach { target }
+            | Motion::Transit { target } => {
+                matches!(target, Target::Bring { labware, to, .. }
+                if lab.item(labware).is_ok_and(|(_, live)| {
+                    lab.affordance(labware, to, live)
+                        .is_ok_and(|a| a.symmetry == Symmetry::Axial)
+                }))
+            }
+            _ => false,
         });
         if seats {
             let item = carried.ok_or(PlanError::NothingCarried)?;
@@ -349,10 +371,9 @@ impl StepFrame {
             let held = lab.affordance(carried, from, live)?;
             let (_, other) = lab.item(labware)?;
             let goal = lab.affordance(labware, to, other)?;
-            let goal = translated_local(
-                &(goal.pose * closest_turn(&goal, &held.pose)),
-                [0.0, 0.0, -above],
-            );
+            let heading =
+                closest_turn(&goal, &held.pose) * axis_angle([0.0, 0.0, 1.0], self.seat_turn);
+            let goal = translated_local(&(goal.pose * heading), [0.0, 0.0, -above]);
             return Ok(goal * held.pose.inverse() * tcp_now);
         }
         let Target::Carry {
@@ -507,8 +528,8 @@ impl StepFrame {
     /// affordance's axis (a tube taken from another side); `None` where it is not round. The
     /// expert's choice where the grasp closest to the tool as it is cannot be reached on.
     pub fn turned_about_axis(&self, angle: f64) -> Option<StepFrame> {
-        self.round.then(|| StepFrame {
-            turn: self.turn * axis_angle([0.0, 0.0, 1.0], angle),
+        self.round.map(|axis| StepFrame {
+            turn: self.turn * axis_angle(axis, angle),
             ..self.clone()
         })
     }
@@ -517,8 +538,10 @@ impl StepFrame {
     /// the seat's axis from the heading it has now; `None` unless the item is round. For the one
     /// motion that brings it there: the motions after it keep the heading it then has. The
     /// expert's choice where every arm pose over the seat at the item's heading is blocked.
+    /// Likewise a held tool brought onto a round opening (a pipette turned about the tube's axis,
+    /// its arm then clear of the arm that holds the tube).
     pub fn seat_turned(&self, angle: f64) -> Option<StepFrame> {
-        (self.carried_round && self.carried.is_some()).then(|| StepFrame {
+        ((self.carried_round && self.carried.is_some()) || self.brings_round).then(|| StepFrame {
             seat_turn: angle,
             ..self.clone()
         })
@@ -713,7 +736,7 @@ pub fn first_target(motions: &[Motion]) -> Option<&Target> {
 }
 
 /// The turn allowed by the affordance's symmetry (about its z axis; for `AboutY`, about its y
-/// axis) that brings it closest to `tool`'s orientation.
+/// axis; for `About`, about the axis it names) that brings it closest to `tool`'s orientation.
 fn closest_turn(a: &Affordance, tool: &Pose) -> Rot {
     match a.symmetry {
         Symmetry::None => Rot::identity(),
@@ -732,6 +755,18 @@ fn closest_turn(a: &Affordance, tool: &Pose) -> Rot {
         Symmetry::AboutY => {
             let rel = (a.pose.rotation.inverse() * tool.rotation).to_rotation_matrix();
             axis_angle([0.0, 1.0, 0.0], rel[(0, 2)].atan2(rel[(2, 2)]))
+        }
+        // The same for a slanted approach: the turn about the item's axis that brings the
+        // approach's part across that axis onto the tool's.
+        Symmetry::About(axis) => {
+            let k = nalgebra::Vector3::from(axis).normalize();
+            let across = |v: nalgebra::Vector3<f64>| v - k * k.dot(&v);
+            let approach = across(nalgebra::Vector3::z());
+            let tool_z = across(a.pose.rotation.inverse() * tool.rotation * nalgebra::Vector3::z());
+            axis_angle(
+                axis,
+                k.dot(&approach.cross(&tool_z)).atan2(approach.dot(&tool_z)),
+            )
         }
     }
 }
@@ -1065,6 +1100,69 @@ mod tests {
         let path = frame.poses(&loosen, &lab, &above).unwrap();
         let rise = path.last().unwrap().translation.vector.z - above.translation.vector.z;
         assert!((rise - p.pitch / 2.0).abs() < 1e-12, "rose {rise}");
+    }
+
+    /// An open tube is picked from the side the tool comes from, the approach slanted down
+    /// across the tube and the fingers closing level; a grasp turned about the tube's axis keeps
+    /// that slant, and a pipette brought onto its mouth may come at another heading.
+    #[test]
+    fn an_open_tube_is_picked_at_a_slant_from_the_tools_side() {
+        let open = BTreeMap::from([("cap".to_string(), "off".to_string())]);
+        let tube = labware::Model::for_kind("tube_50ml")
+            .unwrap()
+            .for_start(&open);
+        let model = tube.instrument().unwrap();
+        let at = labware::frame::pose([0.1, -0.2, 0.83], Rot::identity());
+        let s = LabwareState {
+            name: "tube".into(),
+            pose: at,
+            joints: BTreeMap::new(),
+            parts: BTreeMap::new(),
+            logic: BTreeMap::new(),
+            touched_by: Vec::new(),
+        };
+        let params = Bindings::new();
+        let lab = Lab {
+            items: vec![("tube", model, &s)],
+            params: &params,
+        };
+        let grasp = Target::Affordance {
+            labware: "tube".into(),
+            name: "grasp".into(),
+            goals: Vec::new(),
+        };
+        // A tool pointing down and a little toward -x (it stands on the tube's +x side).
+        let tool = labware::frame::pose(
+            [0.4, -0.2, 1.2],
+            labware::frame::from_axes([0.0, 1.0, 0.0], [0.9, 0.0, -0.436], [-0.436, 0.0, -0.9]),
+        );
+        let motions = [Motion::Reach {
+            target: grasp.clone(),
+        }];
+        let frame = StepFrame::new(&motions, &lab, &tool, None, 0.0, 0.0).unwrap();
+        let approach = |f: &StepFrame| {
+            let end = *f.poses(&motions[0], &lab, &tool).unwrap().last().unwrap();
+            (end.rotation * Vector3::z(), end.rotation * Vector3::x())
+        };
+        let (z, x) = approach(&frame);
+        let down = 30f64.to_radians();
+        // From +x toward the axis, 30 degrees below the level; the fingers close level.
+        assert!(
+            (z - Vector3::new(-down.cos(), 0.0, -down.sin())).norm() < 1e-9,
+            "approach {z:?}"
+        );
+        assert!(x.z.abs() < 1e-9, "fingers close along {x:?}");
+        // Taken from the other side of the tube, the slant is the same.
+        let other = frame.turned_about_axis(std::f64::consts::PI).unwrap();
+        let (z, x) = approach(&other);
+        assert!(
+            (z - Vector3::new(down.cos(), 0.0, -down.sin())).norm() < 1e-9,
+            "approach {z:?}"
+        );
+        assert!(x.z.abs() < 1e-9, "fingers close along {x:?}");
+        // A pick neither seats a carried item nor brings a tool onto an opening: it has no
+        // heading over a target to turn.
+        assert!(frame.seat_turned(0.5).is_none());
     }
 
     /// A dial is turned from its live angle to the target's notch in as few equal grips as the

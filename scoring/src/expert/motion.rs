@@ -321,6 +321,7 @@ impl ExpertPolicy {
             Motion::Home => vec![arm.target.clone(), arm.model.home.to_vec()],
             _ => waypoints,
         };
+        let first_path = !lane.step_moved;
         lane.step_moved = true;
         // A dial is looked at again once the hand has let go of it.
         if matches!(q.motion, Motion::TurnDial { .. }) {
@@ -336,6 +337,8 @@ impl ExpertPolicy {
         }
         // TOPP's grid: 200 intervals, and for a planned route (~100 waypoints) 8 per waypoint.
         let mut grid = 200;
+        // A grasp taken from another side to get around what blocks the step's first path.
+        let mut kept: Option<StepFrame> = None;
         let waypoints = if q.motion.through_free_space() {
             let frame = seat_frame
                 .as_ref()
@@ -374,14 +377,24 @@ impl ExpertPolicy {
                     seed,
                 )
                 .or_else(|| {
-                    // A round item may go over its seat at another heading: the arm's poses
-                    // there are others.
-                    GRASP_TURNS.iter().skip(1).find_map(|deg| {
-                        let f = frame.seat_turned(deg.to_radians())?;
+                    // A round item may go over its seat at another heading, and on the step's
+                    // first path a round part may be taken from another side (the step keeps
+                    // that grasp): the arm's poses there are others.
+                    let alternatives = GRASP_TURNS.iter().skip(1).flat_map(|deg| {
+                        let a = deg.to_radians();
+                        [
+                            first_path
+                                .then(|| frame.turned_about_axis(a))
+                                .flatten()
+                                .map(|f| (f, true)),
+                            frame.seat_turned(a).map(|f| (f, false)),
+                        ]
+                    });
+                    alternatives.flatten().find_map(|(f, keep)| {
                         let w =
                             free_path(arm, &f, &q.motion, &lab, &tcp_now, next.as_ref(), direct)?;
                         let end = w.last().map(|q| arm.kin.tcp(q));
-                        route(
+                        let routed = route(
                             &mut arm.clearance,
                             &joint_limits,
                             limits.check_step,
@@ -399,7 +412,11 @@ impl ExpertPolicy {
                                 limits.check_step,
                                 seed,
                             )
-                        })
+                        })?;
+                        if keep {
+                            kept = Some(f);
+                        }
+                        Some(routed)
                     })
                 })
                 .ok_or_else(|| planning(context.clone(), blocked))?,
@@ -418,6 +435,9 @@ impl ExpertPolicy {
         } else {
             waypoints
         };
+        if let Some(f) = kept {
+            lane.frame = Some((q.step, f));
+        }
         let topp = Limits {
             vmax: limits.vmax,
             amax: limits.amax,
