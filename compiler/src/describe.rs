@@ -25,9 +25,15 @@ pub fn describe(task: &Task) -> String {
     let _ = writeln!(w, "\nscene");
     for r in &task.robots {
         let p = labware::frame::position(&r.base);
+        let (_, _, yaw) = r.base.rotation.euler_angles();
+        let turned = if yaw.abs() > 1e-9 {
+            format!(", yaw {:.1} deg", yaw.to_degrees())
+        } else {
+            String::new()
+        };
         let _ = writeln!(
             w,
-            "  robot {:<10} {} at ({:.3}, {:.3}, {:.3}) m",
+            "  robot {:<10} {} at ({:.3}, {:.3}, {:.3}) m{turned}",
             r.name, r.model, p[0], p[1], p[2]
         );
     }
