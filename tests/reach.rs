@@ -156,6 +156,23 @@ fn a_place_out_of_reach_gets_e0036_at_its_step_and_its_hint_base_works() {
     );
 }
 
+/// The rack of tubes stood past the pipetting arm's reach: the pipette's tip, as the hand holds
+/// it, cannot be brought over the source tube's mouth (nor under its surface), E0036 says so at
+/// the aspirate, and from the hinted base the transfer is made.
+#[test]
+fn a_tube_out_of_the_pipettes_reach_gets_e0036_and_its_hint_base_works() {
+    let base = "base = { pos_m = [0.0, -0.5, 0.824] }";
+    let target = "pose = { pos_m = [0.0, 0.0, 0.854] }";
+    let far = "pose = { pos_m = [0.0, 0.5, 0.854] }";
+    the_hint_fixes(
+        "protocols/pipette/transfer.toml",
+        base,
+        (target, far),
+        1,
+        "pipette",
+    );
+}
+
 /// The thermal mixer stood past the arm's reach: the first button the panel steps need (the
 /// press point, and the point 4 cm back along it where the finger comes in from) is out of
 /// reach, E0036 says so at that step, and from the hinted base the panel is set.

@@ -547,6 +547,17 @@ impl StepFrame {
         })
     }
 
+    /// The tool pose for `target` with the tool at `tcp_now` (a carried item or a held tool is
+    /// brought there as it sits in the hand now).
+    pub fn pose_toward(
+        &self,
+        target: &Target,
+        lab: &Lab,
+        tcp_now: &Pose,
+    ) -> Result<Pose, PlanError> {
+        self.target_from(target, lab, tcp_now)
+    }
+
     /// The tool pose at the step's first target (where its grasp is taken), if it has one.
     pub fn first_pose(&self, motions: &[Motion], lab: &Lab) -> Result<Option<Pose>, PlanError> {
         first_target(motions)

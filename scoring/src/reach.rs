@@ -22,8 +22,9 @@
 //! [`margins`] gives each step's reach margin for `autobio describe`: how far its targets could
 //! move away from the robot and still be reached.
 //!
-//! It does not check a pipette brought to a container (`aspirate`, `dispense`: their targets are
-//! measured from where the tip is, which needs the arm's pose), hand-overs or a seat for an item
+//! A held tool brought onto an opening (`aspirate`, `dispense`: a pipette's tip over a tube's
+//! mouth and under its surface) is solved as the tool sits in the hand at the start, at any
+//! heading about the opening's axis. It does not check hand-overs or a seat for an item
 //! another robot picked, the free-space
 //! paths between targets (the expert routes those, `crate::route`), the straight lines between
 //! checked poses, or a chain's later stages, and it skips a step acting on an item an earlier
@@ -573,6 +574,38 @@ fn aims(
         ) else {
             continue;
         };
+        // A held tool brought onto an opening (a pipette's tip over a tube's mouth, then under
+        // its surface): each place it is brought to, as the tool sits in the hand at the start,
+        // at any heading about the opening's axis the expert may take.
+        if matches!(first_target(&motions), Some(Target::Bring { .. })) {
+            let as_started = !moved_joints && held.values().all(|(r, _)| *r != robot);
+            let mut seen: Vec<&Target> = Vec::new();
+            for m in &motions {
+                let Motion::Reach { target } = m else {
+                    continue;
+                };
+                if seen.contains(&target) {
+                    continue;
+                }
+                seen.push(target);
+                let grasps: Vec<(Pose, Vec<Pose>)> = BRING_TURNS
+                    .iter()
+                    .filter_map(|deg| frame.seat_turned(deg.to_radians()))
+                    .filter_map(|f| f.pose_toward(target, lab, &tcp).ok())
+                    .map(|p| (p, Vec::new()))
+                    .collect();
+                if !grasps.is_empty() {
+                    out.push(Aim {
+                        step: i,
+                        robot,
+                        target: target_name(std::slice::from_ref(m)),
+                        grasps,
+                        as_started,
+                    });
+                }
+            }
+            continue;
+        }
         let Ok(Some(pose)) = frame.first_pose(&motions, lab) else {
             continue;
         };
@@ -643,6 +676,12 @@ fn aims(
     }
     out
 }
+
+/// Headings (deg) about an opening's axis at which a held tool's place over it is tried: the
+/// expert's own, then 30 degrees more each way (as it tries them where the first is blocked).
+const BRING_TURNS: [f64; 12] = [
+    0.0, 30.0, -30.0, 60.0, -60.0, 90.0, -90.0, 120.0, -120.0, 150.0, -150.0, 180.0,
+];
 
 /// The tool poses of a step's `Follow` motions in order, from its grasp at `from` with `frame`,
 /// each from where the one before leaves the labware's joints (`states` as the grip takes it).
