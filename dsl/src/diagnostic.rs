@@ -62,7 +62,7 @@ pub enum Code {
     E0014,
     /// A name declared twice.
     E0015,
-    /// An unknown or unusable slot.
+    /// An unknown or unusable start place: a slot, or a hand (`held_by`).
     E0016,
     /// An initial state the labware kind does not have.
     E0017,
@@ -223,7 +223,7 @@ impl Code {
             Code::E0013 => "a name that refers to nothing declared",
             Code::E0014 => "a primitive applied to labware that does not support it",
             Code::E0015 => "a name declared twice",
-            Code::E0016 => "an unknown or unusable slot",
+            Code::E0016 => "an unknown or unusable slot or hand",
             Code::E0017 => "an initial state the labware kind does not have",
             Code::E0020 => "a quantity with a missing, unknown or wrong unit",
             Code::E0021 => "a value outside its allowed range",
@@ -297,7 +297,7 @@ impl Code {
                 "Robots, labware and parameters share one namespace: every name must be unique in a protocol."
             }
             Code::E0016 => {
-                "A location `<holder>.<slot>` names a holder without slots, a slot the holder does not have, a\nslot that does not accept this kind of item, or a slot two items start in."
+                "A location `<holder>.<slot>` names a holder without slots, a slot the holder does not have, a\nslot that does not accept this kind of item, or a slot two items start in; or `held_by` puts in\na hand an item that cannot be held (a fixed instrument), one that also starts in a slot (`at`),\nor a second item in a hand that already holds one."
             }
             Code::E0017 => {
                 "`state = { .. }` sets a part, panel value or volume the kind does not have, or a state the part\ncannot start in (a lid cannot start `unlocked`; declare `closed`)."
