@@ -356,8 +356,9 @@ impl StepFrame {
         }
     }
 
-    /// The tool pose for a [`Target::Carry`] from the tool at `tcp_now`; other targets as
-    /// [`Self::target`].
+    /// The tool pose for a [`Target::Carry`] or a [`Target::Bring`] from the tool at `tcp_now`
+    /// (a Bring at the heading closest to the held tool's now, turned by the frame's
+    /// `seat_turn`); other targets as [`Self::target`].
     fn target_from(&self, target: &Target, lab: &Lab, tcp_now: &Pose) -> Result<Pose, PlanError> {
         if let Target::Bring {
             carried,
@@ -526,10 +527,20 @@ impl StepFrame {
 
     /// The same step with its grasp turned a further `angle` (rad) about a round first
     /// affordance's axis (a tube taken from another side); `None` where it is not round. The
-    /// expert's choice where the grasp closest to the tool as it is cannot be reached on.
+    /// expert's choice where the grasp closest to the tool as it is cannot be reached on. A turn
+    /// over a seat or an opening made for one motion ([`Self::seat_turned`]) is not carried into
+    /// the step's grasp.
     pub fn turned_about_axis(&self, angle: f64) -> Option<StepFrame> {
         self.round.map(|axis| StepFrame {
-            turn: self.turn * axis_angle(axis, angle),
+            // About z (a cap from above) every turn of the grasp is about the same axis, so
+            // the order is immaterial; about a slanted grasp's item axis the turn goes first,
+            // so that it stays about the item's axis after the other grasp's half turn.
+            turn: if axis == [0.0, 0.0, 1.0] {
+                self.turn * axis_angle(axis, angle)
+            } else {
+                axis_angle(axis, angle) * self.turn
+            },
+            seat_turn: 0.0,
             ..self.clone()
         })
     }
@@ -809,6 +820,18 @@ mod tests {
     use compiler::motion::goals;
     use nalgebra::Vector3;
     use std::collections::BTreeMap;
+
+    /// An item at `pose` with no joints, parts or logic.
+    fn state(name: &str, pose: Pose) -> LabwareState {
+        LabwareState {
+            name: name.into(),
+            pose,
+            joints: BTreeMap::new(),
+            parts: BTreeMap::new(),
+            logic: BTreeMap::new(),
+            touched_by: Vec::new(),
+        }
+    }
 
     fn cycler_state() -> LabwareState {
         LabwareState {
@@ -1114,8 +1137,8 @@ mod tests {
     }
 
     /// An open tube is picked from the side the tool comes from, the approach slanted down
-    /// across the tube and the fingers closing level; a grasp turned about the tube's axis keeps
-    /// that slant, and a pipette brought onto its mouth may come at another heading.
+    /// across the tube and the fingers closing level; a grasp turned about the tube's axis, from
+    /// either of the two grasps, keeps that slant.
     #[test]
     fn an_open_tube_is_picked_at_a_slant_from_the_tools_side() {
         let open = BTreeMap::from([("cap".to_string(), "off".to_string())]);
@@ -1123,15 +1146,7 @@ mod tests {
             .unwrap()
             .for_start(&open);
         let model = tube.instrument().unwrap();
-        let at = labware::frame::pose([0.1, -0.2, 0.83], Rot::identity());
-        let s = LabwareState {
-            name: "tube".into(),
-            pose: at,
-            joints: BTreeMap::new(),
-            parts: BTreeMap::new(),
-            logic: BTreeMap::new(),
-            touched_by: Vec::new(),
-        };
+        let s = state("tube", labware::frame::translation([0.1, -0.2, 0.83]));
         let params = Bindings::new();
         let lab = Lab {
             items: vec![("tube", model, &s)],
@@ -1142,38 +1157,122 @@ mod tests {
             name: "grasp".into(),
             goals: Vec::new(),
         };
-        // A tool pointing down and a little toward -x (it stands on the tube's +x side).
+        // A tool pointing down and a little toward -y (it stands on the tube's +y side).
+        let (cos, sin) = (0.4f64.cos(), 0.4f64.sin());
         let tool = labware::frame::pose(
-            [0.4, -0.2, 1.2],
-            labware::frame::from_axes([0.0, 1.0, 0.0], [0.9, 0.0, -0.436], [-0.436, 0.0, -0.9]),
+            [0.1, 0.2, 1.2],
+            labware::frame::from_axes([1.0, 0.0, 0.0], [0.0, -cos, sin], [0.0, -sin, -cos]),
         );
-        let motions = [Motion::Reach {
-            target: grasp.clone(),
-        }];
+        let motions = [Motion::Reach { target: grasp }];
         let frame = StepFrame::new(&motions, &lab, &tool, None, 0.0, 0.0).unwrap();
-        let approach = |f: &StepFrame| {
+        let grip = |f: &StepFrame| {
             let end = *f.poses(&motions[0], &lab, &tool).unwrap().last().unwrap();
             (end.rotation * Vector3::z(), end.rotation * Vector3::x())
         };
-        let (z, x) = approach(&frame);
-        let down = 30f64.to_radians();
-        // From +x toward the axis, 30 degrees below the level; the fingers close level.
+        let (down_c, down_s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+        // From +y toward the axis, 30 degrees below the level; the fingers close level.
+        let (z, x) = grip(&frame);
         assert!(
-            (z - Vector3::new(-down.cos(), 0.0, -down.sin())).norm() < 1e-9,
+            (z - Vector3::new(0.0, -down_c, -down_s)).norm() < 1e-9,
             "approach {z:?}"
         );
         assert!(x.z.abs() < 1e-9, "fingers close along {x:?}");
-        // Taken from the other side of the tube, the slant is the same.
-        let other = frame.turned_about_axis(std::f64::consts::PI).unwrap();
-        let (z, x) = approach(&other);
+        // A quarter turn anticlockwise about the tube's axis (seen from above): from -x.
+        let (z, x) = grip(
+            &frame
+                .turned_about_axis(std::f64::consts::FRAC_PI_2)
+                .unwrap(),
+        );
         assert!(
-            (z - Vector3::new(down.cos(), 0.0, -down.sin())).norm() < 1e-9,
+            (z - Vector3::new(down_c, 0.0, -down_s)).norm() < 1e-9,
+            "approach {z:?}"
+        );
+        assert!(x.z.abs() < 1e-9, "fingers close along {x:?}");
+        // The other grasp (the fingers swapped) turned the same way: the same approach.
+        let other = frame.other_grasp().unwrap();
+        let (z, x) = grip(
+            &other
+                .turned_about_axis(std::f64::consts::FRAC_PI_2)
+                .unwrap(),
+        );
+        assert!(
+            (z - Vector3::new(down_c, 0.0, -down_s)).norm() < 1e-9,
             "approach {z:?}"
         );
         assert!(x.z.abs() < 1e-9, "fingers close along {x:?}");
         // A pick neither seats a carried item nor brings a tool onto an opening: it has no
         // heading over a target to turn.
         assert!(frame.seat_turned(0.5).is_none());
+    }
+
+    /// A pipette held in the hand is brought onto an open tube's mouth: its opening on the
+    /// mouth's axis, pointing down, at the heading it has now; turned for another heading
+    /// (`seat_turned`), its opening is at the same place and the tool turns about the axis.
+    #[test]
+    fn a_pipette_is_brought_onto_a_mouth_at_its_heading_or_a_turned_one() {
+        let open = BTreeMap::from([("cap".to_string(), "off".to_string())]);
+        let tube = labware::Model::for_kind("tube_50ml")
+            .unwrap()
+            .for_start(&open);
+        let pipette = labware::Model::for_kind("pipette").unwrap();
+        let (tube_m, pipette_m) = (tube.instrument().unwrap(), pipette.instrument().unwrap());
+        let t = state("tube", labware::frame::translation([0.1, -0.2, 0.83]));
+        let p = state(
+            "pipette",
+            labware::frame::pose([0.3, -0.4, 1.1], axis_angle([0.0, 0.0, 1.0], 0.7)),
+        );
+        let params = Bindings::new();
+        let lab = Lab {
+            items: vec![("tube", tube_m, &t), ("pipette", pipette_m, &p)],
+            params: &params,
+        };
+        let onto = Target::Bring {
+            carried: "pipette".into(),
+            from: "opening".into(),
+            labware: "tube".into(),
+            to: "mouth".into(),
+            above: 0.03,
+        };
+        let tcp = pipette_m.affordance("grasp", &p).unwrap().pose;
+        let motions = [Motion::Reach {
+            target: onto.clone(),
+        }];
+        let frame = StepFrame::new(&motions, &lab, &tcp, None, 0.0, 0.0).unwrap();
+        let opening_in_tool = tcp.inverse() * p.pose;
+        let mouth = tube_m
+            .affordance("mouth", &t)
+            .unwrap()
+            .pose
+            .translation
+            .vector;
+        let brought = |f: &StepFrame| f.pose_toward(&onto, &lab, &tcp).unwrap() * opening_in_tool;
+        let here = brought(&frame);
+        let turned = brought(&frame.seat_turned(0.5).unwrap());
+        for at in [here, turned] {
+            let off = at.translation.vector - mouth;
+            assert!(
+                off.xy().norm() < 1e-9 && (off.z - 0.03).abs() < 1e-9,
+                "{off:?}"
+            );
+            // The pipette upright: its opening points down.
+            assert!((at.rotation * Vector3::z() - Vector3::z()).norm() < 1e-9);
+        }
+        // The heading it had (turned 0.7 about the vertical), then 0.5 about the mouth's axis,
+        // which points down the tube: clockwise seen from above.
+        let heading = |r: &Rot| {
+            let x = r * Vector3::x();
+            x.y.atan2(x.x)
+        };
+        assert!(
+            (heading(&here.rotation) - 0.7).abs() < 1e-9,
+            "{}",
+            heading(&here.rotation)
+        );
+        assert!(
+            (heading(&turned.rotation) - 0.2).abs() < 1e-9,
+            "{}",
+            heading(&turned.rotation)
+        );
     }
 
     /// A dial is turned from its live angle to the target's notch in as few equal grips as the

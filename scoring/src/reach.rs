@@ -22,9 +22,11 @@
 //! [`margins`] gives each step's reach margin for `autobio describe`: how far its targets could
 //! move away from the robot and still be reached.
 //!
-//! A held tool brought onto an opening (`aspirate`, `dispense`: a pipette's tip over a tube's
-//! mouth and under its surface) is solved as the tool sits in the hand at the start, at any
-//! heading about the opening's axis. It does not check hand-overs or a seat for an item
+//! A held tool brought onto a round opening (`aspirate`, `dispense`: a pipette's tip over a
+//! tube's mouth and under its surface) is solved as the tool sits in the hand at the start, at
+//! the headings about the opening's axis the expert tries (twelve, 30 degrees apart); onto an
+//! opening that is not round, or a container another robot holds (the two-arm aspirate's
+//! lifted tube), it is not checked. It does not check hand-overs or a seat for an item
 //! another robot picked, the free-space
 //! paths between targets (the expert routes those, `crate::route`), the straight lines between
 //! checked poses, or a chain's later stages, and it skips a step acting on an item an earlier
@@ -588,7 +590,8 @@ fn aims(
                     continue;
                 }
                 seen.push(target);
-                let grasps: Vec<(Pose, Vec<Pose>)> = BRING_TURNS
+                // The headings the expert tries where its first is blocked.
+                let grasps: Vec<(Pose, Vec<Pose>)> = crate::expert::GRASP_TURNS
                     .iter()
                     .filter_map(|deg| frame.seat_turned(deg.to_radians()))
                     .filter_map(|f| f.pose_toward(target, lab, &tcp).ok())
@@ -676,12 +679,6 @@ fn aims(
     }
     out
 }
-
-/// Headings (deg) about an opening's axis at which a held tool's place over it is tried: the
-/// expert's own, then 30 degrees more each way (as it tries them where the first is blocked).
-const BRING_TURNS: [f64; 12] = [
-    0.0, 30.0, -30.0, 60.0, -60.0, 90.0, -90.0, 120.0, -120.0, 150.0, -150.0, 180.0,
-];
 
 /// The tool poses of a step's `Follow` motions in order, from its grasp at `from` with `frame`,
 /// each from where the one before leaves the labware's joints (`states` as the grip takes it).

@@ -10,6 +10,7 @@
 //! has reached its stage. The robots with nothing to do hold their targets.
 
 mod motion;
+pub(crate) use motion::GRASP_TURNS;
 
 use crate::policy::{Observation, PlanFailure, Policy, PolicyError, StageEvent};
 use compiler::motion::{Motion, MotionStep};

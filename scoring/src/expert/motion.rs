@@ -447,9 +447,10 @@ impl ExpertPolicy {
     }
 }
 
-/// Grasps about a round part's axis tried for a step that turns it: the step's own, then turned
-/// by 30 degrees more each way, up to half a turn.
-const GRASP_TURNS: [f64; 12] = [
+/// Grasps about a round part's axis tried for a step that turns it, or whose first choice is
+/// blocked, and headings over a seat or an opening tried where the first is (the reach check
+/// tries the same): the step's own, then turned by 30 degrees more each way, up to half a turn.
+pub(crate) const GRASP_TURNS: [f64; 12] = [
     0.0, 30.0, -30.0, 60.0, -60.0, 90.0, -90.0, 120.0, -120.0, 150.0, -150.0, 180.0,
 ];
 
