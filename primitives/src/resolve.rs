@@ -1165,41 +1165,26 @@ mod tests {
         );
         let motions = [Motion::Reach { target: grasp }];
         let frame = StepFrame::new(&motions, &lab, &tool, None, 0.0, 0.0).unwrap();
-        let grip = |f: &StepFrame| {
+        // The grasp's approach is `approach`; its fingers close level.
+        let grips = |f: &StepFrame, approach: Vector3<f64>| {
             let end = *f.poses(&motions[0], &lab, &tool).unwrap().last().unwrap();
-            (end.rotation * Vector3::z(), end.rotation * Vector3::x())
+            let (z, x) = (end.rotation * Vector3::z(), end.rotation * Vector3::x());
+            assert!(
+                (z - approach).norm() < 1e-9,
+                "approach {z:?}, not {approach:?}"
+            );
+            assert!(x.z.abs() < 1e-9, "fingers close along {x:?}");
         };
         let (down_c, down_s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
-        // From +y toward the axis, 30 degrees below the level; the fingers close level.
-        let (z, x) = grip(&frame);
-        assert!(
-            (z - Vector3::new(0.0, -down_c, -down_s)).norm() < 1e-9,
-            "approach {z:?}"
-        );
-        assert!(x.z.abs() < 1e-9, "fingers close along {x:?}");
-        // A quarter turn anticlockwise about the tube's axis (seen from above): from -x.
-        let (z, x) = grip(
-            &frame
-                .turned_about_axis(std::f64::consts::FRAC_PI_2)
-                .unwrap(),
-        );
-        assert!(
-            (z - Vector3::new(down_c, 0.0, -down_s)).norm() < 1e-9,
-            "approach {z:?}"
-        );
-        assert!(x.z.abs() < 1e-9, "fingers close along {x:?}");
-        // The other grasp (the fingers swapped) turned the same way: the same approach.
+        // From +y toward the axis, 30 degrees below the level.
+        grips(&frame, Vector3::new(0.0, -down_c, -down_s));
+        // A quarter turn anticlockwise about the tube's axis (seen from above): from -x; the
+        // other grasp (the fingers swapped) turned the same way comes the same way.
+        let quarter = std::f64::consts::FRAC_PI_2;
+        let from_minus_x = Vector3::new(down_c, 0.0, -down_s);
+        grips(&frame.turned_about_axis(quarter).unwrap(), from_minus_x);
         let other = frame.other_grasp().unwrap();
-        let (z, x) = grip(
-            &other
-                .turned_about_axis(std::f64::consts::FRAC_PI_2)
-                .unwrap(),
-        );
-        assert!(
-            (z - Vector3::new(down_c, 0.0, -down_s)).norm() < 1e-9,
-            "approach {z:?}"
-        );
-        assert!(x.z.abs() < 1e-9, "fingers close along {x:?}");
+        grips(&other.turned_about_axis(quarter).unwrap(), from_minus_x);
         // A pick neither seats a carried item nor brings a tool onto an opening: it has no
         // heading over a target to turn.
         assert!(frame.seat_turned(0.5).is_none());
