@@ -196,7 +196,7 @@ fn scene_figures(task: &compiler::Task) -> Result<f64> {
         resume: false,
         ..Default::default()
     };
-    let report = scoring::evaluate(task, &opts, |_| {})?;
+    let report = scoring::eval::evaluate(task, &opts, |_| {})?;
     let sim: f64 = report.episodes.iter().map(|e| e.sim_time_s).sum();
     outln!(
         "expert   episodes       {:>10.1} episodes/min ({n} episodes, {:.1} s simulated, {:.0}x real time, {} successful)",
@@ -524,14 +524,14 @@ fn front_end_figures() -> Result<()> {
 /// Expert episodes/s with one worker and with two; then a model in the loop.
 fn harness_figures(task: &compiler::Task) -> Result<()> {
     let n = 24;
-    let rate = |workers: usize| -> Result<(f64, scoring::EvalReport)> {
+    let rate = |workers: usize| -> Result<(f64, results::run::EvalReport)> {
         let opts = scoring::eval::EvalOptions {
             episodes: n,
             workers,
             ..Default::default()
         };
         let t = Instant::now();
-        let report = scoring::evaluate(task, &opts, |_| {})?;
+        let report = scoring::eval::evaluate(task, &opts, |_| {})?;
         Ok((n as f64 / t.elapsed().as_secs_f64(), report))
     };
     // A first, untimed run warms the caches and the scene's first build for both.
@@ -554,7 +554,7 @@ fn dataset_figures(task: &compiler::Task) -> Result<()> {
     let mut rates = Vec::new();
     for workers in [1, 2] {
         let _ = std::fs::remove_dir_all(&dir);
-        let opts = dataset::GenerateOptions {
+        let opts = demos::GenerateOptions {
             episodes: 2,
             seed: 0,
             out: dir.clone(),
@@ -567,7 +567,7 @@ fn dataset_figures(task: &compiler::Task) -> Result<()> {
             file_sizes: Default::default(),
         };
         let t = Instant::now();
-        let done = dataset::generate(std::slice::from_ref(task), &opts, |_| {})?;
+        let done = demos::generate(std::slice::from_ref(task), &opts, |_| {})?;
         rates.push(done.frames as f64 / t.elapsed().as_secs_f64());
     }
     let _ = std::fs::remove_dir_all(&dir);
@@ -603,8 +603,8 @@ fn model_in_the_loop(task: &compiler::Task) -> Result<()> {
         record: true,
         ..Default::default()
     };
-    let baseline = scoring::evaluate(task, &expert, |_| {})?;
-    let pi0 = scoring::profile::BUILT_IN[0].1;
+    let baseline = scoring::eval::evaluate(task, &expert, |_| {})?;
+    let pi0 = results::profile::BUILT_IN[0].1;
     for execute in [50usize, 1] {
         let mut server = std::process::Command::new(&python)
             .arg(root.join("tests/servers/openpi_server.py"))
@@ -625,19 +625,19 @@ fn model_in_the_loop(task: &compiler::Task) -> Result<()> {
         let text = pi0
             .replace("reset_frame = false", "reset_frame = true")
             .replace("execute = 50", &format!("execute = {execute}"));
-        let profile = scoring::profile::LoadedProfile::from_text(text, "bench".into())?;
+        let profile = results::profile::LoadedProfile::from_text(text, "bench".into())?;
         let opts = scoring::eval::EvalOptions {
             episodes: n,
             model: Some(scoring::eval::ModelSpec {
                 url,
-                wire: scoring::remote::Wire::Openpi,
+                wire: results::run::Wire::Openpi,
                 profile,
                 attempts: 4,
                 backoff_s: 0.25,
             }),
             ..Default::default()
         };
-        let report = scoring::evaluate(task, &opts, |_| {});
+        let report = scoring::eval::evaluate(task, &opts, |_| {});
         let _ = server.kill();
         let _ = server.wait();
         let report = report?;

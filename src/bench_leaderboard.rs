@@ -39,7 +39,7 @@ fn measure(task: &compiler::Task, dir: &Path) -> Result<()> {
         image_every: 0,
         ..Default::default()
     };
-    let report = scoring::evaluate(task, &opts, |_| {})?;
+    let report = scoring::eval::evaluate(task, &opts, |_| {})?;
     let bundle = dir.join("bench.tar");
     leaderboard::bundle::submit(
         std::slice::from_ref(&run),

@@ -79,7 +79,7 @@ pub enum DatasetCommand {
 
 /// `autobio export`.
 pub fn export_cli(a: &ExportArgs) -> Result<ExitCode> {
-    let opts = dataset::ExportOptions {
+    let opts = demos::ExportOptions {
         out: a.out.clone(),
         version: a.format.version(),
         codec: a.codec.codec(),
@@ -124,7 +124,7 @@ impl FileSizeArgs {
     }
 }
 
-fn summary(out: &Path, done: &dataset::Generated, verb: &str) {
+fn summary(out: &Path, done: &demos::Generated, verb: &str) {
     outln!(
         "{}: {} episodes in the dataset, {} {verb}, {} left out, {} frames",
         out.display(),
@@ -141,8 +141,8 @@ fn with_progress(
     verb: &str,
     out: &Path,
     job: impl FnOnce(
-        &mut dyn FnMut(dataset::Step<'_>),
-    ) -> Result<dataset::Generated, dataset::DatasetError>,
+        &mut dyn FnMut(demos::Step<'_>),
+    ) -> Result<demos::Generated, dataset::DatasetError>,
 ) -> Result<ExitCode> {
     let mut view = ProgressView::new(label);
     let done = job(&mut |s| view.step(&s));
@@ -151,15 +151,15 @@ fn with_progress(
     Ok(ExitCode::SUCCESS)
 }
 
-pub fn generate(tasks: &[compiler::Task], opts: &dataset::GenerateOptions) -> Result<ExitCode> {
+pub fn generate(tasks: &[compiler::Task], opts: &demos::GenerateOptions) -> Result<ExitCode> {
     with_progress("demo", "written", &opts.out, |progress| {
-        dataset::generate(tasks, opts, progress)
+        demos::generate(tasks, opts, progress)
     })
 }
 
-pub fn export(recordings: &[PathBuf], opts: &dataset::ExportOptions) -> Result<ExitCode> {
+pub fn export(recordings: &[PathBuf], opts: &demos::ExportOptions) -> Result<ExitCode> {
     with_progress("export", "exported", &opts.out, |progress| {
-        dataset::export(recordings, opts, progress)
+        demos::export(recordings, opts, progress)
     })
 }
 

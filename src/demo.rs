@@ -1,5 +1,5 @@
 //! `autobio demo`: scripted-expert demonstrations, as one MCAP recording per episode or as a
-//! LeRobot dataset (`dataset::generate`, printed by `crate::datasets`).
+//! LeRobot dataset (`demos::generate`, printed by `crate::datasets`).
 
 use crate::datasets::{CodecArg, FileSizeArgs};
 use crate::front::Front;
@@ -45,7 +45,7 @@ pub struct DemoArgs {
     /// Record only shard I of N (datasets): every N-th episode of the plan from position I,
     /// into its own --out; join the shards with `autobio dataset merge`
     #[arg(long, value_name = "I/N")]
-    shard: Option<scoring::eval::Shard>,
+    shard: Option<results::run::Shard>,
     #[command(flatten)]
     files: FileSizeArgs,
     /// Record a protocol whose success already holds at the start (W0001; refused otherwise)
@@ -70,7 +70,7 @@ pub fn run(front: &Front, a: &DemoArgs) -> Result<ExitCode> {
             .and_then(|t| t.cameras.first())
             .map_or([224, 224], |c| [c.width as usize, c.height as usize])
     });
-    let opts = dataset::GenerateOptions {
+    let opts = demos::GenerateOptions {
         episodes: a.episodes,
         seed: a.seed,
         out: a.out.clone(),
@@ -100,7 +100,7 @@ fn mcap(tasks: &[compiler::Task], a: &DemoArgs) -> Result<ExitCode> {
             resume: a.resume,
             ..Default::default()
         };
-        let report = scoring::evaluate(task, &opts, |p| {
+        let report = scoring::eval::evaluate(task, &opts, |p| {
             let e = p.result;
             outln!(
                 "seed {:>4}  {}  {:.1} s  {}",

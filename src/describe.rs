@@ -47,7 +47,7 @@ pub fn compile(front: &Front, a: &CompileArgs) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// Each step's reach margin in seed 0's layout (`scoring::reach::margins`), as the sheet's last
+/// Each step's reach margin in seed 0's layout (`expert::reach::margins`), as the sheet's last
 /// section.
 fn reach_margins(task: &compiler::Task) -> String {
     use std::fmt::Write;
@@ -59,7 +59,7 @@ fn reach_margins(task: &compiler::Task) -> String {
         );
         return w;
     }
-    let margins = scoring::reach::margins(task);
+    let margins = expert::reach::margins(task);
     let _ = writeln!(
         w,
         "\nreach in seed 0's layout (how far each step's targets could move away from its robot and still be reached)"
@@ -70,7 +70,7 @@ fn reach_margins(task: &compiler::Task) -> String {
             None => "not checked (no target of its own, or one an earlier step moved)".to_string(),
             Some(m) => match m.margin {
                 None => "out of reach (E0036: see `autobio check`)".to_string(),
-                Some(d) if d >= scoring::reach::MARGIN_MAX - 1e-9 => {
+                Some(d) if d >= expert::reach::MARGIN_MAX - 1e-9 => {
                     format!("at least {:.0} cm", d * 100.0)
                 }
                 Some(d) => format!("{:.0} cm", d * 100.0),

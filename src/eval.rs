@@ -1,6 +1,6 @@
 //! `autobio eval` (a policy or a model server on protocols: a progress line per task, then the
 //! results tables) and `autobio results merge` (shards' run records joined). The work is
-//! `scoring::evaluate` and `results::run::merge`; the tables are `leaderboard::table`'s.
+//! `scoring::eval::evaluate` and `results::run::merge`; the tables are `leaderboard::table`'s.
 
 use crate::front::Front;
 use crate::progress;
@@ -50,7 +50,7 @@ pub struct EvalArgs {
     model: Option<String>,
     /// The protocol the model server speaks: `openpi` or `vla-eval`
     #[arg(long, default_value = "openpi", requires = "model")]
-    wire: scoring::remote::Wire,
+    wire: results::run::Wire,
     /// How observations and actions map onto the model: `pi0`, `rdt` or a profile file
     #[arg(long, default_value = "pi0", requires = "model")]
     profile: String,
@@ -68,7 +68,7 @@ pub struct EvalArgs {
     /// Run only share I of N of the episodes (0-based), into its own --out; join the shards
     /// with `autobio results merge`
     #[arg(long, value_name = "I/N", requires = "out")]
-    shard: Option<scoring::eval::Shard>,
+    shard: Option<results::run::Shard>,
     /// Run a protocol whose success already holds at the start (W0001; refused otherwise: a
     /// robot that does nothing would pass it)
     #[arg(long)]
@@ -93,7 +93,7 @@ pub fn eval(front: &Front, a: &EvalArgs) -> Result<ExitCode> {
         Some(url) => Some(scoring::eval::ModelSpec {
             url: url.clone(),
             wire: a.wire,
-            profile: scoring::profile::LoadedProfile::load(&a.profile)?,
+            profile: results::profile::LoadedProfile::load(&a.profile)?,
             attempts: a.connect_attempts.max(1),
             backoff_s: 0.25,
         }),
@@ -152,7 +152,7 @@ pub fn eval(front: &Front, a: &EvalArgs) -> Result<ExitCode> {
             );
         }
         let mut view = progress::ProgressView::for_task(&task);
-        let report = scoring::evaluate(&task, &opts, |p| view.update(p));
+        let report = scoring::eval::evaluate(&task, &opts, |p| view.update(p));
         view.finish();
         let report = report?;
         if report.policy == "expert" {
@@ -173,7 +173,7 @@ pub fn eval(front: &Front, a: &EvalArgs) -> Result<ExitCode> {
 
 /// Says which stages' time limits the expert's run found tight (`scoring::stage_time`): an author
 /// validating a protocol or chain with the expert learns it before a model is held to them.
-fn warn_tight_stages(task: &compiler::Task, episodes: &[scoring::EpisodeResult]) {
+fn warn_tight_stages(task: &compiler::Task, episodes: &[results::EpisodeResult]) {
     for t in scoring::stage_time::tight_stages(task, episodes) {
         let ran_out = match t.ran_out {
             0 => String::new(),
@@ -236,7 +236,7 @@ fn suite_run(file: &std::path::Path, out: &std::path::Path) -> Result<results::s
 pub fn results(c: &ResultsCommand) -> Result<ExitCode> {
     match c {
         ResultsCommand::Merge { shards, out } => {
-            let rows = scoring::eval::merge(shards, out)?;
+            let rows = results::run::merge(shards, out)?;
             out!("{}", leaderboard::results_table(&rows));
             out!("{}", leaderboard::runs_table(&rows));
             for r in &rows {

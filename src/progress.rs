@@ -80,7 +80,7 @@ impl ProgressView {
     }
 
     /// One episode written to a dataset, or left out.
-    pub fn step(&mut self, s: &dataset::Step<'_>) {
+    pub fn step(&mut self, s: &demos::Step<'_>) {
         self.left_out += usize::from(s.result.is_err());
         let what = match s.result {
             Ok(frames) => format!("{frames} frames"),

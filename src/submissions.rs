@@ -50,7 +50,7 @@ pub enum LeaderboardCommand {
         model: String,
         /// The protocol the model server speaks: `openpi` or `vla-eval`
         #[arg(long, default_value = "openpi")]
-        wire: scoring::remote::Wire,
+        wire: results::run::Wire,
         /// The model's profile (`pi0`, `rdt` or a file): use the one the bundle's runs used
         #[arg(long, default_value = "pi0")]
         profile: String,
@@ -218,7 +218,7 @@ fn audit(c: &LeaderboardCommand) -> Result<ExitCode> {
     let spec = scoring::eval::ModelSpec {
         url: model.clone(),
         wire: *wire,
-        profile: scoring::profile::LoadedProfile::load(profile)?,
+        profile: results::profile::LoadedProfile::load(profile)?,
         attempts: 4,
         backoff_s: 0.25,
     };
@@ -235,7 +235,7 @@ fn audit(c: &LeaderboardCommand) -> Result<ExitCode> {
             workers: *workers as usize,
             ..Default::default()
         };
-        let report = scoring::evaluate(&task, &opts, |_| {})?;
+        let report = scoring::eval::evaluate(&task, &opts, |_| {})?;
         let audited = leaderboard::audit::Count {
             successes: report.summary.successes as u64,
             episodes: report.summary.episodes as u64,

@@ -1,5 +1,5 @@
 //! `autobio synth`: random long-horizon protocols from the shipped protocols' steps, each one
-//! proven and reach-checked, written as protocol files (`scoring::synth`). Prints each file as it
+//! proven and reach-checked, written as protocol files (the `synth` crate). Prints each file as it
 //! is written, then what was found and dropped.
 
 use anyhow::{Result, bail};
@@ -51,7 +51,7 @@ pub fn run(a: &SynthArgs) -> Result<ExitCode> {
     if a.out.is_file() {
         bail!("--out {}: a file, not a folder", a.out.display());
     }
-    let opts = scoring::synth::Options {
+    let opts = synth::Options {
         from: a.from.clone(),
         steps: a.steps.clone(),
         seed: a.seed,
@@ -59,7 +59,7 @@ pub fn run(a: &SynthArgs) -> Result<ExitCode> {
         out: a.out.clone(),
         workers: a.workers as usize,
     };
-    let report = scoring::synth::synthesize(&opts, &|w| {
+    let report = synth::synthesize(&opts, &|w| {
         errln!(
             "wrote {} ({} steps on {}, candidate {})",
             w.path.display(),

@@ -13,7 +13,8 @@
 //! about 17 minutes).
 
 use anyhow::{Context, Result};
-use scoring::eval::{EvalOptions, EvalReport, evaluate};
+use results::run::EvalReport;
+use scoring::eval::{EvalOptions, evaluate};
 use scoring::policies::PolicySpec;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -384,7 +385,7 @@ fn render(opts: &Options, rows: &[Row], not_run: &[(String, String)]) -> String 
                 .summary
                 .outcomes
                 .iter()
-                .filter(|(o, _)| **o != scoring::Outcome::Success)
+                .filter(|(o, _)| **o != results::Outcome::Success)
                 .map(|(o, n)| {
                     let name = serde_json::to_value(o).unwrap_or_default();
                     format!("{} {n}", name.as_str().unwrap_or("?"))

@@ -8,8 +8,10 @@
 mod common;
 
 use common::{compile, predicate, run, run_with};
-use scoring::expert::ExpertPolicy;
-use scoring::{Observation, Policy, PolicyError};
+use expert::ExpertPolicy;
+use policy::Observation;
+use policy::Policy;
+use policy::PolicyError;
 
 #[test]
 fn the_aloha_layout_names_its_joints_and_its_gripper_in_metres() {
@@ -128,7 +130,7 @@ fn run_stopped(
     t: &compiler::Task,
     seed: u64,
     stop: fn(f64, bool) -> bool,
-) -> scoring::EpisodeResult {
+) -> results::EpisodeResult {
     let tube = t.labware_index("tube").unwrap();
     let model = t.labware[tube].params.clone();
     run_with(t, seed, &Default::default(), |t, s, i| {

@@ -7,7 +7,7 @@ mod common;
 
 use common::{compile, compile_edited, run, scene, spread};
 use runtime::render::Cameras;
-use scoring::Judge;
+use results::verdict::Judge;
 
 const CLOSE: &str = "protocols/centrifuge_mini/close_lid.toml";
 const OPEN: &str = "protocols/centrifuge_mini/open_lid.toml";
@@ -70,7 +70,7 @@ fn the_closed_check_needs_the_lid_shut() {
     });
     let r = run(&task, 21, "expert");
     assert!(!r.success);
-    assert_eq!(r.outcome, scoring::Outcome::TimeLimit);
+    assert_eq!(r.outcome, results::Outcome::TimeLimit);
     let p = &r.verdict.predicates()[0];
     assert!((p.value - p.target).abs() > 0.1, "{p:?}");
 }

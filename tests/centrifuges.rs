@@ -14,7 +14,7 @@ mod common;
 use common::{compile, run, scene, spread};
 use mujoco_rs::prelude::*;
 use runtime::render::Cameras;
-use scoring::Judge;
+use results::verdict::Judge;
 
 const C5430: &str = "protocols/centrifuge_5430/close_lid.toml";
 const C5910: &str = "protocols/centrifuge_5910/close_lid.toml";

@@ -4,7 +4,7 @@
 //! / `check --json` work as processes.
 
 use scoring::episode::{EpisodeOptions, run_episode};
-use scoring::expert::ExpertPolicy;
+use expert::ExpertPolicy;
 use std::path::Path;
 use std::process::Command;
 use std::sync::Arc;
@@ -15,7 +15,7 @@ fn compile(path: &str) -> compiler::Task {
     task.unwrap_or_else(|| panic!("{path}: {diags:#?}"))
 }
 
-fn expert(task: &compiler::Task, seed: u64) -> scoring::EpisodeResult {
+fn expert(task: &compiler::Task, seed: u64) -> results::EpisodeResult {
     let instance = task.sample(seed);
     let scene = Arc::new(runtime::Scene::build(task, &instance).unwrap());
     let mut policy = ExpertPolicy::new(task, &scene, &instance).unwrap();

@@ -51,7 +51,7 @@ fn near_measures_the_distance_from_the_live_pose() {
     // The expert carries the tube to the target slot; the recording has its pose at every step.
     let recorded = transfer("tube in target.{row}{col}", false);
     let path = scratch("near").join("carry.mcap");
-    let opts = scoring::EpisodeOptions {
+    let opts = scoring::episode::EpisodeOptions {
         record: Some(path.clone()),
         image_every: 0,
         ..Default::default()
@@ -81,7 +81,7 @@ fn near_measures_the_distance_from_the_live_pose() {
         // The moment it is near counts here: the recording ends as soon as the tube has
         // settled in its slot, before it has stood still a settle time near its last pose.
         task.stages[0].settle_s = 0.0;
-        scoring::Judge::replay(&task, &params, &rec.labware_series)
+        results::verdict::Judge::replay(&task, &params, &rec.labware_series)
     };
     // Near where it ends: not at the start, only once carried there.
     let v = judge(end);

@@ -1,13 +1,16 @@
 //! The episode's failure paths on real MuJoCo: a policy error, an empty action chunk, an action of
 //! the wrong length and a non-finite action each end the episode as a failure with its reason, at
 //! the step where it happened; an unstable simulation ends the control step with its reason (the
-//! same error path in the episode loop as the non-finite action). And `scoring::evaluate` writes each
+//! same error path in the episode loop as the non-finite action). And `scoring::eval::evaluate` writes each
 //! finished episode to the journal before the next one starts, with results JSON that carries its
 //! schema version.
 
 mod common;
 
-use scoring::{HoldPolicy, Observation, Policy, PolicyError};
+use scoring::policies::HoldPolicy;
+use policy::Observation;
+use policy::Policy;
+use policy::PolicyError;
 
 fn task() -> compiler::Task {
     common::compile("protocols/thermal_cycler/close_lid.toml")
@@ -33,13 +36,13 @@ impl<F: FnMut(&Observation) -> Result<Vec<Vec<f64>>, PolicyError>> Policy for Fa
     }
 }
 
-fn run(policy: impl Policy + 'static) -> scoring::EpisodeResult {
+fn run(policy: impl Policy + 'static) -> results::EpisodeResult {
     common::run_with(&task(), 0, &Default::default(), |_, _, _| Box::new(policy))
 }
 
-fn assert_failed_at(r: &scoring::EpisodeResult, steps: u64, reason: &str) {
+fn assert_failed_at(r: &results::EpisodeResult, steps: u64, reason: &str) {
     assert!(!r.success && !r.verdict.success, "{r:?}");
-    assert_eq!(r.outcome, scoring::Outcome::PolicyError, "{r:?}");
+    assert_eq!(r.outcome, results::Outcome::PolicyError, "{r:?}");
     assert_eq!(r.control_steps, steps, "ended at the failing step");
     let error = r.error.as_deref().expect("a reason");
     assert!(error.contains(reason), "{error}");
@@ -126,13 +129,13 @@ fn the_journal_has_each_episode_before_the_next_starts() {
     };
     let journal = dir.join(format!("{}.journal.jsonl", t.id));
     let mut seen = Vec::new();
-    let report = scoring::evaluate(&t, &opts, |p| {
+    let report = scoring::eval::evaluate(&t, &opts, |p| {
         let e = p.result;
         // Called after the journal write and before the next episode.
         let text = std::fs::read_to_string(&journal).unwrap();
         let lines: Vec<&str> = text.lines().collect();
         assert_eq!(lines.len(), seen.len() + 1);
-        let last: scoring::EpisodeResult = serde_json::from_str(lines[lines.len() - 1]).unwrap();
+        let last: results::EpisodeResult = serde_json::from_str(lines[lines.len() - 1]).unwrap();
         assert_eq!(&last, e);
         seen.push(e.seed);
     })
@@ -145,7 +148,7 @@ fn the_journal_has_each_episode_before_the_next_starts() {
     .unwrap();
     assert_eq!(
         results["schema_version"].as_u64(),
-        Some(u64::from(scoring::RESULTS_SCHEMA_VERSION))
+        Some(u64::from(results::run::RESULTS_SCHEMA_VERSION))
     );
     assert_eq!(results["policy"], "hold");
     assert_eq!(results["episodes"].as_array().unwrap().len(), 3);
@@ -177,10 +180,10 @@ fn an_unstable_simulation_is_an_unstable_episode_in_the_results() {
         out: Some(dir.clone()),
         ..Default::default()
     };
-    let report = scoring::evaluate(&t, &opts, |_| {}).unwrap();
+    let report = scoring::eval::evaluate(&t, &opts, |_| {}).unwrap();
     assert_eq!(report.episodes.len(), 2);
     for e in &report.episodes {
-        assert_eq!(e.outcome, scoring::Outcome::Unstable, "{e:?}");
+        assert_eq!(e.outcome, results::Outcome::Unstable, "{e:?}");
         assert!(!e.success && e.verdict.score == 0.0);
         let error = e.error.as_deref().unwrap();
         assert!(

@@ -3,8 +3,9 @@
 //! lid open fails, and a recording re-scores offline to the same verdict.
 
 use scoring::episode::{EpisodeOptions, run_episode};
-use scoring::expert::ExpertPolicy;
-use scoring::{HoldPolicy, Judge};
+use expert::ExpertPolicy;
+use scoring::policies::HoldPolicy;
+use results::verdict::Judge;
 use std::path::Path;
 use std::sync::Arc;
 
@@ -21,7 +22,7 @@ fn expert_episode(
     task: &compiler::Task,
     seed: u64,
     opts: &EpisodeOptions,
-) -> scoring::EpisodeResult {
+) -> results::EpisodeResult {
     let instance = task.sample(seed);
     let scene = Arc::new(runtime::Scene::build(task, &instance).unwrap());
     let mut expert = ExpertPolicy::new(task, &scene, &instance).unwrap();

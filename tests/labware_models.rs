@@ -77,7 +77,7 @@ fn every_tube_kind_stands_capped_in_its_rack() {
         assert!(m.holds, "{tube} in {rack}: {m:?} at {:?}", end[ti].pose);
         assert_eq!(tube_model.readout(&end[ti])["cap"], "on", "{tube}");
         // The judge: not in A2, where the task wants it; in B1, where it stands.
-        let mut judge = scoring::Judge::new(&task, &instance.params, &start);
+        let mut judge = results::verdict::Judge::new(&task, &instance.params, &start);
         // The end state judged as a state: reached at once and held for the settle time.
         judge.update(0.02, &end);
         judge.update(0.02 + task.stages[0].settle_s, &end);
@@ -90,7 +90,7 @@ fn every_tube_kind_stands_capped_in_its_rack() {
         {
             *location = "rack.B1".into();
         }
-        let mut judge = scoring::Judge::new(&at_b1, &instance.params, &start);
+        let mut judge = results::verdict::Judge::new(&at_b1, &instance.params, &start);
         assert!(
             !judge.update(0.02, &end),
             "{tube}: a moment in B1 is not yet a success"

@@ -101,7 +101,7 @@ fn over_an_expert_episode_the_levels_differ_by_the_documented_psnr() {
     let task = compile("protocols/thermal_cycler/close_lid.toml");
     let dir = common::scratch("lod-episode");
     let path = dir.join("close_lid.mcap");
-    let opts = scoring::EpisodeOptions {
+    let opts = scoring::episode::EpisodeOptions {
         record: Some(path.clone()),
         ..Default::default()
     };

@@ -4,7 +4,7 @@
 
 mod common;
 
-use scoring::policy::{Needs, Observation, Policy, PolicyError};
+use policy::{Needs, Observation, Policy, PolicyError};
 
 /// One query's frames: every camera's current image and earlier image (RGB bytes).
 type Frames = (Vec<Vec<u8>>, Vec<Vec<u8>>);
@@ -48,12 +48,12 @@ fn queries(chunk: usize, history: u32) -> Vec<Frames> {
     let dir = common::scratch(&format!("history-{chunk}-{history}"));
     let recording = dir.join("expert.mcap");
     let mut expert = scoring::policies::make("expert", &task, &scene, &instance).unwrap();
-    let opts = scoring::EpisodeOptions {
+    let opts = scoring::episode::EpisodeOptions {
         record: Some(recording.clone()),
         image_every: 0,
         ..Default::default()
     };
-    scoring::run_episode(&task, &scene, &instance, expert.as_mut(), &opts).unwrap();
+    scoring::episode::run_episode(&task, &scene, &instance, expert.as_mut(), &opts).unwrap();
     let mut p = Chunked {
         inner: Box::new(
             scoring::policies::ReplayPolicy::new(&recording, &task, &instance).unwrap(),
@@ -63,7 +63,7 @@ fn queries(chunk: usize, history: u32) -> Vec<Frames> {
         history,
         seen: Vec::new(),
     };
-    let r = scoring::run_episode(&task, &scene, &instance, &mut p, &Default::default()).unwrap();
+    let r = scoring::episode::run_episode(&task, &scene, &instance, &mut p, &Default::default()).unwrap();
     assert!(r.success, "{r:?}");
     p.seen
 }

@@ -415,7 +415,7 @@ fn the_expert_transfers_the_set_volume_and_every_step_conserves_it() {
     let volume: f64 = params["volume"].parse().unwrap();
     let fill: f64 = params["fill"].parse().unwrap();
     let path = common::scratch("pipette").join("transfer.mcap");
-    let opts = scoring::EpisodeOptions {
+    let opts = scoring::episode::EpisodeOptions {
         record: Some(path.clone()),
         image_every: 0,
         ..Default::default()
@@ -476,7 +476,7 @@ fn the_expert_transfers_the_set_volume_and_every_step_conserves_it() {
         )
     });
     let path = common::scratch("pipette").join("wrong.mcap");
-    let opts = scoring::EpisodeOptions {
+    let opts = scoring::episode::EpisodeOptions {
         record: Some(path.clone()),
         image_every: 0,
         ..Default::default()
@@ -486,7 +486,7 @@ fn the_expert_transfers_the_set_volume_and_every_step_conserves_it() {
     });
     assert!(r.error.is_none(), "{:?}", r.error);
     let rec = runtime::record::read_recording(&path).unwrap();
-    let v = scoring::Judge::replay(&task, &params, &rec.labware_series);
+    let v = results::verdict::Judge::replay(&task, &params, &rec.labware_series);
     assert!(!v.success);
     let p = v
         .predicates()

@@ -13,7 +13,10 @@ use primitives::ik::solve_ik;
 use runtime::clearance::{Clearance, KEEP};
 use runtime::kinematics::ArmKinematics;
 use runtime::scene::Owner;
-use scoring::{Observation, Policy, PolicyError, StageEvent};
+use policy::Observation;
+use policy::Policy;
+use policy::PolicyError;
+use policy::StageEvent;
 use std::sync::{Arc, Mutex};
 
 const ROTOR: &str = "protocols/centrifuge/insert_symmetric.toml";
@@ -418,7 +421,7 @@ fn the_expert_goes_around_the_housing_into_the_rotor_with_rrt_connect() {
     let seen = Arc::new(Mutex::new(Vec::new()));
     let watched = seen.clone();
     // The expert reports its events to the recorder.
-    let opts = scoring::EpisodeOptions {
+    let opts = scoring::episode::EpisodeOptions {
         record: Some(common::scratch("planning").join("rotor.mcap")),
         image_every: 0,
         ..Default::default()

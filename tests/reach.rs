@@ -1,4 +1,4 @@
-//! Reach before any episode (`scoring::reach`, E0036), on the real robot models and MuJoCo: every
+//! Reach before any episode (`expert::reach`, E0036), on the real robot models and MuJoCo: every
 //! shipped protocol's steps are reached; a robot stood too far from its work, a slot placed out of
 //! its reach, or a lid's arc it gives out along, gets the error at the step, and the base its hint
 //! names makes the protocol check clean (and the expert win it, for the grasp, slot and press
@@ -28,7 +28,7 @@ fn check_as(path: &str, source: &str, scratch: &str) -> compiler::Checked {
     let file = common::scratch(scratch).join(Path::new(path).file_name().unwrap());
     std::fs::write(&file, source).unwrap();
     let mut c = compiler::check_file(&file, None).unwrap();
-    scoring::reach::check(&mut c);
+    expert::reach::check(&mut c);
     c
 }
 
@@ -73,7 +73,7 @@ fn every_shipped_protocol_reaches_its_targets_in_every_sampled_layout() {
     {
         for path in files {
             let mut c = compiler::check_file(&path, None).unwrap();
-            scoring::reach::check(&mut c);
+            expert::reach::check(&mut c);
             let errors: Vec<_> = c
                 .diagnostics
                 .iter()
@@ -209,7 +209,7 @@ fn a_lid_out_of_reach_is_found_along_its_arc_and_a_hinted_base_checks_clean() {
     let check = |base: &str| {
         std::fs::write(dir.join("riser.toml"), riser.replacen(stands, base, 1)).unwrap();
         let mut c = compiler::check_file(&dir.join("open_lid.toml"), None).unwrap();
-        scoring::reach::check(&mut c);
+        expert::reach::check(&mut c);
         c
     };
     let low = check("base = { pos_m = [0.4, 0.25, 1.0], yaw_deg = -90 }");
@@ -253,7 +253,7 @@ fn a_slot_out_of_reach_in_some_layouts_is_a_warning_naming_the_seeds_that_fail()
         "partial",
     );
     let task = c.task.as_ref().expect("a warning, not an error");
-    let seeds = scoring::reach::partly_unreachable(task);
+    let seeds = expert::reach::partly_unreachable(task);
     assert_eq!(seeds.get(&1), Some(&vec![4, 5]), "{seeds:?}");
     let w = c
         .diagnostics
@@ -291,7 +291,7 @@ fn a_steps_reach_margin_shrinks_as_its_robot_stands_back_and_is_none_out_of_reac
     // `describe`'s figure for step 2 (the lid lifted along its arc): the 5430's own layout has
     // its arc at the edge of the arm's reach.
     let margin = |y: f64| {
-        let m = scoring::reach::margins(&opening_from(y));
+        let m = expert::reach::margins(&opening_from(y));
         assert_eq!(m.len(), 2, "{m:?}");
         assert_eq!((m[1].step, m[1].robot.as_str()), (1, "arm"));
         m[1].margin
@@ -305,7 +305,7 @@ fn a_steps_reach_margin_shrinks_as_its_robot_stands_back_and_is_none_out_of_reac
     );
     assert_eq!(margin(0.6), None, "out of reach from 0.6 m");
     // And the step the arm reaches easily (the key on the panel) keeps room at any of these.
-    let key = scoring::reach::margins(&opening_from(0.6))[0]
+    let key = expert::reach::margins(&opening_from(0.6))[0]
         .margin
         .unwrap();
     assert!(key > 0.1, "{key}");
@@ -346,7 +346,7 @@ fn a_target_in_reach_only_past_a_joint_range_names_the_joint_and_a_lower_shelf_c
 fn the_corpus_hint_fixes(path: &str, code: dsl::Code, seeds: &[u64], tag: &str) -> String {
     let source = std::fs::read_to_string(path).unwrap();
     let mut c = compiler::check_file(Path::new(path), None).unwrap();
-    scoring::reach::check(&mut c);
+    expert::reach::check(&mut c);
     let (hint, hinted) = hint_of(&c, code);
     let line = source
         .lines()

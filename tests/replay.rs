@@ -10,7 +10,7 @@ use runtime::record::{RecordError, Recorder, proto, read_recording};
 mod common;
 
 use common::{compile, compile_edited, spread};
-use scoring::Judge;
+use results::verdict::Judge;
 use scoring::episode::EpisodeOptions;
 use std::path::PathBuf;
 
@@ -25,7 +25,7 @@ fn record_and_replay(
     expert: bool,
     image_every: u32,
     name: &str,
-) -> (scoring::EpisodeResult, scoring::Verdict, PathBuf) {
+) -> (results::EpisodeResult, results::verdict::Verdict, PathBuf) {
     let path = temp(name);
     let opts = EpisodeOptions {
         record: Some(path.clone()),
@@ -74,7 +74,7 @@ fn a_chain_replays_stage_by_stage_and_its_images_show_the_motion() {
     let task = compile("protocols/thermal_cycler/close_then_open.toml");
     let (live, replayed, path) = record_and_replay(&task, 2, true, 10, "chain.mcap");
     assert!(live.success, "{:?}", live.error);
-    assert_eq!(live.outcome, scoring::Outcome::Success);
+    assert_eq!(live.outcome, results::Outcome::Success);
     assert_eq!(replayed, live.verdict);
     assert_eq!(replayed.stages.len(), 2);
     // Scored apart from success: both stages count.
@@ -123,7 +123,7 @@ fn a_timed_out_episode_replays_to_its_failure() {
     task.stages[0].time_limit_s = 1.0;
     let (live, replayed, _) = record_and_replay(&task, 8, false, 0, "timeout.mcap");
     assert!(!live.success && live.error.is_none());
-    assert_eq!(live.outcome, scoring::Outcome::TimeLimit);
+    assert_eq!(live.outcome, results::Outcome::TimeLimit);
     assert!((live.sim_time_s - 1.0).abs() < 0.05);
     assert_eq!(replayed, live.verdict);
 }

@@ -59,8 +59,8 @@ fn journal_seeds(dir: &Path) -> Vec<u64> {
 fn a_run_resumes_only_with_matching_fingerprints_and_never_reruns_an_episode() {
     let task = common::compile(CLOSE);
     let dir = scratch("resume");
-    scoring::evaluate(&task, &opts(&dir, "hold", 2, false), |_| {}).unwrap();
-    let manifest: scoring::eval::Manifest = serde_json::from_str(
+    scoring::eval::evaluate(&task, &opts(&dir, "hold", 2, false), |_| {}).unwrap();
+    let manifest: results::run::Manifest = serde_json::from_str(
         &std::fs::read_to_string(dir.join("thermal_cycler.close_lid.manifest.json")).unwrap(),
     )
     .unwrap();
@@ -76,25 +76,25 @@ fn a_run_resumes_only_with_matching_fingerprints_and_never_reruns_an_episode() {
         (manifest.episodes, manifest.runs, manifest.shard),
         (2, 1, None)
     );
-    assert_eq!(manifest.git_commit, scoring::eval::GIT_COMMIT);
-    assert_eq!(manifest.conditions, scoring::eval::Conditions::of(&task));
+    assert_eq!(manifest.git_commit, results::run::GIT_COMMIT);
+    assert_eq!(manifest.conditions, results::run::Conditions::of(&task));
     assert_eq!(manifest.task_sha256.len(), 64);
     assert!(manifest.protocol_sha256.is_some());
 
     // Into the same folder without --resume: refused, nothing run.
-    let err = scoring::evaluate(&task, &opts(&dir, "hold", 2, false), |_| {})
+    let err = scoring::eval::evaluate(&task, &opts(&dir, "hold", 2, false), |_| {})
         .unwrap_err()
         .to_string();
     assert!(err.contains("continue it with --resume"), "{err}");
     // With another policy: the fingerprints differ.
-    let err = scoring::evaluate(&task, &opts(&dir, "expert", 4, true), |_| {})
+    let err = scoring::eval::evaluate(&task, &opts(&dir, "expert", 4, true), |_| {})
         .unwrap_err()
         .to_string();
     assert!(err.contains("measured under another policy;"), "{err}");
     // With an edited protocol: the compiled task differs.
     let mut edited = task.clone();
     edited.time_limit_s += 1.0;
-    let err = scoring::evaluate(&edited, &opts(&dir, "hold", 4, true), |_| {})
+    let err = scoring::eval::evaluate(&edited, &opts(&dir, "hold", 4, true), |_| {})
         .unwrap_err()
         .to_string();
     assert!(
@@ -105,7 +105,7 @@ fn a_run_resumes_only_with_matching_fingerprints_and_never_reruns_an_episode() {
 
     // Matching: only the episodes not yet run are run, and the report has them all.
     let mut ran = Vec::new();
-    let report = scoring::evaluate(&task, &opts(&dir, "hold", 4, true), |p| {
+    let report = scoring::eval::evaluate(&task, &opts(&dir, "hold", 4, true), |p| {
         ran.push(p.result.seed)
     })
     .unwrap();
@@ -114,7 +114,7 @@ fn a_run_resumes_only_with_matching_fingerprints_and_never_reruns_an_episode() {
     assert_eq!(journal_seeds(&dir), [30, 31, 32, 33]);
     // The resumed run is the run that was never interrupted, episode for episode (trajectory
     // hashes included) and in its summary, all but the measured times.
-    let whole = scoring::evaluate(
+    let whole = scoring::eval::evaluate(
         &task,
         &opts(&scratch("resume-whole"), "hold", 4, false),
         |_| {},
@@ -218,15 +218,15 @@ fn an_episode_whose_policy_cannot_be_made_fails_alone() {
     let recorded = scratch("recorded");
     let mut o = opts(&recorded, "expert", 1, false);
     o.record = true;
-    scoring::evaluate(&task, &o, |_| {}).unwrap();
+    scoring::eval::evaluate(&task, &o, |_| {}).unwrap();
     let policy = format!("replay:{}", recorded.display());
     let report =
-        scoring::evaluate(&task, &opts(&scratch("partial"), &policy, 2, false), |_| {}).unwrap();
+        scoring::eval::evaluate(&task, &opts(&scratch("partial"), &policy, 2, false), |_| {}).unwrap();
     let [first, second] = &report.episodes[..] else {
         panic!("{report:#?}")
     };
     assert!(first.success);
-    assert_eq!(second.outcome, scoring::Outcome::PolicyError);
+    assert_eq!(second.outcome, results::Outcome::PolicyError);
     let why = second.error.as_deref().unwrap();
     assert!(
         why.contains("seed31.mcap: cannot read the recording"),
@@ -244,7 +244,7 @@ fn a_cut_short_journal_resumes_and_a_garbled_one_is_refused() {
     let dir = scratch("cut-journal");
     let journal = dir.join("thermal_cycler.close_lid.journal.jsonl");
     let task = common::compile(CLOSE);
-    scoring::evaluate(&task, &opts(&dir, "hold", 3, false), |_| {}).unwrap();
+    scoring::eval::evaluate(&task, &opts(&dir, "hold", 3, false), |_| {}).unwrap();
     let whole = std::fs::read_to_string(&journal).unwrap();
     let lines: Vec<&str> = whole.lines().collect();
     assert_eq!(lines.len(), 3);
@@ -256,7 +256,7 @@ fn a_cut_short_journal_resumes_and_a_garbled_one_is_refused() {
         &lines[2][..lines[2].len() / 2]
     );
     std::fs::write(&journal, &cut).unwrap();
-    let report = scoring::evaluate(&task, &opts(&dir, "hold", 3, true), |_| {}).unwrap();
+    let report = scoring::eval::evaluate(&task, &opts(&dir, "hold", 3, true), |_| {}).unwrap();
     assert_eq!(report.episodes.len(), 3);
     assert_eq!(journal_seeds(&dir), [30, 31, 32]);
     let resumed = std::fs::read_to_string(&journal).unwrap();
@@ -270,7 +270,7 @@ fn a_cut_short_journal_resumes_and_a_garbled_one_is_refused() {
     // A whole line that is not an episode result.
     let garbled = format!("{}\n{{\"not\": \"an episode\"}}\n", lines[0]);
     std::fs::write(&journal, &garbled).unwrap();
-    let err = match scoring::evaluate(&task, &opts(&dir, "hold", 3, true), |_| {}) {
+    let err = match scoring::eval::evaluate(&task, &opts(&dir, "hold", 3, true), |_| {}) {
         Ok(_) => panic!("a garbled journal was resumed"),
         Err(e) => e.to_string(),
     };

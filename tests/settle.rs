@@ -5,7 +5,7 @@
 mod common;
 
 /// The judge over a lid-angle series: (time, lid angle) at the control period.
-fn judge(task: &compiler::Task, series: &[(f64, f64)]) -> scoring::Verdict {
+fn judge(task: &compiler::Task, series: &[(f64, f64)]) -> results::verdict::Verdict {
     let (instance, scene) = common::scene(task, 0);
     let ep = runtime::Episode::new(scene, task, &instance);
     let initial = ep.labware_state();
@@ -22,7 +22,7 @@ fn judge(task: &compiler::Task, series: &[(f64, f64)]) -> scoring::Verdict {
             (t, s)
         })
         .collect();
-    scoring::Judge::replay(task, &instance.params, &states)
+    results::verdict::Judge::replay(task, &instance.params, &states)
 }
 
 #[test]

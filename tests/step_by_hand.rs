@@ -7,7 +7,7 @@
 mod common;
 
 use runtime::{Env, EnvError, EnvOptions};
-use scoring::policy::{Observation, Policy, Privileged};
+use policy::{Observation, Policy, Privileged};
 use std::process::Command;
 
 /// One query of `policy` on the environment's state now (no images: the expert and hold need
@@ -96,7 +96,7 @@ fn stepping_by_hand_with_the_experts_actions_gives_evals_trajectory() {
 fn no_motion_is_truncated_at_the_time_limit_with_no_reward() {
     let task = common::compile("protocols/thermal_cycler/close_lid.toml");
     let mut env = Env::make(&task, 0, EnvOptions::default()).unwrap();
-    let mut hold = scoring::HoldPolicy;
+    let mut hold = scoring::policies::HoldPolicy;
     let end = run_to_end(&mut env, &mut hold);
     assert!(end.truncated && !end.terminated, "{end:?}");
     assert_eq!(end.reward, 0.0);

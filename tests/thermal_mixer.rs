@@ -13,7 +13,7 @@ use labware::thermal_mixer::Params;
 use labware::{LabwareState, Logic};
 use mujoco_rs::prelude::*;
 use runtime::render::{Cameras, Image};
-use scoring::Judge;
+use results::verdict::Judge;
 
 const TASK: &str = "protocols/thermal_mixer/set_parameters.toml";
 
@@ -35,7 +35,7 @@ fn the_expert_sets_all_three_values_and_hold_scores_nothing() {
 }
 
 /// The task's verdict on its first state with the panel showing `speed`, `temperature`, `time`.
-fn judged(seed: u64, shown: [f64; 3]) -> scoring::Verdict {
+fn judged(seed: u64, shown: [f64; 3]) -> results::verdict::Verdict {
     let task = compile(TASK);
     let (instance, scene) = scene(&task, seed);
     let ep = runtime::Episode::new(scene, &task, &instance);

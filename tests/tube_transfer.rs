@@ -5,7 +5,7 @@
 use labware::frame::position;
 use mujoco_rs::prelude::*;
 use scoring::episode::{EpisodeOptions, run_episode};
-use scoring::expert::ExpertPolicy;
+use expert::ExpertPolicy;
 use std::sync::Arc;
 
 fn task() -> compiler::Task {
@@ -14,7 +14,7 @@ fn task() -> compiler::Task {
     task.unwrap_or_else(|| panic!("{diags:#?}"))
 }
 
-fn expert(task: &compiler::Task, seed: u64, opts: &EpisodeOptions) -> scoring::EpisodeResult {
+fn expert(task: &compiler::Task, seed: u64, opts: &EpisodeOptions) -> results::EpisodeResult {
     let instance = task.sample(seed);
     let scene = Arc::new(runtime::Scene::build(task, &instance).unwrap());
     let mut policy = ExpertPolicy::new(task, &scene, &instance).unwrap();

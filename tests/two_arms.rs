@@ -4,7 +4,7 @@
 //! and the recording has one joint-state and one action channel per arm.
 
 use scoring::episode::{EpisodeOptions, run_episode};
-use scoring::expert::ExpertPolicy;
+use expert::ExpertPolicy;
 use std::sync::Arc;
 
 #[test]
@@ -132,21 +132,21 @@ fn steps_marked_together_move_both_arms_in_the_same_control_steps() {
         let mut env = runtime::Env::new(scene.clone(), task, &instance, Default::default());
         while !env.done() {
             let seen = env.observe();
-            let obs = scoring::Observation {
+            let obs = policy::Observation {
                 time: seen.time,
                 state: seen.state,
                 stage: seen.stage,
                 prompt: &seen.instruction,
                 images: &[],
                 previous: &[],
-                privileged: scoring::policy::Privileged {
+                privileged: policy::Privileged {
                     robots: seen.robots,
                     labware: seen.labware,
                     qpos: seen.qpos,
                 },
             };
-            let chunk = scoring::Policy::act(&mut expert, &obs).unwrap();
-            for e in scoring::Policy::drain_events(&mut expert) {
+            let chunk = policy::Policy::act(&mut expert, &obs).unwrap();
+            for e in policy::Policy::drain_events(&mut expert) {
                 if e.label.starts_with("step ") {
                     starts.push((e.label, e.time));
                 }

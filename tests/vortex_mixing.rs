@@ -10,8 +10,10 @@ mod common;
 
 use common::{compile, compile_edited, predicate, run, run_with};
 use labware::Instrument;
-use scoring::expert::ExpertPolicy;
-use scoring::{Observation, Policy, PolicyError};
+use expert::ExpertPolicy;
+use policy::Observation;
+use policy::Policy;
+use policy::PolicyError;
 use std::sync::{Arc, Mutex};
 
 const PROTOCOL: &str = "protocols/vortex_mixer/mix_tube.toml";
@@ -72,7 +74,7 @@ impl Policy for Watch {
 }
 
 /// Runs the expert on `task` (seed 3), watching the mixer.
-fn watched(task: &compiler::Task) -> (scoring::EpisodeResult, Vec<Seen>) {
+fn watched(task: &compiler::Task) -> (results::EpisodeResult, Vec<Seen>) {
     let mixer = task.labware_index("vortex").unwrap();
     let labware::Model::VortexMixer(model) = &task.labware[mixer].params else {
         panic!("a vortex mixer")

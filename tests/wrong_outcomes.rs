@@ -8,8 +8,11 @@
 mod common;
 
 use common::{compile, predicate, run, run_with};
-use scoring::expert::ExpertPolicy;
-use scoring::{HoldPolicy, Observation, Policy, PolicyError};
+use expert::ExpertPolicy;
+use scoring::policies::HoldPolicy;
+use policy::Observation;
+use policy::Policy;
+use policy::PolicyError;
 
 fn task(name: &str) -> compiler::Task {
     compile(&format!("protocols/thermal_cycler/{name}"))
@@ -40,7 +43,7 @@ fn expert_until(
     task: &compiler::Task,
     seed: u64,
     keep_going: impl FnMut(&Observation) -> bool + 'static,
-) -> scoring::EpisodeResult {
+) -> results::EpisodeResult {
     run_with(task, seed, &Default::default(), |t, s, i| {
         Box::new(ExpertUntil {
             expert: ExpertPolicy::new(t, s, i).unwrap(),

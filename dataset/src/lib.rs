@@ -1,15 +1,18 @@
-//! Demonstration datasets in LeRobot's formats, written directly (no conversion script):
+//! The LeRobot dataset formats, written directly (no conversion script) and read back:
 //! v2.1 (what openpi trains on: a parquet and one video per camera per episode, JSONL metadata)
 //! and v3.0 (what `lerobot` 0.4+ reads: episodes sharing one parquet and one video per camera,
-//! parquet metadata). Episodes come from the scripted expert through the episode loop's step
-//! sink: state, action and every camera at the control rate; failed episodes are not written.
+//! parquet metadata); the [`Capture`] that observes an episode's env (state, action and every
+//! camera at the control rate), shards merged into one dataset, and the task table a reader
+//! looks up.
 //!
 //! Each episode is staged in `.staging/` and moved into the dataset only when complete, its
 //! metadata line appended last (fsynced), so an interrupted run leaves no half-written episode
-//! and `--resume` continues it. It does not record MCAP (the runtime does) or score anything.
+//! and a resumed run continues it. It does not make episodes: the scripted expert's episodes are
+//! generated into a dataset, and recordings exported, by the `demos` crate; so this crate (and
+//! the Python wheel that reads task tables through it) links no planner (tests/no_planner.rs).
+//! Its tests are tests/datasets.rs and tests/merge.rs.
 
 mod capture;
-mod export;
 mod merge;
 pub mod meta;
 mod parquet;
@@ -18,15 +21,11 @@ mod video;
 mod writer;
 
 pub use capture::Capture;
-pub use export::{ExportOptions, export};
-pub use merge::{Merged, merge};
+pub use merge::{Merged, SHARD_FILE, ShardPlan, merge};
 pub use video::Codec;
-pub use writer::{DatasetWriter, FileSizes, Layout, Version};
+pub use writer::{CaptureSpec, DatasetWriter, FileSizes, Layout, Version};
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::{Arc, mpsc};
 
 #[derive(Debug, thiserror::Error)]
 pub enum DatasetError {
@@ -54,219 +53,11 @@ pub enum DatasetError {
 }
 
 impl DatasetError {
-    pub(crate) fn io(what: &'static str, path: &Path, why: std::io::Error) -> DatasetError {
+    pub fn io(what: &'static str, path: &Path, why: std::io::Error) -> DatasetError {
         DatasetError::Io {
             what,
             path: path.to_path_buf(),
             why,
         }
     }
-}
-
-/// What `generate` is asked for.
-pub struct GenerateOptions {
-    pub episodes: usize,
-    pub seed: u64,
-    pub out: PathBuf,
-    pub version: Version,
-    pub codec: Codec,
-    pub resume: bool,
-    /// Camera images' size (width, height).
-    pub image_size: [usize; 2],
-    /// Episodes recorded at once, each thread with its own scene and renderer.
-    pub workers: usize,
-    /// Record only this shard's share of the plan: every `count`-th episode from `index`.
-    pub shard: Option<scoring::eval::Shard>,
-    /// Where v3.0's shared files roll over.
-    pub file_sizes: FileSizes,
-}
-
-/// One episode handled, for progress reports.
-pub struct Step<'a> {
-    pub task: &'a str,
-    pub seed: u64,
-    /// Its frames, or why it was not written.
-    pub result: Result<usize, &'a str>,
-    /// Episodes handled so far in this run, of `total`.
-    pub done: usize,
-    pub total: usize,
-}
-
-/// What a generation run did.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Generated {
-    /// Episodes in the dataset (this run's and, resumed, those before).
-    pub written: usize,
-    /// Episodes a resumed dataset already had.
-    pub resumed: usize,
-    /// Expert episodes that failed and were not written.
-    pub failed: Vec<(String, u64, String)>,
-    pub frames: usize,
-}
-
-/// Records `opts.episodes` seeded expert episodes of each task into one dataset, on
-/// `opts.workers` threads; `progress` hears each episode. Episodes are committed in plan order (task, then seed) whatever thread finishes
-/// first, so a dataset's episode indices do not depend on the number of workers.
-pub fn generate(
-    tasks: &[compiler::Task],
-    opts: &GenerateOptions,
-    mut progress: impl FnMut(Step<'_>),
-) -> Result<Generated, DatasetError> {
-    let mut writer = DatasetWriter::open(
-        &opts.out,
-        opts.version,
-        opts.codec,
-        Layout::of(tasks, &opts.out)?,
-        opts.image_size,
-        opts.resume,
-    )?;
-    writer.set_file_sizes(opts.file_sizes);
-    if let Some(shard) = opts.shard {
-        let asked = merge::ShardPlan {
-            shard,
-            tasks: tasks.iter().map(|t| t.id.clone()).collect(),
-            episodes: opts.episodes,
-            seed: opts.seed,
-        };
-        asked.write_new(&opts.out)?;
-    } else if opts.out.join(merge::SHARD_FILE).exists() {
-        return Err(DatasetError::Existing {
-            path: opts.out.clone(),
-            why: "is a shard's dataset; resume it with its --shard, or merge it with autobio dataset merge".into(),
-        });
-    }
-    let mut out = Generated {
-        resumed: writer.episodes(),
-        ..Default::default()
-    };
-    // The whole plan (task, then seed), numbered; a shard keeps its share, a resumed run what
-    // the dataset lacks.
-    let plan: Vec<(usize, usize, u64)> = tasks
-        .iter()
-        .enumerate()
-        .flat_map(|(t, _)| (0..opts.episodes as u64).map(move |i| (t, opts.seed.wrapping_add(i))))
-        .enumerate()
-        .filter(|(k, _)| opts.shard.is_none_or(|s| s.takes(*k)))
-        .filter(|(_, (t, seed))| !writer.has(&tasks[*t].id, *seed))
-        .map(|(k, (t, seed))| (k, t, seed))
-        .collect();
-    let spec = writer.capture_spec();
-    let next = AtomicUsize::new(0);
-    let stop = AtomicBool::new(false);
-    let mut failure = None;
-    std::thread::scope(|s| {
-        let (tx, rx) = mpsc::channel();
-        for _ in 0..opts.workers.clamp(1, plan.len().max(1)) {
-            let (tx, plan, next, stop, spec) = (tx.clone(), &plan, &next, &stop, &spec);
-            s.spawn(move || {
-                let mut scenes: Vec<Option<Arc<runtime::Scene>>> = vec![None; tasks.len()];
-                while !stop.load(Ordering::Relaxed) {
-                    let k = next.fetch_add(1, Ordering::Relaxed);
-                    let Some(&(_, t, seed)) = plan.get(k) else {
-                        break;
-                    };
-                    let r = record(&tasks[t], seed, spec, &mut scenes[t]);
-                    if tx.send((k, r)).is_err() {
-                        break;
-                    }
-                }
-            });
-        }
-        drop(tx);
-        // Finished episodes wait here until every earlier one is committed.
-        let mut waiting: BTreeMap<usize, Result<Recorded, DatasetError>> = BTreeMap::new();
-        let mut due = 0;
-        for (k, r) in rx {
-            waiting.insert(k, r);
-            while let Some(r) = waiting.remove(&due) {
-                let (position, t, seed) = plan[due];
-                due += 1;
-                let id = &tasks[t].id;
-                let step = r.and_then(|rec| match rec.outcome {
-                    Ok(instruction) => {
-                        let frames = writer.commit(rec.capture, &instruction, Some(position))?;
-                        out.frames += frames;
-                        progress(Step {
-                            task: id,
-                            seed,
-                            result: Ok(frames),
-                            done: due,
-                            total: plan.len(),
-                        });
-                        Ok(())
-                    }
-                    Err(why) => {
-                        rec.capture.discard();
-                        progress(Step {
-                            task: id,
-                            seed,
-                            result: Err(&why),
-                            done: due,
-                            total: plan.len(),
-                        });
-                        out.failed.push((id.clone(), seed, why));
-                        Ok(())
-                    }
-                });
-                if let Err(e) = step {
-                    stop.store(true, Ordering::Relaxed);
-                    failure.get_or_insert(e);
-                }
-            }
-        }
-    });
-    if let Some(e) = failure {
-        return Err(e);
-    }
-    out.written = writer.finish()?;
-    Ok(out)
-}
-
-/// One expert episode, captured: the instruction to commit it under, or why it failed.
-struct Recorded {
-    capture: Capture,
-    outcome: Result<String, String>,
-}
-
-fn record(
-    task: &compiler::Task,
-    seed: u64,
-    spec: &writer::CaptureSpec,
-    scene: &mut Option<Arc<runtime::Scene>>,
-) -> Result<Recorded, DatasetError> {
-    let episode_err = |why: String| DatasetError::Episode {
-        task: task.id.clone(),
-        seed,
-        why,
-    };
-    let instance = task.sample(seed);
-    let scene = &runtime::Scene::reuse_or_build(scene, task, &instance)
-        .map_err(|e| episode_err(e.to_string()))?;
-    let mut capture = spec.capture(&task.id, seed)?;
-    let opts = scoring::EpisodeOptions {
-        image_size: Some(capture.image_size()),
-        ..Default::default()
-    };
-    let result = match scoring::policies::make("expert", task, scene, &instance) {
-        Ok(mut policy) => scoring::episode::run_episode_with(
-            task,
-            scene,
-            &instance,
-            policy.as_mut(),
-            &opts,
-            Some(&mut capture),
-        )
-        .map_err(|e| episode_err(e.to_string()))?,
-        Err(e) => scoring::episode::policy_failed(task, scene, &instance, &e, None)
-            .map_err(|e| episode_err(e.to_string()))?,
-    };
-    let outcome = if result.success {
-        Ok(instance.instruction.clone())
-    } else {
-        Err(result
-            .error
-            .clone()
-            .unwrap_or_else(|| format!("{:?}", result.outcome)))
-    };
-    Ok(Recorded { capture, outcome })
 }

@@ -12,20 +12,22 @@ use std::path::{Path, PathBuf};
 
 /// What a shard was asked for, kept in `meta/autobio_shard.json` of a shard's dataset.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub(crate) struct ShardPlan {
-    pub shard: scoring::eval::Shard,
+/// The share of a generation plan a shard dataset was recorded with (`meta/autobio_shard.json`).
+pub struct ShardPlan {
+    pub shard: results::run::Shard,
     pub tasks: Vec<String>,
     pub episodes: usize,
     pub seed: u64,
 }
 
-pub(crate) const SHARD_FILE: &str = "meta/autobio_shard.json";
+/// Where a shard dataset keeps its [`ShardPlan`].
+pub const SHARD_FILE: &str = "meta/autobio_shard.json";
 
 impl ShardPlan {
     fn write(&self, root: &Path) -> Result<(), DatasetError> {
         let p = root.join(SHARD_FILE);
         let text = serde_json::to_string_pretty(self).expect("json") + "\n";
-        scoring::eval::record::write_atomic(&p, text.as_bytes())
+        results::run::record::write_atomic(&p, text.as_bytes())
             .map_err(|e| DatasetError::io("write", &p, e))
     }
 

@@ -161,7 +161,7 @@ fn create_dir(p: &Path) -> Result<(), DatasetError> {
 }
 
 fn write_file(p: &Path, text: &str) -> Result<(), DatasetError> {
-    scoring::eval::record::write_atomic(p, text.as_bytes())
+    results::run::record::write_atomic(p, text.as_bytes())
         .map_err(|e| DatasetError::io("write", p, e))
 }
 

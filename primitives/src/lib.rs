@@ -7,6 +7,7 @@
 //! through the [`Kinematics`] trait (the runtime implements it on MuJoCo), so this crate runs no
 //! simulation and names no instrument: affordances and joint goals come from the labware models.
 
+pub mod alternatives;
 pub mod analytic_ik;
 pub mod ik;
 pub mod resolve;

@@ -6,7 +6,7 @@
 //! simulation ends the episode as a failure with its reason; a recording or renderer fault ends
 //! the loop with a typed [`EpisodeError`].
 
-use crate::policy::{Observation, Policy, Privileged};
+use policy::{Observation, Policy, Privileged};
 use compiler::{SceneInstance, Task};
 use results::recording::{RecordError, Recorder};
 pub use results::{EpisodeResult, Outcome};
@@ -45,9 +45,9 @@ pub enum EpisodeError {
 }
 
 /// The outcome class of a policy's failure.
-pub fn outcome_of(e: &crate::PolicyError) -> Outcome {
+pub fn outcome_of(e: &policy::PolicyError) -> Outcome {
     match e {
-        crate::PolicyError::Server(_) => Outcome::ServerFault,
+        policy::PolicyError::Server(_) => Outcome::ServerFault,
         _ => Outcome::PolicyError,
     }
 }
@@ -61,7 +61,7 @@ pub fn policy_failed(
     task: &Task,
     scene: &Arc<runtime::Scene>,
     instance: &SceneInstance,
-    failure: &crate::PolicyError,
+    failure: &policy::PolicyError,
     record: Option<PathBuf>,
 ) -> Result<EpisodeResult, EpisodeError> {
     let env = Env::new(scene.clone(), task, instance, EnvOptions::default());
@@ -178,7 +178,7 @@ impl Observer for Recording {
 }
 
 /// The frames a policy asks for from `history_steps` control steps before its next query
-/// ([`crate::policy::Needs::history_steps`]): taken at that step of the chunk, or, for a chunk
+/// ([`policy::Needs::history_steps`]): taken at that step of the chunk, or, for a chunk
 /// no longer than the history, the frames of the query itself.
 pub struct History {
     steps: usize,

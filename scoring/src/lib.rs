@@ -1,28 +1,18 @@
-//! Scoring: policies (the scripted expert, the no-motion control, replays of recordings, and
-//! models over the network under a profile), the episode loop that couples a policy to the
-//! runtime, verdicts from success predicates, and evaluation runs that write versioned results
-//! and run records.
+//! Scoring, the evaluation harness: the episode loop that couples a policy to the runtime and
+//! judges it every control step, the policies it runs by name (`policies`: the scripted expert
+//! from the `expert` crate, the no-motion control, replays of recordings) and models over the
+//! network under a profile (`remote`), evaluation runs that write journals, versioned results
+//! and run records (`eval`), replays and re-enactments of recordings (`replay`), and stage times.
 //!
-//! It does not simulate (the runtime does) and does not aggregate across submissions (the
-//! leaderboard does).
+//! It does not simulate (the runtime does), plan motions (the expert does), synthesise protocols
+//! (`synth`), write datasets (`dataset`, `demos`) or aggregate across submissions (the
+//! leaderboard does). Its tests are the workspace's (tests/episode_failures.rs,
+//! tests/model_servers.rs, tests/model_faults.rs, tests/replay.rs, tests/resume.rs and the
+//! episodes of every task).
 
 pub mod episode;
 pub mod eval;
-pub mod expert;
 pub mod policies;
-pub mod policy;
-pub mod reach;
 pub mod remote;
 pub mod replay;
-pub mod route;
 pub mod stage_time;
-pub mod synth;
-
-/// Profiles and verdicts live in `results` (no simulator needed to read them).
-pub use results::{profile, verdict};
-
-pub use episode::{EpisodeError, EpisodeOptions, EpisodeResult, Outcome, run_episode};
-pub use eval::{EvalError, EvalReport, EvalSummary, RESULTS_SCHEMA_VERSION, evaluate};
-pub use policies::{HoldPolicy, POLICIES, PolicySpec};
-pub use policy::{Observation, Policy, PolicyError, StageEvent};
-pub use results::verdict::{Judge, PredicateValue, StageVerdict, Verdict};

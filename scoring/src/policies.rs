@@ -1,10 +1,10 @@
 //! The policies the harness knows by name, and the factory that makes one per episode: the
-//! scripted expert ([`crate::expert`]), the no-motion control ([`HoldPolicy`]) and replays of a
+//! scripted expert (the `expert` crate), the no-motion control ([`HoldPolicy`]) and replays of a
 //! recording's actions ([`ReplayPolicy`]). `--policy` parses into a [`PolicySpec`] once;
 //! evaluation asks it to make the policy for each episode, so every policy takes the same path.
 //! A model server is not made here: `--model` connects through [`crate::remote`].
 
-use crate::policy::{Observation, Policy, PolicyError};
+use policy::{Observation, Policy, PolicyError};
 use compiler::{SceneInstance, Task};
 use runtime::Scene;
 
@@ -153,7 +153,7 @@ impl PolicySpec {
     ) -> Result<Box<dyn Policy>, PolicyError> {
         Ok(match self {
             PolicySpec::Expert => {
-                Box::new(crate::expert::ExpertPolicy::new(task, scene, instance)?)
+                Box::new(expert::ExpertPolicy::new(task, scene, instance)?)
             }
             PolicySpec::Hold => Box::new(HoldPolicy),
             PolicySpec::Replay(path) => Box::new(ReplayPolicy::new(path, task, instance)?),

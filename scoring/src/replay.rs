@@ -4,15 +4,15 @@
 //!   the trajectory hash against the recording's;
 //! - [`frames`]: sets each recorded state and draws the cameras at any size and level of detail,
 //!   with no simulation (the frames an episode recorded come back byte for byte), for a new
-//!   recording ([`render`]), PNG files, or a dataset (`dataset::export`).
+//!   recording ([`render`]), PNG files, or a dataset (`demos::export`).
 //!
 //! - [`reenact`]: a verifier's replay, trusting nothing a recording states but its actions: the
 //!   scene the seed draws for the caller's own task, the actions applied one control step each,
 //!   the trajectory hash and verdict as the episode then comes out.
 //!
-//! Offline re-scoring from the labware series alone is [`crate::Judge::replay`].
+//! Offline re-scoring from the labware series alone is [`results::verdict::Judge::replay`].
 
-use crate::verdict::{Judge, Verdict};
+use results::verdict::{Judge, Verdict};
 use compiler::{SceneInstance, Task};
 use results::TrajectoryHash;
 use runtime::record::{RecordError, Recorder, RecordingSummary};

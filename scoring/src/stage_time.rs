@@ -4,7 +4,7 @@
 //! written with can be tight there. Only the figures; `eval` words the warning. Runs of other
 //! policies say nothing about the task's time limits and are not read here.
 
-use crate::{EpisodeResult, Outcome};
+use results::{EpisodeResult, Outcome};
 use compiler::Task;
 
 /// One stage whose time limit the expert's run found tight.

@@ -9,7 +9,7 @@ use std::process::{Command, Output};
 use std::sync::Arc;
 
 /// The value of the predicate written `text` in an episode's verdict.
-pub fn predicate<'a>(r: &'a scoring::EpisodeResult, text: &str) -> &'a scoring::PredicateValue {
+pub fn predicate<'a>(r: &'a results::EpisodeResult, text: &str) -> &'a results::verdict::PredicateValue {
     r.verdict
         .predicates()
         .iter()
@@ -40,24 +40,24 @@ pub fn scene(task: &compiler::Task, seed: u64) -> (compiler::SceneInstance, Arc<
 pub fn run_with(
     task: &compiler::Task,
     seed: u64,
-    opts: &scoring::EpisodeOptions,
+    opts: &scoring::episode::EpisodeOptions,
     make: impl FnOnce(
         &compiler::Task,
         &runtime::Scene,
         &compiler::SceneInstance,
-    ) -> Box<dyn scoring::Policy>,
-) -> scoring::EpisodeResult {
+    ) -> Box<dyn policy::Policy>,
+) -> results::EpisodeResult {
     let (instance, scene) = scene(task, seed);
     let mut policy = make(task, &scene, &instance);
-    scoring::run_episode(task, &scene, &instance, policy.as_mut(), opts).unwrap()
+    scoring::episode::run_episode(task, &scene, &instance, policy.as_mut(), opts).unwrap()
 }
 
 /// One episode with a policy by name (`expert`, `hold`), not recorded.
-pub fn run(task: &compiler::Task, seed: u64, policy: &str) -> scoring::EpisodeResult {
+pub fn run(task: &compiler::Task, seed: u64, policy: &str) -> results::EpisodeResult {
     run_with(
         task,
         seed,
-        &scoring::EpisodeOptions::default(),
+        &scoring::episode::EpisodeOptions::default(),
         |t, s, i| scoring::policies::make(policy, t, s, i).unwrap(),
     )
 }

@@ -2,7 +2,7 @@
 //! folder ([`record`]: manifest, journal), the plan of a run's seeds and its shards, statistics
 //! ([`stats`]) and joining shards ([`merge`]).
 //!
-//! It runs no episode (`scoring::evaluate` does) and renders no report (the leaderboard does).
+//! It runs no episode (`scoring::eval::evaluate` does) and renders no report (the leaderboard does).
 
 mod merge;
 pub mod record;

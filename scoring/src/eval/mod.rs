@@ -6,18 +6,17 @@
 //!
 //! It does not simulate (the runtime does) and does not render reports (the leaderboard does).
 
-pub use results::run::{
-    AcrossRuns, Aggregate, Conditions, EvalReport, EvalSummary, GIT_COMMIT, Manifest, ModelRecord,
-    RESULTS_SCHEMA_VERSION, RUN_SEED_STRIDE, RunError, RunSummary, Shard, aggregate, journal_path,
-    manifest_path, mean_sem, merge, plan, recording_path, results_path, sha256_hex, summarise,
-    wilson,
+use results::run::{
+    Conditions, EvalReport, GIT_COMMIT, Manifest, ModelRecord, RESULTS_SCHEMA_VERSION,
+    RUN_SEED_STRIDE, RunError, Shard, plan, recording_path, results_path, sha256_hex, summarise,
 };
-pub use results::run::{record, stats};
+use results::run::record;
 
 use crate::episode::{EpisodeError, EpisodeOptions, run_episode};
 use crate::policies;
-use crate::policy::{self, PolicyError};
-use crate::remote::{Model, WireError};
+use policy::PolicyError;
+use crate::remote::Model;
+use policy::WireError;
 use compiler::Task;
 use record::RunRecord;
 use results::EpisodeResult;
@@ -57,7 +56,7 @@ pub enum EvalError {
 #[derive(Clone, Debug)]
 pub struct ModelSpec {
     pub url: String,
-    pub wire: crate::remote::Wire,
+    pub wire: results::run::Wire,
     pub profile: results::profile::LoadedProfile,
     /// Connection attempts per episode and the first retry's wait (doubled per retry).
     pub attempts: u32,

@@ -4,7 +4,7 @@
 //!
 //! It does not frame or transport anything (see `link`).
 
-use crate::profile::StateDtype;
+use results::profile::StateDtype;
 use rmpv::Value;
 
 /// How marker keys are spelled.

@@ -9,29 +9,8 @@
 use std::io::{ErrorKind, Read, Write};
 use std::net::{SocketAddr, TcpStream, ToSocketAddrs};
 use std::time::{Duration, Instant};
+use policy::WireError;
 use tungstenite::{Message, WebSocket};
-
-/// How a model server failed us. Each ends the episode it happens in with its reason.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum WireError {
-    #[error("bad model address `{url}`: {why}")]
-    Address { url: String, why: String },
-    #[error("cannot connect to {url} after {attempts} attempts over {waited_s:.1} s: {last}")]
-    Connect {
-        url: String,
-        attempts: u32,
-        waited_s: f64,
-        last: String,
-    },
-    #[error("the server closed the connection{0}")]
-    Closed(String),
-    #[error("no reply within {0} s")]
-    Timeout(f64),
-    #[error("the server reported an error: {0}")]
-    ErrorFrame(String),
-    #[error("the reply is malformed: {0}")]
-    Malformed(String),
-}
 
 /// A received frame.
 pub enum Frame {

@@ -1,5 +1,5 @@
 //! Models over the network: a [`Model`] is one connection to a model server speaking one
-//! [`Wire`] protocol under one [`crate::profile::Profile`]; a [`ModelPolicy`] drives one episode
+//! [`Wire`] protocol under one [`results::profile::Profile`]; a [`ModelPolicy`] drives one episode
 //! through it (observation in the profile's layout out, an action chunk back, the first
 //! `execute` actions run). The connection is kept across episodes and reopened, with backoff,
 //! after a failure.
@@ -15,21 +15,22 @@
 //!   servers keep the chunk and answer one action per observation; a chunk is accepted too.
 //!
 //! Failures of the server (no connection, closed, silent past the timeout, error frames, frames
-//! that do not decode or break the wire's framing) are [`crate::PolicyError::Server`]; decodable
+//! that do not decode or break the wire's framing) are [`policy::PolicyError::Server`]; decodable
 //! replies without usable actions (no `actions` key, wrong shape or dtype) are
-//! [`crate::PolicyError::BadActions`]. It does not render or step the simulation.
+//! [`policy::PolicyError::BadActions`]. It does not render or step the simulation.
 
 pub mod codec;
 pub mod link;
 
-use crate::policy::{Needs, Observation, Policy, PolicyError};
-use crate::profile::{ImageEncoding, Layout, LoadedProfile};
+use policy::{Needs, Observation, Policy, PolicyError};
+use results::profile::{ImageEncoding, Layout, LoadedProfile};
 use codec::Keys;
-pub use link::{Frame, Link, WireError};
+pub use link::{Frame, Link};
+use policy::WireError;
 use rmpv::Value;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
-pub use results::run::Wire;
+use results::run::Wire;
 
 /// How long a fresh openpi connection waits for the server's metadata frame before taking the
 /// server for one that sends none (a late one is still recognised).

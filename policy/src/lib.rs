@@ -1,8 +1,13 @@
 //! The policy interface: an observation in, a chunk of absolute actions out (openpi style), what
-//! a policy needs rendered, and how it fails. The policies themselves and the factory that makes
-//! one by name are [`crate::policies`]; models over the network are [`crate::remote`].
+//! a policy needs rendered, and how it fails (a model server's faults as [`WireError`]).
+//!
+//! It holds no policy: the scripted expert is the `expert` crate, the no-motion control, replays
+//! and models over the network are `scoring`'s, and `scoring::policies` makes one by name. Its
+//! types are exercised through those crates' tests (tests/episode_failures.rs,
+//! tests/model_servers.rs).
 
 use runtime::LabwareState;
+use runtime::env::RobotState;
 use serde::{Deserialize, Serialize};
 
 /// What a policy sees at one control step.
@@ -27,44 +32,17 @@ pub struct Observation<'a> {
 
 pub struct Privileged {
     /// Per robot, in task order: arm joint angles and current targets (its action layout).
-    pub robots: Vec<RobotPrivileged>,
+    pub robots: Vec<RobotState>,
     pub labware: Vec<LabwareState>,
     /// MuJoCo's generalized positions: the scene the expert's collision checks start from.
     pub qpos: Vec<f64>,
 }
-
-/// One robot's arm joint angles and current targets.
-pub use runtime::env::RobotState as RobotPrivileged;
 
 impl Privileged {
     /// Every robot's current targets, concatenated: the action that changes nothing.
     pub fn ctrl(&self) -> Vec<f64> {
         self.robots.iter().flat_map(|r| r.ctrl.clone()).collect()
     }
-}
-
-/// Why the expert cannot plan.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum PlanFailure {
-    #[error("no robot named `{0}`")]
-    NoRobot(String),
-    #[error("the expert has no motions for `{0}` yet")]
-    NoMotions(String),
-    #[error(transparent)]
-    Resolve(#[from] primitives::PlanError),
-    /// IK failed at one pose of a path (1-based, of `of` after the start).
-    #[error("at pose {at} of {of}: {ik}")]
-    IkAt {
-        at: usize,
-        of: usize,
-        ik: primitives::IkError,
-    },
-    /// A free-space motion's straight path collides and RRTConnect found no way around.
-    #[error("the straight path hits {hits}, and {error}")]
-    Blocked {
-        hits: String,
-        error: planner::PlanError,
-    },
 }
 
 /// A labelled moment of an episode (start of a motion, of a lab step).
@@ -74,13 +52,14 @@ pub struct StageEvent {
     pub label: String,
 }
 
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[derive(Debug, Clone, thiserror::Error)]
 pub enum PolicyError {
-    /// The scripted expert cannot plan a step (`context` names the step and motion).
+    /// The scripted expert cannot plan a step (`context` names the step and motion; the
+    /// expert's own failure type, `expert::PlanFailure`, is the source).
     #[error("the expert cannot plan {context}: {failure}")]
     Planning {
         context: String,
-        failure: PlanFailure,
+        failure: std::sync::Arc<dyn std::error::Error + Send + Sync>,
     },
     /// A name the factory does not know, with the names it does.
     #[error("unknown policy `{name}`; known policies: {known}")]
@@ -90,7 +69,7 @@ pub enum PolicyError {
     Failed(String),
     /// The model server failed: no connection, closed, silent, an error frame, garbage.
     #[error("model server fault: {0}")]
-    Server(crate::remote::link::WireError),
+    Server(WireError),
     /// The model answered, but not with actions this task can run.
     #[error("the model's actions are unusable: {0}")]
     BadActions(String),
@@ -119,4 +98,26 @@ pub trait Policy {
     fn drain_events(&mut self) -> Vec<StageEvent> {
         Vec::new()
     }
+}
+
+/// How a model server failed us. Each ends the episode it happens in with its reason.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum WireError {
+    #[error("bad model address `{url}`: {why}")]
+    Address { url: String, why: String },
+    #[error("cannot connect to {url} after {attempts} attempts over {waited_s:.1} s: {last}")]
+    Connect {
+        url: String,
+        attempts: u32,
+        waited_s: f64,
+        last: String,
+    },
+    #[error("the server closed the connection{0}")]
+    Closed(String),
+    #[error("no reply within {0} s")]
+    Timeout(f64),
+    #[error("the server reported an error: {0}")]
+    ErrorFrame(String),
+    #[error("the reply is malformed: {0}")]
+    Malformed(String),
 }

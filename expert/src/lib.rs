@@ -8,11 +8,19 @@
 //! group is a step with the steps after it marked `together` (on other robots), whose lanes move
 //! in the same control steps. A group starts when the one before it has finished and the judge
 //! has reached its stage. The robots with nothing to do hold their targets.
+//!
+//! The crate also holds the reach pass `autobio check` runs before any episode ([`reach`]) and
+//! the routing of free-space paths around obstacles ([`route`], RRTConnect from `planner`). The
+//! alternatives a step may take where its first choice is blocked are enumerated once, in
+//! `primitives::alternatives`, and both the expert and the reach pass iterate them. It does not
+//! run episodes or score them (`scoring` does). Its tests are the workspace's
+//! (tests/expert_episodes.rs, tests/planning.rs, tests/reach.rs and every task's episodes).
 
 mod motion;
-pub(crate) use motion::GRASP_TURNS;
+pub mod reach;
+pub mod route;
 
-use crate::policy::{Observation, PlanFailure, Policy, PolicyError, StageEvent};
+use policy::{Observation, Policy, PolicyError, StageEvent};
 use compiler::motion::{Motion, MotionStep};
 use compiler::params::{Bindings, render};
 use compiler::{SceneInstance, Task};
@@ -89,10 +97,34 @@ pub struct ExpertPolicy {
     routed: u64,
 }
 
+/// Why the expert cannot plan.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum PlanFailure {
+    #[error("no robot named `{0}`")]
+    NoRobot(String),
+    #[error("the expert has no motions for `{0}` yet")]
+    NoMotions(String),
+    #[error(transparent)]
+    Resolve(#[from] primitives::PlanError),
+    /// IK failed at one pose of a path (1-based, of `of` after the start).
+    #[error("at pose {at} of {of}: {ik}")]
+    IkAt {
+        at: usize,
+        of: usize,
+        ik: primitives::IkError,
+    },
+    /// A free-space motion's straight path collides and RRTConnect found no way around.
+    #[error("the straight path hits {hits}, and {error}")]
+    Blocked {
+        hits: String,
+        error: planner::PlanError,
+    },
+}
+
 fn planning(context: String, failure: impl Into<PlanFailure>) -> PolicyError {
     PolicyError::Planning {
         context,
-        failure: failure.into(),
+        failure: std::sync::Arc::new(failure.into()),
     }
 }
 

@@ -7,7 +7,7 @@
 //! spacing (0.05 rad). Motions that end in contact (reach, press, follow) are not routed here:
 //! touching is their purpose.
 
-use crate::policy::PlanFailure;
+use crate::PlanFailure;
 use planner::{Problem, distance, lerp, shortcut};
 use runtime::clearance::Clearance;
 

@@ -9,11 +9,12 @@
 //! kind is a `compiler::motion::Motion` variant and its arm here (or in `primitives::resolve` for
 //! its poses).
 
-use super::{ExpertPolicy, Queued, planning};
-use crate::policy::{Observation, PlanFailure, PolicyError, StageEvent};
+use crate::{ExpertPolicy, Lane, PlanFailure, Queued, planning};
+use policy::{Observation, PolicyError, StageEvent};
 use crate::route::{Route, route};
 use compiler::motion::Motion;
 use primitives::topp::{Limits, Trajectory, plan_trajectory};
+use primitives::alternatives::Scope;
 use primitives::{Kinematics, Lab, StepFrame, solutions, solve_with};
 use robots::RobotModel;
 use runtime::clearance::Clearance;
@@ -63,35 +64,40 @@ pub(super) struct Arm {
 }
 
 impl ExpertPolicy {
-    /// Starts motion `q` on robot `r`'s lane.
+    /// Starts motion `q` on robot `r`'s lane: a new step's frame first (with an open hand where
+    /// the step goes to grasp), then one function per motion family: a dial's grip
+    /// ([`dial_grip`]), the motions that move no pose ([`in_place`]) and the pose motions
+    /// ([`PathStart`]).
     pub(super) fn start(
         &mut self,
         r: usize,
         q: Queued,
         obs: &Observation,
     ) -> Result<Active, PolicyError> {
-        let step = &self.steps[q.step];
+        let ExpertPolicy {
+            task,
+            params,
+            steps,
+            arms,
+            lanes,
+            events,
+            seed,
+            routed,
+            ..
+        } = self;
+        let step = &steps[q.step];
         let context = format!("{}, {}", step.label, q.motion.label());
-        let lab = Lab::new(&self.task, &obs.privileged.labware, &self.params);
-        let arm = &mut self.arms[r];
-        let lane = &mut self.lanes[r];
+        let plan = |failure: PlanFailure| planning(context.clone(), failure);
+        let lab = Lab::new(task, &obs.privileged.labware, params);
+        let arm = &mut arms[r];
+        let lane = &mut lanes[r];
         let tcp_now = arm.kin.tcp(&arm.target);
         if lane.frame.as_ref().map(|(s, _)| *s) != Some(q.step) {
-            let g = arm.model.gripper;
-            let frame = StepFrame::new(
-                &step.motions,
-                &lab,
-                &tcp_now,
-                step.on.as_deref(),
-                g.finger_reach,
-                g.enclose,
-            )
-            .map_err(|e| planning(context.clone(), e))?;
-            let frame = with_room_to_turn(arm, frame, &step.motions, &lab);
+            let frame = step_frame(arm, step, &lab, &tcp_now).map_err(&plan)?;
             lane.frame = Some((q.step, frame));
             lane.step_moved = false;
             lane.dial_grips = 0;
-            self.events.push(StageEvent {
+            events.push(StageEvent {
                 time: obs.time,
                 label: step.label.clone(),
             });
@@ -100,7 +106,7 @@ impl ExpertPolicy {
             let g = arm.model.gripper;
             if arm.gripper != g.open && grasps_after_moving(&step.motions) {
                 arm.gripper = g.open;
-                self.events.push(StageEvent {
+                events.push(StageEvent {
                     time: obs.time,
                     label: Motion::Release.label().to_string(),
                 });
@@ -110,161 +116,219 @@ impl ExpertPolicy {
                 });
             }
         }
-        self.events.push(StageEvent {
+        events.push(StageEvent {
             time: obs.time,
             label: q.motion.label().to_string(),
         });
-        if let Motion::TurnDial {
+        if let Some(active) = dial_grip(arm, lane, &q, &lab, obs.time).map_err(&plan)? {
+            return Ok(active);
+        }
+        let comply_at = &obs.privileged.robots[r].arm_q;
+        if let Some(active) = in_place(arm, &q.motion, comply_at, &lab, obs.time).map_err(&plan)? {
+            return Ok(active);
+        }
+        let route_seed = || {
+            let s = planner::mix(*seed, *routed);
+            *routed += 1;
+            s
+        };
+        PathStart {
+            arm,
+            lane,
+            lab: &lab,
+            tcp_now,
+            task,
+            events,
+            robot: r,
+        }
+        .start(q, obs, route_seed)
+        .map_err(&plan)
+    }
+}
+
+/// A new step's frame: its motions resolved against the lab with the tool where it is, and for a
+/// step that turns a round part in the hand, the grasp with room for the turn.
+fn step_frame(
+    arm: &mut Arm,
+    step: &crate::Step,
+    lab: &Lab,
+    tcp_now: &labware::Pose,
+) -> Result<StepFrame, PlanFailure> {
+    let g = arm.model.gripper;
+    let frame = StepFrame::new(
+        &step.motions,
+        lab,
+        tcp_now,
+        step.on.as_deref(),
+        g.finger_reach,
+        g.enclose,
+    )?;
+    Ok(with_room_to_turn(arm, frame, &step.motions, lab))
+}
+
+/// A dial's turn, where the dial is now decides: in its notch, nothing is left to do; short of it
+/// with the hand open (let go after a grip), turn back and grip again; gripped, turn (the pose
+/// motion that follows), at most `MAX_DIAL_GRIPS` times in one step. `None` for every other
+/// motion, and for a gripped dial still to turn.
+fn dial_grip(
+    arm: &Arm,
+    lane: &mut Lane,
+    q: &Queued,
+    lab: &Lab,
+    time: f64,
+) -> Result<Option<Active>, PlanFailure> {
+    let Motion::TurnDial {
+        labware,
+        param,
+        value,
+        ..
+    } = &q.motion
+    else {
+        return Ok(None);
+    };
+    let left = lab.dial_turn(labware, param, value)?;
+    let now = Active::Hold { until: time };
+    if left.abs() < DIAL_DONE {
+        return Ok(Some(now));
+    }
+    if arm.gripper == arm.model.gripper.open {
+        for motion in [q.motion.clone(), Motion::Grasp, Motion::TurnBack] {
+            lane.queue.push_front(Queued {
+                motion,
+                step: q.step,
+                group: q.group,
+                stage: q.stage,
+            });
+        }
+        return Ok(Some(now));
+    }
+    lane.dial_grips += 1;
+    if lane.dial_grips > MAX_DIAL_GRIPS {
+        return Err(primitives::PlanError::DialStuck {
+            labware: labware.clone(),
+            param: param.clone(),
+            value: value.clone(),
+            grips: MAX_DIAL_GRIPS,
+        }
+        .into());
+    }
+    Ok(None)
+}
+
+/// The motions that move no pose: the gripper closed or opened (then its settle time), a wait,
+/// complying (the arm's targets where it is, `arm_q`), a held item's part pressed, the hand eased
+/// open, holding until a panel shows a value. `None` for a pose motion.
+fn in_place(
+    arm: &mut Arm,
+    motion: &Motion,
+    arm_q: &[f64],
+    lab: &Lab,
+    time: f64,
+) -> Result<Option<Active>, PlanFailure> {
+    let gripper = arm.model.gripper;
+    Ok(Some(match motion {
+        Motion::Grasp | Motion::Release => {
+            arm.gripper = if matches!(motion, Motion::Grasp) {
+                gripper.closed
+            } else {
+                gripper.open
+            };
+            Active::Hold {
+                until: time + gripper.settle_s,
+            }
+        }
+        Motion::Wait { seconds } => Active::Hold {
+            until: time + seconds,
+        },
+        Motion::Comply => {
+            arm.target = arm_q.to_vec();
+            Active::Hold { until: time }
+        }
+        Motion::PressPart {
+            labware,
+            goals,
+            timeout_s,
+        } => {
+            let (_, live) = lab.item(labware)?;
+            let at = lab.at_goals(labware, goals)?;
+            let joints = goals
+                .iter()
+                .map(|(role, _)| (role.clone(), live.joint(role), at.joint(role)))
+                .collect();
+            Active::Press {
+                labware: labware.clone(),
+                joints,
+                deadline: time + timeout_s,
+            }
+        }
+        Motion::EasePart { seconds } => Active::Ease {
+            from: arm.gripper,
+            t0: time,
+            seconds: *seconds,
+        },
+        Motion::HoldUntil {
             labware,
             param,
             value,
-            ..
-        } = &q.motion
-        {
-            // Where the dial is now decides: in its notch, nothing is left to do; short of it
-            // with the hand open (let go after a grip), turn back and grip again; gripped, turn
-            // (below), at most `MAX_DIAL_GRIPS` times in one step.
-            let left = lab
-                .dial_turn(labware, param, value)
-                .map_err(|e| planning(context.clone(), e))?;
-            let now = Active::Hold { until: obs.time };
-            if left.abs() < DIAL_DONE {
-                return Ok(now);
-            }
-            if arm.gripper == arm.model.gripper.open {
-                for motion in [q.motion.clone(), Motion::Grasp, Motion::TurnBack] {
-                    lane.queue.push_front(Queued { motion, ..q });
-                }
-                return Ok(now);
-            }
-            lane.dial_grips += 1;
-            if lane.dial_grips > MAX_DIAL_GRIPS {
-                let stuck = primitives::PlanError::DialStuck {
-                    labware: labware.clone(),
-                    param: param.clone(),
-                    value: value.clone(),
-                    grips: MAX_DIAL_GRIPS,
-                };
-                return Err(planning(context, stuck));
-            }
-        }
-        let gripper = arm.model.gripper;
-        match q.motion {
-            Motion::Grasp | Motion::Release => {
-                arm.gripper = if matches!(q.motion, Motion::Grasp) {
-                    gripper.closed
-                } else {
-                    gripper.open
-                };
-                return Ok(Active::Hold {
-                    until: obs.time + gripper.settle_s,
-                });
-            }
-            Motion::Wait { seconds } => {
-                return Ok(Active::Hold {
-                    until: obs.time + seconds,
-                });
-            }
-            Motion::Comply => {
-                arm.target = obs.privileged.robots[r].arm_q.clone();
-                return Ok(Active::Hold { until: obs.time });
-            }
-            Motion::PressPart {
-                labware,
-                goals,
-                timeout_s,
-            } => {
-                let (_, live) = lab
-                    .item(&labware)
-                    .map_err(|e| planning(context.clone(), e))?;
-                let at = lab
-                    .at_goals(&labware, &goals)
-                    .map_err(|e| planning(context.clone(), e))?;
-                let joints = goals
-                    .iter()
-                    .map(|(role, _)| (role.clone(), live.joint(role), at.joint(role)))
-                    .collect();
-                return Ok(Active::Press {
-                    labware,
-                    joints,
-                    deadline: obs.time + timeout_s,
-                });
-            }
-            Motion::EasePart { seconds } => {
-                return Ok(Active::Ease {
-                    from: arm.gripper,
-                    t0: obs.time,
-                    seconds,
-                });
-            }
-            Motion::HoldUntil {
-                labware,
-                param,
-                value,
-                timeout_s,
-            } => {
-                return Ok(Active::Until {
-                    labware,
-                    param,
-                    value,
-                    deadline: obs.time + timeout_s,
-                });
-            }
-            _ => {}
-        }
-        let frame = &mut lane.frame.as_mut().expect("set above").1;
+            timeout_s,
+        } => Active::Until {
+            labware: labware.clone(),
+            param: param.clone(),
+            value: value.clone(),
+            deadline: time + timeout_s,
+        },
+        _ => return Ok(None),
+    }))
+}
+
+/// A pose motion started on one robot's lane: its tool poses solved to joint waypoints (with the
+/// step's fallbacks), its end chosen so that the step's next straight motion can be made, routed
+/// around obstacles in free space, and timed by TOPP.
+struct PathStart<'a> {
+    arm: &'a mut Arm,
+    lane: &'a mut Lane,
+    lab: &'a Lab<'a>,
+    tcp_now: labware::Pose,
+    task: &'a compiler::Task,
+    events: &'a mut Vec<StageEvent>,
+    robot: usize,
+}
+
+impl PathStart<'_> {
+    fn start(
+        self,
+        q: Queued,
+        obs: &Observation,
+        route_seed: impl FnOnce() -> u64,
+    ) -> Result<Active, PlanFailure> {
+        let PathStart {
+            arm,
+            lane,
+            lab,
+            tcp_now,
+            task,
+            events,
+            robot,
+        } = self;
+        let frame = &mut lane.frame.as_mut().expect("set when the step began").1;
         // The item may have turned in the fingers on the way: each seat motion aims with the
         // grasp as it is now.
-        frame
-            .regrip(&lab, &tcp_now)
-            .map_err(|e| planning(context.clone(), e))?;
-        let frame = &*frame;
-        let poses = frame
-            .poses(&q.motion, &lab, &tcp_now)
-            .map_err(|e| planning(context.clone(), e))?;
+        frame.regrip(lab, &tcp_now)?;
+        let poses = frame.poses(&q.motion, lab, &tcp_now)?;
         // A robot that crosses free space in joint space goes straight to the IK solution
         // nearest where it is: solved along the tool's path instead, its wrist would follow the
         // path's orientations through a singularity onto the other branch (the ViperX's forearm
         // rolled half a turn, leaving its wrist no room for a cap's turn).
         let limits = arm.model.expert_limits;
         let direct = q.motion.through_free_space() && limits.joint_space_transits;
-        let ends = |poses: Vec<labware::Pose>| path_ends(poses, direct);
-        let poses = ends(poses);
-        // Before the step's first path, the other symmetric grasp is a second try.
-        let waypoints = match solve_path(arm, &poses) {
-            Ok(w) => w,
-            Err(first) => match frame
-                .fallback_poses(&q.motion, &lab, &tcp_now)
-                .unwrap_or_default()
-                .iter()
-                .find_map(|p| solve_path(arm, p).ok())
-            {
-                Some(w) => w,
-                None => {
-                    let other = (!lane.step_moved)
-                        .then(|| frame.other_grasp())
-                        .flatten()
-                        .and_then(|other| {
-                            let poses = ends(other.poses(&q.motion, &lab, &tcp_now).ok()?);
-                            solve_path(arm, &poses).ok().map(|w| (other, w))
-                        });
-                    match other {
-                        Some((other, w)) => {
-                            lane.frame = Some((q.step, other));
-                            w
-                        }
-                        // Last, a free-space path whose line the arm cannot follow (through
-                        // a singularity, past a joint's range midway) goes in joint space.
-                        None => q
-                            .motion
-                            .through_free_space()
-                            .then(|| in_joint_space(arm, &poses))
-                            .flatten()
-                            .ok_or_else(|| planning(context.clone(), first))?,
-                    }
-                }
-            },
+        let poses = path_ends(poses, direct);
+        let free = FreeMotion {
+            motion: &q.motion,
+            lab,
+            tcp_now,
+            direct,
         };
+        let waypoints = solve_with_fallbacks(arm, lane, q.step, &free, &poses)?;
         // A free-space motion's end decides the IK branch the step's next straight motion starts
         // from: where that motion cannot be solved from the end this path arrives at, the end is
         // taken on a branch from which it can.
@@ -278,33 +342,24 @@ impl ExpertPolicy {
         let mut seat_frame: Option<StepFrame> = None;
         let waypoints = match &next {
             Some(next) if q.motion.through_free_space() => {
-                let frame = &lane.frame.as_ref().expect("set above").1;
+                let frame = &lane.frame.as_ref().expect("set when the step began").1;
                 let end = poses.last().copied();
-                match with_room_for_next(arm, frame, next, &lab, waypoints.clone(), end) {
+                match with_room_for_next(arm, frame, next, lab, waypoints.clone(), end) {
                     Some(w) => w,
                     // Before the step has moved, a round part may be taken from another side
                     // (the step keeps that grasp), or a round carried item brought over its
                     // seat at another heading (the motions after this one keep the heading the
                     // item then has).
                     None if !lane.step_moved => {
-                        let alternatives = GRASP_TURNS.iter().skip(1).flat_map(|deg| {
-                            let a = deg.to_radians();
-                            [
-                                frame.turned_about_axis(a).map(|f| (f, true)),
-                                frame.seat_turned(a).map(|f| (f, false)),
-                            ]
-                        });
-                        let turned = alternatives.flatten().find_map(|(f, keep)| {
-                            let w =
-                                free_path(arm, &f, &q.motion, &lab, &tcp_now, Some(next), direct)?;
-                            Some((f, keep, w))
+                        let turned = frame.alternatives(true).find_map(|alt| {
+                            let w = free.path(arm, &alt.frame, Some(next))?;
+                            Some((alt, w))
                         });
                         match turned {
-                            Some((f, keep, w)) => {
-                                if keep {
-                                    lane.frame = Some((q.step, f));
-                                } else {
-                                    seat_frame = Some(f);
+                            Some((alt, w)) => {
+                                match alt.scope {
+                                    Scope::Step => lane.frame = Some((q.step, alt.frame)),
+                                    Scope::Motion => seat_frame = Some(alt.frame),
                                 }
                                 w
                             }
@@ -326,106 +381,48 @@ impl ExpertPolicy {
         // A dial is looked at again once the hand has let go of it.
         if matches!(q.motion, Motion::TurnDial { .. }) {
             for motion in [q.motion.clone(), Motion::Release] {
-                lane.queue.push_front(Queued { motion, ..q });
+                lane.queue.push_front(Queued {
+                    motion,
+                    step: q.step,
+                    group: q.group,
+                    stage: q.stage,
+                });
             }
         }
         // A turn is noted for the turn back that undoes it (on the frame the path was solved
         // with: the other grasp's, where that one was taken).
         if let Some((_, f)) = lane.frame.as_mut() {
-            f.record_turn(&q.motion, &lab, &tcp_now)
-                .map_err(|e| planning(context.clone(), e))?;
+            f.record_turn(&q.motion, lab, &tcp_now)?;
         }
         // TOPP's grid: 200 intervals, and for a planned route (~100 waypoints) 8 per waypoint.
         let mut grid = 200;
-        // A grasp taken from another side to get around what blocks the step's first path.
-        let mut kept: Option<StepFrame> = None;
         let waypoints = if q.motion.through_free_space() {
             let frame = seat_frame
                 .as_ref()
-                .unwrap_or(&lane.frame.as_ref().expect("set above").1);
+                .unwrap_or(&lane.frame.as_ref().expect("set when the step began").1);
             // What the hand carries moves with it: the item the step seats, else the liquid
             // tool it works with (a pipette held from the start).
             let carried = frame
                 .carried()
                 .map(str::to_string)
-                .or_else(|| self.task.liquid_tool(&self.task.robots[r].name, q.step))
-                .and_then(|item| self.task.labware.iter().position(|l| l.name == item));
+                .or_else(|| task.liquid_tool(&task.robots[robot].name, q.step))
+                .and_then(|item| task.labware.iter().position(|l| l.name == item));
             arm.clearance.sync(&obs.privileged.qpos, carried);
-            let seed = planner::mix(self.seed, self.routed);
-            self.routed += 1;
-            let joint_limits = arm.kin.limits();
-            let end = waypoints.last().map(|q| arm.kin.tcp(q));
-            let routed = match route(
-                &mut arm.clearance,
-                &joint_limits,
-                limits.check_step,
-                waypoints,
-                seed,
-            ) {
-                Ok(routed) => routed,
-                // Home is the model's home joints, not another pose of its tool.
-                Err(blocked) if matches!(q.motion, Motion::Home) => {
-                    return Err(planning(context.clone(), blocked));
-                }
-                Err(blocked) => route_to_other_end(
-                    arm,
-                    frame,
-                    next.as_ref(),
-                    &lab,
-                    end,
-                    limits.check_step,
-                    seed,
-                )
-                .or_else(|| {
-                    // A round item may go over its seat at another heading, and on the step's
-                    // first path a round part may be taken from another side (the step keeps
-                    // that grasp): the arm's poses there are others.
-                    let alternatives = GRASP_TURNS.iter().skip(1).flat_map(|deg| {
-                        let a = deg.to_radians();
-                        [
-                            first_path
-                                .then(|| frame.turned_about_axis(a))
-                                .flatten()
-                                .map(|f| (f, true)),
-                            frame.seat_turned(a).map(|f| (f, false)),
-                        ]
-                    });
-                    alternatives.flatten().find_map(|(f, keep)| {
-                        let w =
-                            free_path(arm, &f, &q.motion, &lab, &tcp_now, next.as_ref(), direct)?;
-                        let end = w.last().map(|q| arm.kin.tcp(q));
-                        let routed = route(
-                            &mut arm.clearance,
-                            &joint_limits,
-                            limits.check_step,
-                            w,
-                            seed,
-                        )
-                        .ok()
-                        .or_else(|| {
-                            route_to_other_end(
-                                arm,
-                                &f,
-                                next.as_ref(),
-                                &lab,
-                                end,
-                                limits.check_step,
-                                seed,
-                            )
-                        })?;
-                        if keep {
-                            kept = Some(f);
-                        }
-                        Some(routed)
-                    })
-                })
-                .ok_or_else(|| planning(context.clone(), blocked))?,
+            let routing = Routing {
+                free: &free,
+                next: next.as_ref(),
+                seed: route_seed(),
+                check_step: limits.check_step,
             };
+            let (routed, kept) = routing.route(arm, frame, waypoints, first_path)?;
+            if let Some(f) = kept {
+                lane.frame = Some((q.step, f));
+            }
             match routed {
                 Route::Straight(path) => path,
                 Route::Planned { path, hits, checks } => {
                     grid = grid.max(8 * path.len());
-                    self.events.push(StageEvent {
+                    events.push(StageEvent {
                         time: obs.time,
                         label: format!("planned around {hits} ({checks} collision checks)"),
                     });
@@ -435,9 +432,6 @@ impl ExpertPolicy {
         } else {
             waypoints
         };
-        if let Some(f) = kept {
-            lane.frame = Some((q.step, f));
-        }
         let topp = Limits {
             vmax: limits.vmax,
             amax: limits.amax,
@@ -447,12 +441,153 @@ impl ExpertPolicy {
     }
 }
 
-/// Grasps about a round part's axis tried for a step that turns it, or whose first choice is
-/// blocked, and headings over a seat or an opening tried where the first is (the reach check
-/// tries the same): the step's own, then turned by 30 degrees more each way, up to half a turn.
-pub(crate) const GRASP_TURNS: [f64; 12] = [
-    0.0, 30.0, -30.0, 60.0, -60.0, 90.0, -90.0, 120.0, -120.0, 150.0, -150.0, 180.0,
-];
+/// Joint waypoints through a motion's tool `poses`, trying in order: the poses as resolved, the
+/// motion's own fallback paths, before the step's first path the other symmetric grasp (the step
+/// then keeps it), and last, for a free-space motion whose line the arm cannot follow (through a
+/// singularity, past a joint's range midway), a path in joint space.
+fn solve_with_fallbacks(
+    arm: &mut Arm,
+    lane: &mut Lane,
+    step: usize,
+    free: &FreeMotion,
+    poses: &[labware::Pose],
+) -> Result<Vec<Vec<f64>>, PlanFailure> {
+    let first = match solve_path(arm, poses) {
+        Ok(w) => return Ok(w),
+        Err(first) => first,
+    };
+    let frame = &lane.frame.as_ref().expect("set when the step began").1;
+    let fallback = frame
+        .fallback_poses(free.motion, free.lab, &free.tcp_now)
+        .unwrap_or_default()
+        .iter()
+        .find_map(|p| solve_path(arm, p).ok());
+    if let Some(w) = fallback {
+        return Ok(w);
+    }
+    let other = (!lane.step_moved)
+        .then(|| frame.other_grasp())
+        .flatten()
+        .and_then(|other| {
+            let poses = path_ends(
+                other.poses(free.motion, free.lab, &free.tcp_now).ok()?,
+                free.direct,
+            );
+            solve_path(arm, &poses).ok().map(|w| (other, w))
+        });
+    if let Some((other, w)) = other {
+        lane.frame = Some((step, other));
+        return Ok(w);
+    }
+    free.motion
+        .through_free_space()
+        .then(|| in_joint_space(arm, poses))
+        .flatten()
+        .ok_or(first)
+}
+
+/// The motion being planned and what its poses are resolved with.
+struct FreeMotion<'a> {
+    motion: &'a Motion,
+    lab: &'a Lab<'a>,
+    tcp_now: labware::Pose,
+    /// Whether the robot crosses free space in joint space (only a path's ends are solved).
+    direct: bool,
+}
+
+impl FreeMotion<'_> {
+    /// Joint waypoints for the motion planned with frame `f` (one of a step's alternatives): its
+    /// path solved pose by pose, else in joint space, ending where the step's `next` straight
+    /// motion (if any) solves from. `None` where it has none.
+    fn path(&self, arm: &mut Arm, f: &StepFrame, next: Option<&Motion>) -> Option<Vec<Vec<f64>>> {
+        let poses = path_ends(f.poses(self.motion, self.lab, &self.tcp_now).ok()?, self.direct);
+        let w = solve_path(arm, &poses)
+            .ok()
+            .or_else(|| in_joint_space(arm, &poses))?;
+        match next {
+            Some(n) => with_room_for_next(arm, f, n, self.lab, w, poses.last().copied()),
+            None => Some(w),
+        }
+    }
+}
+
+/// A free-space motion's waypoints routed around obstacles.
+struct Routing<'a> {
+    free: &'a FreeMotion<'a>,
+    next: Option<&'a Motion>,
+    seed: u64,
+    check_step: f64,
+}
+
+impl Routing<'_> {
+    /// The route of `waypoints` planned with `frame`; where it is blocked for good, a route to
+    /// another solution of its end, then the step's alternatives (a round item over its seat at
+    /// another heading, and on the step's `first_path` a round part taken from another side),
+    /// each routed likewise. With the route, the alternative grasp the step keeps, if one was
+    /// taken.
+    fn route(
+        &self,
+        arm: &mut Arm,
+        frame: &StepFrame,
+        waypoints: Vec<Vec<f64>>,
+        first_path: bool,
+    ) -> Result<(Route, Option<StepFrame>), PlanFailure> {
+        let joint_limits = arm.kin.limits();
+        let end = waypoints.last().map(|q| arm.kin.tcp(q));
+        let blocked = match route(
+            &mut arm.clearance,
+            &joint_limits,
+            self.check_step,
+            waypoints,
+            self.seed,
+        ) {
+            Ok(routed) => return Ok((routed, None)),
+            Err(blocked) => blocked,
+        };
+        // Home is the model's home joints, not another pose of its tool.
+        if matches!(self.free.motion, Motion::Home) {
+            return Err(blocked);
+        }
+        if let Some(routed) = self.to_other_end(arm, frame, end) {
+            return Ok((routed, None));
+        }
+        frame
+            .alternatives(first_path)
+            .find_map(|alt| {
+                let w = self.free.path(arm, &alt.frame, self.next)?;
+                let end = w.last().map(|q| arm.kin.tcp(q));
+                let routed = route(
+                    &mut arm.clearance,
+                    &joint_limits,
+                    self.check_step,
+                    w,
+                    self.seed,
+                )
+                .ok()
+                .or_else(|| self.to_other_end(arm, &alt.frame, end))?;
+                let kept = (alt.scope == Scope::Step).then_some(alt.frame);
+                Some((routed, kept))
+            })
+            .ok_or(blocked)
+    }
+
+    fn to_other_end(
+        &self,
+        arm: &mut Arm,
+        frame: &StepFrame,
+        end: Option<labware::Pose>,
+    ) -> Option<Route> {
+        route_to_other_end(
+            arm,
+            frame,
+            self.next,
+            self.free.lab,
+            end,
+            self.check_step,
+            self.seed,
+        )
+    }
+}
 
 /// What is left of a dial's turn (rad) that counts as none: the detent holds it in its notch.
 const DIAL_DONE: f64 = 0.1;
@@ -513,11 +648,8 @@ fn with_room_to_turn(arm: &mut Arm, frame: StepFrame, motions: &[Motion], lab: &
         }
         Some(())
     };
-    GRASP_TURNS
-        .iter()
-        .filter_map(|deg| frame.grasp_turned(centre + deg.to_radians()))
-        .find(|f| fits(f).is_some())
-        .unwrap_or(frame)
+    let chosen = frame.turn_grasps(centre).find(|f| fits(f).is_some());
+    chosen.unwrap_or(frame)
 }
 
 /// A free-space motion's tool poses as the arm follows them: where the robot crosses free space
@@ -526,28 +658,6 @@ fn path_ends(poses: Vec<labware::Pose>, direct: bool) -> Vec<labware::Pose> {
     match (poses.first(), poses.last()) {
         (Some(a), Some(b)) if direct && poses.len() > 2 => vec![*a, *b],
         _ => poses,
-    }
-}
-
-/// Joint waypoints for free-space `motion` planned with frame `f` (one of a step's alternative
-/// grasps or seat headings): its path solved pose by pose, else in joint space, ending where the
-/// step's `next` straight motion (if any) solves from. `None` where it has none.
-fn free_path(
-    arm: &mut Arm,
-    f: &StepFrame,
-    motion: &Motion,
-    lab: &Lab,
-    tcp_now: &labware::Pose,
-    next: Option<&Motion>,
-    direct: bool,
-) -> Option<Vec<Vec<f64>>> {
-    let poses = path_ends(f.poses(motion, lab, tcp_now).ok()?, direct);
-    let w = solve_path(arm, &poses)
-        .ok()
-        .or_else(|| in_joint_space(arm, &poses))?;
-    match next {
-        Some(n) => with_room_for_next(arm, f, n, lab, w, poses.last().copied()),
-        None => Some(w),
     }
 }
 

@@ -591,9 +591,8 @@ fn aims(
                 }
                 seen.push(target);
                 // The headings the expert tries where its first is blocked.
-                let grasps: Vec<(Pose, Vec<Pose>)> = crate::expert::GRASP_TURNS
-                    .iter()
-                    .filter_map(|deg| frame.seat_turned(deg.to_radians()))
+                let grasps: Vec<(Pose, Vec<Pose>)> = frame
+                    .headings()
                     .filter_map(|f| f.pose_toward(target, lab, &tcp).ok())
                     .map(|p| (p, Vec::new()))
                     .collect();
@@ -629,16 +628,15 @@ fn aims(
             path.extend(lift.map(|h| labware::frame::translation([0.0, 0.0, h]) * at));
             path
         };
-        let mut grasps = vec![(
-            pose,
-            lifted(&pose, follow(task, states, params, &frame, &motions, &pose)),
-        )];
-        if let Some(other) = frame.other_grasp()
-            && let Ok(Some(at)) = other.first_pose(&motions, lab)
-        {
-            let path = follow(task, states, params, &other, &motions, &at);
-            grasps.push((at, lifted(&at, path)));
-        }
+        // Either of a symmetric affordance's grasps, as the expert may take them.
+        let grasps: Vec<(Pose, Vec<Pose>)> = frame
+            .symmetric_grasps()
+            .filter_map(|f| {
+                let at = f.first_pose(&motions, lab).ok().flatten()?;
+                let path = follow(task, states, params, &f, &motions, &at);
+                Some((at, lifted(&at, path)))
+            })
+            .collect();
         // Where the step leaves the labware's joints, for the steps after it.
         for m in &motions {
             if let Motion::Follow { labware, goals, .. } = m {

@@ -6,11 +6,12 @@
 //! the step shapes its protocols show), then a random walk over the abstract world (`walk`: each
 //! step's precondition is its primitive's own, as the state proof runs it), written out (`text`),
 //! compiled and proven as any protocol file, and reach-checked in the layouts the check samples
-//! (`crate::reach`). A candidate with any diagnostic, or with a step out of reach, is dropped
+//! (`expert::reach`). A candidate with any diagnostic, or with a step out of reach, is dropped
 //! and the next one drawn; the reasons are counted in the [`Report`]. The scene file is copied
 //! beside the protocols, so the folder checks and runs on its own.
 //!
-//! It does not run the expert: `autobio tasks <out>` (or `eval`) measures what it wrote.
+//! It does not run the expert: `autobio tasks <out>` (or `eval`) measures what it wrote. Its
+//! tests are tests/synth.rs (and a test there fails when a registered primitive has no phrase).
 
 mod text;
 pub mod vocabulary;
@@ -270,7 +271,7 @@ fn verdict(path: &Path, first: &World) -> Option<String> {
     if holds_at_start {
         return Some("a success predicate holds at the start".into());
     }
-    (!crate::reach::reached_everywhere(task)).then(|| "reach".to_string())
+    (!expert::reach::reached_everywhere(task)).then(|| "reach".to_string())
 }
 
 /// Every protocol file under `from` that names a scene file and compiles clean to one stage.

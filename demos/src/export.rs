@@ -5,8 +5,8 @@
 //! recordings of a run equals recording the run as a dataset (tested on the frames tables).
 //! Recordings of failed episodes are not written (counted and reported).
 
-use crate::writer::{DatasetWriter, Layout};
-use crate::{Codec, DatasetError, Generated, Step, Version};
+use crate::{Generated, Step};
+use dataset::{Codec, DatasetError, DatasetWriter, Layout, Version};
 use scoring::replay::{FrameOptions, Recording, ReplayError};
 use std::path::{Path, PathBuf};
 
@@ -18,7 +18,7 @@ pub struct ExportOptions {
     pub image_size: [usize; 2],
     pub resume: bool,
     /// Where v3.0's shared files roll over.
-    pub file_sizes: crate::FileSizes,
+    pub file_sizes: dataset::FileSizes,
 }
 
 /// The `.mcap` files named, a folder standing for the recordings in it (sorted by name).
