@@ -5,7 +5,7 @@
 //! no-motion runs are in
 //! tests/hold_control.rs; its IK round trip in tests/kinematics.rs.)
 
-mod common;
+use crate::common;
 
 use common::{compile, predicate, run, run_with};
 use expert::ExpertPolicy;

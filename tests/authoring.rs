@@ -5,7 +5,7 @@
 //! with the seed's values filled in; failure lines name what the seed drew and number steps from
 //! 1; `autobio render` draws a seed's initial scene.
 
-mod common;
+use crate::common;
 use common::{autobio, autobio_ok, scratch, text};
 
 const TRIVIAL: &str = "tests/corpus/warnings/success_holds_at_start.toml";

@@ -3,7 +3,7 @@
 //! by its time limit, and holds at the closed angle; the fixed camera sees the instrument, and an
 //! open and a closed lid give different frames.
 
-mod common;
+use crate::common;
 
 use common::{compile, compile_edited, run, scene, spread};
 use runtime::render::Cameras;

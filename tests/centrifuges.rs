@@ -9,7 +9,7 @@
 //! neighbouring slot, in the loaded slot's own neighbour, or sitting up out of the right one; the
 //! loaded slot shows in the protocol's camera.
 
-mod common;
+use crate::common;
 
 use common::{compile, run, scene, spread};
 use mujoco_rs::prelude::*;

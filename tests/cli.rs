@@ -4,7 +4,7 @@
 //! tests/golden/diagnostics (regenerate with `UPDATE_GOLDEN=1` and review the diff); and chains
 //! that cannot make the tool read, or show, files outside their protocol root.
 
-mod common;
+use crate::common;
 
 use common::{autobio, scratch, text};
 use std::io::{BufRead, BufReader};

@@ -5,7 +5,7 @@
 //! predicates compiled but could never hold, so a task using them could not be won. A volume is
 //! measured from the liquid the container holds.
 
-mod common;
+use crate::common;
 
 use common::{compile_edited, run, run_with, scratch};
 

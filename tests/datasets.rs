@@ -3,7 +3,7 @@
 //! frame's time), byte-identical parquet for the same seeds, no failed episode written, and an
 //! interrupted run resumed.
 
-mod common;
+use crate::common;
 
 use common::{autobio, scratch, text};
 use serde_json::Value;

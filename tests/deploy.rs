@@ -3,7 +3,7 @@
 //! and `merge.sh` joining the shards into the summary one unsharded run gives. The Kubernetes
 //! manifests are checked to be Indexed Jobs whose shard count agrees with the merge's.
 
-mod common;
+use crate::common;
 
 use common::{autobio, journal, scratch, text};
 use serde_json::Value;

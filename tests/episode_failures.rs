@@ -5,7 +5,7 @@
 //! finished episode to the journal before the next one starts, with results JSON that carries its
 //! schema version.
 
-mod common;
+use crate::common;
 
 use scoring::policies::HoldPolicy;
 use policy::Observation;

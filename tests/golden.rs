@@ -3,7 +3,7 @@
 //! compiling twice gives byte-identical tasks. After an intended change, regenerate with
 //! `UPDATE_GOLDEN=1 cargo test --release --test golden` and review the diff.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

@@ -1,10 +1,12 @@
-//! The no-motion control: every simulated shipped protocol and chain scores 0 under `hold`, on
-//! seed 0 and on a spread of other seeds. A task a motionless robot passes (a lid that falls shut,
-//! a tube already in place) is a broken task.
+//! The no-motion control: every simulated shipped protocol and chain scores 0 under `hold` on
+//! seed 0, some measured check failing, run to its time limit. A task a motionless robot passes (a
+//! lid that falls shut, a tube already in place) is a broken task. The spread over many seeds is
+//! CI's second step (`make hold-column`: every task on seeds 0-39 against docs/tasks.md), not
+//! repeated here.
 //! Also checks the policy factory: the report's policy field comes from the policy, and an unknown
 //! name is refused with the known ones listed.
 
-mod common;
+use crate::common;
 
 use scoring::eval::{EvalOptions, evaluate};
 
@@ -52,27 +54,6 @@ fn every_simulated_task_scores_zero_without_motion() {
             (e.sim_time_s - task.stages[0].time_limit_s).abs() < 0.05,
             "{name}"
         );
-        // And on a spread of other seeds (two runs: 37-40 and 2^20 + 37-40): the layouts a seed
-        // draws must not leave any task done without motion.
-        let spread = EvalOptions {
-            policy: scoring::policies::PolicySpec::Hold,
-            episodes: 4,
-            seed: 37,
-            runs: 2,
-            workers: 2,
-            ..Default::default()
-        };
-        let report = evaluate(&task, &spread, |_| {}).unwrap();
-        assert_eq!(report.episodes.len(), 8, "{name}");
-        for e in &report.episodes {
-            assert!(
-                e.error.is_none() && !e.success && e.verdict.score == 0.0,
-                "{name} seed {}: {:?} {:#?}",
-                e.seed,
-                e.error,
-                e.verdict
-            );
-        }
         simulated.push(task.id);
     }
     simulated.sort();

@@ -5,7 +5,7 @@
 //! tolerances (0.2 mm and 2 mrad), in position and in orientation (targets turned 0.3 rad about
 //! each of the TCP's axes).
 
-mod common;
+use crate::common;
 
 use mujoco_rs::prelude::*;
 use primitives::Kinematics;

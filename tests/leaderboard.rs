@@ -6,7 +6,7 @@
 //! a changed protocol, a missing or duplicated seed, and archives with a path that climbs out,
 //! a link, a truncated end, a decompression bomb or an unknown schema.
 
-mod common;
+use crate::common;
 
 use common::{Server, autobio, scratch, text};
 use serde_json::Value;

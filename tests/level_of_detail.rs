@@ -3,7 +3,7 @@
 //! two levels are close (PSNR) but not the same, over a whole expert episode, at the figures
 //! docs/rendering.md gives; and the image size picks the level.
 
-mod common;
+use crate::common;
 
 use common::{compile, scene};
 use robots::Detail;

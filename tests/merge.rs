@@ -2,7 +2,7 @@
 //! merge (an unfinished shard, a missing one, the output pointed at a shard) and a merge whose
 //! output already holds the run, every byte under every shard folder is as it was.
 
-mod common;
+use crate::common;
 
 use common::{autobio, scratch, text};
 use std::collections::BTreeMap;

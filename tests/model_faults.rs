@@ -5,7 +5,7 @@
 //! fragments, error frames for other requests), and a kept connection the server has closed
 //! between episodes is replaced, not failed on. Every run is under a watchdog: a hang fails.
 
-mod common;
+use crate::common;
 
 use common::{Server, autobio, autobio_within, journal, scratch, text};
 use serde_json::Value;

@@ -3,7 +3,7 @@
 //! vla-eval package, both answering with the scripted expert's recorded actions. They check the
 //! observations they get, so a client that sends the wrong layout fails here.
 
-mod common;
+use crate::common;
 
 use common::{Server, autobio, journal, scratch, text};
 use serde_json::Value;

@@ -2,7 +2,7 @@
 //! frame of exactly that many control steps before the query: with the history as long as the
 //! chunk, it is the last query's frame byte for byte; shorter, it is a later frame.
 
-mod common;
+use crate::common;
 
 use policy::{Needs, Observation, Policy, PolicyError};
 

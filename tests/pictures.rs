@@ -5,7 +5,7 @@
 //! camera). Frames that must differ between draws (the mixer's
 //! display, the rotor's loaded slot) are tested with their tasks.
 
-mod common;
+use crate::common;
 
 use robots::Detail;
 use runtime::render::Cameras;

@@ -9,7 +9,7 @@
 //! pipetting hand (`ur5e_inspire`) holding the pipette from the start works the plunger with its
 //! thumb, and the shipped tasks' expert aspirates and transfers.
 
-mod common;
+use crate::common;
 
 use labware::process::{AIR_UL, BUBBLED_UL, SPILT_UL, VOLUME_UL};
 use mujoco_rs::prelude::*;

@@ -4,7 +4,7 @@
 //! the housing, so the expert goes around with OMPL's RRTConnect and still seats the tube; the
 //! same seed gives the same planned episode, byte for byte.
 
-mod common;
+use crate::common;
 
 use common::{compile, run_with, scene};
 use labware::frame::{axis_angle, pose, translation};

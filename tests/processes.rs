@@ -2,7 +2,7 @@
 //! 1 what was checked failed, 2 could not run), and determinism across processes: the same seed
 //! gives the same draws and the same trajectory hash in two separate runs of the binary.
 
-mod common;
+use crate::common;
 
 use common::{autobio, scratch, text};
 use std::path::Path;

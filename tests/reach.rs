@@ -9,7 +9,7 @@
 //! reach for a grasp, a slot and a press point above) each get a hinted base from which the file
 //! checks with no reach diagnostic and the expert wins.
 
-mod common;
+use crate::common;
 
 use common::run;
 use std::path::Path;

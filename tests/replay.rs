@@ -7,7 +7,7 @@
 //! for byte; and mcap's own protobuf decoder reads the binary channels.
 
 use runtime::record::{RecordError, Recorder, proto, read_recording};
-mod common;
+use crate::common;
 
 use common::{compile, compile_edited, spread};
 use results::verdict::Judge;

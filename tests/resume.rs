@@ -3,7 +3,7 @@
 //! match, never reruns a finished episode, and survives the evaluating process being killed
 //! (SIGKILL) mid-run with no finished episode lost or repeated.
 
-mod common;
+use crate::common;
 
 use common::{autobio, scratch, text};
 use scoring::eval::EvalOptions;

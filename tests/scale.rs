@@ -3,7 +3,7 @@
 //! and a merge refuses missing, doubled or mismatched shards; `--runs K` reports each run and
 //! their mean ± SEM; progress is a bar on a terminal and plain lines elsewhere.
 
-mod common;
+use crate::common;
 
 use common::{autobio, journal, scratch, text};
 use serde_json::Value;

@@ -4,7 +4,7 @@
 //! own file; a scene file checks alone and is no task; chains whose stages share a scene keep the
 //! scene rule without a word.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::process::Command;

@@ -2,7 +2,7 @@
 //! the settle time (`[success] settle`, default `compiler::DEFAULT_SETTLE_S`). A lid flung
 //! through "open" and falling back is not opened; one that stays open is, once it has stayed.
 
-mod common;
+use crate::common;
 
 /// The judge over a lid-angle series: (time, lid angle) at the control period.
 fn judge(task: &compiler::Task, series: &[(f64, f64)]) -> results::verdict::Verdict {

@@ -4,7 +4,7 @@
 //! hold the submitted numbers, and a screenshot of the ranking page and of a task page is taken
 //! (left under the test's scratch folder for a human to look at).
 
-mod common;
+use crate::common;
 
 use common::scratch;
 use serde_json::{Value, json};

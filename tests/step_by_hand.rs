@@ -4,7 +4,7 @@
 //! with the task's score as its reward, and refuses a step after the end. Under no motion the
 //! episode is `truncated` at the time limit with reward 0.
 
-mod common;
+use crate::common;
 
 use runtime::{Env, EnvError, EnvOptions};
 use policy::{Observation, Policy, Privileged};

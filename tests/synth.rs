@@ -4,7 +4,7 @@
 //! the arm standing back keeps that follow-up; sources with nothing to recombine are a clear
 //! error; and the expert runs what it wrote.
 
-mod common;
+use crate::common;
 
 use common::{autobio, autobio_ok, scratch, text};
 use std::collections::BTreeMap;

@@ -5,7 +5,7 @@
 //! a recording's replay redraws the display from the recorded panel state; and the expert's
 //! `press` steps a value exactly once.
 
-mod common;
+use crate::common;
 
 use common::{compile, run, scene, spread};
 use labware::display::{Cell, Field};

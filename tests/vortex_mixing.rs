@@ -6,7 +6,7 @@
 //! produces.
 //! (The no-motion run is in tests/hold_control.rs.)
 
-mod common;
+use crate::common;
 
 use common::{compile, compile_edited, predicate, run, run_with};
 use labware::Instrument;

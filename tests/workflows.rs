@@ -6,7 +6,7 @@
 //! the task table measures the workflows, not the stage files they are made of; a workflow
 //! reports each stage's completion; the lidder leaves the open lid open on its way home.
 
-mod common;
+use crate::common;
 
 use common::{compile, compile_edited, run};
 

@@ -5,7 +5,7 @@
 //! only the lid is done. (The Aloha tasks' wrong outcomes, a tube let go and a cap half
 //! unscrewed, are in tests/aloha.rs.)
 
-mod common;
+use crate::common;
 
 use common::{compile, predicate, run, run_with};
 use expert::ExpertPolicy;

@@ -9,7 +9,7 @@
 //! metadata line appended last (fsynced), so an interrupted run leaves no half-written episode
 //! and a resumed run continues it. It does not make episodes: the scripted expert's episodes are
 //! generated into a dataset, and recordings exported, by the `demos` crate; so this crate (and
-//! the Python wheel that reads task tables through it) links no planner (tests/no_planner.rs).
+//! the Python wheel that reads task tables through it) links no planner (tests/no_simulator.rs).
 //! Its tests are tests/datasets.rs and tests/merge.rs.
 
 mod capture;

@@ -53,33 +53,89 @@ fn error_norms(e: &[f64; 6]) -> (f64, f64) {
     )
 }
 
-/// Solves for joint angles reaching `target` from `seed` with the method the robot model chooses:
-/// the one place an [`robots::IkMethod`] meets its solver (an analytic solver is one more arm).
+/// One IK method's code: a solve from a seed, and (for a closed-form method) every branch.
+trait Solver {
+    /// Joint angles reaching `target` from `seed`.
+    fn solve(
+        &self,
+        kin: &mut dyn Kinematics,
+        target: &Pose,
+        seed: &[f64],
+    ) -> Result<Vec<f64>, IkError>;
+    /// Every closed-form branch within the joint limits, each joint taken nearest `first`;
+    /// none for a numeric method.
+    fn branches(&self, _kin: &mut dyn Kinematics, _target: &Pose, _first: &[f64]) -> Vec<Vec<f64>> {
+        Vec::new()
+    }
+}
+
+/// The one place an [`robots::IkMethod`] meets its solver: a new method is its solver type and
+/// one arm here.
+fn solver(method: robots::IkMethod) -> Box<dyn Solver> {
+    match method {
+        robots::IkMethod::Qp => Box::new(Qp),
+        robots::IkMethod::Analytic(arm) => Box::new(Analytic(arm)),
+    }
+}
+
+/// Damped least-squares QPs ([`solve_ik`]).
+struct Qp;
+
+impl Solver for Qp {
+    fn solve(
+        &self,
+        kin: &mut dyn Kinematics,
+        target: &Pose,
+        seed: &[f64],
+    ) -> Result<Vec<f64>, IkError> {
+        solve_ik(kin, target, seed, &IkOptions::default())
+    }
+}
+
+/// The closed form of [`analytic_ik`], refined by the QP where its best branch misses, and the
+/// QP alone where no branch is within the limits.
+struct Analytic(robots::AnalyticArm);
+
+impl Solver for Analytic {
+    fn solve(
+        &self,
+        kin: &mut dyn Kinematics,
+        target: &Pose,
+        seed: &[f64],
+    ) -> Result<Vec<f64>, IkError> {
+        let opt = IkOptions::default();
+        let local = analytic_ik::base_frame(&self.0, kin).inverse() * target;
+        let cands = analytic_ik::candidates(&self.0, &local, seed);
+        match analytic_ik::best_within(&cands, &kin.limits(), seed) {
+            Some(q) => {
+                let (pos, rot) = error_norms(&pose_error(target, &kin.tcp(&q)));
+                if pos < opt.pos_tol && rot < opt.rot_tol {
+                    Ok(q)
+                } else {
+                    solve_ik(kin, target, &q, &opt)
+                }
+            }
+            None => solve_ik(kin, target, seed, &opt),
+        }
+    }
+
+    fn branches(&self, kin: &mut dyn Kinematics, target: &Pose, first: &[f64]) -> Vec<Vec<f64>> {
+        let local = analytic_ik::base_frame(&self.0, kin).inverse() * target;
+        analytic_ik::candidates(&self.0, &local, first)
+            .into_iter()
+            .filter_map(|c| analytic_ik::best_within(&[c], &kin.limits(), first))
+            .collect()
+    }
+}
+
+/// Solves for joint angles reaching `target` from `seed` with the method the robot model chooses.
 pub fn solve_with(
     method: robots::IkMethod,
     kin: &mut dyn Kinematics,
     target: &Pose,
     seed: &[f64],
 ) -> Result<Vec<f64>, IkError> {
-    match method {
-        robots::IkMethod::Qp => solve_ik(kin, target, seed, &IkOptions::default()),
-        robots::IkMethod::Analytic(arm) => {
-            let opt = IkOptions::default();
-            let local = analytic_ik::base_frame(&arm, kin).inverse() * target;
-            let cands = analytic_ik::candidates(&arm, &local, seed);
-            match analytic_ik::best_within(&cands, &kin.limits(), seed) {
-                Some(q) => {
-                    let (pos, rot) = error_norms(&pose_error(target, &kin.tcp(&q)));
-                    if pos < opt.pos_tol && rot < opt.rot_tol {
-                        Ok(q)
-                    } else {
-                        solve_ik(kin, target, &q, &opt)
-                    }
-                }
-                None => solve_ik(kin, target, seed, &opt),
-            }
-        }
-    }
+    solver(method).solve(kin, target, seed)
 }
 
 /// The distinct joint solutions for `target` within the joint limits that the robot model's
@@ -106,16 +162,12 @@ pub fn solutions(
             found.push(q);
         }
     };
-    if let robots::IkMethod::Analytic(arm) = method {
-        let local = analytic_ik::base_frame(&arm, kin).inverse() * target;
-        for c in analytic_ik::candidates(&arm, &local, first) {
-            if let Some(q) = analytic_ik::best_within(&[c], &kin.limits(), first) {
-                keep(q, kin);
-            }
-        }
+    let solver = solver(method);
+    for q in solver.branches(kin, target, first) {
+        keep(q, kin);
     }
     for seed in seeds {
-        if let Ok(q) = solve_with(method, kin, target, seed) {
+        if let Ok(q) = solver.solve(kin, target, seed) {
             keep(q, kin);
         }
     }

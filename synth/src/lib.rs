@@ -11,7 +11,8 @@
 //! beside the protocols, so the folder checks and runs on its own.
 //!
 //! It does not run the expert: `autobio tasks <out>` (or `eval`) measures what it wrote. Its
-//! tests are tests/synth.rs (and a test there fails when a registered primitive has no phrase).
+//! tests are tests/synth.rs. Each step is worded by its primitive's own phrase (declared beside it in
+//! `compiler::primitives`, checked there for every registered primitive).
 
 mod text;
 pub mod vocabulary;

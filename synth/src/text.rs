@@ -115,33 +115,10 @@ pub fn success(
 }
 
 /// One step in the instruction's words.
+/// The step as its primitive words it (`LabPrimitive::phrase`, declared beside the primitive).
 fn phrase(step: &Step) -> String {
-    let arg = |k: &str| step.args.get(k).cloned().unwrap_or_default();
-    let on = arg("on");
-    match step.template.primitive.name {
-        "pick" => format!("pick up the {on}"),
-        "place" => {
-            let to = arg("to");
-            let (holder, slot) = to.split_once('.').unwrap_or((&to, ""));
-            format!("put the {on} in slot {slot} of the {holder}")
-        }
-        "open_lid" => format!("open the lid of the {on}"),
-        "close_lid" => format!("close the lid of the {on}"),
-        "lock" => format!("lock the lid of the {on}"),
-        "unlock" => format!("release the lid of the {on}"),
-        "set_parameter" => format!("set the {on}'s {} to {}", arg("param"), arg("value")),
-        "press" => format!("press the {} button of the {on}", arg("button")),
-        "retract" => format!(
-            "bring the {} arm back to its rest pose",
-            step.template.robot
-        ),
-        "hold" => format!("hold the {on} steady"),
-        "release" => format!("let go of the {on}"),
-        "hand_over" => format!("hand the {on} to the {} arm", arg("to")),
-        "screw_cap" => format!("screw the cap onto the {on}"),
-        "unscrew_cap" => format!("unscrew the cap of the {on}"),
-        other => format!("{} the {on}", other.replace('_', " ")),
-    }
+    let primitive = step.template.primitive;
+    primitive.phrase_for(&step.template.robot, &step.args)
 }
 
 /// A TOML basic string.

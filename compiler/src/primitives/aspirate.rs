@@ -10,6 +10,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     args: &[ON, VOLUME],
     requires: "the robot carries a pipette with room for `volume`; `on` is open and holds at least `volume`",
     leaves: "`volume` moved from `on` into the pipette",
+    phrase: "aspirate the {on}",
     effect: liquid::effect,
     motions: Some(motions),
 };

@@ -10,6 +10,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     args: &[ON],
     requires: "the hand is empty; the lid is open",
     leaves: "the lid locked (closed, for lids without a latch)",
+    phrase: "close the lid of the {on}",
     effect: lid::effect,
     motions: Some(motions),
 };

@@ -10,6 +10,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     args: &[ON, VOLUME],
     requires: "the robot carries a pipette holding at least `volume`; `on` is open and has room for it",
     leaves: "`volume` moved from the pipette into `on`",
+    phrase: "dispense the {on}",
     effect: liquid::effect,
     motions: Some(motions),
 };

@@ -9,6 +9,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     args: &[ON],
     requires: "the hand is empty; `on` is movable",
     leaves: "the robot holding `on` steady; `on` stays where it is",
+    phrase: "hold the {on} steady",
     effect,
     motions: Some(motions),
 };

@@ -10,6 +10,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     args: &[ON],
     requires: "the hand is empty; the lid is closed and has a latch",
     leaves: "the lid locked",
+    phrase: "lock the lid of the {on}",
     effect: lid::effect,
     motions: Some(motions),
 };

@@ -10,6 +10,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     args: &[ON],
     requires: "the hand is empty; the lid is closed or locked",
     leaves: "the lid open (and unlocked)",
+    phrase: "open the lid of the {on}",
     effect: lid::effect,
     motions: Some(motions),
 };

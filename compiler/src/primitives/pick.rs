@@ -9,6 +9,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     args: &[ON],
     requires: "the hand is empty; `on` is movable and nobody carries it",
     leaves: "`on` carried by the robot",
+    phrase: "pick up the {on}",
     effect,
     motions: Some(motions),
 };

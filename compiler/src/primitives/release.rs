@@ -8,6 +8,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     args: &[],
     requires: "the robot holds something steady",
     leaves: "the hand empty",
+    phrase: "let go of the {on}",
     effect,
     motions: None,
 };

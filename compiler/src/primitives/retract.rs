@@ -11,6 +11,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     args: &[],
     requires: "the hand is empty",
     leaves: "the arm at its home pose; the lab as it was",
+    phrase: "bring the {robot} arm back to its rest pose",
     effect,
     motions: Some(motions),
 };

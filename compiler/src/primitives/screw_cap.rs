@@ -9,6 +9,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     args: &[ON],
     requires: "the robot holds `on`'s cap; the tube is in a slot or gripped by another robot",
     leaves: "the cap on; the hand empty",
+    phrase: "screw the cap onto the {on}",
     effect,
     motions: Some(motions),
 };

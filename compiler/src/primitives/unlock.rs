@@ -10,6 +10,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     args: &[ON],
     requires: "the hand is empty; the lid is locked",
     leaves: "the lid closed, unlocked",
+    phrase: "release the lid of the {on}",
     effect: lid::effect,
     motions: Some(motions),
 };

@@ -1,0 +1,53 @@
+//! The workspace's integration tests, in one test binary: each file under tests/ is a module
+//! here (one link of the workspace instead of one per file; see docs/decisions.md, "One test
+//! binary"). They run the real MuJoCo, real files, the real `autobio` binary and real servers on
+//! loopback. A new test file is a new `mod` line below.
+
+mod common;
+
+mod aloha;
+mod architecture;
+mod authoring;
+mod centrifuge_mini;
+mod centrifuges;
+mod chains;
+mod cli;
+mod contact_and_position;
+mod datasets;
+mod deploy;
+mod episode_failures;
+mod expert_episodes;
+mod faulty_corpus;
+mod golden;
+mod hold_control;
+mod instruments_act;
+mod kinematics;
+mod labware_models;
+mod leaderboard;
+mod level_of_detail;
+mod liquid_scene;
+mod merge;
+mod model_faults;
+mod model_servers;
+mod no_simulator;
+mod observation_history;
+mod pictures;
+mod pipette;
+mod planning;
+mod processes;
+mod protocol_diagnostics;
+mod reach;
+mod replay;
+mod resume;
+mod scale;
+mod scene_files;
+mod settle;
+mod site_browser;
+mod step_by_hand;
+mod synth;
+mod thermal_mixer;
+mod tube_transfer;
+mod two_arms;
+mod vortex_mixing;
+mod workflows;
+mod wrong_outcomes;
