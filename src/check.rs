@@ -41,7 +41,7 @@ pub fn check(front: &Front, a: &CheckArgs) -> Result<ExitCode> {
             }
         };
         // What the language cannot see: whether each step's robot reaches its target.
-        expert::reach::check(&mut checked);
+        expert::reach::check(&mut checked, &expert::reach::Store::from_env());
         failed |= checked.diagnostics.iter().any(|d| d.is_error());
         if a.json {
             for d in &checked.diagnostics {

@@ -63,7 +63,7 @@ fn check(path: &Path) -> compiler::Checked {
     let mut checked =
         compiler::check_file(path, Some(Path::new(env!("CARGO_MANIFEST_DIR")))).unwrap();
     // As `autobio check` does: the reach of each step's robot (E0036).
-    expert::reach::check(&mut checked);
+    expert::reach::check(&mut checked, &expert::reach::Store::none());
     checked
 }
 

@@ -28,7 +28,7 @@ fn check_as(path: &str, source: &str, scratch: &str) -> compiler::Checked {
     let file = common::scratch(scratch).join(Path::new(path).file_name().unwrap());
     std::fs::write(&file, source).unwrap();
     let mut c = compiler::check_file(&file, None).unwrap();
-    expert::reach::check(&mut c);
+    expert::reach::check(&mut c, &expert::reach::Store::none());
     c
 }
 
@@ -73,7 +73,7 @@ fn every_shipped_protocol_reaches_its_targets_in_every_sampled_layout() {
     {
         for path in files {
             let mut c = compiler::check_file(&path, None).unwrap();
-            expert::reach::check(&mut c);
+            expert::reach::check(&mut c, &expert::reach::Store::none());
             let errors: Vec<_> = c
                 .diagnostics
                 .iter()
@@ -209,7 +209,7 @@ fn a_lid_out_of_reach_is_found_along_its_arc_and_a_hinted_base_checks_clean() {
     let check = |base: &str| {
         std::fs::write(dir.join("riser.toml"), riser.replacen(stands, base, 1)).unwrap();
         let mut c = compiler::check_file(&dir.join("open_lid.toml"), None).unwrap();
-        expert::reach::check(&mut c);
+        expert::reach::check(&mut c, &expert::reach::Store::none());
         c
     };
     let low = check("base = { pos_m = [0.4, 0.25, 1.0], yaw_deg = -90 }");
@@ -253,7 +253,7 @@ fn a_slot_out_of_reach_in_some_layouts_is_a_warning_naming_the_seeds_that_fail()
         "partial",
     );
     let task = c.task.as_ref().expect("a warning, not an error");
-    let seeds = expert::reach::partly_unreachable(task);
+    let seeds = expert::reach::partly_unreachable(task, &expert::reach::Store::none());
     assert_eq!(seeds.get(&1), Some(&vec![4, 5]), "{seeds:?}");
     let w = c
         .diagnostics
@@ -346,7 +346,7 @@ fn a_target_in_reach_only_past_a_joint_range_names_the_joint_and_a_lower_shelf_c
 fn the_corpus_hint_fixes(path: &str, code: dsl::Code, seeds: &[u64], tag: &str) -> String {
     let source = std::fs::read_to_string(path).unwrap();
     let mut c = compiler::check_file(Path::new(path), None).unwrap();
-    expert::reach::check(&mut c);
+    expert::reach::check(&mut c, &expert::reach::Store::none());
     let (hint, hinted) = hint_of(&c, code);
     let line = source
         .lines()
@@ -405,4 +405,74 @@ fn the_partial_range_corpus_case_hints_a_base_that_reaches_every_layout() {
         &[4, 5],
         "partial",
     );
+}
+
+/// `autobio check FILE` with its reach outcomes kept under `cache`: stdout and stderr.
+fn check_cached(file: &str, cache: &Path) -> String {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_autobio"))
+        .args(["check", file])
+        .env("AUTOBIO_CACHE_DIR", cache)
+        .env("NO_COLOR", "1")
+        .output()
+        .unwrap();
+    format!("{}{}", common::text(&out.stdout), common::text(&out.stderr))
+}
+
+/// The files a reach store holds.
+fn kept(cache: &Path) -> Vec<std::path::PathBuf> {
+    std::fs::read_dir(cache.join("reach"))
+        .map(|d| d.map(|e| e.unwrap().path()).collect())
+        .unwrap_or_default()
+}
+
+#[test]
+fn kept_reach_outcomes_give_the_same_diagnostics_and_an_edit_is_solved_afresh() {
+    let cache = common::scratch("reach-store");
+    // A step out of reach (E0036 with its base hint) and a clean protocol: each checked with an
+    // empty store, then answered from it, then with its entries corrupted.
+    for file in [
+        "tests/corpus/faulty/step_out_of_reach.toml",
+        "protocols/thermal_cycler/close_lid.toml",
+    ] {
+        let cold = check_cached(file, &cache);
+        let entries = kept(&cache).len();
+        assert!(entries > 0, "{file}: nothing kept");
+        let warm = check_cached(file, &cache);
+        assert_eq!(warm, cold, "{file}: answered from the store");
+        assert_eq!(kept(&cache).len(), entries, "{file}: solved again");
+        for f in kept(&cache) {
+            std::fs::write(f, "{ not json").unwrap();
+        }
+        assert_eq!(check_cached(file, &cache), cold, "{file}: a corrupt entry is a miss");
+        // What the store says is what was solved: the faulty file's error is in it.
+        if file.contains("faulty") {
+            assert!(cold.contains("E0036"), "{cold}");
+        }
+    }
+    // An edited protocol (its robot moved out of reach) is solved afresh: new entries, and the
+    // error the edit causes, not the clean outcome kept for the file before it.
+    let source = std::fs::read_to_string("protocols/thermal_cycler/close_lid.toml").unwrap();
+    let moved = common::scratch("reach-store-edit").join("close_lid.toml");
+    let edited = source.replacen(
+        "base = { pos_m = [0.0, 0.5, 0.824] }",
+        "base = { pos_m = [0.0, 1.1, 0.824] }",
+        1,
+    );
+    assert_ne!(edited, source, "the edit did not apply");
+    std::fs::write(&moved, edited).unwrap();
+    let before = kept(&cache).len();
+    let out = check_cached(moved.to_str().unwrap(), &cache);
+    assert!(out.contains("E0036"), "{out}");
+    assert!(kept(&cache).len() > before, "the edited task was not solved");
+    // An empty AUTOBIO_CACHE_DIR keeps nothing (not even in the home folder's cache).
+    let home = common::scratch("reach-store-home");
+    let none = std::process::Command::new(env!("CARGO_BIN_EXE_autobio"))
+        .args(["check", "protocols/thermal_cycler/close_lid.toml"])
+        .env("AUTOBIO_CACHE_DIR", "")
+        .env("HOME", &home)
+        .env_remove("XDG_CACHE_HOME")
+        .output()
+        .unwrap();
+    assert!(none.status.success());
+    assert!(!home.join(".cache").exists());
 }
