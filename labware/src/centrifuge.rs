@@ -15,10 +15,11 @@
 //! about +z.
 
 use crate::frame::{Pose, Vec3, axis_angle, pose, translation, x_turn};
-use crate::lid::{Lid, LidNames};
-use crate::mjcf::{Fragment, box_inertia, pose_attrs, rgba, v3};
+use crate::lid::{JOINT, LOCK_SWITCH, LOCKED, Lid, LidBody, LidNames, Lidded};
+use crate::mjcf::{Fragment, pose_attrs, rgba, v3};
 use crate::model::{
-    Affordance, Effects, Instrument, LabwareState, Logic, Measure, Reset, Symmetry, set,
+    Affordance, Effects, Instrument, Joints, LabwareState, Logic, Measure, Reset, Symmetry, flag,
+    set, set_flag,
 };
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -47,12 +48,9 @@ pub struct Params {
     pub base_half: Vec3,
     /// Lid hinge (axis +x through it): y and z, on the back edge of the body's top.
     pub hinge: [f64; 2],
-    /// Lid extent from the hinge to its front edge, half width, half thickness, mass, damping.
-    pub lid_depth: f64,
-    pub lid_half_width: f64,
-    pub lid_half_thickness: f64,
-    pub lid_mass: f64,
-    pub lid_damping: f64,
+    /// The lid's extents, mass and damping.
+    #[serde(flatten)]
+    pub lid_body: LidBody,
     /// Spring towards open (N·m/rad).
     pub lid_stiffness: f64,
     pub lid_open: f64,
@@ -129,11 +127,13 @@ impl Params {
         Params {
             base_half: [0.1705, 0.216, 0.1105],
             hinge: [-0.198, 0.221],
-            lid_depth: 0.352,
-            lid_half_width: 0.17,
-            lid_half_thickness: 0.0135,
-            lid_mass: 2.95,
-            lid_damping: 20.0,
+            lid_body: LidBody {
+                depth: 0.352,
+                half_width: 0.17,
+                half_thickness: 0.0135,
+                mass: 2.95,
+                damping: 20.0,
+            },
             lid_stiffness: 3.2,
             lid_open: 0.0,
             lid_closed: -1.723,
@@ -166,11 +166,13 @@ impl Params {
         Params {
             base_half: [0.363, 0.349, 0.1555],
             hinge: [-0.29, 0.311],
-            lid_depth: 0.59,
-            lid_half_width: 0.36,
-            lid_half_thickness: 0.021,
-            lid_mass: 17.5,
-            lid_damping: 20.0,
+            lid_body: LidBody {
+                depth: 0.59,
+                half_width: 0.36,
+                half_thickness: 0.021,
+                mass: 17.5,
+                damping: 20.0,
+            },
             lid_stiffness: 27.5,
             lid_open: 0.0,
             lid_closed: -1.94,
@@ -198,21 +200,10 @@ impl Params {
         [0.0, self.hinge[0], self.hinge[1]]
     }
 
-    /// Orientation of the lid body at joint angle 0: the closed geometry turned open about +x.
-    /// The lid this instrument composes ([`crate::lid`]), from its parameters.
-    pub fn lid(&self) -> Lid {
-        Lid::new(
-            self.lid_open,
-            self.lid_closed,
-            self.open_tolerance,
-            self.closed_tolerance,
-        )
-    }
-
     /// The lid's frame at a lid angle (at the hinge; x along it, y towards the front edge, z the
     /// lid's outward normal), in the frame `placement` is given in.
     fn lid_frame(&self, placement: &Pose, lid: f64) -> Pose {
-        placement * pose(self.hinge_point(), self.lid().rest() * x_turn(lid))
+        placement * self.lid().frame(self.hinge_point(), lid)
     }
 
     /// The grip bar's centre for a lid angle, in the frame `placement` is given in.
@@ -222,10 +213,11 @@ impl Params {
 
     /// The bar's centre in the lid's frame.
     fn bar_centre(&self) -> Vec3 {
+        let lid = &self.lid_body;
         [
             0.0,
-            self.lid_depth - self.bar_inset,
-            2.0 * self.lid_half_thickness + self.bar_height,
+            lid.depth - self.bar_inset,
+            2.0 * lid.half_thickness + self.bar_height,
         ]
     }
 
@@ -270,7 +262,7 @@ impl Params {
     /// the face) and half extents across and along the face.
     fn panel(&self) -> (Pose, f64, f64) {
         let b = self.base_half;
-        let front = self.hinge[0] + self.lid_depth;
+        let front = self.hinge[0] + self.lid_body.depth;
         let half_depth = (b[1] - front) / 2.0 - 0.002;
         let frame = pose(
             [0.0, (b[1] + front) / 2.0, 2.0 * b[2] + 0.012],
@@ -297,20 +289,17 @@ impl Params {
         self.lid_frame(placement, lid) * pose(self.bar_centre(), tool)
     }
 
-    pub fn lid_is_closed(&self, lid: f64) -> bool {
-        self.lid().is_closed(lid)
-    }
-
     /// Where the hand pushes the lid shut: on its outer face, `push_x` off the centre line,
     /// `push_at` of the way from the hinge to the front edge (clear of the grip bar), the tool
     /// pointing into the lid (a touch: the closed fingertips go there). The frame turns with the lid, so following it while the lid closes pushes the lid
     /// shut; the damper keeps the lid against the fingers. (Held by its bar instead, the 5430's
     /// open lid is out of the arm's reach for a third of the arm's start poses.)
     fn push_affordance(&self, placement: &Pose, lid: f64) -> Pose {
+        let body = &self.lid_body;
         let at = [
             self.push_x,
-            self.lid_depth * self.push_at,
-            2.0 * self.lid_half_thickness,
+            body.depth * self.push_at,
+            2.0 * body.half_thickness,
         ];
         let tool = crate::frame::from_axes([1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]);
         self.lid_frame(placement, lid) * pose(at, tool)
@@ -324,11 +313,8 @@ impl Params {
     /// pressed on their caps and tipped them in their slots once it latched). Over a swing-bucket
     /// rotor, whose buckets hang below the body's top, one slab.
     fn lid_boxes(&self) -> Vec<(&'static str, Vec3, Vec3)> {
-        let (w, d, t) = (
-            self.lid_half_width,
-            self.lid_depth,
-            2.0 * self.lid_half_thickness,
-        );
+        let lid = &self.lid_body;
+        let (w, d, t) = (lid.half_width, lid.depth, 2.0 * lid.half_thickness);
         if !matches!(self.rotor, Rotor::FixedAngle { .. }) {
             return vec![("shell", [0.0, d / 2.0, t / 2.0], [w, d / 2.0, t / 2.0])];
         }
@@ -532,37 +518,64 @@ impl Params {
     }
 }
 
-struct Names {
-    base: String,
-    lid: LidNames,
-    key: String,
-}
+/// The lid, sprung towards open, and the latch that catches it shut.
+impl Lidded for Params {
+    fn lid(&self) -> Lid {
+        let lid = self.lid_body.hinged(
+            [self.lid_open, self.lid_closed],
+            [self.open_tolerance, self.closed_tolerance],
+        );
+        Lid {
+            spring: Some(self.lid_stiffness),
+            ..lid
+        }
+    }
 
-impl Names {
-    fn new(prefix: &str) -> Names {
-        Names {
-            base: format!("{prefix}/base"),
-            lid: LidNames::new(prefix),
-            key: format!("{prefix}/key_open"),
+    /// Locked: shut and held by the latch; unlocked: released, whatever the lid's angle.
+    fn latch(&self, state: &str, tolerance: Option<f64>, s: &LabwareState) -> Option<Measure> {
+        let locked = s.flag(LOCKED);
+        match state {
+            "locked" => {
+                let m = self.lid().measure("closed", s.joint(JOINT), tolerance)?;
+                Some(Measure {
+                    holds: m.holds && locked,
+                    ..m
+                })
+            }
+            "unlocked" => Some(Measure {
+                value: f64::from(u8::from(locked)),
+                target: 0.0,
+                tolerance: 0.5,
+                holds: !locked,
+            }),
+            _ => None,
+        }
+    }
+
+    /// Closed: pressed past the stop, so that the latch catches it against the spring: the push
+    /// point goes `PRESS_PAST` below the shut lid's face, more than the arm sags under gravity
+    /// (about 1 cm at the UR5e's reach).
+    fn lid_goal(&self, goal: &str) -> Option<f64> {
+        match goal {
+            "closed" => Some(self.lid_closed - PRESS_PAST / (self.push_at * self.lid_body.depth)),
+            _ => self.lid().goal(goal),
         }
     }
 }
 
+/// The MuJoCo name of the lid key's body (the lid's are [`LidNames`]).
+fn key_name(prefix: &str) -> String {
+    format!("{prefix}/key_open")
+}
+
 impl Instrument for Params {
     fn fragment(&self, name: &str, placement: &Pose) -> Fragment {
-        let n = Names::new(name);
+        let n = LidNames::new(name);
+        let key = key_name(name);
         let b = self.base_half;
-        let lid_half = [
-            self.lid_half_width,
-            self.lid_depth / 2.0,
-            self.lid_half_thickness,
-        ];
-        let lid_c = [0.0, self.lid_depth / 2.0, self.lid_half_thickness];
+        let lid = &self.lid_body;
+        let lid_c = [0.0, lid.depth / 2.0, lid.half_thickness];
         let bar_c = self.bar_centre();
-        let (lo, hi) = (
-            self.lid_closed.min(self.lid_open),
-            self.lid_closed.max(self.lid_open),
-        );
         let rotor = format!(
             "  <body name=\"{base}/rotor\" {frame}>\n    <joint name=\"{base}/rotor_hinge\" type=\"hinge\" axis=\"0 0 1\" damping=\"0.0001\" frictionloss=\"0.05\"/>\n    <inertial pos=\"0 0 -0.02\" mass=\"0.59\" diaginertia=\"0.0017 0.0017 0.0033\"/>\n{geoms}  </body>\n",
             base = n.base,
@@ -593,7 +606,7 @@ impl Instrument for Params {
             dat = pose_attrs(&on_panel(-0.4 * pw)),
             sat = pose_attrs(&on_panel(0.15 * pw)),
             tat = pose_attrs(&on_panel(0.4 * pw)),
-            key = n.key,
+            key = key,
             kat = pose_attrs(&on_panel(self.key.x)),
             travel = self.key.travel,
             k = self.key.stiffness,
@@ -603,83 +616,65 @@ impl Instrument for Params {
             mz = self.key.height + 0.0003,
         );
         let [rx, ry] = self.rotor_axis;
-        let worldbody = format!(
-            r#"<body name="{base}" {placement}>
-{housing}  <geom name="{base}/bowl" type="cylinder" size="{bowl} 0.002" pos="{rx} {ry} {bowlz}" rgba="0.3 0.31 0.33 1" contype="0" conaffinity="0"/>
+        let geoms = format!(
+            r#"{housing}  <geom name="{base}/bowl" type="cylinder" size="{bowl} 0.002" pos="{rx} {ry} {bowlz}" rgba="0.3 0.31 0.33 1" contype="0" conaffinity="0"/>
 {rotor}{panel}  <geom name="{base}/stripe" type="box" size="{sx} 0.001 0.006" pos="0 {sy} {stz}" rgba="0.15 0.3 0.6 1" contype="0" conaffinity="0"/>
-  <body name="{lid}" {lidframe}>
-    <joint name="{lidj}" type="hinge" axis="1 0 0" range="{lo} {hi}" damping="{lidd}" stiffness="{lidk}" springref="{open}" solreflimit="0.004 1" solimplimit="0.95 0.99 0.0005"/>
-    <inertial pos="{lidc}" mass="{lidm}" diaginertia="{lidi}"/>
-{shell}    <geom name="{lid}/window" type="cylinder" size="{win} 0.001" pos="{rx} {winy} {winz}" rgba="0.15 0.2 0.28 0.85" contype="0" conaffinity="0"/>
-    <geom name="{lid}/label" type="box" size="{labw} 0.012 0.001" pos="0 {laby} {winz}" rgba="0.15 0.3 0.6 1" contype="0" conaffinity="0"/>
-    <geom name="{lid}/post_l" type="cylinder" size="0.007 {posth}" pos="{postx} {posty} {postz}" rgba="0.3 0.31 0.33 1"/>
-    <geom name="{lid}/post_r" type="cylinder" size="0.007 {posth}" pos="-{postx} {posty} {postz}" rgba="0.3 0.31 0.33 1"/>
-    <geom name="{lid}/bar" type="capsule" size="{gr} {gl}" pos="{barc}" quat="0.7071068 0 0.7071068 0" friction="1.5 0.01 0.001" rgba="0.3 0.31 0.33 1"/>
-    <site name="{grip}" pos="{barc}" size="0.005" rgba="1 0.2 0.2 0.5" group="4"/>
-  </body>
-</body>
 "#,
             base = n.base,
-            placement = pose_attrs(placement),
             housing = self.housing(&n.base),
             bowl = self.bowl_radius,
             bowlz = self.bowl_floor() + 0.002,
             sx = b[0] - 0.01,
             sy = b[1] + 0.001,
             stz = 0.03,
-            lid = n.lid.body,
-            lidframe = pose_attrs(&pose(self.hinge_point(), self.lid().rest())),
-            lidj = n.lid.joint,
-            lidd = self.lid_damping,
-            lidk = self.lid_stiffness,
-            open = self.lid_open,
-            lidc = v3(lid_c),
-            lidm = self.lid_mass,
-            lidi = v3(box_inertia(self.lid_mass, lid_half)),
-            shell = self.lid_shell(&n.lid.body),
+        );
+        // The lid's shell, the window over the rotor, the label and the grip bar on its posts.
+        let lid_geoms = format!(
+            r#"{shell}    <geom name="{lid}/window" type="cylinder" size="{win} 0.001" pos="{rx} {winy} {winz}" rgba="0.15 0.2 0.28 0.85" contype="0" conaffinity="0"/>
+    <geom name="{lid}/label" type="box" size="{labw} 0.012 0.001" pos="0 {laby} {winz}" rgba="0.15 0.3 0.6 1" contype="0" conaffinity="0"/>
+    <geom name="{lid}/post_l" type="cylinder" size="0.007 {posth}" pos="{postx} {posty} {postz}" rgba="0.3 0.31 0.33 1"/>
+    <geom name="{lid}/post_r" type="cylinder" size="0.007 {posth}" pos="-{postx} {posty} {postz}" rgba="0.3 0.31 0.33 1"/>
+    <geom name="{lid}/bar" type="capsule" size="{gr} {gl}" pos="{barc}" quat="0.7071068 0 0.7071068 0" friction="1.5 0.01 0.001" rgba="0.3 0.31 0.33 1"/>
+    <site name="{grip}" pos="{barc}" size="0.005" rgba="1 0.2 0.2 0.5" group="4"/>
+"#,
+            lid = n.body,
+            shell = self.lid_shell(&n.body),
             win = 0.65 * self.bowl_radius,
             winy = ry - self.hinge[0],
-            winz = 2.0 * self.lid_half_thickness + 0.001,
-            labw = 0.3 * self.lid_half_width,
-            laby = self.lid_depth * 0.85,
+            winz = 2.0 * lid.half_thickness + 0.001,
+            labw = 0.3 * lid.half_width,
+            laby = lid.depth * 0.85,
             posth = self.bar_height / 2.0,
             postx = self.grip_half_length - 0.005,
             posty = bar_c[1],
-            postz = 2.0 * self.lid_half_thickness + self.bar_height / 2.0,
+            postz = 2.0 * lid.half_thickness + self.bar_height / 2.0,
             gr = self.grip_radius,
             gl = self.grip_half_length,
             barc = v3(bar_c),
-            grip = n.lid.grip,
+            grip = n.grip,
         );
-        let equality = format!(
-            r#"<joint name="{lock}" joint1="{lidj}" polycoef="{closed} 0 0 0 0" active="false" solref="0.01 1"/>
-"#,
-            lock = n.lid.lock,
-            lidj = n.lid.joint,
-            closed = self.lid_closed,
-        );
+        let lid_xml = self
+            .lid()
+            .body_xml(&n, self.hinge_point(), lid_c, &lid_geoms);
         let contact = format!(
-            "<exclude body1=\"{base}\" body2=\"{}\"/>\n<exclude body1=\"{base}\" body2=\"{}\"/>\n",
-            n.lid.body,
-            n.key,
+            "<exclude body1=\"{base}\" body2=\"{}\"/>\n<exclude body1=\"{base}\" body2=\"{key}\"/>\n",
+            n.body,
             base = n.base
         );
         Fragment {
-            asset: String::new(),
-            worldbody,
-            equality,
+            worldbody: n.instrument_xml(placement, &geoms, &lid_xml),
+            equality: self.lid().lock_xml(&n),
             contact,
             ..Default::default()
         }
     }
 
     fn joints(&self, name: &str) -> Vec<(&'static str, String)> {
-        let n = Names::new(name);
         vec![
-            ("lid", n.lid.joint),
+            (JOINT, LidNames::new(name).joint),
             ("rotor", format!("{name}/base/rotor_hinge")),
             // The role is the catalogue's name of the key.
-            ("open", format!("{}/press", n.key)),
+            ("open", format!("{}/press", key_name(name))),
         ]
     }
 
@@ -693,22 +688,17 @@ impl Instrument for Params {
     }
 
     fn switches(&self, name: &str) -> Vec<(&'static str, String)> {
-        vec![("lock", Names::new(name).lid.lock)]
+        LidNames::new(name).switches()
     }
 
     fn reset(&self, initial: &BTreeMap<String, String>) -> Reset {
-        let state = initial.get("lid").map(String::as_str).unwrap_or("open");
-        let lid = if state == "open" {
-            self.lid_open
-        } else {
-            self.lid_closed
-        };
+        let (state, lid) = self.lid().start(initial);
         let mut logic = Logic::new();
-        set(&mut logic, "locked", f64::from(u8::from(state == "locked")));
+        set_flag(&mut logic, LOCKED, state == "locked");
         // A lid that starts shut but unlatched must be lifted clear before the latch can catch.
-        set(&mut logic, "armed", f64::from(u8::from(state == "open")));
+        set_flag(&mut logic, "armed", state == "open");
         Reset {
-            joints: vec![("lid", lid)],
+            joints: vec![(JOINT, lid)],
             logic,
         }
     }
@@ -716,14 +706,8 @@ impl Instrument for Params {
     /// The latch: it catches a lid within `latch_catch` of shut when armed; the lid key held
     /// past its press force for `hold_s` releases it and disarms it until the lid has been
     /// lifted twice the catch clear.
-    fn step(
-        &self,
-        dt: f64,
-        joints: &BTreeMap<String, f64>,
-        logic: &mut Logic,
-        effects: &mut Effects,
-    ) {
-        let lid = joints.get("lid").copied().unwrap_or(self.lid_open);
+    fn step(&self, dt: f64, joints: &Joints, logic: &mut Logic, effects: &mut Effects) {
+        let lid = self.lid().angle(joints);
         let pressed = joints
             .get("open")
             .is_some_and(|x| *x * self.key.stiffness > self.key.force);
@@ -732,9 +716,8 @@ impl Instrument for Params {
         } else {
             0.0
         };
-        let mut locked = logic.get("locked").is_some_and(|v| *v != 0.0);
-        let mut armed = logic.get("armed").is_some_and(|v| *v != 0.0)
-            || lid > self.lid_closed + 2.0 * self.latch_catch;
+        let mut locked = flag(logic, LOCKED);
+        let mut armed = flag(logic, "armed") || lid > self.lid_closed + 2.0 * self.latch_catch;
         if held >= self.key.hold_s {
             locked = false;
             armed = false;
@@ -742,67 +725,21 @@ impl Instrument for Params {
             locked = true;
         }
         set(logic, "key_held_s", held);
-        set(logic, "locked", f64::from(u8::from(locked)));
-        set(logic, "armed", f64::from(u8::from(armed)));
-        effects.switch("lock", locked);
+        set_flag(logic, LOCKED, locked);
+        set_flag(logic, "armed", armed);
+        effects.switch(LOCK_SWITCH, locked);
     }
 
-    fn joint_goal(&self, role: &str, goal: &str) -> Option<f64> {
-        match (role, goal) {
-            ("lid", "open") => Some(self.lid_open),
-            // Pressed past the stop, so that the latch catches it against the spring: the push
-            // point goes `PRESS_PAST` below the shut lid's face, more than the arm sags under
-            // gravity (about 1 cm at the UR5e's reach).
-            ("lid", "closed") => {
-                Some(self.lid_closed - PRESS_PAST / (self.push_at * self.lid_depth))
-            }
-            _ => None,
-        }
-    }
-
-    fn measure(
-        &self,
-        part: &str,
-        state: &str,
-        tolerance: Option<f64>,
-        s: &LabwareState,
-    ) -> Option<Measure> {
-        if part != "lid" {
-            return None;
-        }
-        let lid = s.joint(crate::lid::JOINT);
-        let locked = s.flag(crate::lid::LOCKED);
-        match state {
-            "closed" | "open" => self.lid().measure(state, lid, tolerance),
-            // Latched: shut and held by the latch.
-            "locked" => {
-                let m = self.lid().measure("closed", lid, tolerance)?;
-                Some(Measure {
-                    holds: m.holds && locked,
-                    ..m
-                })
-            }
-            // Released: whatever the lid's angle.
-            "unlocked" => Some(Measure {
-                value: f64::from(u8::from(locked)),
-                target: 0.0,
-                tolerance: 0.5,
-                holds: !locked,
-            }),
-            _ => None,
-        }
-    }
-
-    fn readout(&self, s: &LabwareState) -> BTreeMap<String, String> {
-        self.lid().readout(s)
+    fn lidded(&self) -> Option<&dyn Lidded> {
+        Some(self)
     }
 
     /// `lid_close`: the lid is pushed shut (a touch on its face); `lid_open`: it is lifted by its
     /// grip bar; `open`: the lid key.
     fn affordance(&self, name: &str, s: &LabwareState) -> Option<Affordance> {
         let (pose, touch) = match name {
-            "lid_close" => (self.push_affordance(&s.pose, s.joint("lid")), true),
-            "lid_open" => (self.bar_affordance(&s.pose, s.joint("lid")), false),
+            "lid_close" => (self.push_affordance(&s.pose, s.joint(JOINT)), true),
+            "lid_open" => (self.bar_affordance(&s.pose, s.joint(JOINT)), false),
             "open" => (self.key_affordance(&s.pose), true),
             _ => return None,
         };
@@ -946,7 +883,8 @@ mod tests {
         assert!(closest > 0.005, "a cap within {closest} m of the lid");
         // The skirt stands on every side of the hollow, inside the lid's outline.
         let (cy, r) = (p.rotor_axis[1] - p.hinge[0], p.bowl_radius);
-        assert!(cy - r > 0.0 && cy + r < p.lid_depth && r < p.lid_half_width);
+        let lid = &p.lid_body;
+        assert!(cy - r > 0.0 && cy + r < lid.depth && r < lid.half_width);
         let xml = p.fragment("c", &Pose::identity()).worldbody;
         for (part, ..) in &boxes {
             assert!(xml.contains(&format!("c/lid/{part}\"")), "{part}");

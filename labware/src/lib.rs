@@ -32,6 +32,7 @@ pub use catalogue::{
 };
 pub use frame::{Pose, Rot, Vec3};
 pub use model::{
-    Affordance, Display, Effects, Instrument, LabwareState, Logic, Measure, Mechanism, Symmetry,
+    Affordance, Display, Effects, Instrument, Joints, LabwareState, Logic, Measure, Mechanism,
+    Symmetry,
 };
 pub use registry::Model;

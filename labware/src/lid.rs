@@ -1,11 +1,16 @@
 //! The hinged lid the lidded instruments compose (the thermal cycler, the mini centrifuge, the
-//! latched 5430 and 5910): its MuJoCo names, its rest frame, what "open" and "closed" measure,
-//! its readout (a latch's `locked` flag first), its joint goals, and the latch's flag and switch
-//! roles. Each instrument keeps its own geometry, handle and latch mechanics, and reaches its lid
-//! through [`Lid`]; a fourth lidded kind composes the same.
+//! latched 5430 and 5910): its parameters ([`LidBody`], carried flat among the instrument's
+//! own), its MuJoCo names, its rest frame, the MJCF of its hinge, inertia and latch constraint,
+//! the angle it starts at, what "open" and "closed" measure, its readout (a latch's `locked` flag
+//! first), its joint goals, the handle affordance and the latch's flag and switch roles; and
+//! [`Lidded`], what an instrument with a lid answers through [`crate::Instrument::lidded`]. Each
+//! instrument keeps its own geometry (shell, handle), its latch's mechanics and what "locked"
+//! and "unlocked" measure; a fourth lidded kind composes the same.
 
-use crate::frame::{Rot, x_turn};
-use crate::model::{LabwareState, Measure};
+use crate::frame::{Pose, Rot, Vec3, pose, x_turn};
+use crate::mjcf::{box_inertia, pose_attrs, v3};
+use crate::model::{Affordance, Joints, LabwareState, Measure, Symmetry};
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
 /// The logic flag a latched lid keeps while it is latched.
@@ -15,9 +20,11 @@ pub const LOCK_SWITCH: &str = "lock";
 /// The lid's joint role.
 pub const JOINT: &str = "lid";
 
-/// The MuJoCo names of a lid, under the item's prefix.
+/// The MuJoCo names of a lidded instrument's base and lid, under the item's prefix.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LidNames {
+    /// The instrument's base body, which carries the hinge.
+    pub base: String,
     pub body: String,
     pub joint: String,
     /// The site of the handle the hand takes.
@@ -29,37 +36,160 @@ pub struct LidNames {
 impl LidNames {
     pub fn new(prefix: &str) -> LidNames {
         LidNames {
+            base: format!("{prefix}/base"),
             body: format!("{prefix}/lid"),
             joint: format!("{prefix}/lid_hinge"),
             grip: format!("{prefix}/grip"),
             lock: format!("{prefix}/lid_lock"),
         }
     }
+
+    /// The MJCF of the whole instrument at `placement`: its base body with the base's `geoms`
+    /// and the lid's body ([`Lid::body_xml`]) in it.
+    pub fn instrument_xml(&self, placement: &Pose, geoms: &str, lid: &str) -> String {
+        format!(
+            "<body name=\"{}\" {}>\n{geoms}{lid}</body>\n",
+            self.base,
+            pose_attrs(placement)
+        )
+    }
+
+    /// The latch's switch by role, for [`crate::Instrument::switches`].
+    pub fn switches(&self) -> Vec<(&'static str, String)> {
+        vec![(LOCK_SWITCH, self.lock.clone())]
+    }
 }
 
-/// A lid on a hinge about the instrument's x axis: its open and closed angles and the named
-/// tolerances of `lid is open` and `lid is closed` (rad).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Lid {
-    pub open: f64,
-    pub closed: f64,
-    pub open_tolerance: f64,
-    pub closed_tolerance: f64,
+/// The lid's body as an instrument's parameters carry it: flattened among the instrument's own
+/// fields, so that its keys read `lid_depth`, `lid_half_width`... as they always have.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LidBody {
+    /// Extent from the hinge to the front edge, half width and half thickness (m).
+    #[serde(rename = "lid_depth")]
+    pub depth: f64,
+    #[serde(rename = "lid_half_width")]
+    pub half_width: f64,
+    #[serde(rename = "lid_half_thickness")]
+    pub half_thickness: f64,
+    /// Mass (kg) and the hinge's damping (N·m·s/rad).
+    #[serde(rename = "lid_mass")]
+    pub mass: f64,
+    #[serde(rename = "lid_damping")]
+    pub damping: f64,
 }
 
-impl Lid {
-    pub const fn new(open: f64, closed: f64, open_tolerance: f64, closed_tolerance: f64) -> Lid {
+impl LidBody {
+    /// The lid on its hinge: its open and closed angles, the named tolerances of `lid is open`
+    /// and `lid is closed` (rad), and no spring.
+    pub fn hinged(
+        self,
+        [open, closed]: [f64; 2],
+        [open_tolerance, closed_tolerance]: [f64; 2],
+    ) -> Lid {
         Lid {
+            body: self,
             open,
             closed,
+            spring: None,
             open_tolerance,
             closed_tolerance,
         }
     }
 
+    /// Half extents of the lid as a box: across, from the hinge to the front edge, thickness.
+    pub fn half(&self) -> Vec3 {
+        [self.half_width, self.depth / 2.0, self.half_thickness]
+    }
+}
+
+/// A lid on a hinge about the instrument's x axis: its body, its open and closed angles, a
+/// spring towards open if it has one, and the named tolerances of `lid is open` and `lid is
+/// closed` (rad).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lid {
+    pub body: LidBody,
+    pub open: f64,
+    pub closed: f64,
+    /// Spring stiffness towards open (N·m/rad).
+    pub spring: Option<f64>,
+    pub open_tolerance: f64,
+    pub closed_tolerance: f64,
+}
+
+impl Lid {
     /// The lid body's orientation at joint angle 0: the closed geometry turned open about +x.
     pub fn rest(&self) -> Rot {
         x_turn(self.open - self.closed)
+    }
+
+    /// The lid's frame at joint angle `angle`, its hinge at `hinge` (in the frame `hinge` is
+    /// given in): x along the hinge, y towards the front edge, z the lid's outward normal.
+    pub fn frame(&self, hinge: Vec3, angle: f64) -> Pose {
+        pose(hinge, self.rest() * x_turn(angle))
+    }
+
+    /// The MJCF of the lid's body at `hinge` (in the base's frame): the `<body>` at rest, its
+    /// hinge joint over the lid's range, its inertia as a box of the lid's extents centred at
+    /// `centre` (in the lid's frame), and the instrument's `geoms` for it (its shell, handle).
+    pub fn body_xml(&self, names: &LidNames, hinge: Vec3, centre: Vec3, geoms: &str) -> String {
+        let b = &self.body;
+        let spring = self.spring.map_or(String::new(), |k| {
+            format!(" stiffness=\"{k}\" springref=\"{}\"", self.open)
+        });
+        format!(
+            r#"  <body name="{body}" {frame}>
+    <joint name="{joint}" type="hinge" axis="1 0 0" range="{lo} {hi}" damping="{damping}"{spring} solreflimit="0.004 1" solimplimit="0.95 0.99 0.0005"/>
+    <inertial pos="{centre}" mass="{mass}" diaginertia="{inertia}"/>
+{geoms}  </body>
+"#,
+            body = names.body,
+            frame = pose_attrs(&pose(hinge, self.rest())),
+            joint = names.joint,
+            lo = self.closed.min(self.open),
+            hi = self.closed.max(self.open),
+            damping = b.damping,
+            centre = v3(centre),
+            mass = b.mass,
+            inertia = v3(box_inertia(b.mass, b.half())),
+        )
+    }
+
+    /// The MJCF of the whole instrument at `placement`: its base body with the base's `geoms`
+    /// and the lid's body ([`Lid::body_xml`]) in it.
+    pub fn instrument_xml(names: &LidNames, placement: &Pose, geoms: &str, lid: &str) -> String {
+        format!(
+            "<body name=\"{}\" {}>\n{geoms}{lid}</body>\n",
+            names.base,
+            pose_attrs(placement)
+        )
+    }
+
+    /// The latch's equality constraint, off until the latch switches it on: it holds the lid at
+    /// its closed angle.
+    pub fn lock_xml(&self, names: &LidNames) -> String {
+        format!(
+            "<joint name=\"{}\" joint1=\"{}\" polycoef=\"{} 0 0 0 0\" active=\"false\" solref=\"0.01 1\"/>\n",
+            names.lock, names.joint, self.closed
+        )
+    }
+
+    /// The declared start state of the lid (`open` when none is declared) and the angle it
+    /// starts at: open when declared open, else closed.
+    pub fn start<'a>(&self, initial: &'a BTreeMap<String, String>) -> (&'a str, f64) {
+        let state = initial.get(JOINT).map(String::as_str).unwrap_or("open");
+        (
+            state,
+            if state == "open" {
+                self.open
+            } else {
+                self.closed
+            },
+        )
+    }
+
+    /// The lid's angle among a step's joints (open when it is missing).
+    pub fn angle(&self, joints: &Joints) -> f64 {
+        joints.get(JOINT).copied().unwrap_or(self.open)
     }
 
     pub fn is_closed(&self, angle: f64) -> bool {
@@ -74,13 +204,7 @@ impl Lid {
             "closed" => (self.closed, self.closed_tolerance),
             _ => return None,
         };
-        let tolerance = tolerance.unwrap_or(default);
-        Some(Measure {
-            value: angle,
-            target,
-            tolerance,
-            holds: (angle - target).abs() <= tolerance,
-        })
+        Some(Measure::near(angle, target, tolerance.unwrap_or(default)))
     }
 
     /// The lid's state for recordings and reports: `locked` while latched, else `closed` or
@@ -106,18 +230,66 @@ impl Lid {
     }
 }
 
+/// What a lidded instrument tells the rest of the system about its lid, through
+/// [`crate::Instrument::lidded`]: the lid, what its latch measures and the angles the expert
+/// drives it to. The instrument's `lid is …` measures, its readout and its lid goals are these
+/// unless it says otherwise.
+pub trait Lidded {
+    /// The lid, from the instrument's parameters.
+    fn lid(&self) -> Lid;
+
+    /// `lid is locked` / `lid is unlocked` (tolerance: the predicate's, else the latch's); `None`
+    /// for any other state, and for a lid without a latch.
+    fn latch(&self, _state: &str, _tolerance: Option<f64>, _s: &LabwareState) -> Option<Measure> {
+        None
+    }
+
+    /// The angle the expert drives the lid to for a named goal (`open`, `closed`).
+    fn lid_goal(&self, goal: &str) -> Option<f64> {
+        self.lid().goal(goal)
+    }
+
+    /// `lid is <state>`: the latch's states, else open and closed by the lid's angle.
+    fn lid_measure(
+        &self,
+        state: &str,
+        tolerance: Option<f64>,
+        s: &LabwareState,
+    ) -> Option<Measure> {
+        (self.latch(state, tolerance, s))
+            .or_else(|| self.lid().measure(state, s.joint(JOINT), tolerance))
+    }
+}
+
+/// The affordance of a lid taken by one handle to open it and to close it (`lid_open`,
+/// `lid_close`): a grasp at `grip`, the same with the fingers swapped.
+pub fn handle(name: &str, grip: impl FnOnce() -> Pose) -> Option<Affordance> {
+    matches!(name, "lid_open" | "lid_close").then(|| Affordance {
+        pose: grip(),
+        symmetry: Symmetry::HalfTurn,
+        touch: false,
+        lead: 0.0,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    fn lid() -> Lid {
+        let body = LidBody {
+            depth: 0.2,
+            half_width: 0.1,
+            half_thickness: 0.01,
+            mass: 1.0,
+            damping: 0.1,
+        };
+        body.hinged([0.0, -1.5], [0.1, 0.01])
+    }
+
     #[test]
     fn open_and_closed_are_measured_against_their_tolerances() {
-        let lid = Lid {
-            open: 0.0,
-            closed: -1.5,
-            open_tolerance: 0.1,
-            closed_tolerance: 0.01,
-        };
+        let lid = lid();
         assert!(lid.measure("closed", -1.505, None).unwrap().holds);
         assert!(!lid.measure("closed", -1.45, None).unwrap().holds);
         assert!(lid.measure("closed", -1.45, Some(0.1)).unwrap().holds);
@@ -127,13 +299,36 @@ mod tests {
         assert!(lid.is_closed(-1.495) && !lid.is_closed(-1.4));
         let names = LidNames::new("cycler");
         assert_eq!(
-            [names.body, names.joint, names.grip, names.lock],
+            [names.base, names.body, names.joint, names.grip, names.lock],
             [
+                "cycler/base",
                 "cycler/lid",
                 "cycler/lid_hinge",
                 "cycler/grip",
                 "cycler/lid_lock"
             ]
         );
+    }
+
+    #[test]
+    fn a_sprung_lid_writes_its_spring_and_starts_where_declared() {
+        let plain = lid();
+        let names = LidNames::new("c");
+        let xml = plain.body_xml(&names, [0.0; 3], [0.0, 0.1, 0.0], "");
+        assert!(xml.contains("range=\"-1.5 0\"") && !xml.contains("stiffness"));
+        assert!(xml.starts_with("  <body name=\"c/lid\" ") && xml.ends_with("/>\n  </body>\n"));
+        let sprung = Lid {
+            spring: Some(3.0),
+            ..plain
+        };
+        let xml = sprung.body_xml(&names, [0.0; 3], [0.0, 0.1, 0.0], "");
+        assert!(xml.contains("damping=\"0.1\" stiffness=\"3\" springref=\"0\" "));
+        assert!(plain.lock_xml(&names).contains("polycoef=\"-1.5 0 0 0 0\""));
+        let locked = BTreeMap::from([(JOINT.to_string(), "locked".to_string())]);
+        assert_eq!(plain.start(&locked), ("locked", -1.5));
+        assert_eq!(plain.start(&BTreeMap::new()), ("open", 0.0));
+        let joints = BTreeMap::from([(JOINT.to_string(), -0.3)]);
+        assert_eq!(plain.angle(&joints), -0.3);
+        assert_eq!(plain.angle(&BTreeMap::new()), 0.0);
     }
 }

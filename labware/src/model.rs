@@ -12,12 +12,16 @@
 //! affordances as functions of live state.
 
 use crate::frame::{Pose, serde_pose};
+use crate::lid::{self, Lidded};
 use crate::mjcf::Fragment;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
 /// Instrument logic state that is not a joint (latch flags, panel values), by name.
 pub type Logic = BTreeMap<String, f64>;
+
+/// Joint values by role (rad or m).
+pub type Joints = BTreeMap<String, f64>;
 
 /// Sets one value of a name-keyed map, allocating the key only the first time (logic runs after
 /// every physics step).
@@ -30,6 +34,16 @@ pub fn set(map: &mut BTreeMap<String, f64>, key: &str, value: f64) {
     }
 }
 
+/// Whether a flag in a name-keyed map is set (present and not 0).
+pub fn flag(map: &BTreeMap<String, f64>, key: &str) -> bool {
+    map.get(key).is_some_and(|v| *v != 0.0)
+}
+
+/// Sets a flag in a name-keyed map: 1 when `on`, else 0 ([`set`]).
+pub fn set_flag(map: &mut BTreeMap<String, f64>, key: &str, on: bool) {
+    set(map, key, f64::from(u8::from(on)));
+}
+
 /// Live state of one placed labware item: everything a predicate, an affordance or a replay needs.
 /// The runtime fills it after every control step; recordings store it as `/labware/state`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -38,8 +52,7 @@ pub struct LabwareState {
     /// World pose of the item's root body (where a movable item is now).
     #[serde(with = "serde_pose")]
     pub pose: Pose,
-    /// Joint values by role (rad or m).
-    pub joints: BTreeMap<String, f64>,
+    pub joints: Joints,
     /// World poses of loose parts by role (a tube's cap).
     #[serde(default, with = "crate::frame::serde_pose_map")]
     pub parts: BTreeMap<String, Pose>,
@@ -56,7 +69,7 @@ impl LabwareState {
     }
 
     pub fn flag(&self, name: &str) -> bool {
-        self.logic.get(name).is_some_and(|v| *v != 0.0)
+        flag(&self.logic, name)
     }
 
     /// The same state with some joints set to other values (for affordances at planned angles).
@@ -110,6 +123,18 @@ pub struct Measure {
     pub target: f64,
     pub tolerance: f64,
     pub holds: bool,
+}
+
+impl Measure {
+    /// `value` within `tolerance` of `target`.
+    pub fn near(value: f64, target: f64, tolerance: f64) -> Measure {
+        Measure {
+            value,
+            target,
+            tolerance,
+            holds: (value - target).abs() <= tolerance,
+        }
+    }
 }
 
 /// How an affordance frame may be turned and still be the same grasp.
@@ -298,14 +323,7 @@ pub trait Instrument {
     /// and says what the simulation must do in `effects`: each switch's wanted state, each of its
     /// actuators' command (the runtime empties and reuses it, so a step allocates nothing). Also
     /// called once right after reset, with `dt` 0.
-    fn step(
-        &self,
-        _dt: f64,
-        _joints: &BTreeMap<String, f64>,
-        _logic: &mut Logic,
-        _effects: &mut Effects,
-    ) {
-    }
+    fn step(&self, _dt: f64, _joints: &Joints, _logic: &mut Logic, _effects: &mut Effects) {}
 
     /// The value a panel shows (`speed`, `temperature`...), from live state.
     fn panel_value(&self, _param: &str, _s: &LabwareState) -> Option<f64> {
@@ -334,25 +352,34 @@ pub trait Instrument {
     /// row first). Pure: the same logic always draws the same pixels.
     fn draw_display(&self, _index: usize, _logic: &Logic, _rgb: &mut [u8]) {}
 
-    /// A named joint goal, e.g. `("lid", "closed")` -> the lid's closed angle.
-    fn joint_goal(&self, _role: &str, _goal: &str) -> Option<f64> {
+    /// The item's lid, for an instrument with one ([`crate::lid`]): by default its `lid is …`
+    /// measures, its readout and its `lid` goals are the lid's.
+    fn lidded(&self) -> Option<&dyn Lidded> {
         None
+    }
+
+    /// A named joint goal, e.g. `("lid", "closed")` -> the lid's closed angle.
+    fn joint_goal(&self, role: &str, goal: &str) -> Option<f64> {
+        self.lidded().filter(|_| role == lid::JOINT)?.lid_goal(goal)
     }
 
     /// The measured value of `part is state` (tolerance: the predicate's, else the model's).
     fn measure(
         &self,
-        _part: &str,
-        _state: &str,
-        _tolerance: Option<f64>,
-        _s: &LabwareState,
+        part: &str,
+        state: &str,
+        tolerance: Option<f64>,
+        s: &LabwareState,
     ) -> Option<Measure> {
-        None
+        let lidded = self.lidded().filter(|_| part == lid::JOINT)?;
+        lidded.lid_measure(state, tolerance, s)
     }
 
     /// The current state of every part (for recordings and reports).
-    fn readout(&self, _s: &LabwareState) -> BTreeMap<String, String> {
-        BTreeMap::new()
+    fn readout(&self, s: &LabwareState) -> BTreeMap<String, String> {
+        self.lidded()
+            .map(|l| l.lid().readout(s))
+            .unwrap_or_default()
     }
 
     /// A named affordance in the world frame, from live (or planned) state.

@@ -22,7 +22,7 @@
 use crate::frame::{Pose, pose};
 use crate::mjcf::{Fragment, cylinder_inertia, pose_attrs};
 use crate::model::Measure;
-use crate::model::{Affordance, Effects, Instrument, LabwareState, Logic, Symmetry, set};
+use crate::model::{Affordance, Effects, Instrument, Joints, LabwareState, Logic, Symmetry, set};
 use crate::process::{PENDING_UL, Pipetting, Process, STROKE_UL, TIP_IN, VOLUME_UL, Vessel};
 use physics::liquid::Container;
 use serde::{Deserialize, Serialize};
@@ -254,7 +254,7 @@ impl Instrument for Params {
 
     /// The plunger's stroke as volume: each change is volume the tip must move. The first call
     /// (at reset) only notes where the plunger stands.
-    fn step(&self, _dt: f64, joints: &BTreeMap<String, f64>, logic: &mut Logic, _: &mut Effects) {
+    fn step(&self, _dt: f64, joints: &Joints, logic: &mut Logic, _: &mut Effects) {
         let first = joints.get("plunger").copied().unwrap_or(0.0);
         let blow = joints.get("blow_out").copied().unwrap_or(0.0);
         let stroke = self.stroke_ul(self.set_ul(logic), first, blow);

@@ -366,6 +366,27 @@ mod tests {
         }
     }
 
+    /// The plunger asks `pending_ul` of the tip (drawn in: positive), the tip's opening held at
+    /// `tip` for `seconds`.
+    fn stroke(
+        p: &mut Pipetting,
+        logic: &mut [Logic],
+        pending_ul: f64,
+        tip: [f64; 3],
+        seconds: f64,
+    ) {
+        logic[2].insert(PENDING_UL.into(), pending_ul);
+        run(p, &poses(tip), logic, seconds);
+    }
+
+    /// No liquid moved: the tip holds none, the full tube still holds 20 mL, and the stroke's
+    /// 200 µL went to the tip's `key` (air drawn in, or air bubbled out).
+    fn drew_nothing(logic: &[Logic], key: &str, what: &str) {
+        assert_eq!(ul(logic, 2, VOLUME_UL), 0.0, "{what}");
+        assert_eq!(ul(logic, 0, VOLUME_UL), 20_000.0, "{what}");
+        assert!((ul(logic, 2, key) - 200.0).abs() < 1e-9, "{what}");
+    }
+
     fn ul(logic: &[Logic], item: usize, key: &str) -> f64 {
         logic[item].get(key).copied().unwrap_or(0.0)
     }
@@ -409,19 +430,15 @@ mod tests {
     fn a_release_above_the_surface_or_outside_the_tube_draws_air() {
         for tip in [ABOVE, [0.05, 0.0, 0.03]] {
             let (mut p, mut logic) = scene();
-            logic[2].insert(PENDING_UL.into(), 200.0);
-            run(&mut p, &poses(tip), &mut logic, 2.0);
-            assert_eq!(ul(&logic, 2, VOLUME_UL), 0.0, "{tip:?}");
-            assert_eq!(ul(&logic, 0, VOLUME_UL), 20_000.0);
-            assert!((ul(&logic, 2, AIR_UL) - 200.0).abs() < 1e-9);
+            stroke(&mut p, &mut logic, 200.0, tip, 2.0);
+            drew_nothing(&logic, AIR_UL, &format!("{tip:?}"));
         }
     }
 
     #[test]
     fn a_tip_withdrawn_before_it_fills_holds_what_it_drew_under_the_surface() {
         let (mut p, mut logic) = scene();
-        logic[2].insert(PENDING_UL.into(), 200.0);
-        run(&mut p, &poses(UNDER), &mut logic, 0.1);
+        stroke(&mut p, &mut logic, 200.0, UNDER, 0.1);
         let drawn = ul(&logic, 2, VOLUME_UL);
         run(&mut p, &poses(ABOVE), &mut logic, 2.0);
         assert_eq!(ul(&logic, 2, VOLUME_UL), drawn);
@@ -433,30 +450,23 @@ mod tests {
     #[test]
     fn pressing_under_the_surface_bubbles_and_draws_nothing() {
         let (mut p, mut logic) = scene();
-        logic[2].insert(PENDING_UL.into(), -200.0);
-        run(&mut p, &poses(UNDER), &mut logic, 2.0);
-        assert_eq!(ul(&logic, 2, VOLUME_UL), 0.0);
-        assert_eq!(ul(&logic, 0, VOLUME_UL), 20_000.0);
-        assert!((ul(&logic, 2, BUBBLED_UL) - 200.0).abs() < 1e-9);
+        stroke(&mut p, &mut logic, -200.0, UNDER, 2.0);
+        drew_nothing(&logic, BUBBLED_UL, "pressed under the surface");
     }
 
     #[test]
     fn what_is_pushed_out_lands_in_the_vessel_under_the_tip_or_on_the_bench() {
         let (mut p, mut logic) = scene();
-        logic[2].insert(PENDING_UL.into(), 300.0);
-        run(&mut p, &poses(UNDER), &mut logic, 2.0);
+        stroke(&mut p, &mut logic, 300.0, UNDER, 2.0);
         // Into the second tube from 2 cm over its mouth.
-        logic[2].insert(PENDING_UL.into(), -100.0);
-        run(&mut p, &poses([0.1, 0.0, 0.132]), &mut logic, 2.0);
+        stroke(&mut p, &mut logic, -100.0, [0.1, 0.0, 0.132], 2.0);
         assert_eq!(ul(&logic, 1, VOLUME_UL), 100.0);
         // Over the bench between the tubes: spilt.
-        logic[2].insert(PENDING_UL.into(), -150.0);
-        run(&mut p, &poses([0.05, 0.0, 0.05]), &mut logic, 2.0);
+        stroke(&mut p, &mut logic, -150.0, [0.05, 0.0, 0.05], 2.0);
         assert_eq!(ul(&logic, 2, SPILT_UL), 150.0);
         assert_eq!(ul(&logic, 2, VOLUME_UL), 50.0);
         // More pushed out than the tip holds: the rest is air.
-        logic[2].insert(PENDING_UL.into(), -120.0);
-        run(&mut p, &poses([0.1, 0.0, 0.1]), &mut logic, 2.0);
+        stroke(&mut p, &mut logic, -120.0, [0.1, 0.0, 0.1], 2.0);
         assert_eq!(ul(&logic, 1, VOLUME_UL), 150.0);
         assert_eq!(ul(&logic, 2, VOLUME_UL), 0.0);
         assert_eq!(total_nl(&logic), 20_000_000);

@@ -8,10 +8,11 @@
 //! -1.9 rad = closed; lever 0 = raised, -0.94 rad = pressed.
 
 use crate::frame::{Pose, Vec3, pose, translation, x_turn};
-use crate::lid::{Lid, LidNames};
-use crate::mjcf::{Fragment, box_inertia, pose_attrs, v3};
+use crate::lid::{JOINT, LOCK_SWITCH, LOCKED, Lid, LidBody, LidNames, Lidded};
+use crate::mjcf::{Fragment, v3};
 use crate::model::{
-    Affordance, Effects, Instrument, LabwareState, Logic, Measure, Mechanism, Reset, Symmetry,
+    Affordance, Effects, Instrument, Joints, LabwareState, Logic, Measure, Mechanism, Reset, flag,
+    set_flag,
 };
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -23,12 +24,9 @@ pub struct Params {
     pub base_half: Vec3,
     /// Lid hinge point (the hinge axis is +x through it).
     pub hinge: Vec3,
-    /// Lid extent from the hinge to its front edge, half width, half thickness.
-    pub lid_depth: f64,
-    pub lid_half_width: f64,
-    pub lid_half_thickness: f64,
-    pub lid_mass: f64,
-    pub lid_damping: f64,
+    /// The lid's extents, mass and damping.
+    #[serde(flatten)]
+    pub lid_body: LidBody,
     pub lid_open: f64,
     pub lid_closed: f64,
     /// Lever: pivot on the lid's front edge; grip bar at `lever_arm` from the pivot.
@@ -53,11 +51,13 @@ impl Default for Params {
         Params {
             base_half: [0.1655, 0.177, 0.0915],
             hinge: [0.0, 0.01, 0.205],
-            lid_depth: 0.18,
-            lid_half_width: 0.10,
-            lid_half_thickness: 0.02,
-            lid_mass: 0.87,
-            lid_damping: 0.05,
+            lid_body: LidBody {
+                depth: 0.18,
+                half_width: 0.10,
+                half_thickness: 0.02,
+                mass: 0.87,
+                damping: 0.05,
+            },
             lid_open: 0.0,
             lid_closed: -1.9,
             lever_arm: 0.06,
@@ -76,42 +76,42 @@ impl Default for Params {
     }
 }
 
-/// MuJoCo names of one placed instrument, all prefixed by its protocol name.
-struct Names {
-    base: String,
-    lid: LidNames,
-    lever_body: String,
-    lever_joint: String,
+/// The lever's MuJoCo names (the lid's are [`LidNames`]), prefixed by the protocol's name.
+fn lever_names(prefix: &str) -> (String, String) {
+    (format!("{prefix}/lever"), format!("{prefix}/lever_hinge"))
 }
 
-impl Names {
-    fn new(prefix: &str) -> Names {
-        Names {
-            base: format!("{prefix}/base"),
-            lid: LidNames::new(prefix),
-            lever_body: format!("{prefix}/lever"),
-            lever_joint: format!("{prefix}/lever_hinge"),
-        }
+/// The lid, latched by the lever: the latch is read on the lever.
+impl Lidded for Params {
+    fn lid(&self) -> Lid {
+        self.lid_body.hinged(
+            [self.lid_open, self.lid_closed],
+            [self.open_tolerance, self.closed_tolerance],
+        )
+    }
+
+    /// Locked: the lever in its pressed notch and the latch holding; unlocked: raised and not.
+    fn latch(&self, state: &str, tolerance: Option<f64>, s: &LabwareState) -> Option<Measure> {
+        let locked = s.flag(LOCKED);
+        let (target, latched, default) = match state {
+            "locked" => (self.lever_pressed, locked, self.locked_tolerance),
+            "unlocked" => (self.lever_raised, !locked, self.unlocked_tolerance),
+            _ => return None,
+        };
+        let m = Measure::near(s.joint("lever"), target, tolerance.unwrap_or(default));
+        Some(Measure {
+            holds: m.holds && latched,
+            ..m
+        })
     }
 }
 
 impl Params {
-    /// Orientation of the lid body at joint angle 0: the closed geometry turned open about +x.
-    /// The lid this instrument composes ([`crate::lid`]), from its parameters.
-    pub fn lid(&self) -> Lid {
-        Lid::new(
-            self.lid_open,
-            self.lid_closed,
-            self.open_tolerance,
-            self.closed_tolerance,
-        )
-    }
-
     /// Pose of the grip bar's centre for given joint angles, in the frame `placement` is given in.
     /// Axes: x along the bar, y pointing away from the lever pivot, z = x × y.
     pub fn grip_pose(&self, placement: &Pose, lid: f64, lever: f64) -> Pose {
-        let lid_frame = pose(self.hinge, self.lid().rest() * x_turn(lid));
-        let lever_frame = pose([0.0, self.lid_depth, 0.0], x_turn(lever));
+        let lid_frame = self.lid().frame(self.hinge, lid);
+        let lever_frame = pose([0.0, self.lid_body.depth, 0.0], x_turn(lever));
         placement * lid_frame * lever_frame * translation([0.0, self.lever_arm, 0.0])
     }
 
@@ -122,10 +122,6 @@ impl Params {
         } else {
             self.lever_raised
         }
-    }
-
-    pub fn lid_is_closed(&self, lid: f64) -> bool {
-        self.lid().is_closed(lid)
     }
 
     /// TCP frame gripping the bar: at the bar's centre, oriented as the bar frame would be with the
@@ -151,14 +147,14 @@ pub struct Latch {
 impl Latch {
     fn from_logic(l: &Logic) -> Latch {
         Latch {
-            jammed: l.get("jammed").is_some_and(|v| *v != 0.0),
-            locked: l.get("locked").is_some_and(|v| *v != 0.0),
+            jammed: flag(l, "jammed"),
+            locked: flag(l, LOCKED),
         }
     }
 
     fn store(&self, l: &mut Logic) {
-        crate::model::set(l, "jammed", f64::from(u8::from(self.jammed)));
-        crate::model::set(l, "locked", f64::from(u8::from(self.locked)));
+        set_flag(l, "jammed", self.jammed);
+        set_flag(l, LOCKED, self.locked);
     }
 
     /// Updates from the current joint angles; returns whether the lock constraint is active.
@@ -167,7 +163,7 @@ impl Latch {
         if !pressed {
             self.jammed = false;
             self.locked = false;
-        } else if !self.locked && !p.lid_is_closed(lid) {
+        } else if !self.locked && !p.lid().is_closed(lid) {
             self.jammed = true;
         } else if !self.jammed {
             self.locked = true;
@@ -178,33 +174,32 @@ impl Latch {
 
 impl Instrument for Params {
     fn fragment(&self, name: &str, placement: &Pose) -> Fragment {
-        let n = Names::new(name);
+        let n = LidNames::new(name);
+        let (lever_body, lever_joint) = lever_names(name);
         let b = self.base_half;
-        let lid_rel_hinge = [0.0, self.lid_depth / 2.0, 0.0];
-        let lid_half = [
-            self.lid_half_width,
-            self.lid_depth / 2.0,
-            self.lid_half_thickness,
-        ];
+        let lid = &self.lid_body;
+        let lid_rel_hinge = [0.0, lid.depth / 2.0, 0.0];
         let arm_half = [0.006, self.lever_arm / 2.0, 0.006];
         let side = self.grip_half_length - 0.006;
-        let (lo, hi) = (
-            self.lid_closed.min(self.lid_open),
-            self.lid_closed.max(self.lid_open),
-        );
         let (llo, lhi) = (
             self.lever_pressed.min(self.lever_raised),
             self.lever_pressed.max(self.lever_raised),
         );
-        let worldbody = format!(
-            r#"<body name="{base}" {placement}>
-  <geom name="{base}/body" type="box" size="{bh}" pos="0 0 {bz}" rgba="0.82 0.83 0.85 1"/>
+        let geoms = format!(
+            r#"  <geom name="{base}/body" type="box" size="{bh}" pos="0 0 {bz}" rgba="0.82 0.83 0.85 1"/>
   <geom name="{base}/block" type="box" size="0.075 0.065 0.004" pos="0 {blocky} {blockz}" rgba="0.55 0.57 0.6 1" contype="0" conaffinity="0"/>
   <geom name="{base}/panel" type="box" size="0.12 0.004 0.04" pos="0 {panely} 0.1" rgba="0.15 0.2 0.3 1" contype="0" conaffinity="0"/>
-  <body name="{lid}" {lidframe}>
-    <joint name="{lidj}" type="hinge" axis="1 0 0" range="{lo} {hi}" damping="{lidd}" solreflimit="0.004 1" solimplimit="0.95 0.99 0.0005"/>
-    <inertial pos="{lidc}" mass="{lidm}" diaginertia="{lidi}"/>
-    <geom name="{lid}/shell" type="box" size="{lidh}" pos="{lidc}" rgba="0.86 0.87 0.9 1"/>
+"#,
+            base = n.base,
+            bh = v3(b),
+            bz = b[2],
+            blocky = 0.02,
+            blockz = 2.0 * b[2] + 0.004,
+            panely = b[1] + 0.002,
+        );
+        // The lid's shell and badge, and the lever on its front edge.
+        let lid_geoms = format!(
+            r#"    <geom name="{lid}/shell" type="box" size="{lidh}" pos="{lidc}" rgba="0.86 0.87 0.9 1"/>
     <geom name="{lid}/badge" type="box" size="0.05 0.03 0.001" pos="0 {badgey} {badgez}" rgba="0.2 0.35 0.6 1" contype="0" conaffinity="0"/>
     <body name="{lever}" pos="0 {depth} 0">
       <joint name="{leverj}" type="hinge" axis="1 0 0" range="{llo} {lhi}" armature="0.0005" damping="0.002" solreflimit="0.004 1"/>
@@ -214,29 +209,15 @@ impl Instrument for Params {
       <geom name="{lever}/grip" type="capsule" size="{gr} {gl}" pos="0 {arm} 0" quat="0.7071068 0 0.7071068 0" friction="1.5 0.01 0.001" rgba="0.2 0.2 0.22 1"/>
       <site name="{grip}" pos="0 {arm} 0" size="0.005" rgba="1 0.2 0.2 0.5" group="4"/>
     </body>
-  </body>
-</body>
 "#,
-            base = n.base,
-            placement = pose_attrs(placement),
-            bh = v3(b),
-            bz = b[2],
-            blocky = 0.02,
-            blockz = 2.0 * b[2] + 0.004,
-            panely = b[1] + 0.002,
-            lid = n.lid.body,
-            lidframe = pose_attrs(&pose(self.hinge, self.lid().rest())),
-            lidj = n.lid.joint,
-            lidd = self.lid_damping,
+            lid = n.body,
             lidc = v3(lid_rel_hinge),
-            lidm = self.lid_mass,
-            lidi = v3(box_inertia(self.lid_mass, lid_half)),
-            lidh = v3(lid_half),
-            badgey = self.lid_depth * 0.6,
-            badgez = self.lid_half_thickness + 0.001,
-            lever = n.lever_body,
-            depth = self.lid_depth,
-            leverj = n.lever_joint,
+            lidh = v3(lid.half()),
+            badgey = lid.depth * 0.6,
+            badgez = lid.half_thickness + 0.001,
+            lever = lever_body,
+            depth = lid.depth,
+            leverj = lever_joint,
             leverm = self.lever_mass,
             armc = self.lever_arm / 2.0,
             armh = v3(arm_half),
@@ -244,24 +225,15 @@ impl Instrument for Params {
             gr = self.grip_radius,
             gl = self.grip_half_length,
             arm = self.lever_arm,
-            grip = n.lid.grip,
+            grip = n.grip,
         );
-        let equality = format!(
-            r#"<joint name="{lock}" joint1="{lidj}" polycoef="{closed} 0 0 0 0" active="false" solref="0.01 1"/>
-"#,
-            lock = n.lid.lock,
-            lidj = n.lid.joint,
-            closed = self.lid_closed,
-        );
-        let contact = format!(
-            "<exclude body1=\"{}\" body2=\"{}\"/>\n",
-            n.base, n.lever_body
-        );
+        let lid_xml = self
+            .lid()
+            .body_xml(&n, self.hinge, lid_rel_hinge, &lid_geoms);
         Fragment {
-            asset: String::new(),
-            worldbody,
-            equality,
-            contact,
+            worldbody: n.instrument_xml(placement, &geoms, &lid_xml),
+            equality: self.lid().lock_xml(&n),
+            contact: format!("<exclude body1=\"{}\" body2=\"{lever_body}\"/>\n", n.base),
             ..Default::default()
         }
     }
@@ -270,7 +242,7 @@ impl Instrument for Params {
     fn mechanisms(&self, name: &str) -> Vec<Mechanism> {
         vec![Mechanism::Detent {
             instance: format!("{name}/lever_detent"),
-            joint: Names::new(name).lever_joint,
+            joint: lever_names(name).1,
             detent: physics::detent::Detent {
                 lo: self.lever_pressed.min(self.lever_raised),
                 hi: self.lever_pressed.max(self.lever_raised),
@@ -282,46 +254,46 @@ impl Instrument for Params {
     }
 
     fn joints(&self, name: &str) -> Vec<(&'static str, String)> {
-        let n = Names::new(name);
-        vec![("lid", n.lid.joint), ("lever", n.lever_joint)]
+        vec![
+            (JOINT, LidNames::new(name).joint),
+            ("lever", lever_names(name).1),
+        ]
     }
 
     fn switches(&self, name: &str) -> Vec<(&'static str, String)> {
-        vec![("lock", Names::new(name).lid.lock)]
+        LidNames::new(name).switches()
     }
 
+    /// A lid declared locked starts shut with the lever pressed; open or closed, raised.
     fn reset(&self, initial: &BTreeMap<String, String>) -> Reset {
-        let (lid, lever) = match initial.get("lid").map(String::as_str).unwrap_or("open") {
-            "open" => (self.lid_open, self.lever_raised),
-            "closed" => (self.lid_closed, self.lever_raised),
-            _ => (self.lid_closed, self.lever_pressed),
+        let (state, lid) = self.lid().start(initial);
+        let lever = match state {
+            "open" | "closed" => self.lever_raised,
+            _ => self.lever_pressed,
         };
         let mut logic = Logic::new();
         Latch::default().store(&mut logic);
         Reset {
-            joints: vec![("lid", lid), ("lever", lever)],
+            joints: vec![(JOINT, lid), ("lever", lever)],
             logic,
         }
     }
 
-    fn step(
-        &self,
-        _dt: f64,
-        joints: &BTreeMap<String, f64>,
-        logic: &mut Logic,
-        effects: &mut Effects,
-    ) {
+    fn step(&self, _dt: f64, joints: &Joints, logic: &mut Logic, effects: &mut Effects) {
         let mut latch = Latch::from_logic(logic);
-        let lid = joints.get("lid").copied().unwrap_or(self.lid_open);
         let lever = joints.get("lever").copied().unwrap_or(self.lever_raised);
-        let locked = latch.update(self, lid, lever);
+        let locked = latch.update(self, self.lid().angle(joints), lever);
         latch.store(logic);
-        effects.switch("lock", locked);
+        effects.switch(LOCK_SWITCH, locked);
+    }
+
+    fn lidded(&self) -> Option<&dyn Lidded> {
+        Some(self)
     }
 
     fn joint_goal(&self, role: &str, goal: &str) -> Option<f64> {
-        if role == crate::lid::JOINT {
-            return self.lid().goal(goal);
+        if role == JOINT {
+            return self.lid_goal(goal);
         }
         Some(match (role, goal) {
             ("lever", "raised") => self.lever_raised,
@@ -332,45 +304,10 @@ impl Instrument for Params {
         })
     }
 
-    fn measure(
-        &self,
-        part: &str,
-        state: &str,
-        tolerance: Option<f64>,
-        s: &LabwareState,
-    ) -> Option<Measure> {
-        if part != "lid" {
-            return None;
-        }
-        let (lid, lever) = (s.joint(crate::lid::JOINT), s.joint("lever"));
-        let locked = s.flag(crate::lid::LOCKED);
-        // Open and closed are the lid's; the latch is read on the lever.
-        let (value, target, extra, default) = match state {
-            "closed" | "open" => return self.lid().measure(state, lid, tolerance),
-            "locked" => (lever, self.lever_pressed, locked, self.locked_tolerance),
-            "unlocked" => (lever, self.lever_raised, !locked, self.unlocked_tolerance),
-            _ => return None,
-        };
-        let tolerance = tolerance.unwrap_or(default);
-        Some(Measure {
-            value,
-            target,
-            tolerance,
-            holds: (value - target).abs() <= tolerance && extra,
-        })
-    }
-
-    fn readout(&self, s: &LabwareState) -> BTreeMap<String, String> {
-        self.lid().readout(s)
-    }
-
+    /// The lid primitives hold the lid by the lever's grip bar to open and to close it.
     fn affordance(&self, name: &str, s: &LabwareState) -> Option<Affordance> {
-        // The lid primitives hold the lid by the same handle to open and to close it.
-        matches!(name, "lid_open" | "lid_close").then(|| Affordance {
-            pose: self.grip_affordance(&s.pose, s.joint("lid"), s.joint("lever")),
-            symmetry: Symmetry::HalfTurn,
-            touch: false,
-            lead: 0.0,
+        crate::lid::handle(name, || {
+            self.grip_affordance(&s.pose, s.joint(JOINT), s.joint("lever"))
         })
     }
 }
@@ -404,7 +341,8 @@ mod tests {
         // Closed: the bar lies in front of the hinge at hinge height; open: above and behind the front edge.
         assert!((closed.translation.vector[2] - p.hinge[2]).abs() < 1e-9);
         assert!(
-            (closed.translation.vector[1] - (p.hinge[1] + p.lid_depth + p.lever_arm)).abs() < 1e-9
+            (closed.translation.vector[1] - (p.hinge[1] + p.lid_body.depth + p.lever_arm)).abs()
+                < 1e-9
         );
         assert!(open.translation.vector[2] > closed.translation.vector[2] + 0.2);
         let r = |q: &Pose| {

@@ -18,7 +18,7 @@ use crate::display::{Canvas, Cell, Field, Rgb};
 use crate::frame::{Pose, Rot, Vec3, from_axes, pose, translation, x_turn};
 use crate::mjcf::{Fragment, pose_attrs, rgba, v3};
 use crate::model::{
-    Affordance, Display, Effects, Instrument, LabwareState, Logic, Measure, Reset, Symmetry, set,
+    Affordance, Display, Effects, Instrument, Joints, LabwareState, Logic, Reset, Symmetry, set,
 };
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -456,13 +456,7 @@ impl Instrument for Params {
         }
     }
 
-    fn step(
-        &self,
-        dt: f64,
-        joints: &BTreeMap<String, f64>,
-        logic: &mut Logic,
-        _effects: &mut Effects,
-    ) {
+    fn step(&self, dt: f64, joints: &Joints, logic: &mut Logic, _effects: &mut Effects) {
         let travel = self.press_travel();
         for (button, setting, sign, _) in self.buttons() {
             let key = format!("held_s/{button}");
@@ -490,16 +484,6 @@ impl Instrument for Params {
         let v = self.panel_value(param, s)?;
         let word = if target >= v { "up" } else { "down" };
         Some(format!("{param}_{word}"))
-    }
-
-    fn measure(
-        &self,
-        _part: &str,
-        _state: &str,
-        _tolerance: Option<f64>,
-        _s: &LabwareState,
-    ) -> Option<Measure> {
-        None
     }
 
     fn readout(&self, s: &LabwareState) -> BTreeMap<String, String> {

@@ -18,7 +18,8 @@
 use crate::frame::{Pose, Vec3, pose, translation};
 use crate::mjcf::{Fragment, pose_attrs, v3};
 use crate::model::{
-    Affordance, Effects, Instrument, LabwareState, Logic, Measure, Mechanism, Reset, set,
+    Affordance, Effects, Instrument, Joints, LabwareState, Logic, Measure, Mechanism, Reset, flag,
+    set, set_flag,
 };
 use physics::detent::Detent;
 use physics::eccentric::{Eccentric, rpm_to_rad_s};
@@ -168,7 +169,7 @@ impl Params {
 
     /// The motor's command for a logic state (rad/s).
     pub fn motor_speed(&self, logic: &Logic) -> f64 {
-        if logic.get(POWER).is_some_and(|v| *v != 0.0) {
+        if flag(logic, POWER) {
             rpm_to_rad_s(self.set_rpm(logic))
         } else {
             0.0
@@ -255,7 +256,7 @@ impl Instrument for Params {
     fn reset(&self, initial: &BTreeMap<String, String>) -> Reset {
         let on = initial.get(POWER).is_some_and(|s| s == "on");
         let mut logic = Logic::new();
-        set(&mut logic, POWER, f64::from(u8::from(on)));
+        set_flag(&mut logic, POWER, on);
         set(&mut logic, DRIVE_SPEED, 0.0);
         set(&mut logic, KNOB, 0.0);
         Reset {
@@ -264,7 +265,7 @@ impl Instrument for Params {
         }
     }
 
-    fn step(&self, dt: f64, joints: &BTreeMap<String, f64>, logic: &mut Logic, out: &mut Effects) {
+    fn step(&self, dt: f64, joints: &Joints, logic: &mut Logic, out: &mut Effects) {
         let depth = joints.get("switch").copied().unwrap_or(0.0);
         let pressed = self.switch_stiffness * depth > self.press_force;
         let held = if pressed {
@@ -272,10 +273,10 @@ impl Instrument for Params {
         } else {
             0.0
         };
-        let latched = logic.get(LATCHED).is_some_and(|v| *v != 0.0);
+        let latched = flag(logic, LATCHED);
         if held >= self.repeat_s && !latched {
-            let on = logic.get(POWER).is_some_and(|v| *v != 0.0);
-            set(logic, POWER, f64::from(u8::from(!on)));
+            let on = flag(logic, POWER);
+            set_flag(logic, POWER, !on);
             set(logic, LATCHED, 1.0);
         } else if !pressed {
             set(logic, LATCHED, 0.0);
@@ -446,10 +447,11 @@ mod tests {
         let knob = 8.0 * 0.46;
         let rpm = 600.0 + 2600.0 * 7.0 / 9.0;
         let set = rpm_to_rad_s(rpm);
-        let run = |rate: f64| {
-            let mut logic = p
-                .reset(&BTreeMap::from([(POWER.into(), "on".into())]))
-                .logic;
+        // The logic after 0.1 s of the drive turning at `rate` (rad/s), started switched on or
+        // off, the knob in that notch.
+        let spin = |on: bool, rate: f64| {
+            let start = BTreeMap::from([(POWER.into(), if on { "on" } else { "off" }.into())]);
+            let mut logic = p.reset(&start).logic;
             let mut out = Effects::default();
             for i in 0..50 {
                 let joints = BTreeMap::from([
@@ -460,8 +462,9 @@ mod tests {
                 out.clear();
                 p.step(0.002, &joints, &mut logic, &mut out);
             }
-            p.measure(POWER, "on", None, &at_rest(logic)).unwrap()
+            at_rest(logic)
         };
+        let run = |rate: f64| p.measure(POWER, "on", None, &spin(true, rate)).unwrap();
         let full = run(set);
         assert!(full.holds && (full.value - 1.0).abs() < 1e-9, "{full:?}");
         assert!(run(0.95 * set).holds);
@@ -470,17 +473,7 @@ mod tests {
         assert!(!half.holds && (half.value - 0.5).abs() < 1e-9, "{half:?}");
         assert!(!run(0.0).holds);
         // Turning at speed with the switch off (coasting) is not on.
-        let mut logic = p.reset(&BTreeMap::new()).logic;
-        let mut out = Effects::default();
-        for i in 0..50 {
-            let joints = BTreeMap::from([
-                ("switch".to_string(), 0.0),
-                (KNOB_ROLE.to_string(), knob),
-                ("drive".to_string(), set * 0.002 * i as f64),
-            ]);
-            p.step(0.002, &joints, &mut logic, &mut out);
-        }
-        let s = at_rest(logic);
+        let s = spin(false, set);
         assert!(!p.measure(POWER, "on", None, &s).unwrap().holds);
         assert!(p.measure(POWER, "off", None, &s).unwrap().holds);
         assert_eq!(p.readout(&s)["speed"], "2622 rpm");
