@@ -569,3 +569,26 @@ fn cameras_see_the_liquid_and_how_high_it_stands() {
     assert!(low > 100, "10 mL changes {low} pixels");
     assert!(high > low + 100, "40 mL changes {high} pixels, 10 mL {low}");
 }
+
+#[test]
+fn a_task_whose_quantities_do_not_resolve_is_refused_before_any_episode() {
+    // The compiler proves every template resolves; a task edited by hand may not: its scene is
+    // refused with the template named, built afresh or reused for another seed.
+    let text = std::fs::read_to_string("protocols/pipette/transfer.toml").unwrap();
+    let mut task = compiler::compile_source(&text, "transfer.toml").0.unwrap();
+    let ok = task.sample(0);
+    let mut slot = Some(std::sync::Arc::new(runtime::Scene::build(&task, &ok).unwrap()));
+    let source = task.labware.iter().position(|l| l.name == "source").unwrap();
+    task.labware[source].volume = Some("{nowhere} mL".into());
+    let instance = task.sample(0);
+    let refused = |e: runtime::SceneError| {
+        assert!(matches!(e, runtime::SceneError::Quantity(_)), "{e}");
+        assert!(e.to_string().contains("{nowhere} mL"), "{e}");
+    };
+    refused(runtime::Scene::build(&task, &instance).err().unwrap());
+    refused(
+        runtime::Scene::reuse_or_build(&mut slot, &task, &instance)
+            .err()
+            .unwrap(),
+    );
+}

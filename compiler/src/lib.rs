@@ -18,6 +18,7 @@ pub mod motion;
 pub mod params;
 pub mod predicates;
 pub mod primitives;
+pub mod quantities;
 mod proof;
 mod report;
 mod scene_file;

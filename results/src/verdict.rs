@@ -4,7 +4,8 @@
 //! angles); slots by the holder's model. Pure functions of recorded state and the episode's drawn
 //! parameters, so a recording can be re-scored offline ([`Judge::replay`]).
 
-use compiler::params::{Bindings, render};
+use compiler::params::Bindings;
+use compiler::quantities::ResolvedPredicate;
 use compiler::predicates::Check;
 use compiler::{Predicate, Scoring, Task};
 use labware::LabwareState;
@@ -99,7 +100,7 @@ impl Verdict {
 /// The measured value of one predicate, where the judge can measure it.
 fn measure(
     task: &Task,
-    params: &Bindings,
+    resolved: &ResolvedPredicate,
     check: &Check,
     states: &[LabwareState],
 ) -> Option<Measure> {
@@ -138,13 +139,12 @@ fn measure(
         }
         Check::InSlot {
             item,
-            location,
+            location: _,
             tolerance,
             height,
             tilt,
         } => {
-            let location = render(location, params).ok()?;
-            let (holder, slot) = location.split_once('.')?;
+            let (holder, slot) = resolved.place.as_ref()?;
             let seat = spec_of(holder)?
                 .params
                 .instrument()?
@@ -187,9 +187,8 @@ fn measure(
         Check::Lifted { item, height } => {
             let spec = spec_of(item)?;
             let start = match &spec.at {
-                Some(at) => {
-                    let at = render(at, params).ok()?;
-                    let (holder, slot) = at.split_once('.')?;
+                Some(_) => {
+                    let (holder, slot) = resolved.place.as_ref()?;
                     spec_of(holder)?
                         .params
                         .instrument()?
@@ -212,17 +211,12 @@ fn measure(
         Check::Panel {
             instrument,
             param,
-            unit,
-            value,
+            unit: _,
+            value: _,
             tolerance,
             ..
         } => {
-            let target = compiler::predicates::quantity(
-                value,
-                params,
-                compiler::primitives::panel_dimension(unit),
-            )
-            .ok()?;
+            let target = resolved.target.clone().ok()??;
             let shown = spec_of(instrument)?
                 .params
                 .instrument()?
@@ -239,10 +233,10 @@ fn measure(
         Check::Volume {
             container,
             cmp,
-            value,
+            value: _,
             tolerance,
         } => {
-            let target = compiler::predicates::volume_ul(value, params).ok()?;
+            let target = resolved.target.clone().ok()??;
             spec_of(container)?.params.instrument()?.interior()?;
             let held = state_of(container)?
                 .logic
@@ -260,10 +254,15 @@ fn measure(
 }
 
 /// The parts of an `in` predicate: in-plane distance, height and tilt against their tolerances.
-fn parts(task: &Task, params: &Bindings, check: &Check, states: &[LabwareState]) -> Vec<PartValue> {
+fn parts(
+    task: &Task,
+    resolved: &ResolvedPredicate,
+    check: &Check,
+    states: &[LabwareState],
+) -> Vec<PartValue> {
     let Check::InSlot {
         item,
-        location,
+        location: _,
         tolerance,
         height,
         tilt,
@@ -273,9 +272,8 @@ fn parts(task: &Task, params: &Bindings, check: &Check, states: &[LabwareState])
     };
     let state_of = |name: &str| states.iter().find(|s| s.name == name);
     let seat = (|| {
-        let location = render(location, params).ok()?;
-        let (holder, slot) = location.split_once('.')?;
-        let spec = task.labware.iter().find(|l| l.name == holder)?;
+        let (holder, slot) = resolved.place.as_ref()?;
+        let spec = task.labware.iter().find(|l| &l.name == holder)?;
         let seat = spec
             .params
             .instrument()?
@@ -301,19 +299,19 @@ fn parts(task: &Task, params: &Bindings, check: &Check, states: &[LabwareState])
 
 fn evaluate(
     task: &Task,
-    params: &Bindings,
+    resolved: &ResolvedPredicate,
     pred: &Predicate,
     states: &[LabwareState],
     start: &[LabwareState],
 ) -> PredicateValue {
     // The predicate as the author wrote it, with this episode's parameters filled in.
-    let text = render(&pred.text, params).unwrap_or_else(|_| pred.text.clone());
+    let text = resolved.text.clone();
     let Some(Measure {
         value,
         target,
         tolerance,
         holds,
-    }) = measure(task, params, &pred.check, states)
+    }) = measure(task, resolved, &pred.check, states)
     else {
         return PredicateValue {
             text,
@@ -325,7 +323,7 @@ fn evaluate(
             parts: Vec::new(),
         };
     };
-    let from = measure(task, params, &pred.check, start)
+    let from = measure(task, resolved, &pred.check, start)
         .map(|m| m.value)
         .unwrap_or(value);
     let span = (target - from).abs();
@@ -347,14 +345,15 @@ fn evaluate(
         parts: if holds {
             Vec::new()
         } else {
-            parts(task, params, &pred.check, states)
+            parts(task, resolved, &pred.check, states)
         },
     }
 }
 
+/// Stage `index`'s verdict; `resolved` is its predicates with the parameters filled in.
 fn stage_verdict(
     task: &Task,
-    params: &Bindings,
+    resolved: &[ResolvedPredicate],
     index: usize,
     states: &[LabwareState],
     start: &[LabwareState],
@@ -367,7 +366,7 @@ fn stage_verdict(
         .iter()
         .enumerate()
         .map(|(k, p)| {
-            let mut v = evaluate(task, params, p, states, start);
+            let mut v = evaluate(task, &resolved[k], p, states, start);
             // A `was` check holds once its state has been seen in this stage.
             if p.check.is_history() && seen.get(k).copied().unwrap_or(false) {
                 v.holds = true;
@@ -419,7 +418,8 @@ fn unsettled(mut v: StageVerdict, scoring: Scoring) -> StageVerdict {
 /// It keeps its own copy of the task and the drawn parameters, so an environment can own it.
 pub struct Judge {
     task: Task,
-    params: Bindings,
+    /// Each stage's predicates with the episode's parameters filled in, resolved once.
+    resolved: Vec<Vec<ResolvedPredicate>>,
     stage: usize,
     stage_start_s: f64,
     stage_start: Vec<LabwareState>,
@@ -436,7 +436,16 @@ impl Judge {
     pub fn new(task: &Task, params: &Bindings, initial: &[LabwareState]) -> Self {
         Judge {
             task: task.clone(),
-            params: params.clone(),
+            resolved: task
+                .stages
+                .iter()
+                .map(|s| {
+                    s.success
+                        .iter()
+                        .map(|p| ResolvedPredicate::of(task, p, params))
+                        .collect()
+                })
+                .collect(),
             stage: 0,
             stage_start_s: 0.0,
             stage_start: initial.to_vec(),
@@ -463,14 +472,15 @@ impl Judge {
             self.seen.resize(stage.success.len(), false);
             for (k, p) in stage.success.iter().enumerate() {
                 if p.check.is_history()
-                    && measure(&self.task, &self.params, &p.check, states).is_some_and(|m| m.holds)
+                    && measure(&self.task, &self.resolved[self.stage][k], &p.check, states)
+                        .is_some_and(|m| m.holds)
                 {
                     self.seen[k] = true;
                 }
             }
             let v = stage_verdict(
                 &self.task,
-                &self.params,
+                &self.resolved[self.stage],
                 self.stage,
                 states,
                 &self.stage_start,

@@ -7,6 +7,7 @@
 //! after each physics step (the only writer of `eq_active`), and its readings by role.
 
 use crate::scene::{LabwareIds, Scene};
+use compiler::quantities::Quantities;
 use compiler::{SceneInstance, Task};
 use labware::frame::{from_wxyz, position, wxyz};
 use labware::model::Effects;
@@ -164,8 +165,11 @@ impl Episode {
             self.place_item(i, &root);
         }
         self.place_held();
-        self.apply_panel_start(instance);
-        self.start_volumes(instance);
+        // `Scene::build` and `Scene::reuse_or_build` refuse an instance whose quantities do not
+        // resolve; an episode started past them starts with the kinds' defaults.
+        let quantities = Quantities::resolve(&self.task, &instance.params).unwrap_or_default();
+        self.apply_panel_start(&quantities);
+        self.start_volumes(&quantities);
         let vessels: Vec<labware::process::Vessel> = (0..self.task.labware.len())
             .filter_map(|item| {
                 let model = instrument(&self.task, item);
@@ -212,13 +216,12 @@ impl Episode {
         }
     }
 
-    /// The liquid each container starts with (`[labware.x] volume`, rendered for this instance)
+    /// The liquid each container starts with (`[labware.x] volume`, resolved for this instance)
     /// in its logic; a container without a declared volume starts empty (no key: read as 0).
-    fn start_volumes(&mut self, instance: &SceneInstance) {
-        for (i, spec) in self.task.labware.iter().enumerate() {
-            let Some(text) = &spec.volume else { continue };
-            if let Ok(ul) = compiler::predicates::volume_ul(text, &instance.params) {
-                labware::model::set(&mut self.logic[i], labware::process::VOLUME_UL, ul);
+    fn start_volumes(&mut self, quantities: &Quantities) {
+        for (i, ul) in quantities.start_volumes_ul.iter().enumerate() {
+            if let Some(ul) = ul {
+                labware::model::set(&mut self.logic[i], labware::process::VOLUME_UL, *ul);
             }
         }
     }
@@ -226,13 +229,11 @@ impl Episode {
     /// Panel values a protocol starts away from the kind's defaults (`[labware.x] state`), rendered
     /// for this instance: a value set with a dial starts with the dial turned to it (its joint),
     /// any other in the item's logic.
-    fn apply_panel_start(&mut self, instance: &SceneInstance) {
+    fn apply_panel_start(&mut self, quantities: &Quantities) {
         let scene = self.scene.clone();
-        for (i, spec) in self.task.labware.iter().enumerate() {
-            for (param, text) in &spec.panel {
-                let Some(v) = compiler::predicates::panel_quantity(text, &instance.params) else {
-                    continue;
-                };
+        for (i, starts) in quantities.panel_starts.iter().enumerate() {
+            for (param, v) in starts {
+                let v = *v;
                 let dial =
                     instrument(&self.task, i)
                         .dial_toward(param, v)

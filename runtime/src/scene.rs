@@ -39,6 +39,10 @@ pub enum SceneError {
         "the success check `{0}` cannot be measured in simulation yet ({1}); the task can be compiled and described, not run"
     )]
     Unmeasurable(String, &'static str),
+    /// A quantity template that the instance's parameters do not resolve (a task written by
+    /// hand: the compiler proves every template resolves over the parameters' domains).
+    #[error(transparent)]
+    Quantity(#[from] compiler::quantities::QuantityError),
 }
 
 /// Per-robot indices into the model.
@@ -478,6 +482,9 @@ impl Scene {
         task: &Task,
         instance: &SceneInstance,
     ) -> Result<std::sync::Arc<Scene>, SceneError> {
+        // Every instance an episode starts from resolves its quantities: the episode's start
+        // (`Episode::reset`) relies on it.
+        compiler::quantities::Quantities::resolve(task, &instance.params)?;
         match slot {
             Some(s) if s.placements == instance.labware_placement => Ok(s.clone()),
             _ => {
@@ -493,6 +500,7 @@ impl Scene {
         // cannot start as declared, or that could never be won is not built.
         check_starts(task, instance)?;
         check_measurable(task)?;
+        compiler::quantities::Quantities::resolve(task, &instance.params)?;
         let placements = instance.labware_placement.clone();
         physics::register().map_err(|e| SceneError::Compile(e.to_string()))?;
         let xml = scene_xml(task, &placements, Detail::Full)?;

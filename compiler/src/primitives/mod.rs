@@ -475,6 +475,10 @@ mod tests {
         for entry in std::fs::read_dir(&dir).unwrap() {
             let path = entry.unwrap().path();
             let text = std::fs::read_to_string(&path).unwrap();
+            // This file (the catalogue, and this test's own words) is no primitive's.
+            if path.file_name().is_some_and(|n| n == "mod.rs") {
+                continue;
+            }
             if text.contains("pub const PRIMITIVE: LabPrimitive") {
                 declared.push(path.file_stem().unwrap().to_string_lossy().into_owned());
             }
