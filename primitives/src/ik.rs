@@ -53,78 +53,29 @@ fn error_norms(e: &[f64; 6]) -> (f64, f64) {
     )
 }
 
-/// One IK method's code: a solve from a seed, and (for a closed-form method) every branch.
-trait Solver {
-    /// Joint angles reaching `target` from `seed`.
-    fn solve(
-        &self,
-        kin: &mut dyn Kinematics,
-        target: &Pose,
-        seed: &[f64],
-    ) -> Result<Vec<f64>, IkError>;
-    /// Every closed-form branch within the joint limits, each joint taken nearest `first`;
-    /// none for a numeric method.
-    fn branches(&self, _kin: &mut dyn Kinematics, _target: &Pose, _first: &[f64]) -> Vec<Vec<f64>> {
-        Vec::new()
-    }
+/// A closed-form IK method: its candidate joint solutions for a target (every branch, each
+/// joint taken nearest `seed`), before the joint limits prune them.
+trait ClosedForm {
+    fn candidates(&self, kin: &mut dyn Kinematics, target: &Pose, seed: &[f64]) -> Vec<Vec<f64>>;
 }
 
-/// The one place an [`robots::IkMethod`] meets its solver: a new method is its solver type and
-/// one arm here.
-fn solver(method: robots::IkMethod) -> Box<dyn Solver> {
+/// The one place an [`robots::IkMethod`] meets its solver: the QP alone (`None`), or a closed
+/// form the QP refines and stands in for. A new closed-form method is its [`ClosedForm`] and one
+/// arm here.
+fn closed_form(method: robots::IkMethod) -> Option<Box<dyn ClosedForm>> {
     match method {
-        robots::IkMethod::Qp => Box::new(Qp),
-        robots::IkMethod::Analytic(arm) => Box::new(Analytic(arm)),
+        robots::IkMethod::Qp => None,
+        robots::IkMethod::Analytic(arm) => Some(Box::new(Analytic(arm))),
     }
 }
 
-/// Damped least-squares QPs ([`solve_ik`]).
-struct Qp;
-
-impl Solver for Qp {
-    fn solve(
-        &self,
-        kin: &mut dyn Kinematics,
-        target: &Pose,
-        seed: &[f64],
-    ) -> Result<Vec<f64>, IkError> {
-        solve_ik(kin, target, seed, &IkOptions::default())
-    }
-}
-
-/// The closed form of [`analytic_ik`], refined by the QP where its best branch misses, and the
-/// QP alone where no branch is within the limits.
+/// The closed form of [`analytic_ik`] for ViperX-shaped arms.
 struct Analytic(robots::AnalyticArm);
 
-impl Solver for Analytic {
-    fn solve(
-        &self,
-        kin: &mut dyn Kinematics,
-        target: &Pose,
-        seed: &[f64],
-    ) -> Result<Vec<f64>, IkError> {
-        let opt = IkOptions::default();
+impl ClosedForm for Analytic {
+    fn candidates(&self, kin: &mut dyn Kinematics, target: &Pose, seed: &[f64]) -> Vec<Vec<f64>> {
         let local = analytic_ik::base_frame(&self.0, kin).inverse() * target;
-        let cands = analytic_ik::candidates(&self.0, &local, seed);
-        match analytic_ik::best_within(&cands, &kin.limits(), seed) {
-            Some(q) => {
-                let (pos, rot) = error_norms(&pose_error(target, &kin.tcp(&q)));
-                if pos < opt.pos_tol && rot < opt.rot_tol {
-                    Ok(q)
-                } else {
-                    solve_ik(kin, target, &q, &opt)
-                }
-            }
-            None => solve_ik(kin, target, seed, &opt),
-        }
-    }
-
-    fn branches(&self, kin: &mut dyn Kinematics, target: &Pose, first: &[f64]) -> Vec<Vec<f64>> {
-        let local = analytic_ik::base_frame(&self.0, kin).inverse() * target;
-        analytic_ik::candidates(&self.0, &local, first)
-            .into_iter()
-            .filter_map(|c| analytic_ik::best_within(&[c], &kin.limits(), first))
-            .collect()
+        analytic_ik::candidates(&self.0, &local, seed)
     }
 }
 
@@ -135,7 +86,24 @@ pub fn solve_with(
     target: &Pose,
     seed: &[f64],
 ) -> Result<Vec<f64>, IkError> {
-    solver(method).solve(kin, target, seed)
+    let opt = IkOptions::default();
+    let Some(closed) = closed_form(method) else {
+        return solve_ik(kin, target, seed, &opt);
+    };
+    // The best branch within the limits where it is on target, refined by the QP where it is
+    // not, and the QP alone where no branch is within the limits.
+    let cands = closed.candidates(kin, target, seed);
+    match analytic_ik::best_within(&cands, &kin.limits(), seed) {
+        Some(q) => {
+            let (pos, rot) = error_norms(&pose_error(target, &kin.tcp(&q)));
+            if pos < opt.pos_tol && rot < opt.rot_tol {
+                Ok(q)
+            } else {
+                solve_ik(kin, target, &q, &opt)
+            }
+        }
+        None => solve_ik(kin, target, seed, &opt),
+    }
 }
 
 /// The distinct joint solutions for `target` within the joint limits that the robot model's
@@ -162,12 +130,15 @@ pub fn solutions(
             found.push(q);
         }
     };
-    let solver = solver(method);
-    for q in solver.branches(kin, target, first) {
-        keep(q, kin);
+    if let Some(closed) = closed_form(method) {
+        for c in closed.candidates(kin, target, first) {
+            if let Some(q) = analytic_ik::best_within(&[c], &kin.limits(), first) {
+                keep(q, kin);
+            }
+        }
     }
     for seed in seeds {
-        if let Ok(q) = solver.solve(kin, target, seed) {
+        if let Ok(q) = solve_with(method, kin, target, seed) {
             keep(q, kin);
         }
     }
