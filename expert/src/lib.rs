@@ -21,8 +21,8 @@ pub mod reach;
 pub mod route;
 
 use policy::{Observation, Policy, PolicyError, StageEvent};
-use compiler::motion::{Motion, MotionStep};
-use compiler::params::{Bindings, render};
+use compiler::motion::{Expanded, Motion};
+use compiler::params::Bindings;
 use compiler::{SceneInstance, Task};
 use motion::{Active, Arm};
 use primitives::Kinematics;
@@ -30,7 +30,7 @@ use primitives::{Lab, StepFrame};
 use runtime::Scene;
 use runtime::clearance::Clearance;
 use runtime::kinematics::ArmKinematics;
-use std::collections::{BTreeMap, VecDeque};
+use std::collections::VecDeque;
 
 /// Pause after each path so the arm settles on its last waypoint (s).
 const SETTLE_S: f64 = 0.2;
@@ -143,29 +143,10 @@ impl ExpertPolicy {
             let robot = task
                 .robot_index(&step.robot)
                 .ok_or_else(|| planning(context(), PlanFailure::NoRobot(step.robot.clone())))?;
-            let expand = compiler::primitives::primitive(&step.primitive)
-                .and_then(|p| p.motions)
+            let Expanded { args, motions } = Expanded::of(task, i, step, &instance.params)
                 .ok_or_else(|| {
                     planning(context(), PlanFailure::NoMotions(step.primitive.clone()))
                 })?;
-            let args: BTreeMap<String, String> = step
-                .args
-                .iter()
-                .map(|(k, v)| {
-                    let v = render(v, &instance.params).unwrap_or_else(|_| v.clone());
-                    (k.clone(), v)
-                })
-                .collect();
-            let kind = args
-                .get("on")
-                .and_then(|on| task.labware.iter().find(|l| &l.name == on))
-                .and_then(|l| labware::kind(&l.kind));
-            let tool = task.liquid_tool(&step.robot, i);
-            let motions = expand(&MotionStep {
-                args: &args,
-                kind,
-                tool,
-            });
             if i > 0 && !step.together {
                 group += 1;
             }

@@ -56,7 +56,7 @@ fn error_norms(e: &[f64; 6]) -> (f64, f64) {
 /// A closed-form IK method: its candidate joint solutions for a target (every branch, each
 /// joint taken nearest `seed`), before the joint limits prune them.
 trait ClosedForm {
-    fn candidates(&self, kin: &mut dyn Kinematics, target: &Pose, seed: &[f64]) -> Vec<Vec<f64>>;
+    fn candidates(&self, kin: &mut dyn Kinematics, target: &Pose, seed: &[f64]) -> Vec<[f64; 6]>;
 }
 
 /// The one place an [`robots::IkMethod`] meets its solver: the QP alone (`None`), or a closed
@@ -73,7 +73,7 @@ fn closed_form(method: robots::IkMethod) -> Option<Box<dyn ClosedForm>> {
 struct Analytic(robots::AnalyticArm);
 
 impl ClosedForm for Analytic {
-    fn candidates(&self, kin: &mut dyn Kinematics, target: &Pose, seed: &[f64]) -> Vec<Vec<f64>> {
+    fn candidates(&self, kin: &mut dyn Kinematics, target: &Pose, seed: &[f64]) -> Vec<[f64; 6]> {
         let local = analytic_ik::base_frame(&self.0, kin).inverse() * target;
         analytic_ik::candidates(&self.0, &local, seed)
     }

@@ -4,6 +4,7 @@
 //! leave them. It does not solve them (the pass does, in `mod.rs`).
 
 use super::*;
+use compiler::motion::Expanded;
 
 /// The targets the pass checks, step by step: each step's first target where the step's item is
 /// where it started; and for an item a robot picked up, the seat it is then placed on, with the
@@ -27,26 +28,10 @@ pub(super) fn aims(
         let Some(robot) = task.robot_index(&step.robot) else {
             continue;
         };
-        let Some(expand) = compiler::primitives::primitive(&step.primitive).and_then(|p| p.motions)
-        else {
+        let Some(Expanded { args, motions }) = Expanded::of(task, i, step, params) else {
             continue;
         };
-        let args: BTreeMap<String, String> = step
-            .args
-            .iter()
-            .map(|(k, v)| (k.clone(), render(v, params).unwrap_or_else(|_| v.clone())))
-            .collect();
         let on = args.get("on").cloned();
-        let kind = on
-            .as_ref()
-            .and_then(|on| task.labware.iter().find(|l| &l.name == on))
-            .and_then(|l| labware::kind(&l.kind));
-        let tool = task.liquid_tool(&step.robot, i);
-        let motions = expand(&MotionStep {
-            args: &args,
-            kind,
-            tool,
-        });
         // The labware as earlier steps left its joints (a lid opened).
         let owned = states.to_vec();
         let lab = &Lab::new(task, &owned, params);

@@ -37,8 +37,7 @@
 
 use aims::aims;
 use hint::base_for_every_layout;
-use compiler::motion::{Motion, MotionStep, Target};
-use compiler::params::render;
+use compiler::motion::{Motion, Target};
 use compiler::{Checked, Task};
 use dsl::ast::Document;
 use dsl::{Code, Diagnostic};
