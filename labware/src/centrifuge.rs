@@ -18,8 +18,8 @@ use crate::frame::{Pose, Vec3, axis_angle, pose, translation, x_turn};
 use crate::lid::{JOINT, LOCK_SWITCH, LOCKED, Lid, LidBody, LidNames, Lidded};
 use crate::mjcf::{Fragment, pose_attrs, rgba, v3};
 use crate::model::{
-    Affordance, Effects, Instrument, Joints, LabwareState, Logic, Measure, Reset, Symmetry, flag,
-    set, set_flag,
+    Affordance, Effects, Instrument, Joints, LabwareState, Logic, Measure, Part, Reset, Symmetry,
+    flag, set, set_flag,
 };
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -531,12 +531,26 @@ impl Lidded for Params {
         }
     }
 
-    /// Locked: shut and held by the latch; unlocked: released, whatever the lid's angle.
-    fn latch(&self, state: &str, tolerance: Option<f64>, s: &LabwareState) -> Option<Measure> {
+    /// Closed: pressed past the stop, so that the latch catches it against the spring: the push
+    /// point goes `PRESS_PAST` below the shut lid's face, more than the arm sags under gravity
+    /// (about 1 cm at the UR5e's reach).
+    fn lid_goal(&self, goal: &str) -> Option<f64> {
+        match goal {
+            "closed" => Some(self.lid_closed - PRESS_PAST / (self.push_at * self.lid_body.depth)),
+            _ => self.lid().goal(goal),
+        }
+    }
+}
+
+/// Open and closed are the lid's. Locked: shut and held by the latch; unlocked: released,
+/// whatever the lid's angle.
+impl Part for Params {
+    fn state(&self, state: &str, tolerance: Option<f64>, s: &LabwareState) -> Option<Measure> {
+        let lid = s.joint(JOINT);
         let locked = s.flag(LOCKED);
         match state {
             "locked" => {
-                let m = self.lid().measure("closed", s.joint(JOINT), tolerance)?;
+                let m = self.lid().measure("closed", lid, tolerance)?;
                 Some(Measure {
                     holds: m.holds && locked,
                     ..m
@@ -548,17 +562,7 @@ impl Lidded for Params {
                 tolerance: 0.5,
                 holds: !locked,
             }),
-            _ => None,
-        }
-    }
-
-    /// Closed: pressed past the stop, so that the latch catches it against the spring: the push
-    /// point goes `PRESS_PAST` below the shut lid's face, more than the arm sags under gravity
-    /// (about 1 cm at the UR5e's reach).
-    fn lid_goal(&self, goal: &str) -> Option<f64> {
-        match goal {
-            "closed" => Some(self.lid_closed - PRESS_PAST / (self.push_at * self.lid_body.depth)),
-            _ => self.lid().goal(goal),
+            _ => self.lid().measure(state, lid, tolerance),
         }
     }
 }

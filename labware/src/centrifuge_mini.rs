@@ -9,7 +9,7 @@
 use crate::frame::{Pose, Vec3, pose, translation};
 use crate::lid::{JOINT, Lid, LidBody, LidNames, Lidded};
 use crate::mjcf::{Fragment, v3};
-use crate::model::{Affordance, Instrument, LabwareState, Logic, Reset};
+use crate::model::{Affordance, Instrument, LabwareState, Logic, Measure, Part, Reset};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -64,6 +64,12 @@ impl Lidded for Params {
             [self.lid_open, self.lid_closed],
             [self.open_tolerance, self.closed_tolerance],
         )
+    }
+}
+
+impl Part for Params {
+    fn state(&self, state: &str, tolerance: Option<f64>, s: &LabwareState) -> Option<Measure> {
+        self.lid().measure(state, s.joint(JOINT), tolerance)
     }
 }
 

@@ -33,6 +33,6 @@ pub use catalogue::{
 pub use frame::{Pose, Rot, Vec3};
 pub use model::{
     Affordance, Display, Effects, Instrument, Joints, LabwareState, Logic, Measure, Mechanism,
-    Symmetry,
+    Part, Symmetry,
 };
 pub use registry::Model;

@@ -5,11 +5,11 @@
 //! first), its joint goals, the handle affordance and the latch's flag and switch roles; and
 //! [`Lidded`], what an instrument with a lid answers through [`crate::Instrument::lidded`]. Each
 //! instrument keeps its own geometry (shell, handle), its latch's mechanics and what "locked"
-//! and "unlocked" measure; a fourth lidded kind composes the same.
+//! and "unlocked" measure (its [`Part`]); a fourth lidded kind composes the same.
 
 use crate::frame::{Pose, Rot, Vec3, pose, x_turn};
 use crate::mjcf::{box_inertia, pose_attrs, v3};
-use crate::model::{Affordance, Joints, LabwareState, Measure, Symmetry};
+use crate::model::{Affordance, Joints, LabwareState, Measure, Part, Symmetry};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -231,33 +231,17 @@ impl Lid {
 }
 
 /// What a lidded instrument tells the rest of the system about its lid, through
-/// [`crate::Instrument::lidded`]: the lid, what its latch measures and the angles the expert
-/// drives it to. The instrument's `lid is …` measures, its readout and its lid goals are these
-/// unless it says otherwise.
-pub trait Lidded {
+/// [`crate::Instrument::lidded`]: the lid, the angles the expert drives it to, and, as the
+/// [`Part`] the judge measures, its states (open and closed by [`Lid::measure`], a latch's
+/// `locked` and `unlocked` as the instrument's latch works). The instrument's `lid is …`
+/// measures, its readout and its lid goals are these unless it says otherwise.
+pub trait Lidded: Part {
     /// The lid, from the instrument's parameters.
     fn lid(&self) -> Lid;
-
-    /// `lid is locked` / `lid is unlocked` (tolerance: the predicate's, else the latch's); `None`
-    /// for any other state, and for a lid without a latch.
-    fn latch(&self, _state: &str, _tolerance: Option<f64>, _s: &LabwareState) -> Option<Measure> {
-        None
-    }
 
     /// The angle the expert drives the lid to for a named goal (`open`, `closed`).
     fn lid_goal(&self, goal: &str) -> Option<f64> {
         self.lid().goal(goal)
-    }
-
-    /// `lid is <state>`: the latch's states, else open and closed by the lid's angle.
-    fn lid_measure(
-        &self,
-        state: &str,
-        tolerance: Option<f64>,
-        s: &LabwareState,
-    ) -> Option<Measure> {
-        (self.latch(state, tolerance, s))
-            .or_else(|| self.lid().measure(state, s.joint(JOINT), tolerance))
     }
 }
 

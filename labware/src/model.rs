@@ -7,9 +7,10 @@
 //! ([`Mechanism`]), its joints, equality switches and actuators by role, reset from declared part
 //! states, the per-step logic hook (latches, buttons, a motor driven from its switch: [`Effects`]),
 //! processes with other items ([`crate::process`]), panel values and the displays that show them (drawn into
-//! textures the runtime uploads), what the judge scores ([`Instrument::measure`],
-//! [`Instrument::panel_value`]) and the readout people see ([`Instrument::readout`]), and
-//! affordances as functions of live state.
+//! textures the runtime uploads), what the judge scores ([`Instrument::measure`] of the one
+//! [`Part`] a kind's states are about, [`Instrument::panel_value`]) and the readout people see
+//! ([`Instrument::readout`]), and affordances as functions of live state. A lidded instrument
+//! answers for its lid through [`crate::lid::Lidded`] ([`Instrument::lidded`]).
 
 use crate::frame::{Pose, serde_pose};
 use crate::lid::{self, Lidded};
@@ -135,6 +136,15 @@ impl Measure {
             holds: (value - target).abs() <= tolerance,
         }
     }
+}
+
+/// The part of an item whose states the judge measures (`lid is locked`, `cap is on`, `tip is
+/// in`): each kind with a model has at most one (the catalogue's `parts`), named by
+/// [`Instrument::part`].
+pub trait Part {
+    /// The measured value of `state` (tolerance: the predicate's, else the part's); `None` for
+    /// a state the part does not have.
+    fn state(&self, state: &str, tolerance: Option<f64>, s: &LabwareState) -> Option<Measure>;
 }
 
 /// How an affordance frame may be turned and still be the same grasp.
@@ -363,7 +373,14 @@ pub trait Instrument {
         self.lidded().filter(|_| role == lid::JOINT)?.lid_goal(goal)
     }
 
-    /// The measured value of `part is state` (tolerance: the predicate's, else the model's).
+    /// The part [`Instrument::measure`] measures, by its catalogue name (`cap`, `tip`...): a
+    /// lidded instrument's lid unless it says otherwise; `None`: nothing to measure.
+    fn part(&self) -> Option<(&'static str, &dyn Part)> {
+        self.lidded().map(|l| (lid::JOINT, l as &dyn Part))
+    }
+
+    /// The measured value of `part is state` (tolerance: the predicate's, else the model's): a
+    /// state of [`Instrument::part`].
     fn measure(
         &self,
         part: &str,
@@ -371,8 +388,8 @@ pub trait Instrument {
         tolerance: Option<f64>,
         s: &LabwareState,
     ) -> Option<Measure> {
-        let lidded = self.lidded().filter(|_| part == lid::JOINT)?;
-        lidded.lid_measure(state, tolerance, s)
+        let (_, judged) = self.part().filter(|(name, _)| *name == part)?;
+        judged.state(state, tolerance, s)
     }
 
     /// The current state of every part (for recordings and reports).

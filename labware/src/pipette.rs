@@ -21,8 +21,9 @@
 
 use crate::frame::{Pose, pose};
 use crate::mjcf::{Fragment, cylinder_inertia, pose_attrs};
-use crate::model::Measure;
-use crate::model::{Affordance, Effects, Instrument, Joints, LabwareState, Logic, Symmetry, set};
+use crate::model::{
+    Affordance, Effects, Instrument, Joints, LabwareState, Logic, Measure, Part, Symmetry, set,
+};
 use crate::process::{PENDING_UL, Pipetting, Process, STROKE_UL, TIP_IN, VOLUME_UL, Vessel};
 use physics::liquid::Container;
 use serde::{Deserialize, Serialize};
@@ -135,6 +136,27 @@ impl Params {
     fn tip_interior(&self) -> Container {
         let r = self.tip_radius - 0.0004;
         Container::tube(r, self.tip_length - 0.003, 0.75 * self.tip_length, 24)
+    }
+}
+
+/// The tip: `out` of every vessel, `in` one (inside it, or over its mouth where a drop falls
+/// in), or `immersed` under a liquid's surface; the value is where it is (0, 1, 2), from what
+/// the pipetting process found after the last physics step.
+impl Part for Params {
+    fn state(&self, state: &str, _tolerance: Option<f64>, s: &LabwareState) -> Option<Measure> {
+        let place = s.logic.get(TIP_IN).copied().unwrap_or(0.0);
+        let (target, holds) = match state {
+            "out" => (0.0, place == 0.0),
+            "in" => (1.0, place >= 1.0),
+            "immersed" => (2.0, place == 2.0),
+            _ => return None,
+        };
+        Some(Measure {
+            value: place,
+            target,
+            tolerance: 0.0,
+            holds,
+        })
     }
 }
 
@@ -277,32 +299,8 @@ impl Instrument for Params {
         }
     }
 
-    /// `tip`: `out` of every vessel, `in` one (inside it, or over its mouth where a drop falls
-    /// in), or `immersed` under a liquid's surface; the value is where it is (0, 1, 2), from what
-    /// the pipetting process found after the last physics step.
-    fn measure(
-        &self,
-        part: &str,
-        state: &str,
-        _tolerance: Option<f64>,
-        s: &LabwareState,
-    ) -> Option<Measure> {
-        if part != "tip" {
-            return None;
-        }
-        let place = s.logic.get(TIP_IN).copied().unwrap_or(0.0);
-        let (target, holds) = match state {
-            "out" => (0.0, place == 0.0),
-            "in" => (1.0, place >= 1.0),
-            "immersed" => (2.0, place == 2.0),
-            _ => return None,
-        };
-        Some(Measure {
-            value: place,
-            target,
-            tolerance: 0.0,
-            holds,
-        })
+    fn part(&self) -> Option<(&'static str, &dyn Part)> {
+        Some(("tip", self))
     }
 
     fn panel_value(&self, param: &str, s: &LabwareState) -> Option<f64> {

@@ -101,6 +101,18 @@ mod tests {
         }
     }
 
+    /// A model measures the one part its kind's states are about (`Instrument::part`), the
+    /// catalogue's, and a kind without parts has nothing to measure.
+    #[test]
+    fn every_model_measures_its_kinds_part() {
+        for k in crate::KINDS.iter().filter(|k| k.simulated()) {
+            let model = Model::for_kind(k.name).unwrap();
+            let part = model.instrument().unwrap().part().map(|(name, _)| name);
+            let declared: Vec<&str> = k.parts.iter().map(|p| p.part).collect();
+            assert_eq!(part.into_iter().collect::<Vec<_>>(), declared, "{}", k.name);
+        }
+    }
+
     /// Every slot the catalogue names has a seat in the holder's model, and no item a holder
     /// takes may count as standing in a neighbouring slot: its `slot_xy` is under half the
     /// distance between the two closest seats.

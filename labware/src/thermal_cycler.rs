@@ -11,8 +11,8 @@ use crate::frame::{Pose, Vec3, pose, translation, x_turn};
 use crate::lid::{JOINT, LOCK_SWITCH, LOCKED, Lid, LidBody, LidNames, Lidded};
 use crate::mjcf::{Fragment, v3};
 use crate::model::{
-    Affordance, Effects, Instrument, Joints, LabwareState, Logic, Measure, Mechanism, Reset, flag,
-    set_flag,
+    Affordance, Effects, Instrument, Joints, LabwareState, Logic, Measure, Mechanism, Part, Reset,
+    flag, set_flag,
 };
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -81,7 +81,7 @@ fn lever_names(prefix: &str) -> (String, String) {
     (format!("{prefix}/lever"), format!("{prefix}/lever_hinge"))
 }
 
-/// The lid, latched by the lever: the latch is read on the lever.
+/// The lid, latched by the lever.
 impl Lidded for Params {
     fn lid(&self) -> Lid {
         self.lid_body.hinged(
@@ -89,14 +89,17 @@ impl Lidded for Params {
             [self.open_tolerance, self.closed_tolerance],
         )
     }
+}
 
-    /// Locked: the lever in its pressed notch and the latch holding; unlocked: raised and not.
-    fn latch(&self, state: &str, tolerance: Option<f64>, s: &LabwareState) -> Option<Measure> {
+/// Open and closed are the lid's; the latch is read on the lever. Locked: the lever in its
+/// pressed notch and the latch holding; unlocked: raised and not.
+impl Part for Params {
+    fn state(&self, state: &str, tolerance: Option<f64>, s: &LabwareState) -> Option<Measure> {
         let locked = s.flag(LOCKED);
         let (target, latched, default) = match state {
             "locked" => (self.lever_pressed, locked, self.locked_tolerance),
             "unlocked" => (self.lever_raised, !locked, self.unlocked_tolerance),
-            _ => return None,
+            _ => return self.lid().measure(state, s.joint(JOINT), tolerance),
         };
         let m = Measure::near(s.joint("lever"), target, tolerance.unwrap_or(default));
         Some(Measure {

@@ -10,7 +10,7 @@
 
 use crate::frame::{Pose, translation};
 use crate::mjcf::{Fragment, cylinder_inertia, pose_attrs};
-use crate::model::{Affordance, Instrument, LabwareState, Measure, Mechanism, Symmetry};
+use crate::model::{Affordance, Instrument, LabwareState, Measure, Mechanism, Part, Symmetry};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -233,6 +233,54 @@ impl Params {
     }
 }
 
+/// The cap: on its seat or off it.
+impl Part for Params {
+    fn state(&self, state: &str, tolerance: Option<f64>, s: &LabwareState) -> Option<Measure> {
+        let tolerance = tolerance.unwrap_or(0.002);
+        if self.open {
+            // No cap: off, as far as a cap can be.
+            let off = state == "off";
+            // Its value: as far as a cap can be from the seat, the tube's height.
+            return (state == "on" || off).then_some(Measure {
+                value: self.height,
+                target: if off { self.cap_off_rise } else { 0.0 },
+                tolerance,
+                holds: off,
+            });
+        }
+        let (_, tilt) = cap_offset(self, s)?;
+        Some(match state {
+            // On: screwed to its seat, measured along the thread's travel (the tube's axis),
+            // coaxial within the thread's play and not crossed (tilted).
+            "on" => {
+                // Its value: how far from seated, up or down the thread, and how far beyond
+                // the play aside (so that a cap at its seat's height but off the axis does not
+                // read as nearly on).
+                let (rise, aside) = cap_rise_and_aside(self, s)?;
+                Measure {
+                    value: rise.abs() + (aside - CAP_PLAY).max(0.0),
+                    target: 0.0,
+                    tolerance,
+                    holds: rise.abs() <= tolerance && aside <= CAP_PLAY && tilt <= CAP_TILT,
+                }
+            }
+            // Off: risen off the thread along the tube's axis, or put down clear of the neck
+            // (its skirt no longer around it). A cap forced down onto its tube, or torn sideways
+            // into the neck (which a thread does not allow; a simulated one may let go), is not.
+            "off" => {
+                let (rise, aside) = cap_rise_and_aside(self, s)?;
+                Measure {
+                    value: rise.max(aside - self.radius - self.cap_radius + self.cap_off_rise),
+                    target: self.cap_off_rise,
+                    tolerance,
+                    holds: rise >= self.cap_off_rise || aside >= self.radius + self.cap_radius,
+                }
+            }
+            _ => return None,
+        })
+    }
+}
+
 impl Instrument for Params {
     fn fragment(&self, name: &str, placement: &Pose) -> Fragment {
         if self.open {
@@ -351,58 +399,8 @@ impl Instrument for Params {
         vec![("cap", format!("{name}/cap"))]
     }
 
-    fn measure(
-        &self,
-        part: &str,
-        state: &str,
-        tolerance: Option<f64>,
-        s: &LabwareState,
-    ) -> Option<Measure> {
-        if part != "cap" {
-            return None;
-        }
-        let tolerance = tolerance.unwrap_or(0.002);
-        if self.open {
-            // No cap: off, as far as a cap can be.
-            let off = state == "off";
-            // Its value: as far as a cap can be from the seat, the tube's height.
-            return (state == "on" || off).then_some(Measure {
-                value: self.height,
-                target: if off { self.cap_off_rise } else { 0.0 },
-                tolerance,
-                holds: off,
-            });
-        }
-        let (_, tilt) = cap_offset(self, s)?;
-        Some(match state {
-            // On: screwed to its seat, measured along the thread's travel (the tube's axis),
-            // coaxial within the thread's play and not crossed (tilted).
-            "on" => {
-                // Its value: how far from seated, up or down the thread, and how far beyond
-                // the play aside (so that a cap at its seat's height but off the axis does not
-                // read as nearly on).
-                let (rise, aside) = cap_rise_and_aside(self, s)?;
-                Measure {
-                    value: rise.abs() + (aside - CAP_PLAY).max(0.0),
-                    target: 0.0,
-                    tolerance,
-                    holds: rise.abs() <= tolerance && aside <= CAP_PLAY && tilt <= CAP_TILT,
-                }
-            }
-            // Off: risen off the thread along the tube's axis, or put down clear of the neck
-            // (its skirt no longer around it). A cap forced down onto its tube, or torn sideways
-            // into the neck (which a thread does not allow; a simulated one may let go), is not.
-            "off" => {
-                let (rise, aside) = cap_rise_and_aside(self, s)?;
-                Measure {
-                    value: rise.max(aside - self.radius - self.cap_radius + self.cap_off_rise),
-                    target: self.cap_off_rise,
-                    tolerance,
-                    holds: rise >= self.cap_off_rise || aside >= self.radius + self.cap_radius,
-                }
-            }
-            _ => return None,
-        })
+    fn part(&self) -> Option<(&'static str, &dyn Part)> {
+        Some(("cap", self))
     }
 
     fn readout(&self, s: &LabwareState) -> BTreeMap<String, String> {

@@ -18,8 +18,8 @@
 use crate::frame::{Pose, Vec3, pose, translation};
 use crate::mjcf::{Fragment, pose_attrs, v3};
 use crate::model::{
-    Affordance, Effects, Instrument, Joints, LabwareState, Logic, Measure, Mechanism, Reset, flag,
-    set, set_flag,
+    Affordance, Effects, Instrument, Joints, LabwareState, Logic, Measure, Mechanism, Part, Reset,
+    flag, set, set_flag,
 };
 use physics::detent::Detent;
 use physics::eccentric::{Eccentric, rpm_to_rad_s};
@@ -177,6 +177,37 @@ impl Params {
     }
 }
 
+/// The power: switched on and turning, or off.
+impl Part for Params {
+    fn state(&self, state: &str, _tolerance: Option<f64>, s: &LabwareState) -> Option<Measure> {
+        if !matches!(state, "on" | "off") {
+            return None;
+        }
+        // On: switched on and the drive really turning at the knob's speed (within 10%),
+        // measured, as a fraction of that speed; with the knob at its stop nothing may run, and
+        // the value is 0.
+        let switched = s.flag(POWER);
+        if state == "on" {
+            let set = rpm_to_rad_s(self.set_rpm(&s.logic));
+            let speed = s.logic.get(DRIVE_SPEED).copied().unwrap_or(0.0);
+            let running = set > 0.0 && (speed - set).abs() <= SPEED_TOLERANCE * set;
+            return Some(Measure {
+                value: if set > 0.0 { speed / set } else { 0.0 },
+                target: 1.0,
+                tolerance: SPEED_TOLERANCE,
+                holds: switched && running,
+            });
+        }
+        let value = f64::from(u8::from(switched));
+        Some(Measure {
+            value,
+            target: 0.0,
+            tolerance: 0.0,
+            holds: !switched,
+        })
+    }
+}
+
 impl Instrument for Params {
     fn fragment(&self, name: &str, placement: &Pose) -> Fragment {
         let h = self.housing_half;
@@ -293,38 +324,8 @@ impl Instrument for Params {
         set(logic, DRIVE_ANGLE, angle);
     }
 
-    fn measure(
-        &self,
-        part: &str,
-        state: &str,
-        _tolerance: Option<f64>,
-        s: &LabwareState,
-    ) -> Option<Measure> {
-        if part != POWER || !matches!(state, "on" | "off") {
-            return None;
-        }
-        // On: switched on and the drive really turning at the knob's speed (within 10%),
-        // measured, as a fraction of that speed; with the knob at its stop nothing may run, and
-        // the value is 0.
-        let switched = s.flag(POWER);
-        if state == "on" {
-            let set = rpm_to_rad_s(self.set_rpm(&s.logic));
-            let speed = s.logic.get(DRIVE_SPEED).copied().unwrap_or(0.0);
-            let running = set > 0.0 && (speed - set).abs() <= SPEED_TOLERANCE * set;
-            return Some(Measure {
-                value: if set > 0.0 { speed / set } else { 0.0 },
-                target: 1.0,
-                tolerance: SPEED_TOLERANCE,
-                holds: switched && running,
-            });
-        }
-        let value = f64::from(u8::from(switched));
-        Some(Measure {
-            value,
-            target: 0.0,
-            tolerance: 0.0,
-            holds: !switched,
-        })
+    fn part(&self) -> Option<(&'static str, &dyn Part)> {
+        Some((POWER, self))
     }
 
     /// The speed the knob's notch sets (rpm): what its dial shows, not how fast the drive turns.
