@@ -42,12 +42,24 @@ pub(crate) fn compile_chain(
     (task, diags)
 }
 
+/// Why a chain's stage file is not a protocol file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+enum NotAProtocol {
+    #[error("it is a scene file (protocols name it with `scene = \"..\"`)")]
+    SceneFile,
+    /// Broken TOML without a `[protocol]` or `[chain]` header line (1-based line and column).
+    #[error("it is not valid TOML (line {line}, column {column})")]
+    BadToml { line: usize, column: usize },
+    #[error("it has no `[protocol]` table")]
+    NoProtocolTable,
+}
+
 /// A stage's diagnostics are shown only if it is a protocol file: text from any other file is
 /// never echoed. A protocol file is valid TOML with a `[protocol]` or `[chain]` table, or, when its
 /// TOML is broken (a protocol with a typo), has a `[protocol]` or `[chain]` header line.
-fn looks_like_protocol(text: &str) -> Result<(), String> {
+fn looks_like_protocol(text: &str) -> Result<(), NotAProtocol> {
     if scene_file::has_scene_header(text) {
-        return Err("it is a scene file (protocols name it with `scene = \"..\"`)".into());
+        return Err(NotAProtocol::SceneFile);
     }
     let header =
         scene_file::has_header(text, "[protocol]") || scene_file::has_header(text, "[chain]");
@@ -57,8 +69,8 @@ fn looks_like_protocol(text: &str) -> Result<(), String> {
             return Ok(());
         }
         let at = e.span().map(|s| s.start).unwrap_or(0);
-        let (line, col) = dsl::render::line_col(text, at);
-        return Err(format!("it is not valid TOML (line {line}, column {col})"));
+        let (line, column) = dsl::render::line_col(text, at);
+        return Err(NotAProtocol::BadToml { line, column });
     }
     let doc = doc.get_ref();
     let table = |name: &str| {
@@ -68,10 +80,12 @@ fn looks_like_protocol(text: &str) -> Result<(), String> {
     if table("protocol") || table("chain") {
         Ok(())
     } else {
-        Err("it has no `[protocol]` table".into())
+        Err(NotAProtocol::NoProtocolTable)
     }
 }
 
+// Long on purpose: the stages are compiled, carried over and checked against the scene rule in one
+// pass over them, whose state (the scene so far, each stage's end world) the steps share.
 fn compile_stages(
     c: &Chain,
     file: &str,

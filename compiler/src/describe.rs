@@ -8,7 +8,8 @@ use crate::primitives::CATALOGUE;
 use crate::task::{Scoring, Task};
 use std::fmt::Write;
 
-/// The task sheet of a compiled task.
+/// The task sheet of a compiled task. Long on purpose: one block per section of the sheet, in the
+/// order the sheet prints them, each a few lines of `writeln!` that read best in sequence.
 pub fn describe(task: &Task) -> String {
     let mut out = String::new();
     let w = &mut out;

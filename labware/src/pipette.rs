@@ -24,7 +24,7 @@ use crate::mjcf::{Fragment, cylinder_inertia, pose_attrs};
 use crate::model::{
     Affordance, Effects, Instrument, Joints, LabwareState, Logic, Measure, Part, Symmetry, set,
 };
-use crate::process::{PENDING_UL, Pipetting, Process, STROKE_UL, TIP_IN, VOLUME_UL, Vessel};
+use crate::process::{PENDING_UL, Pipetting, Process, STROKE_UL, TipPlace, VOLUME_UL, Vessel};
 use physics::liquid::Container;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -140,20 +140,20 @@ impl Params {
 }
 
 /// The tip: `out` of every vessel, `in` one (inside it, or over its mouth where a drop falls
-/// in), or `immersed` under a liquid's surface; the value is where it is (0, 1, 2), from what
-/// the pipetting process found after the last physics step.
+/// in), or `immersed` under a liquid's surface; the value is where it is
+/// ([`TipPlace::value`]), from what the pipetting process found after the last physics step.
 impl Part for Params {
     fn state(&self, state: &str, _tolerance: Option<f64>, s: &LabwareState) -> Option<Measure> {
-        let place = s.logic.get(TIP_IN).copied().unwrap_or(0.0);
-        let (target, holds) = match state {
-            "out" => (0.0, place == 0.0),
-            "in" => (1.0, place >= 1.0),
-            "immersed" => (2.0, place == 2.0),
-            _ => return None,
+        let place = TipPlace::of(&s.logic);
+        let wanted = TipPlace::named(state)?;
+        // `in` holds deeper too: a tip under the surface is in its vessel.
+        let holds = match wanted {
+            TipPlace::In => place >= TipPlace::In,
+            _ => place == wanted,
         };
         Some(Measure {
-            value: place,
-            target,
+            value: place.value(),
+            target: wanted.value(),
             tolerance: 0.0,
             holds,
         })
@@ -320,11 +320,7 @@ impl Instrument for Params {
             "rest"
         };
         let held = s.logic.get(VOLUME_UL).copied().unwrap_or(0.0);
-        let tip = match s.logic.get(TIP_IN).copied().unwrap_or(0.0) {
-            p if p >= 2.0 => "immersed",
-            p if p >= 1.0 => "in",
-            _ => "out",
-        };
+        let tip = TipPlace::of(&s.logic).name();
         BTreeMap::from([
             ("plunger".into(), plunger.into()),
             ("tip".into(), tip.into()),

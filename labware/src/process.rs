@@ -37,9 +37,56 @@ pub const AIR_UL: &str = "air_ul";
 /// The pipette's logic: air pushed out of the tip under a liquid's surface (bubbles, µL).
 pub const BUBBLED_UL: &str = "bubbled_ul";
 
-/// The pipette's logic: where the tip's opening is: 0 out of every vessel, 1 in one (inside it,
-/// or over its mouth close enough that a drop falls in), 2 under a vessel's liquid surface.
+/// The pipette's logic: where the tip's opening is, as [`TipPlace::value`] (the logic holds
+/// numbers, as recordings store them; code reads it as a [`TipPlace`]).
 pub const TIP_IN: &str = "tip_in";
+
+/// Where a pipette's tip opening is, ordered from farthest to deepest.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum TipPlace {
+    /// Out of every vessel.
+    Out,
+    /// In one: inside it, or over its mouth close enough that a drop falls in.
+    In,
+    /// Under a vessel's liquid surface.
+    Immersed,
+}
+
+impl TipPlace {
+    /// Its value in the logic (0, 1, 2).
+    pub fn value(self) -> f64 {
+        match self {
+            TipPlace::Out => 0.0,
+            TipPlace::In => 1.0,
+            TipPlace::Immersed => 2.0,
+        }
+    }
+
+    /// Where the pipette whose logic this is has its tip (out where the process has not said).
+    pub fn of(logic: &Logic) -> TipPlace {
+        match logic.get(TIP_IN).copied().unwrap_or(0.0) {
+            v if v >= 2.0 => TipPlace::Immersed,
+            v if v >= 1.0 => TipPlace::In,
+            _ => TipPlace::Out,
+        }
+    }
+
+    /// The state's name in the catalogue and the readout.
+    pub fn name(self) -> &'static str {
+        match self {
+            TipPlace::Out => "out",
+            TipPlace::In => "in",
+            TipPlace::Immersed => "immersed",
+        }
+    }
+
+    /// The place a state name means.
+    pub fn named(name: &str) -> Option<TipPlace> {
+        [TipPlace::Out, TipPlace::In, TipPlace::Immersed]
+            .into_iter()
+            .find(|p| p.name() == name)
+    }
+}
 
 /// How far above a vessel's mouth a drop from a tip still falls into it (m).
 const DROP_HEIGHT: f64 = 0.03;
@@ -247,12 +294,12 @@ struct Place {
 }
 
 impl Place {
-    /// [`TIP_IN`]'s value.
-    fn value(self) -> f64 {
+    /// Where the tip is.
+    fn tip(self) -> TipPlace {
         match (self.under, self.catching) {
-            (Some(_), _) => 2.0,
-            (None, Some(_)) => 1.0,
-            (None, None) => 0.0,
+            (Some(_), _) => TipPlace::Immersed,
+            (None, Some(_)) => TipPlace::In,
+            (None, None) => TipPlace::Out,
         }
     }
 }
@@ -293,7 +340,7 @@ impl Process for Pipetting {
             v.liquid.volume = Nanolitres::from_microlitres(volume(v.item));
         }
         let place = self.place(poses, opening);
-        set(&mut logic[self.pipette], TIP_IN, place.value());
+        set(&mut logic[self.pipette], TIP_IN, place.tip().value());
         let pending = logic[self.pipette].get(PENDING_UL).copied().unwrap_or(0.0);
         if pending == 0.0 {
             return;

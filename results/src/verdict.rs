@@ -97,7 +97,8 @@ impl Verdict {
     }
 }
 
-/// The measured value of one predicate, where the judge can measure it.
+/// The measured value of one predicate, where the judge can measure it. Long on purpose: one
+/// arm per predicate form, each the few lines that form measures.
 fn measure(
     task: &Task,
     resolved: &ResolvedPredicate,

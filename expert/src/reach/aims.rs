@@ -64,17 +64,7 @@ pub(super) fn aims(
                 let frame =
                     StepFrame::new(&motions, lab, &grasp, Some(item), g.finger_reach, g.enclose);
                 let Ok(frame) = frame else { continue };
-                for m in seats {
-                    if let Ok(Some(pose)) = frame.first_pose(std::slice::from_ref(m), lab) {
-                        out.push(Aim {
-                            step: i,
-                            robot,
-                            target: target_name(std::slice::from_ref(m)),
-                            grasps: vec![(pose, Vec::new())],
-                            as_started: false,
-                        });
-                    }
-                }
+                out.extend(seat_aims(i, robot, &seats, &frame, lab));
                 continue;
             }
             if held.contains_key(item) {
@@ -92,36 +82,10 @@ pub(super) fn aims(
         ) else {
             continue;
         };
-        // A held tool brought onto an opening (a pipette's tip over a tube's mouth, then under
-        // its surface): each place it is brought to, as the tool sits in the hand at the start,
-        // at any heading about the opening's axis the expert may take.
+        // A held tool brought onto an opening.
         if matches!(first_target(&motions), Some(Target::Bring { .. })) {
             let as_started = !moved_joints && held.values().all(|(r, _)| *r != robot);
-            let mut seen: Vec<&Target> = Vec::new();
-            for m in &motions {
-                let Motion::Reach { target } = m else {
-                    continue;
-                };
-                if seen.contains(&target) {
-                    continue;
-                }
-                seen.push(target);
-                // The headings the expert tries where its first is blocked.
-                let grasps: Vec<(Pose, Vec<Pose>)> = frame
-                    .headings()
-                    .filter_map(|f| f.pose_toward(target, lab, &tcp).ok())
-                    .map(|p| (p, Vec::new()))
-                    .collect();
-                if !grasps.is_empty() {
-                    out.push(Aim {
-                        step: i,
-                        robot,
-                        target: target_name(std::slice::from_ref(m)),
-                        grasps,
-                        as_started,
-                    });
-                }
-            }
+            out.extend(bring_aims(i, robot, &motions, &frame, lab, &tcp, as_started));
             continue;
         }
         let Ok(Some(pose)) = frame.first_pose(&motions, lab) else {
@@ -160,26 +124,7 @@ pub(super) fn aims(
                 moved_joints = true;
             }
         }
-        // Where the arm comes in from: the standoff back along the target's axis (4 cm above a
-        // tube's grasp), for each grasp.
-        let standoff = motions.iter().find_map(|m| match m {
-            Motion::Approach { standoff, .. } => Some(*standoff),
-            _ => None,
-        });
-        let approach = standoff.map(|d| {
-            let back = labware::frame::translation([0.0, 0.0, -d]);
-            Aim {
-                step: i,
-                robot,
-                target: format!(
-                    "{} (coming in {:.0} cm back along it)",
-                    target_name(&motions),
-                    d * 100.0
-                ),
-                grasps: grasps.iter().map(|(g, _)| (g * back, Vec::new())).collect(),
-                as_started,
-            }
-        });
+        let approach = approach_aim(i, robot, &motions, &grasps, as_started);
         // The way in first, as the arm comes: the target's aim is then the arm's last solution
         // for the steps after it (the end of its arc or lift).
         out.extend(approach);
@@ -192,6 +137,92 @@ pub(super) fn aims(
         });
     }
     out
+}
+
+/// The aims of placing a carried item: each seat motion's pose with the item as `frame` (the
+/// pick's grasp) carries it.
+fn seat_aims(i: usize, robot: usize, seats: &[&Motion], frame: &StepFrame, lab: &Lab) -> Vec<Aim> {
+    seats
+        .iter()
+        .filter_map(|m| {
+            let pose = frame.first_pose(std::slice::from_ref(*m), lab).ok()??;
+            Some(Aim {
+                step: i,
+                robot,
+                target: target_name(std::slice::from_ref(*m)),
+                grasps: vec![(pose, Vec::new())],
+                as_started: false,
+            })
+        })
+        .collect()
+}
+
+/// The aims of a held tool brought onto an opening (a pipette's tip over a tube's mouth, then
+/// under its surface): each place it is brought to, as the tool sits in the hand at the start
+/// (`tcp`), at any heading about the opening's axis the expert may take.
+fn bring_aims(
+    i: usize,
+    robot: usize,
+    motions: &[Motion],
+    frame: &StepFrame,
+    lab: &Lab,
+    tcp: &Pose,
+    as_started: bool,
+) -> Vec<Aim> {
+    let mut out = Vec::new();
+    let mut seen: Vec<&Target> = Vec::new();
+    for m in motions {
+        let Motion::Reach { target } = m else {
+            continue;
+        };
+        if seen.contains(&target) {
+            continue;
+        }
+        seen.push(target);
+        // The headings the expert tries where its first is blocked.
+        let grasps: Vec<(Pose, Vec<Pose>)> = frame
+            .headings()
+            .filter_map(|f| f.pose_toward(target, lab, tcp).ok())
+            .map(|p| (p, Vec::new()))
+            .collect();
+        if !grasps.is_empty() {
+            out.push(Aim {
+                step: i,
+                robot,
+                target: target_name(std::slice::from_ref(m)),
+                grasps,
+                as_started,
+            });
+        }
+    }
+    out
+}
+
+/// Where the arm comes in from: the standoff back along the target's axis (4 cm above a tube's
+/// grasp), for each of `grasps`; `None` for a step with no approach.
+fn approach_aim(
+    i: usize,
+    robot: usize,
+    motions: &[Motion],
+    grasps: &[(Pose, Vec<Pose>)],
+    as_started: bool,
+) -> Option<Aim> {
+    let d = motions.iter().find_map(|m| match m {
+        Motion::Approach { standoff, .. } => Some(*standoff),
+        _ => None,
+    })?;
+    let back = labware::frame::translation([0.0, 0.0, -d]);
+    Some(Aim {
+        step: i,
+        robot,
+        target: format!(
+            "{} (coming in {:.0} cm back along it)",
+            target_name(motions),
+            d * 100.0
+        ),
+        grasps: grasps.iter().map(|(g, _)| (g * back, Vec::new())).collect(),
+        as_started,
+    })
 }
 
 /// The tool poses of a step's `Follow` motions in order, from its grasp at `from` with `frame`,

@@ -127,7 +127,9 @@ pub struct Progress<'a> {
     pub elapsed_s: f64,
 }
 
-/// Runs one task's episodes; `progress` is called after each finished episode.
+/// Runs one task's episodes; `progress` is called after each finished episode. Long on purpose:
+/// the plan, the workers and the in-order commit of finished episodes share one scope of
+/// threads and channels, which reads as one piece.
 pub fn evaluate(
     task: &Task,
     opts: &EvalOptions,
