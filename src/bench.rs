@@ -406,7 +406,6 @@ pub fn physics_figures(task_step_s: Option<f64>) -> Result<()> {
 /// changing by a microlitre a step (a fast thumb's release: a solve of the surface every five or
 /// six steps, as the level is solved again each 5 µL), as a share of a task-scene step.
 fn pipetting_figure(task_step_s: Option<f64>) -> Result<()> {
-    use labware::Instrument;
     use labware::process::{PENDING_UL, VOLUME_UL, Vessel};
     let (Some(labware::Model::Tube(tube)), Some(labware::Model::Pipette(pipette))) = (
         labware::Model::for_kind("tube_50ml").map(|m| {
@@ -420,11 +419,10 @@ fn pipetting_figure(task_step_s: Option<f64>) -> Result<()> {
     ) else {
         anyhow::bail!("the catalogue has no 50 mL tube or pipette model");
     };
-    let interior = tube
-        .interior()
-        .ok_or_else(|| anyhow::anyhow!("the tube has no bore"))?;
+    let interior =
+        labware::Liquid::interior(&tube).ok_or_else(|| anyhow::anyhow!("the tube has no bore"))?;
     let vessels = [Vessel { item: 0, interior }];
-    let mut process = pipette.processes("pipette", 1, &vessels).remove(0);
+    let mut process = labware::Liquid::processes(&pipette, "pipette", 1, &vessels).remove(0);
     // The tip's opening 20 mm above the tube's base, under 30 mL of liquid.
     let poses = [
         labware::Pose::identity(),
@@ -515,7 +513,10 @@ fn authoring_figures() -> Result<()> {
         let mut warm = f64::MAX;
         for _ in 0..3 {
             let fresh = tempfile::tempdir()?;
-            cold = cold.min(reach_seconds(path, &expert::reach::Store::at(fresh.path()))?);
+            cold = cold.min(reach_seconds(
+                path,
+                &expert::reach::Store::at(fresh.path()),
+            )?);
             let store = expert::reach::Store::at(store_dir.path());
             reach_seconds(path, &store)?;
             warm = warm.min(reach_seconds(path, &store)?);

@@ -102,7 +102,7 @@ impl Bench {
             panic!("a is a tube")
         };
         assert!(tube.open, "a tube whose cap starts off is made open");
-        let bore = labware::Instrument::interior(tube).unwrap();
+        let bore = labware::Liquid::interior(tube).unwrap();
         let level = Liquid::new(bore, Nanolitres::from_microlitres(20_000.0), 0.0).offset();
         let (free_qpos, free_dof) = (free.qpos, free.dof);
         Bench {
@@ -577,8 +577,14 @@ fn a_task_whose_quantities_do_not_resolve_is_refused_before_any_episode() {
     let text = std::fs::read_to_string("protocols/pipette/transfer.toml").unwrap();
     let mut task = compiler::compile_source(&text, "transfer.toml").0.unwrap();
     let ok = task.sample(0);
-    let mut slot = Some(std::sync::Arc::new(runtime::Scene::build(&task, &ok).unwrap()));
-    let source = task.labware.iter().position(|l| l.name == "source").unwrap();
+    let mut slot = Some(std::sync::Arc::new(
+        runtime::Scene::build(&task, &ok).unwrap(),
+    ));
+    let source = task
+        .labware
+        .iter()
+        .position(|l| l.name == "source")
+        .unwrap();
     task.labware[source].volume = Some("{nowhere} mL".into());
     let instance = task.sample(0);
     let refused = |e: runtime::SceneError| {

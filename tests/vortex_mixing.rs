@@ -9,8 +9,8 @@
 use crate::common;
 
 use common::{compile, compile_edited, predicate, run, run_with};
-use labware::Instrument;
 use expert::ExpertPolicy;
+use labware::{Instrument, Panel};
 use policy::Observation;
 use policy::Policy;
 use policy::PolicyError;

@@ -32,7 +32,7 @@ pub use catalogue::{
 };
 pub use frame::{Pose, Rot, Vec3};
 pub use model::{
-    Affordance, Display, Effects, Instrument, Joints, LabwareState, Logic, Measure, Mechanism,
-    Part, Symmetry,
+    Affordance, Display, Effects, Instrument, Joints, LabwareState, Liquid, Logic, Measure,
+    Mechanism, Panel, Part, Symmetry,
 };
 pub use registry::Model;

@@ -180,7 +180,7 @@ pub struct Affordance {
 }
 
 /// A display an instrument draws: the MuJoCo texture (declared in the model's fragment, 8-bit RGB)
-/// that [`Instrument::draw_display`] fills.
+/// that [`Panel::draw_display`] fills.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Display {
     pub texture: String,
@@ -288,32 +288,6 @@ pub trait Instrument {
         Vec::new()
     }
 
-    /// Processes between this item (index `me` in task order) and others that the runtime runs
-    /// after every physics step (a pipette's tip working among `vessels`, every item with an
-    /// [`Instrument::interior`]), each written in the item's own model.
-    fn processes(&self, _name: &str, _me: usize, _vessels: &[Vessel]) -> Vec<Box<dyn Process>> {
-        Vec::new()
-    }
-
-    /// The mocap bodies that draw the surface of the liquid the item holds (see
-    /// [`crate::liquid_view`]), declared in its fragment; empty: nothing to draw.
-    fn liquid_bodies(&self, _name: &str) -> Vec<String> {
-        Vec::new()
-    }
-
-    /// Whether a tip can reach the liquid in its interior: an open container (a capped tube's
-    /// liquid is out of reach, and a drop over it lands on the cap). Only such items are the
-    /// vessels a pipetting process works among.
-    fn open_vessel(&self) -> bool {
-        self.interior().is_some()
-    }
-
-    /// The space inside the item that holds liquid (a tube's bore, a pipette's tip), in its root
-    /// frame; `None`: it holds none. Its volume is `volume_ul` in the logic.
-    fn interior(&self) -> Option<physics::liquid::Container> {
-        None
-    }
-
     /// Makes the model for the declared part states where they change what is built (a tube
     /// whose cap starts off is built without one). The compiler calls it once per item, before
     /// [`Instrument::unsupported_start`].
@@ -334,33 +308,6 @@ pub trait Instrument {
     /// actuators' command (the runtime empties and reuses it, so a step allocates nothing). Also
     /// called once right after reset, with `dt` 0.
     fn step(&self, _dt: f64, _joints: &Joints, _logic: &mut Logic, _effects: &mut Effects) {}
-
-    /// The value a panel shows (`speed`, `temperature`...), from live state.
-    fn panel_value(&self, _param: &str, _s: &LabwareState) -> Option<f64> {
-        None
-    }
-
-    /// The button that moves a panel value toward `target` (an affordance name).
-    fn button_toward(&self, _param: &str, _target: f64, _s: &LabwareState) -> Option<String> {
-        None
-    }
-
-    /// The dial that sets panel value `param` (a knob on a detent): its joint's role and the
-    /// joint angle that sets the value nearest `target`. The dial's affordance has the role's name
-    /// and its approach axis along the joint's axis, so that turning the tool right-handed about
-    /// its approach turns the joint's angle up. `None` for a value set with buttons.
-    fn dial_toward(&self, _param: &str, _target: f64) -> Option<(&'static str, f64)> {
-        None
-    }
-
-    /// The displays the item draws, in the order [`Instrument::draw_display`] numbers them.
-    fn displays(&self, _name: &str) -> Vec<Display> {
-        Vec::new()
-    }
-
-    /// Draws display `index` for the logic state into `rgb` (its texture's pixels, row-major, top
-    /// row first). Pure: the same logic always draws the same pixels.
-    fn draw_display(&self, _index: usize, _logic: &Logic, _rgb: &mut [u8]) {}
 
     /// The item's lid, for an instrument with one ([`crate::lid`]): by default its `lid is …`
     /// measures, its readout and its `lid` goals are the lid's.
@@ -406,6 +353,78 @@ pub trait Instrument {
 
     /// Where an item stands in one of this holder's slots: its base frame (z up), world frame.
     fn slot_seat(&self, _slot: &str, _s: &LabwareState) -> Option<Pose> {
+        None
+    }
+
+    /// The item's panel, for an instrument with one: the values it shows, the buttons and dials
+    /// that set them, and its screens.
+    fn panel(&self) -> Option<&dyn Panel> {
+        None
+    }
+
+    /// The item's liquid, for an item that holds it (a tube, a pipette's tip): its interior,
+    /// how it is drawn and the processes it runs with the other vessels.
+    fn liquid(&self) -> Option<&dyn Liquid> {
+        None
+    }
+}
+
+/// What an instrument with a panel answers ([`Instrument::panel`]): each method's default is
+/// "not on this panel".
+pub trait Panel {
+    /// The value a panel shows (`speed`, `temperature`...), from live state.
+    fn panel_value(&self, _param: &str, _s: &LabwareState) -> Option<f64> {
+        None
+    }
+
+    /// The button that moves a panel value toward `target` (an affordance name).
+    fn button_toward(&self, _param: &str, _target: f64, _s: &LabwareState) -> Option<String> {
+        None
+    }
+
+    /// The dial that sets panel value `param` (a knob on a detent): its joint's role and the
+    /// joint angle that sets the value nearest `target`. The dial's affordance has the role's name
+    /// and its approach axis along the joint's axis, so that turning the tool right-handed about
+    /// its approach turns the joint's angle up. `None` for a value set with buttons.
+    fn dial_toward(&self, _param: &str, _target: f64) -> Option<(&'static str, f64)> {
+        None
+    }
+
+    /// The displays the item draws, in the order [`Panel::draw_display`] numbers them.
+    fn displays(&self, _name: &str) -> Vec<Display> {
+        Vec::new()
+    }
+
+    /// Draws display `index` for the logic state into `rgb` (its texture's pixels, row-major, top
+    /// row first). Pure: the same logic always draws the same pixels.
+    fn draw_display(&self, _index: usize, _logic: &Logic, _rgb: &mut [u8]) {}
+}
+
+/// What an item that holds liquid answers ([`Instrument::liquid`]).
+pub trait Liquid {
+    /// Processes between this item (index `me` in task order) and others that the runtime runs
+    /// after every physics step (a pipette's tip working among `vessels`, every item with an
+    /// [`Instrument::interior`]), each written in the item's own model.
+    fn processes(&self, _name: &str, _me: usize, _vessels: &[Vessel]) -> Vec<Box<dyn Process>> {
+        Vec::new()
+    }
+
+    /// The mocap bodies that draw the surface of the liquid the item holds (see
+    /// [`crate::liquid_view`]), declared in its fragment; empty: nothing to draw.
+    fn liquid_bodies(&self, _name: &str) -> Vec<String> {
+        Vec::new()
+    }
+
+    /// Whether a tip can reach the liquid in its interior: an open container (a capped tube's
+    /// liquid is out of reach, and a drop over it lands on the cap). Only such items are the
+    /// vessels a pipetting process works among.
+    fn open_vessel(&self) -> bool {
+        self.interior().is_some()
+    }
+
+    /// The space inside the item that holds liquid (a tube's bore, a pipette's tip), in its root
+    /// frame; `None`: it holds none. Its volume is `volume_ul` in the logic.
+    fn interior(&self) -> Option<physics::liquid::Container> {
         None
     }
 }

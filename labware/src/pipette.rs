@@ -24,6 +24,7 @@ use crate::mjcf::{Fragment, cylinder_inertia, pose_attrs};
 use crate::model::{
     Affordance, Effects, Instrument, Joints, LabwareState, Logic, Measure, Part, Symmetry, set,
 };
+use crate::model::{Liquid, Panel};
 use crate::process::{PENDING_UL, Pipetting, Process, STROKE_UL, TipPlace, VOLUME_UL, Vessel};
 use physics::liquid::Container;
 use serde::{Deserialize, Serialize};
@@ -240,10 +241,6 @@ impl Instrument for Params {
             .collect()
     }
 
-    fn liquid_bodies(&self, name: &str) -> Vec<String> {
-        crate::liquid_view::bodies(name)
-    }
-
     /// All but the button, which the thumb presses.
     fn held_bodies(&self, name: &str) -> Vec<String> {
         ["base", "plunger", "ejector"]
@@ -254,24 +251,6 @@ impl Instrument for Params {
 
     fn place(&self, name: &str, root: &Pose) -> Vec<(String, Pose)> {
         vec![(format!("{name}/free"), *root)]
-    }
-
-    fn interior(&self) -> Option<Container> {
-        Some(self.tip_interior())
-    }
-
-    /// The tip is not a vessel another tip works in.
-    fn open_vessel(&self) -> bool {
-        false
-    }
-
-    fn processes(&self, _name: &str, me: usize, vessels: &[Vessel]) -> Vec<Box<dyn Process>> {
-        vec![Box::new(Pipetting::new(
-            me,
-            self.tip_interior(),
-            [0.0, 0.0, 0.0],
-            vessels,
-        ))]
     }
 
     /// The plunger's stroke as volume: each change is volume the tip must move. The first call
@@ -301,10 +280,6 @@ impl Instrument for Params {
 
     fn part(&self) -> Option<(&'static str, &dyn Part)> {
         Some(("tip", self))
-    }
-
-    fn panel_value(&self, param: &str, s: &LabwareState) -> Option<f64> {
-        (param == SET_VOLUME).then(|| self.set_ul(&s.logic))
     }
 
     fn readout(&self, s: &LabwareState) -> BTreeMap<String, String> {
@@ -349,6 +324,44 @@ impl Instrument for Params {
             touch,
             lead: 0.0,
         })
+    }
+
+    fn panel(&self) -> Option<&dyn Panel> {
+        Some(self)
+    }
+
+    fn liquid(&self) -> Option<&dyn Liquid> {
+        Some(self)
+    }
+}
+
+impl Panel for Params {
+    fn panel_value(&self, param: &str, s: &LabwareState) -> Option<f64> {
+        (param == SET_VOLUME).then(|| self.set_ul(&s.logic))
+    }
+}
+
+impl Liquid for Params {
+    fn liquid_bodies(&self, name: &str) -> Vec<String> {
+        crate::liquid_view::bodies(name)
+    }
+
+    fn interior(&self) -> Option<Container> {
+        Some(self.tip_interior())
+    }
+
+    /// The tip is not a vessel another tip works in.
+    fn open_vessel(&self) -> bool {
+        false
+    }
+
+    fn processes(&self, _name: &str, me: usize, vessels: &[Vessel]) -> Vec<Box<dyn Process>> {
+        vec![Box::new(Pipetting::new(
+            me,
+            self.tip_interior(),
+            [0.0, 0.0, 0.0],
+            vessels,
+        ))]
     }
 }
 

@@ -475,17 +475,6 @@ impl Instrument for Params {
         }
     }
 
-    fn panel_value(&self, param: &str, s: &LabwareState) -> Option<f64> {
-        self.setting(param)?;
-        Some(self.value(&s.logic, param))
-    }
-
-    fn button_toward(&self, param: &str, target: f64, s: &LabwareState) -> Option<String> {
-        let v = self.panel_value(param, s)?;
-        let word = if target >= v { "up" } else { "down" };
-        Some(format!("{param}_{word}"))
-    }
-
     fn readout(&self, s: &LabwareState) -> BTreeMap<String, String> {
         self.settings
             .iter()
@@ -514,6 +503,23 @@ impl Instrument for Params {
         })
     }
 
+    fn panel(&self) -> Option<&dyn crate::model::Panel> {
+        Some(self)
+    }
+}
+
+impl crate::model::Panel for Params {
+    fn panel_value(&self, param: &str, s: &LabwareState) -> Option<f64> {
+        self.setting(param)?;
+        Some(self.value(&s.logic, param))
+    }
+
+    fn button_toward(&self, param: &str, target: f64, s: &LabwareState) -> Option<String> {
+        let v = self.panel_value(param, s)?;
+        let word = if target >= v { "up" } else { "down" };
+        Some(format!("{param}_{word}"))
+    }
+
     fn displays(&self, name: &str) -> Vec<Display> {
         vec![Display {
             texture: Names::new(name).display,
@@ -531,6 +537,7 @@ impl Instrument for Params {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::Panel as _;
 
     fn state(logic: Logic) -> LabwareState {
         LabwareState {

@@ -10,6 +10,7 @@
 
 use crate::frame::{Pose, translation};
 use crate::mjcf::{Fragment, cylinder_inertia, pose_attrs};
+use crate::model::Liquid;
 use crate::model::{Affordance, Instrument, LabwareState, Measure, Mechanism, Part, Symmetry};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -377,21 +378,6 @@ impl Instrument for Params {
         ]
     }
 
-    /// Only a tube built open: a capped one's liquid is out of a tip's reach. (A cap taken off
-    /// during an episode does not open the tube to a tip: no task pipettes from one.)
-    fn open_vessel(&self) -> bool {
-        self.open
-    }
-
-    /// An open tube's liquid is drawn (a capped one's cannot be seen into).
-    fn liquid_bodies(&self, name: &str) -> Vec<String> {
-        if self.open {
-            crate::liquid_view::bodies(name)
-        } else {
-            Vec::new()
-        }
-    }
-
     fn part_bodies(&self, name: &str) -> Vec<(&'static str, String)> {
         if self.open {
             return Vec::new();
@@ -501,15 +487,6 @@ impl Instrument for Params {
         })
     }
 
-    /// The bore: a cylinder on a cone, from above the base up to the mouth (see [`Params::bore`]).
-    fn interior(&self) -> Option<physics::liquid::Container> {
-        let (radius, base, cone) = self.bore();
-        Some(
-            physics::liquid::Container::tube(radius, self.height - base, cone, 48)
-                .shifted([0.0, 0.0, base]),
-        )
-    }
-
     fn start_from(&mut self, initial: &BTreeMap<String, String>) {
         self.open = initial.get("cap").map(String::as_str) == Some("off");
     }
@@ -519,6 +496,36 @@ impl Instrument for Params {
             "a tube whose cap starts off is made open when its protocol compiles; this task was compiled without that: compile it again"
                 .into()
         })
+    }
+
+    fn liquid(&self) -> Option<&dyn Liquid> {
+        Some(self)
+    }
+}
+
+impl Liquid for Params {
+    /// Only a tube built open: a capped one's liquid is out of a tip's reach. (A cap taken off
+    /// during an episode does not open the tube to a tip: no task pipettes from one.)
+    fn open_vessel(&self) -> bool {
+        self.open
+    }
+
+    /// An open tube's liquid is drawn (a capped one's cannot be seen into).
+    fn liquid_bodies(&self, name: &str) -> Vec<String> {
+        if self.open {
+            crate::liquid_view::bodies(name)
+        } else {
+            Vec::new()
+        }
+    }
+
+    /// The bore: a cylinder on a cone, from above the base up to the mouth (see [`Params::bore`]).
+    fn interior(&self) -> Option<physics::liquid::Container> {
+        let (radius, base, cone) = self.bore();
+        Some(
+            physics::liquid::Container::tube(radius, self.height - base, cone, 48)
+                .shifted([0.0, 0.0, base]),
+        )
     }
 }
 

@@ -17,6 +17,7 @@
 
 use crate::frame::{Pose, Vec3, pose, translation};
 use crate::mjcf::{Fragment, pose_attrs, v3};
+use crate::model::Panel;
 use crate::model::{
     Affordance, Effects, Instrument, Joints, LabwareState, Logic, Measure, Mechanism, Part, Reset,
     flag, set, set_flag,
@@ -328,25 +329,6 @@ impl Instrument for Params {
         Some((POWER, self))
     }
 
-    /// The speed the knob's notch sets (rpm): what its dial shows, not how fast the drive turns.
-    fn panel_value(&self, param: &str, s: &LabwareState) -> Option<f64> {
-        (param == SPEED).then(|| self.set_rpm(&s.logic))
-    }
-
-    /// The knob angle of the running notch whose speed is nearest `target` (rpm).
-    fn dial_toward(&self, param: &str, target: f64) -> Option<(&'static str, f64)> {
-        if param != SPEED {
-            return None;
-        }
-        // The running notch nearest the target, half way between two the higher: the
-        // catalogue's rule (`PanelParam::set_value`), on the same 600..3,200 rpm.
-        let spacing = (self.speed_max_rpm - self.speed_min_rpm) / f64::from(self.knob_notches - 2);
-        let nearest = ((target - self.speed_min_rpm) / spacing + 1.0)
-            .round()
-            .clamp(1.0, f64::from(self.knob_notches - 1));
-        Some((KNOB_ROLE, nearest * self.notch_angle()))
-    }
-
     /// The switch's position, the knob's notch and speed, and the drive's measured speed:
     /// switched on during spin-up (or with the drive held back) reads "on" at under the set
     /// speed, which the judge's "on" is not.
@@ -405,6 +387,31 @@ impl Instrument for Params {
             let c = self.cup_rest();
             s.pose * translation([c[0], c[1], c[2] + self.cup_half_height])
         })
+    }
+
+    fn panel(&self) -> Option<&dyn Panel> {
+        Some(self)
+    }
+}
+
+impl Panel for Params {
+    /// The speed the knob's notch sets (rpm): what its dial shows, not how fast the drive turns.
+    fn panel_value(&self, param: &str, s: &LabwareState) -> Option<f64> {
+        (param == SPEED).then(|| self.set_rpm(&s.logic))
+    }
+
+    /// The knob angle of the running notch whose speed is nearest `target` (rpm).
+    fn dial_toward(&self, param: &str, target: f64) -> Option<(&'static str, f64)> {
+        if param != SPEED {
+            return None;
+        }
+        // The running notch nearest the target, half way between two the higher: the
+        // catalogue's rule (`PanelParam::set_value`), on the same 600..3,200 rpm.
+        let spacing = (self.speed_max_rpm - self.speed_min_rpm) / f64::from(self.knob_notches - 2);
+        let nearest = ((target - self.speed_min_rpm) / spacing + 1.0)
+            .round()
+            .clamp(1.0, f64::from(self.knob_notches - 1));
+        Some((KNOB_ROLE, nearest * self.notch_angle()))
     }
 }
 

@@ -150,7 +150,8 @@ impl<'a> Lab<'a> {
         let target =
             compiler::predicates::panel_quantity(value, self.params).ok_or_else(no_button)?;
         let name = model
-            .button_toward(param, target, state)
+            .panel()
+            .and_then(|p| p.button_toward(param, target, state))
             .ok_or_else(no_button)?;
         self.affordance(labware, &name, state)
     }
@@ -166,14 +167,17 @@ impl<'a> Lab<'a> {
         };
         let target =
             compiler::predicates::panel_quantity(value, self.params).ok_or_else(no_dial)?;
-        let (role, angle) = model.dial_toward(param, target).ok_or_else(no_dial)?;
+        let (role, angle) = model
+            .panel()
+            .and_then(|p| p.dial_toward(param, target))
+            .ok_or_else(no_dial)?;
         Ok(angle - state.joint(role))
     }
 
     /// The value a panel shows now, and the target `value` (a quantity) read in its unit.
     pub fn panel(&self, labware: &str, param: &str, value: &str) -> Option<(f64, f64)> {
         let (model, state) = self.item(labware).ok()?;
-        let shown = model.panel_value(param, state)?;
+        let shown = model.panel()?.panel_value(param, state)?;
         Some((
             shown,
             compiler::predicates::panel_quantity(value, self.params)?,

@@ -5,8 +5,8 @@
 //! parameters, so a recording can be re-scored offline ([`Judge::replay`]).
 
 use compiler::params::Bindings;
-use compiler::quantities::ResolvedPredicate;
 use compiler::predicates::Check;
+use compiler::quantities::ResolvedPredicate;
 use compiler::{Predicate, Scoring, Task};
 use labware::LabwareState;
 use labware::Measure;
@@ -221,6 +221,7 @@ fn measure(
             let shown = spec_of(instrument)?
                 .params
                 .instrument()?
+                .panel()?
                 .panel_value(param, state_of(instrument)?)?;
             Some(Measure {
                 value: shown,
@@ -238,7 +239,11 @@ fn measure(
             tolerance,
         } => {
             let target = resolved.target.clone().ok()??;
-            spec_of(container)?.params.instrument()?.interior()?;
+            spec_of(container)?
+                .params
+                .instrument()?
+                .liquid()?
+                .interior()?;
             let held = state_of(container)?
                 .logic
                 .get(labware::process::VOLUME_UL)

@@ -173,13 +173,17 @@ impl Episode {
         let vessels: Vec<labware::process::Vessel> = (0..self.task.labware.len())
             .filter_map(|item| {
                 let model = instrument(&self.task, item);
-                let interior = model.interior().filter(|_| model.open_vessel())?;
+                let liquid = model.liquid()?;
+                let interior = liquid.interior().filter(|_| liquid.open_vessel())?;
                 Some(labware::process::Vessel { item, interior })
             })
             .collect();
         self.processes = (0..self.task.labware.len())
             .flat_map(|i| {
-                instrument(&self.task, i).processes(&self.task.labware[i].name, i, &vessels)
+                let liquid = instrument(&self.task, i).liquid();
+                liquid
+                    .map(|l| l.processes(&self.task.labware[i].name, i, &vessels))
+                    .unwrap_or_default()
             })
             .collect();
         self.run_logic(0.0);
@@ -234,16 +238,16 @@ impl Episode {
         for (i, starts) in quantities.panel_starts.iter().enumerate() {
             for (param, v) in starts {
                 let v = *v;
-                let dial =
-                    instrument(&self.task, i)
-                        .dial_toward(param, v)
-                        .and_then(|(role, angle)| {
-                            let joints = &scene.labware[i].joints;
-                            joints
-                                .iter()
-                                .find(|(r, _)| *r == role)
-                                .map(|(_, a)| (*a, angle))
-                        });
+                let dial = instrument(&self.task, i)
+                    .panel()
+                    .and_then(|p| p.dial_toward(param, v))
+                    .and_then(|(role, angle)| {
+                        let joints = &scene.labware[i].joints;
+                        joints
+                            .iter()
+                            .find(|(r, _)| *r == role)
+                            .map(|(_, a)| (*a, angle))
+                    });
                 match dial {
                     Some((adr, angle)) => self.data.qpos_mut()[adr] = angle,
                     None => labware::model::set(&mut self.logic[i], param, v),

@@ -125,8 +125,9 @@ impl Cameras {
             let Some(instrument) = spec.params.instrument() else {
                 continue;
             };
-            for (index, (d, &texture)) in instrument
-                .displays(&spec.name)
+            let displays = instrument.panel().map(|p| p.displays(&spec.name));
+            for (index, (d, &texture)) in displays
+                .unwrap_or_default()
                 .into_iter()
                 .zip(&ids.displays)
                 .enumerate()
@@ -150,9 +151,10 @@ impl Cameras {
             let Some(instrument) = spec.params.instrument() else {
                 continue;
             };
-            let (bodies, Some(bore)) =
-                (instrument.liquid_bodies(&spec.name), instrument.interior())
-            else {
+            let Some(liquid) = instrument.liquid() else {
+                continue;
+            };
+            let (bodies, Some(bore)) = (liquid.liquid_bodies(&spec.name), liquid.interior()) else {
                 continue;
             };
             let discs: Vec<usize> = bodies
@@ -318,7 +320,9 @@ impl Cameras {
                 .model
                 .instrument()
                 .ok_or_else(|| bad("a display without a model"))?;
-            instrument.draw_display(s.index, state, &mut s.scratch);
+            if let Some(panel) = instrument.panel() {
+                panel.draw_display(s.index, state, &mut s.scratch);
+            }
             let adr = usize::try_from(textures.tex_adr()[s.texture])
                 .map_err(|_| bad("a display texture is not stored in the model"))?;
             let channels = textures.tex_nchannel()[s.texture] as usize;

@@ -107,7 +107,19 @@ pub struct Scene {
     pub held: Vec<(usize, usize, Pose)>,
     /// What the simplified model is built from, and that model once a camera asked for it.
     task: Task,
-    simplified: OnceLock<Result<Arc<MjModel>, String>>,
+    simplified: OnceLock<Result<Arc<MjModel>, SimplifiedError>>,
+}
+
+/// Why a scene's simplified render model could not be built; kept, so every camera that asks is
+/// told the same.
+#[derive(Clone, Debug, thiserror::Error)]
+enum SimplifiedError {
+    #[error(transparent)]
+    Xml(Arc<SceneError>),
+    #[error(transparent)]
+    Mujoco(#[from] mujoco_rs::error::MjModelError),
+    #[error("the simplified model's structure differs from the simulated one")]
+    Structure,
 }
 
 impl Scene {
@@ -458,7 +470,9 @@ fn labware_ids(m: &MjModel, l: &compiler::LabwareSpec) -> Result<LabwareIds, Sce
         .map(|(role, b)| Ok((role, id_of(m, MjtObjBase::mjOBJ_BODY, "body", &b)?)))
         .collect::<Result<Vec<_>, SceneError>>()?;
     let displays = model
-        .displays(name)
+        .panel()
+        .map(|p| p.displays(name))
+        .unwrap_or_default()
         .iter()
         .map(|d| id_of(m, MjtObjBase::mjOBJ_TEXTURE, "texture", &d.texture))
         .collect::<Result<Vec<_>, SceneError>>()?;
@@ -568,22 +582,20 @@ impl Scene {
         self.simplified
             .get_or_init(|| {
                 let xml = scene_xml(&self.task, &self.placements, Detail::Simplified)
-                    .map_err(|e| e.to_string())?;
-                let m = MjModel::from_xml_string(&xml).map_err(|e| e.to_string())?;
+                    .map_err(|e| SimplifiedError::Xml(Arc::new(e)))?;
+                let m = MjModel::from_xml_string(&xml)?;
                 let same = |a: &MjModel, b: &MjModel| {
                     let (a, b) = (a.ffi(), b.ffi());
                     (a.nq, a.nbody, a.ngeom, a.ncam, a.nmocap)
                         == (b.nq, b.nbody, b.ngeom, b.ncam, b.nmocap)
                 };
                 if !same(&m, &self.model) {
-                    return Err(
-                        "the simplified model's structure differs from the simulated one".into(),
-                    );
+                    return Err(SimplifiedError::Structure);
                 }
                 Ok(Arc::new(m))
             })
             .clone()
-            .map_err(SceneError::Compile)
+            .map_err(|e| SceneError::Compile(e.to_string()))
     }
 }
 
@@ -634,7 +646,7 @@ fn check_measurable(task: &Task) -> Result<(), SceneError> {
                     .iter()
                     .find(|l| &l.name == container)
                     .and_then(|l| l.params.instrument())
-                    .is_some_and(|m| m.interior().is_some());
+                    .is_some_and(|m| m.liquid().is_some_and(|l| l.interior().is_some()));
                 if holds {
                     continue;
                 }
@@ -657,7 +669,8 @@ fn check_measurable(task: &Task) -> Result<(), SceneError> {
                             logic: Default::default(),
                             touched_by: Vec::new(),
                         };
-                        m.panel_value(param, &probe).is_some()
+                        m.panel()
+                            .is_some_and(|p| p.panel_value(param, &probe).is_some())
                     });
                 if shows {
                     continue;
