@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 /// Every crate's sources: the CLI's and each workspace member's.
-const CRATES: [&str; 14] = [
+const CRATES: [&str; 18] = [
     "src",
     "dsl/src",
     "compiler/src",
@@ -17,8 +17,12 @@ const CRATES: [&str; 14] = [
     "physics/src",
     "runtime/src",
     "results/src",
+    "policy/src",
+    "expert/src",
     "scoring/src",
+    "synth/src",
     "dataset/src",
+    "demos/src",
     "leaderboard/src",
     "python/src",
 ];

@@ -197,46 +197,6 @@ impl MotionStep<'_> {
     }
 }
 
-/// A planned step as the expert runs it: its arguments rendered for one episode and its
-/// primitive's motions for them.
-pub struct Expanded {
-    pub args: BTreeMap<String, String>,
-    pub motions: Vec<Motion>,
-}
-
-impl Expanded {
-    /// Step `index` of `task` (`step`), its arguments rendered with `params` (an unknown
-    /// placeholder left as written), expanded by its primitive for the kind of the item it acts
-    /// `on` and the liquid tool its robot carries then; `None` where its primitive has no expert
-    /// motions. The expert and the reach check both expand steps here.
-    pub fn of(
-        task: &crate::Task,
-        index: usize,
-        step: &crate::PlannedStep,
-        params: &crate::params::Bindings,
-    ) -> Option<Expanded> {
-        let expand = crate::primitives::primitive(&step.primitive).and_then(|p| p.motions)?;
-        let args: BTreeMap<String, String> = step
-            .args
-            .iter()
-            .map(|(k, v)| {
-                let v = crate::params::render(v, params).unwrap_or_else(|_| v.clone());
-                (k.clone(), v)
-            })
-            .collect();
-        let kind = args
-            .get("on")
-            .and_then(|on| task.labware.iter().find(|l| &l.name == on))
-            .and_then(|l| labware::kind(&l.kind));
-        let motions = expand(&MotionStep {
-            args: &args,
-            kind,
-            tool: task.liquid_tool(&step.robot, index),
-        });
-        Some(Expanded { args, motions })
-    }
-}
-
 /// Goals from `(role, goal)` pairs.
 pub fn goals(pairs: &[(&str, &str)]) -> Goals {
     pairs

@@ -20,11 +20,12 @@ mod motion;
 pub mod reach;
 pub mod route;
 
-use policy::{Observation, Policy, PolicyError, StageEvent};
-use compiler::motion::{Expanded, Motion};
+use compiler::motion::Motion;
 use compiler::params::Bindings;
+use compiler::primitives::Expanded;
 use compiler::{SceneInstance, Task};
 use motion::{Active, Arm};
+use policy::{Observation, Policy, PolicyError, StageEvent};
 use primitives::Kinematics;
 use primitives::{Lab, StepFrame};
 use runtime::Scene;

@@ -9,12 +9,12 @@
 //! kind is a `compiler::motion::Motion` variant and its arm here (or in `primitives::resolve` for
 //! its poses).
 
-use crate::{ExpertPolicy, Lane, PlanFailure, Queued, planning};
-use policy::{Observation, PolicyError, StageEvent};
 use crate::route::{Route, route};
+use crate::{ExpertPolicy, Lane, PlanFailure, Queued, planning};
 use compiler::motion::Motion;
-use primitives::topp::{Limits, Trajectory, plan_trajectory};
+use policy::{Observation, PolicyError, StageEvent};
 use primitives::alternatives::Scope;
+use primitives::topp::{Limits, Trajectory, plan_trajectory};
 use primitives::{Kinematics, Lab, StepFrame, solutions, solve_with};
 use robots::RobotModel;
 use runtime::clearance::Clearance;
@@ -500,7 +500,10 @@ impl FreeMotion<'_> {
     /// path solved pose by pose, else in joint space, ending where the step's `next` straight
     /// motion (if any) solves from. `None` where it has none.
     fn path(&self, arm: &mut Arm, f: &StepFrame, next: Option<&Motion>) -> Option<Vec<Vec<f64>>> {
-        let poses = path_ends(f.poses(self.motion, self.lab, &self.tcp_now).ok()?, self.direct);
+        let poses = path_ends(
+            f.poses(self.motion, self.lab, &self.tcp_now).ok()?,
+            self.direct,
+        );
         let w = solve_path(arm, &poses)
             .ok()
             .or_else(|| in_joint_space(arm, &poses))?;

@@ -15,8 +15,9 @@
 //! about +z.
 
 use crate::frame::{Pose, Vec3, axis_angle, pose, translation, x_turn};
-use crate::lid::{JOINT, LOCK_SWITCH, LOCKED, Lid, LidBody, LidNames, Lidded};
+use crate::lid::{HasLid, JOINT, LOCK_SWITCH, LOCKED, Lid, LidBody, LidNames};
 use crate::mjcf::{Fragment, pose_attrs, rgba, v3};
+use crate::model::Lidded;
 use crate::model::{
     Affordance, Effects, Instrument, Joints, LabwareState, Logic, Measure, Part, Reset, Symmetry,
     flag, set, set_flag,
@@ -519,7 +520,10 @@ impl Params {
 }
 
 /// The lid, sprung towards open, and the latch that catches it shut.
-impl Lidded for Params {
+impl HasLid for Params {
+    /// Closed is driven past the stop, so that the latch catches it against the spring: the
+    /// push point goes `PRESS_PAST` below the shut lid's face, more than the arm sags under
+    /// gravity (about 1 cm at the UR5e's reach).
     fn lid(&self) -> Lid {
         let lid = self.lid_body.hinged(
             [self.lid_open, self.lid_closed],
@@ -527,17 +531,8 @@ impl Lidded for Params {
         );
         Lid {
             spring: Some(self.lid_stiffness),
+            closing_to: Some(self.lid_closed - PRESS_PAST / (self.push_at * self.lid_body.depth)),
             ..lid
-        }
-    }
-
-    /// Closed: pressed past the stop, so that the latch catches it against the spring: the push
-    /// point goes `PRESS_PAST` below the shut lid's face, more than the arm sags under gravity
-    /// (about 1 cm at the UR5e's reach).
-    fn lid_goal(&self, goal: &str) -> Option<f64> {
-        match goal {
-            "closed" => Some(self.lid_closed - PRESS_PAST / (self.push_at * self.lid_body.depth)),
-            _ => self.lid().goal(goal),
         }
     }
 }

@@ -7,8 +7,9 @@
 //! +z up. Joint conventions: lid 0 = open (98° up, past upright), -1.712 rad = closed.
 
 use crate::frame::{Pose, Vec3, pose, translation};
-use crate::lid::{JOINT, Lid, LidBody, LidNames, Lidded};
+use crate::lid::{HasLid, JOINT, Lid, LidBody, LidNames};
 use crate::mjcf::{Fragment, v3};
+use crate::model::Lidded;
 use crate::model::{Affordance, Instrument, LabwareState, Logic, Measure, Part, Reset};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -58,7 +59,7 @@ impl Default for Params {
 }
 
 /// The lid: open and closed by its angle, with no latch.
-impl Lidded for Params {
+impl HasLid for Params {
     fn lid(&self) -> Lid {
         self.lid_body.hinged(
             [self.lid_open, self.lid_closed],

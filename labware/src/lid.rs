@@ -9,7 +9,7 @@
 
 use crate::frame::{Pose, Rot, Vec3, pose, x_turn};
 use crate::mjcf::{box_inertia, pose_attrs, v3};
-use crate::model::{Affordance, Joints, LabwareState, Measure, Part, Symmetry};
+use crate::model::{Affordance, Joints, LabwareState, Lidded, Measure, Part, Symmetry};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -18,7 +18,7 @@ pub const LOCKED: &str = "locked";
 /// The role of the equality constraint that holds a latched lid shut.
 pub const LOCK_SWITCH: &str = "lock";
 /// The lid's joint role.
-pub const JOINT: &str = "lid";
+pub const JOINT: &str = crate::model::LID;
 
 /// The MuJoCo names of a lidded instrument's base and lid, under the item's prefix.
 #[derive(Clone, Debug, PartialEq)]
@@ -93,6 +93,7 @@ impl LidBody {
             spring: None,
             open_tolerance,
             closed_tolerance,
+            closing_to: None,
         }
     }
 
@@ -114,6 +115,9 @@ pub struct Lid {
     pub spring: Option<f64>,
     pub open_tolerance: f64,
     pub closed_tolerance: f64,
+    /// Where the expert drives the lid to close it, where that is past its closed angle (a lid
+    /// pressed down so that its latch catches against its spring); `None`: the closed angle.
+    pub closing_to: Option<f64>,
 }
 
 impl Lid {
@@ -224,24 +228,26 @@ impl Lid {
     pub fn goal(&self, goal: &str) -> Option<f64> {
         match goal {
             "open" => Some(self.open),
-            "closed" => Some(self.closed),
+            "closed" => Some(self.closing_to.unwrap_or(self.closed)),
             _ => None,
         }
     }
 }
 
-/// What a lidded instrument tells the rest of the system about its lid, through
-/// [`crate::Instrument::lidded`]: the lid, the angles the expert drives it to, and, as the
-/// [`Part`] the judge measures, its states (open and closed by [`Lid::measure`], a latch's
-/// `locked` and `unlocked` as the instrument's latch works). The instrument's `lid is …`
-/// measures, its readout and its lid goals are these unless it says otherwise.
-pub trait Lidded: Part {
+/// An instrument that composes a [`Lid`]: every such instrument is [`Lidded`] (the
+/// `Instrument::lidded` component) through the lid's own goals and readout.
+pub trait HasLid: Part {
     /// The lid, from the instrument's parameters.
     fn lid(&self) -> Lid;
+}
 
-    /// The angle the expert drives the lid to for a named goal (`open`, `closed`).
+impl<T: HasLid> Lidded for T {
     fn lid_goal(&self, goal: &str) -> Option<f64> {
         self.lid().goal(goal)
+    }
+
+    fn lid_readout(&self, s: &LabwareState) -> BTreeMap<String, String> {
+        self.lid().readout(s)
     }
 }
 

@@ -10,10 +10,9 @@
 //! textures the runtime uploads), what the judge scores ([`Instrument::measure`] of the one
 //! [`Part`] a kind's states are about, [`Instrument::panel_value`]) and the readout people see
 //! ([`Instrument::readout`]), and affordances as functions of live state. A lidded instrument
-//! answers for its lid through [`crate::lid::Lidded`] ([`Instrument::lidded`]).
+//! answers for its lid through [`Lidded`] ([`Instrument::lidded`]; `crate::lid` composes it).
 
 use crate::frame::{Pose, serde_pose};
-use crate::lid::{self, Lidded};
 use crate::mjcf::Fragment;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -317,13 +316,13 @@ pub trait Instrument {
 
     /// A named joint goal, e.g. `("lid", "closed")` -> the lid's closed angle.
     fn joint_goal(&self, role: &str, goal: &str) -> Option<f64> {
-        self.lidded().filter(|_| role == lid::JOINT)?.lid_goal(goal)
+        self.lidded().filter(|_| role == LID)?.lid_goal(goal)
     }
 
     /// The part [`Instrument::measure`] measures, by its catalogue name (`cap`, `tip`...): a
     /// lidded instrument's lid unless it says otherwise; `None`: nothing to measure.
     fn part(&self) -> Option<(&'static str, &dyn Part)> {
-        self.lidded().map(|l| (lid::JOINT, l as &dyn Part))
+        self.lidded().map(|l| (LID, l as &dyn Part))
     }
 
     /// The measured value of `part is state` (tolerance: the predicate's, else the model's): a
@@ -341,9 +340,7 @@ pub trait Instrument {
 
     /// The current state of every part (for recordings and reports).
     fn readout(&self, s: &LabwareState) -> BTreeMap<String, String> {
-        self.lidded()
-            .map(|l| l.lid().readout(s))
-            .unwrap_or_default()
+        self.lidded().map(|l| l.lid_readout(s)).unwrap_or_default()
     }
 
     /// A named affordance in the world frame, from live (or planned) state.
@@ -367,6 +364,20 @@ pub trait Instrument {
     fn liquid(&self) -> Option<&dyn Liquid> {
         None
     }
+}
+
+/// A lid's joint role, and the part its states are about.
+pub const LID: &str = "lid";
+
+/// What a lidded instrument tells the rest of the system about its lid ([`Instrument::lidded`];
+/// every instrument composing a `crate::lid::Lid` is one): the angles the expert drives it to,
+/// its readout, and, as the [`Part`] the judge measures, its states (open and closed, a latch's
+/// `locked` and `unlocked` as the instrument's latch works).
+pub trait Lidded: Part {
+    /// The angle the expert drives the lid to for a named goal (`open`, `closed`).
+    fn lid_goal(&self, goal: &str) -> Option<f64>;
+    /// The lid's state for recordings and reports.
+    fn lid_readout(&self, s: &LabwareState) -> BTreeMap<String, String>;
 }
 
 /// What an instrument with a panel answers ([`Instrument::panel`]): each method's default is

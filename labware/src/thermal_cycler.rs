@@ -8,8 +8,9 @@
 //! -1.9 rad = closed; lever 0 = raised, -0.94 rad = pressed.
 
 use crate::frame::{Pose, Vec3, pose, translation, x_turn};
-use crate::lid::{JOINT, LOCK_SWITCH, LOCKED, Lid, LidBody, LidNames, Lidded};
+use crate::lid::{HasLid, JOINT, LOCK_SWITCH, LOCKED, Lid, LidBody, LidNames};
 use crate::mjcf::{Fragment, v3};
+use crate::model::Lidded;
 use crate::model::{
     Affordance, Effects, Instrument, Joints, LabwareState, Logic, Measure, Mechanism, Part, Reset,
     flag, set_flag,
@@ -82,7 +83,7 @@ fn lever_names(prefix: &str) -> (String, String) {
 }
 
 /// The lid, latched by the lever.
-impl Lidded for Params {
+impl HasLid for Params {
     fn lid(&self) -> Lid {
         self.lid_body.hinged(
             [self.lid_open, self.lid_closed],

@@ -124,9 +124,51 @@ impl LabPrimitive {
     }
 }
 
+/// A planned step as the expert runs it: its arguments rendered for one episode and its
+/// primitive's motions for them.
+pub struct Expanded {
+    pub args: BTreeMap<String, String>,
+    pub motions: Vec<Motion>,
+}
+
+impl Expanded {
+    /// Step `index` of `task` (`step`), its arguments rendered with `params` (an unknown
+    /// placeholder left as written), expanded by its primitive for the kind of the item it acts
+    /// `on` and the liquid tool its robot carries then; `None` where its primitive has no expert
+    /// motions. The expert and the reach check both expand steps here.
+    pub fn of(
+        task: &crate::Task,
+        index: usize,
+        step: &crate::PlannedStep,
+        params: &crate::params::Bindings,
+    ) -> Option<Expanded> {
+        let expand = primitive(&step.primitive).and_then(|p| p.motions)?;
+        let args: BTreeMap<String, String> = step
+            .args
+            .iter()
+            .map(|(k, v)| {
+                let v = crate::params::render(v, params).unwrap_or_else(|_| v.clone());
+                (k.clone(), v)
+            })
+            .collect();
+        let kind = args
+            .get("on")
+            .and_then(|on| task.labware.iter().find(|l| &l.name == on))
+            .and_then(|l| labware::kind(&l.kind));
+        let motions = expand(&MotionStep {
+            args: &args,
+            kind,
+            tool: task.liquid_tool(&step.robot, index),
+        });
+        Some(Expanded { args, motions })
+    }
+}
+
 /// A phrase cut at its placeholders: each piece of text with the `{key}` after it (`None` after
 /// the last piece). An unclosed `{` is a key running to the end.
-fn placeholders(phrase: &'static str) -> impl Iterator<Item = (&'static str, Option<&'static str>)> {
+fn placeholders(
+    phrase: &'static str,
+) -> impl Iterator<Item = (&'static str, Option<&'static str>)> {
     let mut rest = Some(phrase);
     std::iter::from_fn(move || {
         let text = rest?;
@@ -333,32 +375,56 @@ impl BoundStep<'_> {
                     dim.name()
                 ),
             )),
-            Err(e) => Err(violation(Code::E0020, Some(name), e)),
+            Err(e) => Err(violation(Code::E0020, Some(name), e.to_string())),
         }
     }
+}
+
+/// Why a location text does not name a slot of the scene.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum LocationError {
+    #[error("`{text}` is not a location; write `<holder>.<slot>`")]
+    NotALocation { text: String },
+    #[error("no labware named `{holder}`")]
+    NoLabware { holder: String },
+    #[error("`{holder}` (a {kind}) has no slots")]
+    NoSlots { holder: String, kind: &'static str },
+    /// `slots`: the holder's slots, described.
+    #[error("`{holder}` has no slot `{slot}` (its slots: {slots})")]
+    NoSlot {
+        holder: String,
+        slot: String,
+        slots: String,
+    },
 }
 
 /// A location text `holder.slot` resolved against the scene: checks the holder has that slot.
 pub fn resolve_location(
     env: &Env,
     text: &str,
-) -> Result<(String, String, &'static LabwareKind), String> {
+) -> Result<(String, String, &'static LabwareKind), LocationError> {
     let Some((holder, slot)) = text.split_once('.') else {
-        return Err(format!(
-            "`{text}` is not a location; write `<holder>.<slot>`"
-        ));
+        return Err(LocationError::NotALocation {
+            text: text.to_string(),
+        });
     };
     let Some(kind) = env.kinds.get(holder) else {
-        return Err(format!("no labware named `{holder}`"));
+        return Err(LocationError::NoLabware {
+            holder: holder.to_string(),
+        });
     };
     let Some(slots) = kind.slots else {
-        return Err(format!("`{holder}` (a {}) has no slots", kind.name));
+        return Err(LocationError::NoSlots {
+            holder: holder.to_string(),
+            kind: kind.name,
+        });
     };
     if !slots.layout.names().iter().any(|s| s == slot) {
-        return Err(format!(
-            "`{holder}` has no slot `{slot}` (its slots: {})",
-            slots.layout.describe()
-        ));
+        return Err(LocationError::NoSlot {
+            holder: holder.to_string(),
+            slot: slot.to_string(),
+            slots: slots.layout.describe(),
+        });
     }
     Ok((holder.to_string(), slot.to_string(), kind))
 }
@@ -486,11 +552,22 @@ mod tests {
         declared.sort();
         let mut registered: Vec<String> = CATALOGUE.iter().map(|p| p.name.to_string()).collect();
         registered.sort();
-        assert_eq!(declared, registered, "a primitive file missing from CATALOGUE");
-        assert!(registered.len() >= 16, "the folder was not read: {registered:?}");
+        assert_eq!(
+            declared, registered,
+            "a primitive file missing from CATALOGUE"
+        );
+        assert!(
+            registered.len() >= 16,
+            "the folder was not read: {registered:?}"
+        );
         for p in CATALOGUE.iter() {
             assert!(!p.phrase.trim().is_empty(), "{} has no phrase", p.name);
-            assert_eq!(p.phrase_unknowns(), Vec::<&str>::new(), "{}'s phrase", p.name);
+            assert_eq!(
+                p.phrase_unknowns(),
+                Vec::<&str>::new(),
+                "{}'s phrase",
+                p.name
+            );
             assert_eq!(
                 p.motions.is_none(),
                 NO_EXPERT_MOTIONS_YET.contains(&p.name),

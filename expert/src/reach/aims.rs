@@ -4,7 +4,7 @@
 //! leave them. It does not solve them (the pass does, in `mod.rs`).
 
 use super::*;
-use compiler::motion::Expanded;
+use compiler::primitives::Expanded;
 
 /// The targets the pass checks, step by step: each step's first target where the step's item is
 /// where it started; and for an item a robot picked up, the seat it is then placed on, with the
@@ -85,7 +85,9 @@ pub(super) fn aims(
         // A held tool brought onto an opening.
         if matches!(first_target(&motions), Some(Target::Bring { .. })) {
             let as_started = !moved_joints && held.values().all(|(r, _)| *r != robot);
-            out.extend(bring_aims(i, robot, &motions, &frame, lab, &tcp, as_started));
+            out.extend(bring_aims(
+                i, robot, &motions, &frame, lab, &tcp, as_started,
+            ));
             continue;
         }
         let Ok(Some(pose)) = frame.first_pose(&motions, lab) else {

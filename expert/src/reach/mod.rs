@@ -36,11 +36,11 @@
 //! planning), with the same hint where a base serves every layout.
 
 use aims::aims;
-use hint::base_for_every_layout;
 use compiler::motion::{Motion, Target};
 use compiler::{Checked, Task};
 use dsl::ast::Document;
 use dsl::{Code, Diagnostic};
+use hint::base_for_every_layout;
 use labware::{LabwareState, Pose};
 use primitives::resolve::first_target;
 use primitives::{Lab, StepFrame, solve_with};
@@ -127,11 +127,7 @@ pub fn partly_unreachable(task: &Task, store: &Store) -> BTreeMap<usize, Vec<u64
 /// The steps not in `first` (those missed in seed 0's layout) that the next seeds miss. The
 /// layouts are solved on as many threads as the machine has cores (each builds its own scene);
 /// the outcome does not depend on how many.
-fn beyond_seed_0(
-    task: &Task,
-    first: &BTreeSet<usize>,
-    store: &Store,
-) -> BTreeMap<usize, Vec<u64>> {
+fn beyond_seed_0(task: &Task, first: &BTreeSet<usize>, store: &Store) -> BTreeMap<usize, Vec<u64>> {
     let seeds: Vec<u64> = (1..SAMPLED_LAYOUTS).collect();
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let next = std::sync::atomic::AtomicUsize::new(0);
