@@ -8,7 +8,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     args: &[],
     requires: "the robot holds something steady",
     leaves: "the hand empty",
-    phrase: "let go of the {on}",
+    phrase: "let go of what the {robot} arm holds",
     effect,
     motions: None,
 };
