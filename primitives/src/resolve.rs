@@ -628,7 +628,7 @@ impl StepFrame {
             ),
             Motion::Transit { target } => {
                 // In a straight line: the expert goes around whatever that line would hit
-                // (`scoring::route`).
+                // (`expert::route`).
                 let goal = self.transit_goal(target, lab, tcp_now)?;
                 line(tcp_now, &goal, 10)
             }
