@@ -196,7 +196,7 @@ impl LabwareKind {
 
     /// A simulation model exists in [`crate::registry`] (the runtime can build it).
     pub fn simulated(&self) -> bool {
-        crate::registry::Model::for_kind(self.name).is_some()
+        crate::Model::for_kind(self.name).is_some()
     }
 }
 

@@ -2,7 +2,7 @@
 //! model per kind that has one. A model ([`model::Instrument`]) generates its MJCF from parameters,
 //! names its joints, switches and mechanisms by role, resets from declared part states, runs its
 //! per-step logic, reads out part states for the judge and offers affordances for the expert.
-//! [`registry`] is the one place a kind meets its model.
+//! The `registry!` line in this file is the one place a kind meets its model ([`registry`]).
 //!
 //! No mesh files are read or written: geometry is primitive geoms sized from parameters, plus the
 //! SDF meshes the thread plugin generates from a model's thread parameters (dimensions
@@ -10,22 +10,14 @@
 //! MuJoCo's API or robots: it produces text and plain numbers.
 
 pub mod catalogue;
-pub mod centrifuge;
-pub mod centrifuge_mini;
 pub mod display;
 pub mod frame;
 pub mod lid;
 pub mod liquid_view;
 pub mod mjcf;
 pub mod model;
-pub mod pipette;
 pub mod process;
-pub mod rack;
 pub mod registry;
-pub mod thermal_cycler;
-pub mod thermal_mixer;
-pub mod tube;
-pub mod vortex_mixer;
 
 pub use catalogue::{
     Button, ButtonEffect, KINDS, LabwareKind, PanelParam, PartState, SlotLayout, Slots, kind,
@@ -35,4 +27,27 @@ pub use model::{
     Affordance, Display, Effects, Instrument, Joints, LabwareState, Liquid, Logic, Measure,
     Mechanism, Panel, Part, Symmetry,
 };
-pub use registry::Model;
+
+// The registry: one line per simulation model (its module, its variant of `Model`, the kinds it
+// simulates and the parameters each starts from).
+registry::registry! {
+    thermal_cycler::ThermalCycler { "thermal_cycler" => thermal_cycler::Params::default() },
+    centrifuge_mini::CentrifugeMini { "centrifuge_mini" => centrifuge_mini::Params::default() },
+    centrifuge::Centrifuge {
+        "centrifuge_5430" => centrifuge::Params::eppendorf_5430(),
+        "centrifuge_5910" => centrifuge::Params::eppendorf_5910(),
+    },
+    thermal_mixer::ThermalMixer { "thermal_mixer" => thermal_mixer::Params::default() },
+    vortex_mixer::VortexMixer { "vortex_mixer" => vortex_mixer::Params::default() },
+    rack::Rack {
+        "tube_rack" => rack::Params::tube_rack(),
+        "microtube_rack" => rack::Params::microtube_rack(),
+    },
+    tube::Tube {
+        "tube_50ml" => tube::Params::conical_50ml(),
+        "tube_15ml" => tube::Params::conical_15ml(),
+        "tube_1_5ml" => tube::Params::microtube(),
+        "cryovial" => tube::Params::cryovial(),
+    },
+    pipette::Pipette { "pipette" => pipette::Params::p1000() },
+}

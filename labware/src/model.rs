@@ -1,6 +1,6 @@
 //! The instrument model: what one labware kind tells the rest of the system about itself. Each kind
 //! with a simulation model implements [`Instrument`] in its own file; the runtime, the judge and the
-//! expert reach instruments only through this trait (and [`crate::registry::Model`], which maps a
+//! expert reach instruments only through this trait (and [`crate::Model`], which maps a
 //! kind to its model). Pure: numbers and MJCF text, no MuJoCo API.
 //!
 //! What a model owns: its MJCF (through [`crate::mjcf`]), the mechanisms it asks the runtime for

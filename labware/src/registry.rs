@@ -1,21 +1,22 @@
-//! The one place labware kinds meet their simulation models: each line of [`registry!`] names a
-//! model type and the catalogue kinds it simulates, with the parameters each kind starts from.
-//! [`Model`] is the closed, serialisable result (the compiled task carries it, so a task is
-//! self-contained); "has a simulation model" is [`Model::for_kind`] returning one.
+//! The one place labware kinds meet their simulation models: the crate root invokes
+//! [`registry!`] once, one line per model, and each line declares the model's module and names
+//! the catalogue kinds it simulates with the parameters each kind starts from. Adding a model is
+//! its file and its line. [`crate::Model`] is the closed, serialisable result (the compiled task
+//! carries it, so a task is self-contained); "has a simulation model" is
+//! [`crate::Model::for_kind`] returning one.
 
-use crate::model::Instrument;
-use crate::{
-    centrifuge, centrifuge_mini, pipette, rack, thermal_cycler, thermal_mixer, tube, vortex_mixer,
-};
-use serde::{Deserialize, Serialize};
-
+/// Declares every model module (`module::Variant { "kind" => params, ... }`: the module's
+/// `Params` is the model) and generates [`crate::Model`], `MODELLED` (every kind with a model)
+/// and `MODEL_MODULES` (every model's module), in registry order.
 macro_rules! registry {
-    ($($variant:ident($ty:ty) { $($kind:literal => $make:expr),+ $(,)? }),+ $(,)?) => {
+    ($($module:ident :: $variant:ident { $($kind:literal => $make:expr),+ $(,)? }),+ $(,)?) => {
+        $(pub mod $module;)+
+
         /// A labware item's simulation model with its parameters, tagged by model in JSON.
-        #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+        #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
         #[serde(tag = "kind", rename_all = "snake_case")]
         pub enum Model {
-            $($variant($ty),)+
+            $($variant($module::Params),)+
             /// A catalogue kind without a simulation model yet: it compiles and is checked, and
             /// the runtime refuses to build it.
             Unmodelled,
@@ -23,6 +24,9 @@ macro_rules! registry {
 
         /// Every kind with a model, in registry order.
         pub const MODELLED: &[&str] = &[$($($kind,)+)+];
+
+        /// Every model's module (its file under `labware/src/`), in registry order.
+        pub const MODEL_MODULES: &[&str] = &[$(stringify!($module),)+];
 
         impl Model {
             /// The model of a catalogue kind, with the kind's parameters; `None`: not simulated.
@@ -34,15 +38,17 @@ macro_rules! registry {
             }
 
             /// The model as the trait the runtime, judge and expert use.
-            pub fn instrument(&self) -> Option<&dyn Instrument> {
+            pub fn instrument(&self) -> Option<&dyn $crate::model::Instrument> {
                 match self {
                     $(Model::$variant(p) => Some(p),)+
                     Model::Unmodelled => None,
                 }
             }
 
-            /// The model made for the item's declared start (see [`Instrument::start_from`]).
+            /// The model made for the item's declared start (see
+            /// [`Instrument::start_from`](crate::model::Instrument::start_from)).
             pub fn for_start(mut self, initial: &std::collections::BTreeMap<String, String>) -> Model {
+                use $crate::model::Instrument as _;
                 match &mut self {
                     $(Model::$variant(p) => p.start_from(initial),)+
                     Model::Unmodelled => {}
@@ -53,31 +59,11 @@ macro_rules! registry {
     };
 }
 
-registry! {
-    ThermalCycler(thermal_cycler::Params) { "thermal_cycler" => thermal_cycler::Params::default() },
-    CentrifugeMini(centrifuge_mini::Params) { "centrifuge_mini" => centrifuge_mini::Params::default() },
-    Centrifuge(centrifuge::Params) {
-        "centrifuge_5430" => centrifuge::Params::eppendorf_5430(),
-        "centrifuge_5910" => centrifuge::Params::eppendorf_5910(),
-    },
-    ThermalMixer(thermal_mixer::Params) { "thermal_mixer" => thermal_mixer::Params::default() },
-    VortexMixer(vortex_mixer::Params) { "vortex_mixer" => vortex_mixer::Params::default() },
-    Rack(rack::Params) {
-        "tube_rack" => rack::Params::tube_rack(),
-        "microtube_rack" => rack::Params::microtube_rack(),
-    },
-    Tube(tube::Params) {
-        "tube_50ml" => tube::Params::conical_50ml(),
-        "tube_15ml" => tube::Params::conical_15ml(),
-        "tube_1_5ml" => tube::Params::microtube(),
-        "cryovial" => tube::Params::cryovial(),
-    },
-    Pipette(pipette::Params) { "pipette" => pipette::Params::p1000() },
-}
+pub(crate) use registry;
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use crate::{MODELLED, Model};
 
     #[test]
     fn every_model_is_for_a_catalogue_kind_and_round_trips() {
