@@ -8,6 +8,9 @@
 //! SDF meshes the thread plugin generates from a model's thread parameters (dimensions
 //! from the public description of the instruments). This crate knows nothing of protocols,
 //! MuJoCo's API or robots: it produces text and plain numbers.
+//!
+//! Its tests are beside the code (each model's unit tests, the registry's) and the workspace's
+//! tests/labware_models.rs and tests/processes.rs, which simulate the models.
 
 pub mod catalogue;
 pub mod display;

@@ -10,6 +10,9 @@
 //! plugins. Without it the crate is pure math and MJCF text, with no MuJoCo: `labware` builds its
 //! mechanisms and processes on it. This crate generates MJCF fragments and computes forces and
 //! geometry; it does not assemble scenes (runtime) or know about protocols.
+//!
+//! Its tests are beside the code (the force and SDF math) and the workspace's tests/settle.rs,
+//! tests/vortex_mixing.rs and tests/liquid_scene.rs (the plugins inside MuJoCo).
 
 pub mod detent;
 pub mod eccentric;

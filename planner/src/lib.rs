@@ -6,6 +6,8 @@
 //!
 //! Determinism: every call is seeded by the caller and budgeted in validity checks, never in
 //! wall-clock time, so the same problem and seed give the same path, byte for byte.
+//!
+//! Its tests are in planner/tests/.
 
 pub mod rrt;
 pub mod shortcut;

@@ -6,6 +6,9 @@
 //! timed under velocity/acceleration limits by TOPP ([`topp`]). Kinematics come from outside
 //! through the [`Kinematics`] trait (the runtime implements it on MuJoCo), so this crate runs no
 //! simulation and names no instrument: affordances and joint goals come from the labware models.
+//!
+//! Its tests are beside the code (unit tests of IK, TOPP and resolution) and the workspace's
+//! tests/kinematics.rs and tests/planning.rs, which run them on the real robot models.
 
 pub mod alternatives;
 pub mod analytic_ik;

@@ -6,6 +6,8 @@
 //! episode `autobio eval` runs for the same seed and actions (the same trajectory hash). The
 //! Python layer (`python/autobio/`) shapes these values into gymnasium's spaces, vla-eval's
 //! benchmark and numpy arrays.
+//!
+//! Its tests are python/tests (pytest, run by `make test` against the installed wheel).
 
 mod env;
 mod recording;

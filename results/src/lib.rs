@@ -6,6 +6,9 @@
 //! It links no simulator (no MuJoCo, no EGL): a leaderboard, a verifier's bookkeeping and CI for
 //! submissions build on it alone. It does not run episodes (the runtime and `scoring` do) and
 //! does not render reports (the leaderboard does).
+//!
+//! Its tests are beside the code and in the workspace's tests/merge.rs, tests/resume.rs and
+//! tests/no_simulator.rs (that it links no simulator).
 
 pub mod episode;
 pub mod image;

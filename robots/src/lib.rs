@@ -13,6 +13,8 @@
 //! acceleration limits are the model's own.
 //!
 //! No MuJoCo API here: the runtime compiles what `prepare` writes; only file IO for the assets.
+//!
+//! Its tests are the workspace's tests/kinematics.rs and tests/aloha.rs (on the installed models).
 
 pub mod aloha_vx300s;
 mod assets;

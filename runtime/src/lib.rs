@@ -6,6 +6,9 @@
 //! are plugins), renders cameras headless (EGL) and records episodes as MCAP, one channel per robot.
 //! It does not decide what to do (policies live in `scoring`) nor whether an episode succeeded
 //! (verdicts live in `scoring`); it reports state.
+//!
+//! Its tests are the workspace's tests/step_by_hand.rs, tests/contact_and_position.rs,
+//! tests/level_of_detail.rs and tests/pictures.rs.
 
 pub mod clearance;
 pub mod deps;
