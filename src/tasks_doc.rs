@@ -8,8 +8,9 @@
 //!
 //! `--verify-hold TABLE` re-measures only the hold column of a written table, on the seeds the
 //! table says it ran (or the first `--first N` of them), and fails unless every task scores 0
-//! with no motion and the table lists exactly the tasks that run (CI runs it on the first 40 on
-//! every commit: `make hold-column`). It does not re-run the expert (that is `make tasks-doc`,
+//! with no motion (each episode run to its time limit, with no error, some measured check
+//! failing) and the table lists exactly the tasks that run (CI runs it on the first 40 on every
+//! commit: `make hold-column`; it is the suite's every-task hold spread). It does not re-run the expert (that is `make tasks-doc`,
 //! about 17 minutes).
 
 use anyhow::{Context, Result};
@@ -243,6 +244,7 @@ fn verify_hold(
                 task.id, s.successes, s.episodes, s.mean_score
             ));
         }
+        problems.extend(hold_episode_problems(&task, &hold, &file));
         match written.hold.iter().find(|(id, _)| *id == task.id) {
             None => problems.push(format!(
                 "{} ({file}) runs, but the table has no row for it",
@@ -264,6 +266,41 @@ fn verify_hold(
         }
     }
     Ok(problems)
+}
+
+/// What each hold episode must show besides its score of 0: no error ended it, it ran to its
+/// first stage's time limit (nothing ended it early), and some check that could be measured
+/// failed (not only checks that cannot be measured).
+fn hold_episode_problems(task: &compiler::Task, hold: &EvalReport, file: &str) -> Vec<String> {
+    let limit = task.stages.first().map_or(0.0, |s| s.time_limit_s);
+    let mut problems = Vec::new();
+    for e in &hold.episodes {
+        let seed = e.seed;
+        if let Some(error) = &e.error {
+            problems.push(format!(
+                "{} ({file}) seed {seed}: hold ended in an error: {error}",
+                task.id
+            ));
+        }
+        if (e.sim_time_s - limit).abs() >= 0.05 {
+            problems.push(format!(
+                "{} ({file}) seed {seed}: hold ended at {:.2} s, not at its {limit} s limit",
+                task.id, e.sim_time_s
+            ));
+        }
+        let failing = e
+            .verdict
+            .predicates()
+            .iter()
+            .any(|p| !p.value.is_nan() && !p.holds);
+        if !failing {
+            problems.push(format!(
+                "{} ({file}) seed {seed}: every measured check holds without motion",
+                task.id
+            ));
+        }
+    }
+    problems
 }
 
 /// Builds the table; `log` hears one line per task as it is measured.

@@ -1,8 +1,8 @@
-//! The no-motion control: every simulated shipped protocol and chain scores 0 under `hold` on
-//! seed 0, some measured check failing, run to its time limit. A task a motionless robot passes (a
-//! lid that falls shut, a tube already in place) is a broken task. The spread over many seeds is
-//! CI's second step (`make hold-column`: every task on seeds 0-39 against docs/tasks.md), not
-//! repeated here.
+//! The no-motion control. A task a motionless robot passes (a lid that falls shut, a tube already
+//! in place) is a broken task: every simulated task must score 0 under `hold`, each episode run
+//! to its time limit with some measured check failing. The spread over every task and seeds 0-39
+//! is CI's second step (`make hold-column`, tested to fail on a task hold passes in
+//! tests/cli.rs); here, which tasks are simulated and one task's hold episode.
 //! Also checks the policy factory: the report's policy field comes from the policy, and an unknown
 //! name is refused with the known ones listed.
 
@@ -11,7 +11,10 @@ use crate::common;
 use scoring::eval::{EvalOptions, evaluate};
 
 #[test]
-fn every_simulated_task_scores_zero_without_motion() {
+fn the_simulated_tasks_are_the_tables_and_a_motionless_robot_fails_one() {
+    // Which shipped protocols run (their scene builds): the tasks docs/tasks.md lists and CI's
+    // hold column (`make hold-column`) runs every one of under hold, on seeds 0-39, with the
+    // checks below for each episode.
     let mut simulated = Vec::new();
     for path in common::shipped_protocols() {
         let name = path.display().to_string();
@@ -21,39 +24,9 @@ fn every_simulated_task_scores_zero_without_motion() {
         if runtime::Scene::build(&task, &task.sample(0)).is_err() {
             continue;
         }
-        let opts = EvalOptions {
-            policy: scoring::policies::PolicySpec::Hold,
-            episodes: 1,
-            seed: 0,
-            out: None,
-            record: false,
-            image_every: 0,
-            resume: false,
-            ..Default::default()
-        };
-        let report = evaluate(&task, &opts, |_| {}).unwrap();
-        assert_eq!(report.policy, "hold");
-        let e = &report.episodes[0];
-        assert!(e.error.is_none(), "{name}: {:?}", e.error);
-        assert!(!e.success, "{name} passes with no motion: {:#?}", e.verdict);
-        // Not only because a check cannot be measured: some measured check fails.
-        let measured: Vec<_> = e
-            .verdict
-            .predicates()
-            .iter()
-            .filter(|p| !p.value.is_nan())
-            .collect();
-        assert!(
-            measured.iter().any(|p| !p.holds),
-            "{name}: every measured check holds without motion: {:#?}",
-            e.verdict
-        );
-        assert_eq!(e.verdict.score, 0.0, "{name}: {:#?}", e.verdict);
-        // It ran to the time limit: nothing ended it early.
-        assert!(
-            (e.sim_time_s - task.stages[0].time_limit_s).abs() < 0.05,
-            "{name}"
-        );
+        if task.id == "thermal_cycler.close_lid" {
+            hold_fails(&task, &name);
+        }
         simulated.push(task.id);
     }
     simulated.sort();
@@ -90,6 +63,35 @@ fn every_simulated_task_scores_zero_without_motion() {
             "workflows.mixer_cycle",
             "workflows.mixer_run",
         ]
+    );
+}
+
+/// `task` under `hold` on seed 0: no error, not won, score 0, some measured check failing (not
+/// only checks that cannot be measured), run to its time limit (nothing ended it early).
+fn hold_fails(task: &compiler::Task, name: &str) {
+    let opts = EvalOptions {
+        policy: scoring::policies::PolicySpec::Hold,
+        episodes: 1,
+        seed: 0,
+        ..Default::default()
+    };
+    let report = evaluate(task, &opts, |_| {}).unwrap();
+    assert_eq!(report.policy, "hold");
+    let e = &report.episodes[0];
+    assert!(e.error.is_none(), "{name}: {:?}", e.error);
+    assert!(!e.success, "{name} passes with no motion: {:#?}", e.verdict);
+    assert!(
+        e.verdict
+            .predicates()
+            .iter()
+            .any(|p| !p.value.is_nan() && !p.holds),
+        "{name}: every measured check holds without motion: {:#?}",
+        e.verdict
+    );
+    assert_eq!(e.verdict.score, 0.0, "{name}: {:#?}", e.verdict);
+    assert!(
+        (e.sim_time_s - task.stages[0].time_limit_s).abs() < 0.05,
+        "{name}"
     );
 }
 
