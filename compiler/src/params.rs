@@ -295,7 +295,8 @@ fn enumerate(
 }
 
 /// A `{name}` in a template that names no bound parameter.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("unknown placeholder `{{{0}}}`")]
 pub struct UnknownPlaceholder(pub String);
 
 /// Substitutes `{name}` placeholders. `{{` and `}}` are literal braces.

@@ -19,9 +19,9 @@
 //! Any form but contact, joint range and `lifted` may end in `within <quantity>` to give its
 //! tolerance inline.
 
-use crate::params::{Bindings, render};
+use crate::params::{Bindings, UnknownPlaceholder, render};
 use crate::world::{Hand, Location, World};
-use dsl::{Dimension, parse_quantity};
+use dsl::{Dimension, ParseQuantityError, parse_quantity};
 use serde::{Deserialize, Serialize};
 
 /// A tolerance with the name a `[tolerances]` table can override it by.
@@ -166,29 +166,99 @@ pub struct Parsed {
     pub within: Option<(f64, Dimension)>,
 }
 
+/// Why a predicate's text does not read as one of the forms. Its messages are lowercase and say
+/// which form was expected.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum PredicateError {
+    /// The `within` tolerance, or a `lifted` height, is not a quantity.
+    #[error(transparent)]
+    Quantity(#[from] ParseQuantityError),
+    #[error("a `[` without its `]`")]
+    UnclosedBracket,
+    #[error("expected `[`")]
+    NoOpeningBracket,
+    #[error("expected `[..]`")]
+    NoBrackets,
+    #[error("`[{inner}]` must hold numbers")]
+    NotNumbers { inner: String },
+    #[error("`[{inner}]` must hold {count} numbers")]
+    WrongCount { inner: String, count: usize },
+    #[error("`{lhs}` must be `<labware>.<part>`")]
+    NotLabwarePart { lhs: String },
+    #[error("`{state}` is not a state name")]
+    NotStateName { state: String },
+    #[error("`{lhs}` must be `<labware>.<joint>`")]
+    NotLabwareJoint { lhs: String },
+    #[error("`{unit}` is not a unit of angle or length")]
+    NotJointUnit { unit: String },
+    #[error("a joint range is an angle or a length, not a {}", .0.name())]
+    JointDimension(Dimension),
+    #[error("the range [{low}, {high}] is empty")]
+    EmptyRange { low: f64, high: f64 },
+    #[error("`{name}` is not an item name")]
+    NotItemName { name: String },
+    #[error("`{location}` must be `<holder>.<slot>`")]
+    NotLocation { location: String },
+    #[error("write `<robot> touches <item>`")]
+    NotContact,
+    #[error("`{unit}` is not a unit of length")]
+    NotLengthUnit { unit: String },
+    #[error("`{height}` is not a height: write a length above zero, e.g. `lifted 5 cm`")]
+    NotHeight { height: String },
+    #[error("expected `is`, `was`, `in`, `=`, `>=`, `<=`, `touches`, `near` or `lifted`")]
+    NoForm,
+    #[error("`{lhs}` must be `<labware>.<value>`")]
+    NotLabwareValue { lhs: String },
+    #[error("a comparison needs a value with a unit")]
+    NoValue,
+}
+
+/// Why a quantity template does not read as the quantity needed.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ValueError {
+    #[error(transparent)]
+    UnknownPlaceholder(#[from] UnknownPlaceholder),
+    #[error(transparent)]
+    Quantity(#[from] ParseQuantityError),
+    #[error("`{text}` is a {}, but a {} is needed", .found.name(), .needed.name())]
+    WrongDimension {
+        text: String,
+        found: Dimension,
+        needed: Dimension,
+    },
+    /// A panel's starting value ([`panel_quantity`]) that reads as no panel quantity.
+    #[error("not a speed, temperature, time or volume")]
+    NotPanelValue,
+}
+
 fn split_dot(s: &str) -> Option<(String, String)> {
     let (a, b) = s.split_once('.')?;
     (!a.is_empty() && !b.is_empty() && !b.contains('.')).then(|| (a.to_string(), b.to_string()))
 }
 
-fn bracketed(s: &str, n: usize) -> Result<(Vec<f64>, &str), String> {
+fn bracketed(s: &str, n: usize) -> Result<(Vec<f64>, &str), PredicateError> {
     let s = s.trim_start();
-    let inner_end = s.find(']').ok_or("a `[` without its `]`")?;
+    let inner_end = s.find(']').ok_or(PredicateError::UnclosedBracket)?;
     let inner = s
         .strip_prefix('[')
-        .ok_or("expected `[`")?
+        .ok_or(PredicateError::NoOpeningBracket)?
         .get(..inner_end - 1)
-        .ok_or("expected `[..]`")?;
+        .ok_or(PredicateError::NoBrackets)?;
     let nums: Result<Vec<f64>, _> = inner.split(',').map(|x| x.trim().parse::<f64>()).collect();
-    let nums = nums.map_err(|_| format!("`[{inner}]` must hold numbers"))?;
+    let nums = nums.map_err(|_| PredicateError::NotNumbers {
+        inner: inner.to_string(),
+    })?;
     if nums.len() != n || nums.iter().any(|x| !x.is_finite()) {
-        return Err(format!("`[{inner}]` must hold {n} numbers"));
+        return Err(PredicateError::WrongCount {
+            inner: inner.to_string(),
+            count: n,
+        });
     }
     Ok((nums, s[inner_end + 1..].trim()))
 }
 
 /// Reads one predicate. Errors are lowercase and say which form was expected.
-pub fn parse(text: &str) -> Result<Parsed, String> {
+pub fn parse(text: &str) -> Result<Parsed, PredicateError> {
     let text = text.trim();
     let (body, within) = match text.rsplit_once(" within ") {
         Some((b, q)) => {
@@ -202,11 +272,15 @@ pub fn parse(text: &str) -> Result<Parsed, String> {
         .map(|(l, r)| (l, r, false))
         .or_else(|| body.split_once(" was ").map(|(l, r)| (l, r, true)));
     let form = if let Some((lhs, state, ever)) = state_form {
-        let (labware, part) = split_dot(lhs.trim())
-            .ok_or_else(|| format!("`{}` must be `<labware>.<part>`", lhs.trim()))?;
+        let (labware, part) =
+            split_dot(lhs.trim()).ok_or_else(|| PredicateError::NotLabwarePart {
+                lhs: lhs.trim().to_string(),
+            })?;
         let state = state.trim();
         if state.is_empty() || state.contains(' ') {
-            return Err(format!("`{state}` is not a state name"));
+            return Err(PredicateError::NotStateName {
+                state: state.to_string(),
+            });
         }
         Form::State {
             labware,
@@ -219,18 +293,22 @@ pub fn parse(text: &str) -> Result<Parsed, String> {
         let rest = rest.trim();
         if rest.starts_with('[') {
             let (labware, joint) =
-                split_dot(lhs).ok_or_else(|| format!("`{lhs}` must be `<labware>.<joint>`"))?;
+                split_dot(lhs).ok_or_else(|| PredicateError::NotLabwareJoint {
+                    lhs: lhs.to_string(),
+                })?;
             let (v, unit) = bracketed(rest, 2)?;
-            let q = parse_quantity(&format!("1 {unit}"))
-                .map_err(|_| format!("`{unit}` is not a unit of angle or length"))?;
+            let q =
+                parse_quantity(&format!("1 {unit}")).map_err(|_| PredicateError::NotJointUnit {
+                    unit: unit.to_string(),
+                })?;
             if !matches!(q.dimension, Dimension::Angle | Dimension::Length) {
-                return Err(format!(
-                    "a joint range is an angle or a length, not a {}",
-                    q.dimension.name()
-                ));
+                return Err(PredicateError::JointDimension(q.dimension));
             }
             if v[0] > v[1] {
-                return Err(format!("the range [{}, {}] is empty", v[0], v[1]));
+                return Err(PredicateError::EmptyRange {
+                    low: v[0],
+                    high: v[1],
+                });
             }
             Form::JointRange {
                 labware,
@@ -240,9 +318,13 @@ pub fn parse(text: &str) -> Result<Parsed, String> {
             }
         } else {
             if lhs.contains(' ') || lhs.is_empty() {
-                return Err(format!("`{lhs}` is not an item name"));
+                return Err(PredicateError::NotItemName {
+                    name: lhs.to_string(),
+                });
             }
-            split_dot(rest).ok_or_else(|| format!("`{rest}` must be `<holder>.<slot>`"))?;
+            split_dot(rest).ok_or_else(|| PredicateError::NotLocation {
+                location: rest.to_string(),
+            })?;
             Form::InSlot {
                 item: lhs.to_string(),
                 location: rest.to_string(),
@@ -251,7 +333,7 @@ pub fn parse(text: &str) -> Result<Parsed, String> {
     } else if let Some((robot, item)) = body.split_once(" touches ") {
         let (robot, item) = (robot.trim(), item.trim());
         if robot.contains(' ') || item.contains(' ') || robot.is_empty() || item.is_empty() {
-            return Err("write `<robot> touches <item>`".into());
+            return Err(PredicateError::NotContact);
         }
         Form::Contact {
             robot: robot.into(),
@@ -262,7 +344,9 @@ pub fn parse(text: &str) -> Result<Parsed, String> {
         let q = parse_quantity(&format!("1 {unit}"))
             .ok()
             .filter(|q| q.dimension == Dimension::Length)
-            .ok_or_else(|| format!("`{unit}` is not a unit of length"))?;
+            .ok_or_else(|| PredicateError::NotLengthUnit {
+                unit: unit.to_string(),
+            })?;
         Form::Near {
             item: item.trim().to_string(),
             pos: [v[0] * q.si, v[1] * q.si, v[2] * q.si],
@@ -270,14 +354,15 @@ pub fn parse(text: &str) -> Result<Parsed, String> {
     } else if let Some((item, height)) = body.split_once(" lifted ") {
         let item = item.trim();
         if item.contains(' ') || item.is_empty() {
-            return Err(format!("`{item}` is not an item name"));
+            return Err(PredicateError::NotItemName {
+                name: item.to_string(),
+            });
         }
         let q = parse_quantity(height.trim())?;
         if q.dimension != Dimension::Length || q.si <= 0.0 {
-            return Err(format!(
-                "`{}` is not a height: write a length above zero, e.g. `lifted 5 cm`",
-                height.trim()
-            ));
+            return Err(PredicateError::NotHeight {
+                height: height.trim().to_string(),
+            });
         }
         Form::Lifted {
             item: item.into(),
@@ -287,15 +372,14 @@ pub fn parse(text: &str) -> Result<Parsed, String> {
         let (lhs, cmp, rhs) = [(">=", Cmp::Ge), ("<=", Cmp::Le), ("=", Cmp::Eq)]
             .iter()
             .find_map(|(op, c)| body.split_once(op).map(|(l, r)| (l, *c, r)))
-            .ok_or_else(|| {
-                "expected `is`, `was`, `in`, `=`, `>=`, `<=`, `touches`, `near` or `lifted`"
-                    .to_string()
+            .ok_or(PredicateError::NoForm)?;
+        let (labware, field) =
+            split_dot(lhs.trim()).ok_or_else(|| PredicateError::NotLabwareValue {
+                lhs: lhs.trim().to_string(),
             })?;
-        let (labware, field) = split_dot(lhs.trim())
-            .ok_or_else(|| format!("`{}` must be `<labware>.<value>`", lhs.trim()))?;
         let value = rhs.trim();
         if value.is_empty() {
-            return Err("a comparison needs a value with a unit".into());
+            return Err(PredicateError::NoValue);
         }
         Form::Compare {
             labware,
@@ -308,21 +392,21 @@ pub fn parse(text: &str) -> Result<Parsed, String> {
 }
 
 /// A template quantity rendered and read in `dim`.
-pub fn quantity(template: &str, bound: &Bindings, dim: Dimension) -> Result<f64, String> {
-    let text = render(template, bound).map_err(|u| format!("unknown placeholder `{{{}}}`", u.0))?;
+pub fn quantity(template: &str, bound: &Bindings, dim: Dimension) -> Result<f64, ValueError> {
+    let text = render(template, bound)?;
     let q = parse_quantity(&text)?;
     if q.dimension != dim {
-        return Err(format!(
-            "`{text}` is a {}, but a {} is needed",
-            q.dimension.name(),
-            dim.name()
-        ));
+        return Err(ValueError::WrongDimension {
+            text,
+            found: q.dimension,
+            needed: dim,
+        });
     }
     Ok(q.si)
 }
 
 /// A volume template (`"{fill} mL"`) rendered and read in µL.
-pub fn volume_ul(template: &str, bound: &Bindings) -> Result<f64, String> {
+pub fn volume_ul(template: &str, bound: &Bindings) -> Result<f64, ValueError> {
     quantity(template, bound, Dimension::Volume)
 }
 
@@ -346,7 +430,7 @@ impl Check {
 
     /// Why this check's target value cannot be read under these parameter values (a volume or
     /// panel value template that renders to a bare number or the wrong unit); `None` when it can.
-    pub fn target_error(&self, bound: &Bindings) -> Option<String> {
+    pub fn target_error(&self, bound: &Bindings) -> Option<ValueError> {
         match self {
             Check::Volume { value, .. } => quantity(value, bound, Dimension::Volume).err(),
             Check::Panel { value, unit, .. } => {
@@ -550,8 +634,24 @@ mod tests {
         ] {
             match parse(t) {
                 Ok(p) => panic!("{t} parsed as {p:?}"),
-                Err(e) => assert!(e.contains(why), "{t}: {e}"),
+                Err(e) => assert!(e.to_string().contains(why), "{t}: {e}"),
             }
         }
+    }
+
+    #[test]
+    fn a_template_that_does_not_read_says_why() {
+        let why = |t: &str| {
+            quantity(t, &Bindings::new(), Dimension::Volume)
+                .unwrap_err()
+                .to_string()
+        };
+        assert_eq!(why("{fill} mL"), "unknown placeholder `{fill}`");
+        assert_eq!(why("5 s"), "`5 s` is a time, but a volume is needed");
+        assert_eq!(why("5"), "`5` has no unit");
+        assert_eq!(
+            ValueError::NotPanelValue.to_string(),
+            "not a speed, temperature, time or volume"
+        );
     }
 }

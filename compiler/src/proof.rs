@@ -98,7 +98,7 @@ fn initial_world(cx: &mut Cx, scene: &ProofScene, bound: &Bindings) -> Option<Wo
                     }
                 }
                 Err(m) => {
-                    cx.push(Diagnostic::new(Code::E0016, span, m));
+                    cx.push(Diagnostic::new(Code::E0016, span, m.to_string()));
                     ok = false;
                 }
             }
@@ -151,7 +151,7 @@ fn initial_world(cx: &mut Cx, scene: &ProofScene, bound: &Bindings) -> Option<Wo
                     ok = false;
                 }
                 Err(m) => {
-                    cx.push(Diagnostic::new(Code::E0020, span, m));
+                    cx.push(Diagnostic::new(Code::E0020, span, m.to_string()));
                     ok = false;
                 }
             }
@@ -327,7 +327,7 @@ pub(crate) fn prove(cx: &mut Cx, scene: &ProofScene, stages: &[ProofStage], para
             w.panel_hold_s = 0.0;
             for p in stage.predicates {
                 if let Some(e) = p.predicate.check.target_error(bound) {
-                    let mut d = Diagnostic::new(Code::E0020, p.span, e)
+                    let mut d = Diagnostic::new(Code::E0020, p.span, e.to_string())
                         .with_hint("a parameter used as a quantity must render with its unit");
                     d.notes.extend(describe(bound));
                     cx.push(d);

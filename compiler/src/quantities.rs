@@ -7,10 +7,10 @@
 //!
 //! It does not measure anything (the judge does) or apply values (the runtime does).
 
+use crate::Predicate;
 use crate::Task;
 use crate::params::{Bindings, render};
-use crate::Predicate;
-use crate::predicates::{Check, panel_quantity, quantity, volume_ul};
+use crate::predicates::{Check, ValueError, panel_quantity, quantity, volume_ul};
 
 /// A quantity template that does not resolve with the drawn parameters.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -19,7 +19,8 @@ pub struct QuantityError {
     pub item: String,
     pub what: &'static str,
     pub template: String,
-    pub why: String,
+    /// Boxed: the error travels inside the runtime's and the evaluator's errors.
+    pub why: Box<ValueError>,
 }
 
 /// One success predicate with the parameters filled in.
@@ -56,7 +57,7 @@ impl ResolvedPredicate {
             item: item.to_string(),
             what,
             template: template.to_string(),
-            why,
+            why: Box::new(why),
         };
         let target = match &p.check {
             Check::Panel {
@@ -102,27 +103,22 @@ impl Quantities {
     pub fn resolve(task: &Task, params: &Bindings) -> Result<Quantities, QuantityError> {
         let mut out = Quantities::default();
         for spec in &task.labware {
-            let err = |what, template: &str, why: String| QuantityError {
+            let err = |what, template: &str, why| QuantityError {
                 item: spec.name.clone(),
                 what,
                 template: template.to_string(),
-                why,
+                why: Box::new(why),
             };
             out.start_volumes_ul.push(match &spec.volume {
-                Some(text) => Some(
-                    volume_ul(text, params).map_err(|why| err("starting volume", text, why))?,
-                ),
+                Some(text) => {
+                    Some(volume_ul(text, params).map_err(|why| err("starting volume", text, why))?)
+                }
                 None => None,
             });
             let mut panel = Vec::new();
             for (param, text) in &spec.panel {
-                let value = panel_quantity(text, params).ok_or_else(|| {
-                    err(
-                        "starting panel value",
-                        text,
-                        "not a speed, temperature, time or volume".into(),
-                    )
-                })?;
+                let value = panel_quantity(text, params)
+                    .ok_or_else(|| err("starting panel value", text, ValueError::NotPanelValue))?;
                 panel.push((param.clone(), value));
             }
             out.panel_starts.push(panel);
@@ -147,7 +143,10 @@ mod tests {
     use super::*;
 
     fn transfer() -> Task {
-        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../protocols/pipette/transfer.toml");
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../protocols/pipette/transfer.toml"
+        );
         let text = std::fs::read_to_string(path).unwrap();
         let (task, diags) = crate::compile_source(&text, "transfer.toml");
         task.unwrap_or_else(|| panic!("{diags:#?}"))
@@ -170,23 +169,37 @@ mod tests {
         // The target volume check, resolved to µL; the tip's state has no target.
         let checks = &q.predicates[0];
         assert_eq!(checks[0].target, Ok(Some(volume_ul)));
-        assert_eq!(checks[0].text, format!("target.volume = {} µL", instance.params["volume"]));
+        assert_eq!(
+            checks[0].text,
+            format!("target.volume = {} µL", instance.params["volume"])
+        );
         assert_eq!(checks[2].target, Ok(None));
     }
 
     #[test]
     fn a_template_that_does_not_resolve_is_an_error_naming_it() {
         let mut task = transfer();
-        let source = task.labware.iter().position(|l| l.name == "source").unwrap();
+        let source = task
+            .labware
+            .iter()
+            .position(|l| l.name == "source")
+            .unwrap();
         task.labware[source].volume = Some("{nowhere} mL".into());
         let params = task.sample(0).params;
         let e = Quantities::resolve(&task, &params).unwrap_err();
         assert_eq!(e.item, "source");
         assert_eq!(e.template, "{nowhere} mL");
-        assert!(e.to_string().contains("unknown placeholder `{nowhere}`"), "{e}");
+        assert!(
+            e.to_string().contains("unknown placeholder `{nowhere}`"),
+            "{e}"
+        );
         // A panel start that is no panel quantity, and a target of the wrong dimension.
         let mut task = transfer();
-        let pipette = task.labware.iter().position(|l| l.name == "pipette").unwrap();
+        let pipette = task
+            .labware
+            .iter()
+            .position(|l| l.name == "pipette")
+            .unwrap();
         task.labware[pipette]
             .panel
             .insert("set_volume".into(), "fast".into());

@@ -8,9 +8,10 @@
 //! nothing about the order of steps: the proof does.
 
 use crate::params::{Bindings, ParamSpec, placeholders, proof_assignments, render};
-use crate::primitives::{self, Env};
+use crate::predicates::ValueError;
+use crate::primitives::{self, Env, LocationError};
 use crate::report::Cx;
-use dsl::{Code, Diagnostic, Dimension, Span};
+use dsl::{Code, Diagnostic, Dimension, ParseQuantityError, Span};
 use labware::LabwareKind;
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -167,28 +168,24 @@ fn fits(env: &Env, place: &str, what: &What) -> Result<(), Misfit> {
             // A unit that is not known, or of another dimension, is wrong whatever the number.
             return crate::predicates::quantity(place, &Bindings::new(), *dim)
                 .map(|_| ())
-                .map_err(|message| Misfit {
+                .map_err(|e| Misfit {
                     code: Code::E0020,
-                    independent: message.starts_with("unknown unit")
-                        || message.contains(", but a "),
-                    hint: message
-                        .ends_with("has no unit")
+                    independent: matches!(
+                        e,
+                        ValueError::Quantity(ParseQuantityError::UnknownUnit { .. })
+                            | ValueError::WrongDimension { .. }
+                    ),
+                    hint: matches!(e, ValueError::Quantity(ParseQuantityError::NoUnit { .. }))
                         .then(|| "a parameter used as a quantity must render with its unit".into()),
-                    message,
+                    message: e.to_string(),
                 });
         }
     };
-    let (holder, _slot, hkind) = primitives::resolve_location(env, place).map_err(|message| {
-        let independent = place
-            .split_once('.')
-            .and_then(|(h, _)| env.kinds.get(h))
-            .is_none_or(|k| k.slots.is_none());
-        Misfit {
-            code: Code::E0016,
-            message,
-            hint: None,
-            independent,
-        }
+    let (holder, _slot, hkind) = primitives::resolve_location(env, place).map_err(|e| Misfit {
+        code: Code::E0016,
+        independent: !matches!(e, LocationError::NoSlot { .. }),
+        message: e.to_string(),
+        hint: None,
     })?;
     if let Some((_, kind)) = item {
         let accepts = hkind.slots.map(|s| s.accepts).unwrap_or(&[]);

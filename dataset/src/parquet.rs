@@ -11,7 +11,7 @@ use arrow_array::builder::{ListBuilder, StringBuilder};
 use arrow_array::{
     ArrayRef, FixedSizeListArray, Float32Array, Float64Array, Int64Array, RecordBatch, StringArray,
 };
-use arrow_schema::{DataType, Field, Schema};
+use arrow_schema::{ArrowError, DataType, Field, Schema};
 use parquet::arrow::ArrowWriter;
 use parquet::basic::Compression;
 use parquet::file::properties::WriterProperties;
@@ -50,7 +50,7 @@ fn write(path: &Path, batch: RecordBatch) -> Result<(), DatasetError> {
         .map_err(|e| DatasetError::io("sync", path, e))
 }
 
-fn list(values: Vec<f32>, width: usize) -> Result<ArrayRef, String> {
+fn list(values: Vec<f32>, width: usize) -> Result<ArrayRef, ArrowError> {
     let item = Arc::new(Field::new("item", DataType::Float32, true));
     FixedSizeListArray::try_new(
         item,
@@ -59,7 +59,6 @@ fn list(values: Vec<f32>, width: usize) -> Result<ArrayRef, String> {
         None,
     )
     .map(|a| Arc::new(a) as ArrayRef)
-    .map_err(|e| e.to_string())
 }
 
 /// The frames table: one row per frame.
@@ -104,12 +103,12 @@ pub fn write_frames(path: &Path, rows: &[Row]) -> Result<(), DatasetError> {
             rows.iter().flat_map(|r| r.state.iter().copied()).collect(),
             sw,
         )
-        .map_err(bad)?,
+        .map_err(|e| bad(e.to_string()))?,
         list(
             rows.iter().flat_map(|r| r.action.iter().copied()).collect(),
             aw,
         )
-        .map_err(bad)?,
+        .map_err(|e| bad(e.to_string()))?,
         Arc::new(Float32Array::from(
             rows.iter().map(|r| r.timestamp).collect::<Vec<_>>(),
         )),

@@ -9,7 +9,9 @@ mod export;
 
 pub use export::{ExportOptions, export};
 
-use dataset::{Capture, CaptureSpec, Codec, DatasetError, DatasetWriter, FileSizes, Layout, Version};
+use dataset::{
+    Capture, CaptureSpec, Codec, DatasetError, DatasetWriter, FileSizes, Layout, Version,
+};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -134,8 +136,8 @@ pub fn generate(
                 let (position, t, seed) = plan[due];
                 due += 1;
                 let id = &tasks[t].id;
-                let step = r.and_then(|rec| match rec.outcome {
-                    Ok(instruction) => {
+                let step = r.and_then(|rec| match rec.ending {
+                    Ending::Success { instruction } => {
                         let frames = writer.commit(rec.capture, &instruction, Some(position))?;
                         out.frames += frames;
                         progress(Step {
@@ -147,7 +149,7 @@ pub fn generate(
                         });
                         Ok(())
                     }
-                    Err(why) => {
+                    Ending::Failure { why } => {
                         rec.capture.discard();
                         progress(Step {
                             task: id,
@@ -174,10 +176,18 @@ pub fn generate(
     Ok(out)
 }
 
-/// One expert episode, captured: the instruction to commit it under, or why it failed.
+/// One expert episode, captured, and how it ended.
 struct Recorded {
     capture: Capture,
-    outcome: Result<String, String>,
+    ending: Ending,
+}
+
+/// How a captured expert episode ended: whether it is committed or discarded.
+enum Ending {
+    /// It succeeded: committed under this instruction.
+    Success { instruction: String },
+    /// It failed (the episode's error, else its outcome): discarded, and listed with this reason.
+    Failure { why: String },
 }
 
 fn record(
@@ -212,13 +222,17 @@ fn record(
         Err(e) => scoring::episode::policy_failed(task, scene, &instance, &e, None)
             .map_err(|e| episode_err(e.to_string()))?,
     };
-    let outcome = if result.success {
-        Ok(instance.instruction.clone())
+    let ending = if result.success {
+        Ending::Success {
+            instruction: instance.instruction.clone(),
+        }
     } else {
-        Err(result
-            .error
-            .clone()
-            .unwrap_or_else(|| format!("{:?}", result.outcome)))
+        Ending::Failure {
+            why: result
+                .error
+                .clone()
+                .unwrap_or_else(|| format!("{:?}", result.outcome)),
+        }
     };
-    Ok(Recorded { capture, outcome })
+    Ok(Recorded { capture, ending })
 }

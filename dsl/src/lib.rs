@@ -7,6 +7,9 @@
 //! (tables, keys, types, units); it does not know which labware kinds, robots or primitives exist —
 //! name resolution against those catalogues is the compiler's job. Rendering diagnostics for humans
 //! is the CLI's job ([`render`] gives the plain building blocks: line/column and the source line).
+//!
+//! Its tests are beside the code (unit tests) and in the workspace's tests/protocol_diagnostics.rs,
+//! tests/faulty_corpus.rs and tests/golden.rs (golden ASTs in tests/golden/).
 
 pub mod ast;
 mod diagnostic;
@@ -17,7 +20,7 @@ pub mod source;
 
 pub use diagnostic::{Code, Diagnostic, Severity, Span, did_you_mean};
 pub use parse::parse;
-pub use quantity::{Dimension, Quantity, parse_quantity};
+pub use quantity::{Dimension, ParseQuantityError, Quantity, parse_quantity};
 pub use source::decode;
 
 /// The protocol-language version this crate reads (`format = 1` at the top of a file).

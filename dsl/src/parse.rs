@@ -355,7 +355,7 @@ impl Parser {
                         dim.name(),
                         example(dim)
                     );
-                    self.err(Code::E0020, span, e, Some(hint));
+                    self.err(Code::E0020, span, e.to_string(), Some(hint));
                     None
                 }
             },

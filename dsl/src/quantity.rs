@@ -121,8 +121,28 @@ pub fn suggest_unit(symbol: &str) -> Option<&'static str> {
         .or_else(|| crate::did_you_mean(symbol, UNITS.iter().map(|(s, _, _)| *s)))
 }
 
-/// Parses "<number> <unit>" (the space is optional). Errors are lowercase messages.
-pub fn parse_quantity(text: &str) -> Result<Quantity, String> {
+/// Why a text is not a quantity. Its messages are lowercase and quote the text.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum ParseQuantityError {
+    #[error("`{text}` does not start with a number")]
+    NoNumber { text: String },
+    #[error("`{text}` is not a finite number")]
+    NotFinite { text: String },
+    #[error("`{text}` has no unit")]
+    NoUnit { text: String },
+    /// A unit symbol no dimension knows; the message names the known one it most likely means.
+    #[error("unknown unit `{unit}` in `{text}`{}", suggestion_note(.unit))]
+    UnknownUnit { unit: String, text: String },
+}
+
+fn suggestion_note(unit: &str) -> String {
+    suggest_unit(unit)
+        .map(|u| format!("; did you mean `{u}`?"))
+        .unwrap_or_default()
+}
+
+/// Parses "<number> <unit>" (the space is optional).
+pub fn parse_quantity(text: &str) -> Result<Quantity, ParseQuantityError> {
     let t = text.trim();
     let split = t
         .char_indices()
@@ -133,18 +153,19 @@ pub fn parse_quantity(text: &str) -> Result<Quantity, String> {
     let (num, sym) = t.split_at(split);
     let num = num.trim().replace('_', "");
     let sym = sym.trim();
+    let text = || text.to_string();
     let value: f64 = num
         .parse()
-        .map_err(|_| format!("`{text}` does not start with a number"))?;
+        .map_err(|_| ParseQuantityError::NoNumber { text: text() })?;
     if !value.is_finite() {
-        return Err(format!("`{text}` is not a finite number"));
+        return Err(ParseQuantityError::NotFinite { text: text() });
     }
     if sym.is_empty() {
-        return Err(format!("`{text}` has no unit"));
+        return Err(ParseQuantityError::NoUnit { text: text() });
     }
-    let (dimension, factor) = unit(sym).ok_or_else(|| match suggest_unit(sym) {
-        Some(u) => format!("unknown unit `{sym}` in `{text}`; did you mean `{u}`?"),
-        None => format!("unknown unit `{sym}` in `{text}`"),
+    let (dimension, factor) = unit(sym).ok_or_else(|| ParseQuantityError::UnknownUnit {
+        unit: sym.to_string(),
+        text: text(),
     })?;
     Ok(Quantity {
         si: value * factor,
@@ -167,7 +188,9 @@ mod tests {
             ("Mm", "mm"),
         ] {
             assert_eq!(super::suggest_unit(typed), Some(meant), "{typed}");
-            let e = super::parse_quantity(&format!("37 {typed}")).unwrap_err();
+            let e = super::parse_quantity(&format!("37 {typed}"))
+                .unwrap_err()
+                .to_string();
             assert!(e.ends_with(&format!("did you mean `{meant}`?")), "{e}");
         }
         assert_eq!(super::suggest_unit("parsecs"), None);
@@ -195,16 +218,14 @@ mod tests {
 
     #[test]
     fn rejects_bad_quantities() {
-        assert!(parse_quantity("30").unwrap_err().contains("no unit"));
-        assert!(
-            parse_quantity("30 kg")
-                .unwrap_err()
-                .contains("unknown unit `kg`")
-        );
-        assert!(
-            parse_quantity("fast")
-                .unwrap_err()
-                .contains("does not start with a number")
+        let e = |text: &str| parse_quantity(text).unwrap_err().to_string();
+        assert_eq!(e("30"), "`30` has no unit");
+        assert_eq!(e("30 kg"), "unknown unit `kg` in `30 kg`");
+        assert_eq!(e("fast"), "`fast` does not start with a number");
+        assert_eq!(e("1e999 s"), "`1e999 s` is not a finite number");
+        assert_eq!(
+            e(" 37 C"),
+            "unknown unit `C` in ` 37 C`; did you mean `°C`?"
         );
     }
 }

@@ -38,9 +38,29 @@ struct Reply {
     bounds: Vec<(f64, f64)>,
 }
 
+/// Why a slot has no reply; raised as `RuntimeError` with this message.
+#[derive(Debug, thiserror::Error)]
+enum WorkerError {
+    /// Making or resetting the environment failed.
+    #[error(transparent)]
+    Env(#[from] runtime::EnvError),
+    #[error(transparent)]
+    Render(#[from] runtime::render::RenderError),
+    #[error("reset the vector environment before stepping it")]
+    NotReset,
+    #[error("an environment thread has stopped")]
+    Stopped,
+}
+
+impl From<WorkerError> for PyErr {
+    fn from(e: WorkerError) -> PyErr {
+        PyRuntimeError::new_err(e.to_string())
+    }
+}
+
 struct Worker {
     commands: Sender<Command>,
-    replies: Mutex<Receiver<Result<Reply, String>>>,
+    replies: Mutex<Receiver<Result<Reply, WorkerError>>>,
     thread: Option<JoinHandle<()>>,
 }
 
@@ -50,7 +70,7 @@ fn serve(
     opts: runtime::EnvOptions,
     images: bool,
     commands: Receiver<Command>,
-    replies: Sender<Result<Reply, String>>,
+    replies: Sender<Result<Reply, WorkerError>>,
 ) {
     let mut env: Option<runtime::Env> = None;
     let mut seed = 0;
@@ -62,22 +82,17 @@ fn serve(
                     match env.as_mut() {
                         Some(e) => e.reset(s).map(|_| ()),
                         None => runtime::Env::make(&task, s, opts).map(|e| env = Some(e)),
-                    }
-                    .map_err(|e| e.to_string())?;
+                    }?;
                     Ok((0.0, false, false, None))
                 }
                 Command::Step(action) => match env.as_mut() {
                     Some(e) => step(e, &action),
-                    None => return Err("reset the vector environment before stepping it".into()),
+                    None => return Err(WorkerError::NotReset),
                 },
             };
             let e = env.as_mut().expect("made by the first reset");
             let frames = if images {
-                e.frames()
-                    .map_err(|e| e.to_string())?
-                    .iter()
-                    .map(|f| f.rgb.clone())
-                    .collect()
+                e.frames()?.iter().map(|f| f.rgb.clone()).collect()
             } else {
                 Vec::new()
             };
@@ -201,24 +216,25 @@ impl VecEnv {
                     w.commands.send(command).is_ok()
                 })
                 .collect();
-            let stopped = || "an environment thread has stopped".to_string();
-            let replies: Vec<Result<Reply, String>> = workers
+            let replies: Vec<Result<Reply, WorkerError>> = workers
                 .iter()
                 .zip(&sent)
                 .map(|(w, &sent)| {
                     if !sent {
-                        return Err(stopped());
+                        return Err(WorkerError::Stopped);
                     }
                     w.replies
                         .lock()
-                        .map_err(|_| stopped())?
+                        .map_err(|_| WorkerError::Stopped)?
                         .recv()
-                        .map_err(|_| stopped())?
+                        .map_err(|_| WorkerError::Stopped)?
                 })
                 .collect();
-            replies.into_iter().collect::<Result<Vec<Reply>, String>>()
+            replies
+                .into_iter()
+                .collect::<Result<Vec<Reply>, WorkerError>>()
         });
-        let replies = replies.map_err(PyRuntimeError::new_err)?;
+        let replies = replies?;
         if self.bounds.is_none() {
             self.bounds = replies.first().map(|r| r.bounds.clone());
         }

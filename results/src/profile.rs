@@ -196,7 +196,7 @@ impl Profile {
         let cameras = self
             .images
             .iter()
-            .map(|im| camera_index(task, &im.camera).map_err(err))
+            .map(|im| camera_index(task, &im.camera).map_err(|e| err(e.to_string())))
             .collect::<Result<Vec<_>, _>>()?;
         let state_len: usize = task
             .robots
@@ -256,11 +256,24 @@ pub struct Layout {
     pub state_len: usize,
 }
 
-fn camera_index(task: &Task, camera: &str) -> Result<Option<usize>, String> {
+/// Why a profile image's camera is not one of a task's.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+enum CameraError {
+    #[error("camera `{camera}`: `wrist:` takes a robot number")]
+    WristNumber { camera: String },
+    /// `cameras`: the task's camera names.
+    #[error("it has no camera `{camera}` (it has {}, and `wrist:N`)", .cameras.join(", "))]
+    NoCamera {
+        camera: String,
+        cameras: Vec<String>,
+    },
+}
+
+fn camera_index(task: &Task, camera: &str) -> Result<Option<usize>, CameraError> {
     if let Some(n) = camera.strip_prefix("wrist:") {
-        let n: usize = n
-            .parse()
-            .map_err(|_| format!("camera `{camera}`: `wrist:` takes a robot number"))?;
+        let n: usize = n.parse().map_err(|_| CameraError::WristNumber {
+            camera: camera.to_string(),
+        })?;
         let Some(robot) = task.robots.get(n) else {
             return Ok(None);
         };
@@ -272,12 +285,9 @@ fn camera_index(task: &Task, camera: &str) -> Result<Option<usize>, String> {
         .iter()
         .position(|c| c.name == camera)
         .map(Some)
-        .ok_or_else(|| {
-            let names: Vec<&str> = task.cameras.iter().map(|c| c.name.as_str()).collect();
-            format!(
-                "it has no camera `{camera}` (it has {}, and `wrist:N`)",
-                names.join(", ")
-            )
+        .ok_or_else(|| CameraError::NoCamera {
+            camera: camera.to_string(),
+            cameras: task.cameras.iter().map(|c| c.name.clone()).collect(),
         })
 }
 
@@ -330,5 +340,24 @@ mod tests {
             let e = Profile::parse(&text, "test").unwrap_err().to_string();
             assert!(e.contains(want), "{edit:?}: {e}");
         }
+    }
+
+    #[test]
+    fn camera_errors_name_the_camera() {
+        let wrist = CameraError::WristNumber {
+            camera: "wrist:left".into(),
+        };
+        assert_eq!(
+            wrist.to_string(),
+            "camera `wrist:left`: `wrist:` takes a robot number"
+        );
+        let missing = CameraError::NoCamera {
+            camera: "top".into(),
+            cameras: vec!["front".into(), "side".into()],
+        };
+        assert_eq!(
+            missing.to_string(),
+            "it has no camera `top` (it has front, side, and `wrist:N`)"
+        );
     }
 }

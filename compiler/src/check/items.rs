@@ -265,7 +265,7 @@ fn start_quantity_ok(
             false
         }
         Err(e) => {
-            cx.err(Code::E0020, span, e, None);
+            cx.err(Code::E0020, span, e.to_string(), None);
             false
         }
         Ok(q) => {

@@ -167,11 +167,11 @@ fn real_domain(
             return None;
         }
         (Err(e), _) => {
-            cx.err(Code::E0020, low.span, e, None);
+            cx.err(Code::E0020, low.span, e.to_string(), None);
             return None;
         }
         (_, Err(e)) => {
-            cx.err(Code::E0020, high.span, e, None);
+            cx.err(Code::E0020, high.span, e.to_string(), None);
             return None;
         }
     };

@@ -222,7 +222,7 @@ impl Names<'_> {
                 robots: self.robots,
             };
             if let Err(m) = resolve_location(&env, location) {
-                cx.err(Code::E0016, self.text.span, m, None);
+                cx.err(Code::E0016, self.text.span, m.to_string(), None);
                 return None;
             }
         }
@@ -251,7 +251,7 @@ impl Names<'_> {
             cx.err(
                 Code::E0020,
                 self.text.span,
-                e,
+                e.to_string(),
                 Some("compare a volume with a quantity: \"tube.volume = 200 µL\"".into()),
             );
             return None;
@@ -307,7 +307,7 @@ impl Names<'_> {
         if placeholders(value).is_empty()
             && let Err(e) = predicates::quantity(value, &Default::default(), dim)
         {
-            cx.err(Code::E0020, self.text.span, e, None);
+            cx.err(Code::E0020, self.text.span, e.to_string(), None);
             return None;
         }
         let v = kind.tolerance("display").unwrap_or(1e-6);

@@ -128,7 +128,7 @@ fn check_overrides(cx: &mut Cx, overrides: &Overrides, used: &BTreeMap<String, D
                 ),
                 Some(format!("use one of: {}", dim.example_units())),
             ),
-            Err(e) => cx.err(Code::E0020, v.span, e, None),
+            Err(e) => cx.err(Code::E0020, v.span, e.to_string(), None),
         }
     }
 }

@@ -25,8 +25,8 @@ fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
     let robot = step.robot;
     let (lw, kind) = step.on(env)?;
     let to = step.text("to")?.to_string();
-    let (holder, slot, hkind) =
-        resolve_location(env, &to).map_err(|m| violation(Code::E0016, Some("to"), m))?;
+    let (holder, slot, hkind) = resolve_location(env, &to)
+        .map_err(|m| violation(Code::E0016, Some("to"), m.to_string()))?;
     let accepts = hkind.slots.map(|s| s.accepts).unwrap_or(&[]);
     if !accepts.contains(&kind.name) {
         return Err(Violation {

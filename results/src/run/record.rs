@@ -133,13 +133,18 @@ pub enum Wire {
     VlaEval,
 }
 
+/// A wire name that is none of [`Wire`]'s.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("unknown wire `{0}`; known: openpi, vla-eval")]
+pub struct UnknownWire(pub String);
+
 impl std::str::FromStr for Wire {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Wire, String> {
+    type Err = UnknownWire;
+    fn from_str(s: &str) -> Result<Wire, UnknownWire> {
         match s {
             "openpi" => Ok(Wire::Openpi),
             "vla-eval" => Ok(Wire::VlaEval),
-            other => Err(format!("unknown wire `{other}`; known: openpi, vla-eval")),
+            other => Err(UnknownWire(other.to_string())),
         }
     }
 }
@@ -403,5 +408,19 @@ impl RunRecord {
             .and_then(|_| self.journal.flush())
             .and_then(|_| self.journal.sync_data())
             .map_err(|e| RunError::io("append to", &self.path, e))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wires_parse_by_name() {
+        assert_eq!("vla-eval".parse::<Wire>(), Ok(Wire::VlaEval));
+        assert_eq!(
+            "grpc".parse::<Wire>().unwrap_err().to_string(),
+            "unknown wire `grpc`; known: openpi, vla-eval"
+        );
     }
 }

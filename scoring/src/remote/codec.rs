@@ -110,9 +110,52 @@ pub fn get<'v>(v: &'v Value, k: &str) -> Option<&'v Value> {
     })
 }
 
+/// Why a reply's actions are not a float matrix or vector.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum ActionsError {
+    /// The actions value's kind ([`kind_of`]).
+    #[error("the actions are {0}, not an array")]
+    NotAnArray(&'static str),
+    /// A component's kind ([`kind_of`]).
+    #[error("an action component is {0}, not a number")]
+    NotANumber(&'static str),
+    #[error("the array has no dtype")]
+    NoDtype,
+    #[error("the array has no binary data")]
+    NoData,
+    #[error("the array has no shape")]
+    NoShape,
+    #[error("the array's shape is not a list of sizes")]
+    BadShape,
+    #[error("the actions have dtype `{0}`, not a float or integer type")]
+    Dtype(String),
+    #[error("the array's data has {bytes} bytes, which is not shape {shape:?} of `{dtype}`")]
+    DataSize {
+        bytes: usize,
+        shape: Vec<usize>,
+        dtype: String,
+    },
+    #[error("the actions have shape {0:?}; expected (chunk, dim) or (dim,)")]
+    Shape(Vec<usize>),
+}
+
+/// Why bytes are not one msgpack value.
+#[derive(Debug, thiserror::Error)]
+pub enum DecodeError {
+    /// `len`: the bytes' length.
+    #[error("not msgpack ({len} bytes): {source}")]
+    NotMsgpack {
+        len: usize,
+        source: rmpv::decode::Error,
+    },
+    /// `rest` of the `len` bytes follow the first value.
+    #[error("not msgpack: {rest} of its {len} bytes follow the first value")]
+    Trailing { rest: usize, len: usize },
+}
+
 /// A float matrix (an action chunk) or vector (one action), from a numpy array in either dialect
 /// or nested msgpack arrays of numbers. Returns rows; a vector is one row.
-pub fn actions(v: &Value) -> Result<Vec<Vec<f64>>, String> {
+pub fn actions(v: &Value) -> Result<Vec<Vec<f64>>, ActionsError> {
     if get(v, "__ndarray__").is_some() {
         return ndarray_rows(v);
     }
@@ -122,36 +165,36 @@ pub fn actions(v: &Value) -> Result<Vec<Vec<f64>>, String> {
             .map(|r| number_list(r.as_array().expect("checked above")))
             .collect(),
         Value::Array(xs) => Ok(vec![number_list(xs)?]),
-        other => Err(format!("the actions are {}, not an array", kind_of(other))),
+        other => Err(ActionsError::NotAnArray(kind_of(other))),
     }
 }
 
-fn number_list(xs: &[Value]) -> Result<Vec<f64>, String> {
+fn number_list(xs: &[Value]) -> Result<Vec<f64>, ActionsError> {
     xs.iter()
         .map(|x| {
             x.as_f64()
                 .or_else(|| x.as_i64().map(|i| i as f64))
                 .or_else(|| x.as_u64().map(|u| u as f64))
-                .ok_or_else(|| format!("an action component is {}, not a number", kind_of(x)))
+                .ok_or_else(|| ActionsError::NotANumber(kind_of(x)))
         })
         .collect()
 }
 
-fn ndarray_rows(v: &Value) -> Result<Vec<Vec<f64>>, String> {
+fn ndarray_rows(v: &Value) -> Result<Vec<Vec<f64>>, ActionsError> {
     let dtype = get(v, "dtype")
         .and_then(|d| d.as_str())
-        .ok_or("the array has no dtype")?;
+        .ok_or(ActionsError::NoDtype)?;
     let data = match get(v, "data") {
         Some(Value::Binary(b)) => b.as_slice(),
-        _ => return Err("the array has no binary data".into()),
+        _ => return Err(ActionsError::NoData),
     };
     let shape: Vec<usize> = get(v, "shape")
         .and_then(|s| s.as_array())
-        .ok_or("the array has no shape")?
+        .ok_or(ActionsError::NoShape)?
         .iter()
         .map(|d| d.as_u64().map(|d| d as usize))
         .collect::<Option<_>>()
-        .ok_or("the array's shape is not a list of sizes")?;
+        .ok_or(ActionsError::BadShape)?;
     let (width, big, float) = match dtype.as_bytes() {
         [e @ (b'<' | b'>' | b'='), b'f', w @ (b'4' | b'8')] => {
             (usize::from(*w - b'0'), *e == b'>', true)
@@ -161,11 +204,7 @@ fn ndarray_rows(v: &Value) -> Result<Vec<Vec<f64>>, String> {
             b'i' | b'u',
             w @ (b'1' | b'2' | b'4' | b'8'),
         ] => (usize::from(*w - b'0'), *e == b'>', false),
-        _ => {
-            return Err(format!(
-                "the actions have dtype `{dtype}`, not a float or integer type"
-            ));
-        }
+        _ => return Err(ActionsError::Dtype(dtype.to_string())),
     };
     // A declared shape is untrusted: its product may overflow.
     let need = shape
@@ -173,10 +212,11 @@ fn ndarray_rows(v: &Value) -> Result<Vec<Vec<f64>>, String> {
         .try_fold(width, |n, &d| n.checked_mul(d))
         .filter(|&n| n == data.len());
     if need.is_none() {
-        return Err(format!(
-            "the array's data has {} bytes, which is not shape {shape:?} of `{dtype}`",
-            data.len()
-        ));
+        return Err(ActionsError::DataSize {
+            bytes: data.len(),
+            shape,
+            dtype: dtype.to_string(),
+        });
     }
     let signed = dtype.as_bytes()[1] == b'i';
     let values: Vec<f64> = data
@@ -207,9 +247,7 @@ fn ndarray_rows(v: &Value) -> Result<Vec<Vec<f64>>, String> {
             .take(*t)
             .map(<[f64]>::to_vec)
             .collect()),
-        other => Err(format!(
-            "the actions have shape {other:?}; expected (chunk, dim) or (dim,)"
-        )),
+        other => Err(ActionsError::Shape(other.to_vec())),
     }
 }
 
@@ -234,16 +272,19 @@ pub fn encode(v: &Value) -> Vec<u8> {
     out
 }
 
-pub fn decode(bytes: &[u8]) -> Result<Value, String> {
+pub fn decode(bytes: &[u8]) -> Result<Value, DecodeError> {
     let mut r = bytes;
-    let v = rmpv::decode::read_value_with_max_depth(&mut r, 64)
-        .map_err(|e| format!("not msgpack ({} bytes): {e}", bytes.len()))?;
+    let v = rmpv::decode::read_value_with_max_depth(&mut r, 64).map_err(|source| {
+        DecodeError::NotMsgpack {
+            len: bytes.len(),
+            source,
+        }
+    })?;
     if !r.is_empty() {
-        return Err(format!(
-            "not msgpack: {} of its {} bytes follow the first value",
-            r.len(),
-            bytes.len()
-        ));
+        return Err(DecodeError::Trailing {
+            rest: r.len(),
+            len: bytes.len(),
+        });
     }
     Ok(v)
 }
@@ -293,24 +334,41 @@ mod tests {
                 assert_eq!(actions(&back).unwrap(), vec![vec![0.5, -1.25, 3.0]]);
             }
         }
+        let why = |v: &Value| actions(v).unwrap_err().to_string();
         let bad = ndarray(Keys::Text, vec![0; 5], "<f4", &[2]);
-        assert!(actions(&bad).unwrap_err().contains("5 bytes"));
+        assert_eq!(
+            why(&bad),
+            "the array's data has 5 bytes, which is not shape [2] of `<f4`"
+        );
         let huge = ndarray(Keys::Text, vec![], "<f4", &[1 << 62, 1 << 4]);
-        assert!(actions(&huge).unwrap_err().contains("not shape"));
+        assert!(why(&huge).contains("not shape"));
         let odd = ndarray(Keys::Text, vec![0; 16], "<c8", &[2]);
-        assert!(actions(&odd).unwrap_err().contains("dtype `<c8`"));
+        assert_eq!(
+            why(&odd),
+            "the actions have dtype `<c8`, not a float or integer type"
+        );
+        let cube = ndarray(Keys::Text, vec![0; 4], "<f4", &[1, 1, 1]);
+        assert_eq!(
+            why(&cube),
+            "the actions have shape [1, 1, 1]; expected (chunk, dim) or (dim,)"
+        );
+        assert_eq!(why(&str("x")), "the actions are a string, not an array");
+        assert_eq!(
+            why(&Value::Array(vec![str("x")])),
+            "an action component is a string, not a number"
+        );
         let big = ndarray(Keys::Binary, 1.5f64.to_be_bytes().to_vec(), ">f8", &[1, 1]);
         assert_eq!(actions(&big).unwrap(), vec![vec![1.5]]);
         // Cut short (an array of two holding one value), and a value with bytes after it.
         assert!(
             decode(&[0x92, 0x01])
                 .unwrap_err()
-                .starts_with("not msgpack")
+                .to_string()
+                .starts_with("not msgpack (2 bytes): ")
         );
-        assert!(
-            decode(&[0x01, 0x02])
-                .unwrap_err()
-                .contains("follow the first value")
+        assert_eq!(
+            decode(&[0x01, 0x02]).unwrap_err().to_string(),
+            "not msgpack: 1 of its 2 bytes follow the first value"
         );
     }
 }

@@ -6,10 +6,10 @@
 //!
 //! It does not know any message format (see `openpi` and `vla_eval`).
 
+use policy::WireError;
 use std::io::{ErrorKind, Read, Write};
 use std::net::{SocketAddr, TcpStream, ToSocketAddrs};
 use std::time::{Duration, Instant};
-use policy::WireError;
 use tungstenite::{Message, WebSocket};
 
 /// A received frame.
@@ -28,6 +28,23 @@ pub struct Link {
     /// The first retry's wait; doubled for each further retry.
     pub backoff: Duration,
     socket: Option<WebSocket<Timed>>,
+}
+
+/// Why one connection attempt failed.
+#[derive(Debug, thiserror::Error)]
+enum OpenError {
+    #[error("cannot resolve {addr}: {source}")]
+    Resolve {
+        addr: String,
+        source: std::io::Error,
+    },
+    #[error("{addr} resolves to no address")]
+    NoAddress { addr: String },
+    /// The last address's TCP connection failed.
+    #[error(transparent)]
+    Tcp(std::io::Error),
+    #[error("websocket handshake failed: {0}")]
+    Handshake(Box<tungstenite::HandshakeError<tungstenite::ClientHandshake<Timed>>>),
 }
 
 /// The longest wait between connection attempts.
@@ -123,7 +140,7 @@ impl Link {
                     self.socket = Some(ws);
                     return Ok(true);
                 }
-                Err(e) => last = e,
+                Err(e) => last = e.to_string(),
             }
             if attempt < self.attempts {
                 std::thread::sleep(wait);
@@ -138,13 +155,18 @@ impl Link {
         })
     }
 
-    fn open_once(&self) -> Result<WebSocket<Timed>, String> {
+    fn open_once(&self) -> Result<WebSocket<Timed>, OpenError> {
         let addrs: Vec<SocketAddr> = self
             .addr
             .to_socket_addrs()
-            .map_err(|e| format!("cannot resolve {}: {e}", self.addr))?
+            .map_err(|source| OpenError::Resolve {
+                addr: self.addr.clone(),
+                source,
+            })?
             .collect();
-        let mut last = format!("{} resolves to no address", self.addr);
+        let mut last = OpenError::NoAddress {
+            addr: self.addr.clone(),
+        };
         for a in addrs {
             match TcpStream::connect_timeout(&a, self.timeout) {
                 Ok(stream) => {
@@ -158,10 +180,10 @@ impl Link {
                             ws.get_mut().deadline = None;
                             Ok(ws)
                         }
-                        Err(e) => Err(format!("websocket handshake failed: {e}")),
+                        Err(e) => Err(OpenError::Handshake(Box::new(e))),
                     };
                 }
-                Err(e) => last = e.to_string(),
+                Err(e) => last = OpenError::Tcp(e),
             }
         }
         Err(last)

@@ -22,11 +22,11 @@
 pub mod codec;
 pub mod link;
 
-use policy::{Needs, Observation, Policy, PolicyError};
-use results::profile::{ImageEncoding, Layout, LoadedProfile};
 use codec::Keys;
 pub use link::{Frame, Link};
 use policy::WireError;
+use policy::{Needs, Observation, Policy, PolicyError};
+use results::profile::{ImageEncoding, Layout, LoadedProfile};
 use rmpv::Value;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
@@ -120,7 +120,7 @@ impl Model {
     }
 
     fn take_metadata(&mut self, bytes: &[u8]) -> Result<(), WireError> {
-        let v = codec::decode(bytes).map_err(|e| self.malformed(e))?;
+        let v = codec::decode(bytes).map_err(|e| self.malformed(e.to_string()))?;
         self.metadata = Some(codec::to_json(&v));
         self.metadata_pending = false;
         Ok(())
@@ -180,7 +180,7 @@ impl Model {
                 Frame::Binary(b) => b,
                 Frame::Text(t) => return self.error_frame(t),
             };
-            let v = codec::decode(&bytes).map_err(|e| self.malformed(e))?;
+            let v = codec::decode(&bytes).map_err(|e| self.malformed(e.to_string()))?;
             let field = |k: &str| codec::get(&v, k).cloned();
             let (Some(kind), Some(payload), Some(echo)) =
                 (field("type"), field("payload"), field("seq"))
@@ -300,7 +300,7 @@ impl Model {
                 short(&codec::to_json(&reply).to_string())
             )));
         };
-        codec::actions(actions).map_err(PolicyError::BadActions)
+        codec::actions(actions).map_err(|e| PolicyError::BadActions(e.to_string()))
     }
 
     /// openpi: the observation out, its reply back (a metadata frame met on the way is kept),
@@ -323,7 +323,7 @@ impl Model {
                 Frame::Binary(b) => b,
                 Frame::Text(t) => return self.error_frame(t),
             };
-            let v = codec::decode(&bytes).map_err(|e| self.malformed(e))?;
+            let v = codec::decode(&bytes).map_err(|e| self.malformed(e.to_string()))?;
             let has_actions =
                 codec::get(&v, "actions").is_some() || codec::get(&v, "action").is_some();
             if !has_actions && self.metadata_pending {
