@@ -76,7 +76,7 @@ fn measure(task: &compiler::Task, dir: &Path) -> Result<()> {
 }
 
 /// 50 synthetic submissions of 16 tasks x 100 episodes, packed, then the site built from them.
-fn site_figure(dir: &Path, template: &results::EpisodeResult) -> Result<()> {
+fn site_figure(dir: &Path, template: &results::episode::EpisodeResult) -> Result<()> {
     let (subs, tasks, episodes) = (50, 16, 100);
     let bundles = dir.join("bundles");
     std::fs::create_dir_all(&bundles)?;

@@ -129,7 +129,7 @@ pub fn reenact(
     task: &compiler::Task,
     seed: u64,
     actions: &[Vec<f64>],
-) -> Result<leaderboard::verify::Reenacted, String> {
+) -> Result<leaderboard::verify::Reenacted, leaderboard::verify::ReenactError> {
     scoring::replay::reenact(task, seed, actions)
         .map(|r| leaderboard::verify::Reenacted {
             hash: r.hash,
@@ -140,7 +140,7 @@ pub fn reenact(
             unused_actions: r.unused_actions,
             refused: r.refused,
         })
-        .map_err(|e| e.to_string())
+        .map_err(|e| leaderboard::verify::ReenactError::new(task, seed, e))
 }
 
 /// Three frames (start, middle, end) of a recording's first camera at 224x224, drawn from its

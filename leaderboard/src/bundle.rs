@@ -70,6 +70,9 @@ pub enum BundleError {
     Limit(String),
     #[error("the archive member `{member}` is refused: {why}")]
     Member { member: String, why: String },
+    /// A member whose name is not a plain relative path ([`UnsafeName`]).
+    #[error("the archive member `{member}` is refused: {why}")]
+    Name { member: String, why: UnsafeName },
     #[error("the archive has no {INDEX}")]
     NoIndex,
     #[error("{INDEX} does not read: {0}")]
@@ -340,23 +343,36 @@ pub struct Unpacked {
     pub members: Vec<String>,
 }
 
+/// Why an archive member's name is not a plain relative path (the member it names is the
+/// context [`BundleError::Name`] gives).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum UnsafeName {
+    #[error("its name is not UTF-8")]
+    NotUtf8,
+    /// `..`, at the component it was found.
+    #[error("its path climbs out with `..`")]
+    ClimbsOut { at: usize },
+    #[error("its path is absolute")]
+    Absolute,
+    #[error("its name is empty")]
+    Empty,
+}
+
 /// A member's name as a safe relative path, or why it is not one.
-fn safe_name(raw: &[u8]) -> Result<PathBuf, String> {
-    let name = std::str::from_utf8(raw).map_err(|_| "its name is not UTF-8".to_string())?;
+fn safe_name(raw: &[u8]) -> Result<PathBuf, UnsafeName> {
+    let name = std::str::from_utf8(raw).map_err(|_| UnsafeName::NotUtf8)?;
     let path = Path::new(name);
     let mut clean = PathBuf::new();
-    for c in path.components() {
+    for (at, c) in path.components().enumerate() {
         match c {
             Component::Normal(part) => clean.push(part),
             Component::CurDir => {}
-            Component::ParentDir => return Err("its path climbs out with `..`".into()),
-            Component::RootDir | Component::Prefix(_) => {
-                return Err("its path is absolute".into());
-            }
+            Component::ParentDir => return Err(UnsafeName::ClimbsOut { at }),
+            Component::RootDir | Component::Prefix(_) => return Err(UnsafeName::Absolute),
         }
     }
     if clean.as_os_str().is_empty() {
-        return Err("its name is empty".into());
+        return Err(UnsafeName::Empty);
     }
     Ok(clean)
 }
@@ -415,7 +431,10 @@ pub fn unpack(bundle: &Path, work: &Path, limits: &Limits) -> Result<Unpacked, B
             member: shown.clone(),
             why,
         };
-        let name = safe_name(&raw).map_err(&refuse)?;
+        let name = safe_name(&raw).map_err(|why| BundleError::Name {
+            member: shown.clone(),
+            why,
+        })?;
         let kind = entry.header().entry_type();
         if kind.is_dir() {
             continue;
@@ -506,10 +525,15 @@ mod tests {
             Ok(PathBuf::from("runs/0/a.json"))
         );
         assert_eq!(safe_name(b"./index.json"), Ok(PathBuf::from("index.json")));
-        assert!(safe_name(b"../evil").unwrap_err().contains(".."));
-        assert!(safe_name(b"runs/../../evil").unwrap_err().contains(".."));
-        assert!(safe_name(b"/etc/passwd").unwrap_err().contains("absolute"));
-        assert!(safe_name(b"").unwrap_err().contains("empty"));
-        assert!(safe_name(b"\xff").unwrap_err().contains("UTF-8"));
+        let why = |raw: &[u8]| safe_name(raw).unwrap_err().to_string();
+        assert!(why(b"../evil").contains(".."));
+        assert!(why(b"runs/../../evil").contains(".."));
+        assert_eq!(
+            safe_name(b"runs/../../evil"),
+            Err(UnsafeName::ClimbsOut { at: 1 })
+        );
+        assert!(why(b"/etc/passwd").contains("absolute"));
+        assert!(why(b"").contains("empty"));
+        assert!(why(b"\xff").contains("UTF-8"));
     }
 }

@@ -3,9 +3,13 @@
 //! `autobio eval` and `autobio results merge` print ([`table`]); submission bundles packed from
 //! suite runs and unpacked from strangers' files under limits ([`bundle`]); and their offline
 //! verification ([`verify`]), which re-enacts every episode from its seed and actions through a
-//! simulator the caller hands in; and the online audit's statistics ([`audit`]).
+//! simulator the caller hands in; the online audit's statistics ([`audit`]); and the static site
+//! built from a folder of bundles ([`site`]).
 //!
 //! It links no simulator: it reads what runs wrote, through `results`, and runs nothing itself.
+//!
+//! Its tests are beside the code and in the workspace's tests/leaderboard.rs and
+//! tests/site_browser.rs.
 
 pub mod audit;
 pub mod bundle;

@@ -34,7 +34,37 @@ pub struct Reenacted {
 }
 
 /// Re-enacts an episode of the (shipped) task from its seed and actions, in a simulator.
-pub type Reenact<'a> = dyn Fn(&Task, u64, &[Vec<f64>]) -> Result<Reenacted, String> + Sync + 'a;
+pub type Reenact<'a> =
+    dyn Fn(&Task, u64, &[Vec<f64>]) -> Result<Reenacted, ReenactError> + Sync + 'a;
+
+/// Why the caller's simulator could not re-enact an episode ([`Reenact`]'s error): the task and
+/// seed it was asked to re-enact, and what the simulator said. Verification names the episode
+/// itself and reports `why` ("... cannot be re-enacted: {why}").
+#[derive(Debug, thiserror::Error)]
+// The simulator's error is part of the message and not a `source`: a chain of causes prints it
+// once.
+#[error("{task} seed {seed} cannot be re-enacted: {why}")]
+pub struct ReenactError {
+    /// The task's id.
+    pub task: String,
+    pub seed: u64,
+    pub why: Box<dyn std::error::Error + Send + Sync>,
+}
+
+impl ReenactError {
+    /// The simulator's error `why` in re-enacting `task` from `seed`.
+    pub fn new(
+        task: &Task,
+        seed: u64,
+        why: impl Into<Box<dyn std::error::Error + Send + Sync>>,
+    ) -> ReenactError {
+        ReenactError {
+            task: task.id.clone(),
+            seed,
+            why: why.into(),
+        }
+    }
+}
 
 #[derive(Clone, Debug)]
 pub struct VerifyOptions {
@@ -71,31 +101,11 @@ struct Claim {
 
 /// Verifies an unpacked bundle (see the module doc).
 pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Verification {
-    let mut v = Verification::default();
+    let mut v = Verification {
+        failures: check_members(bundle),
+        ..Verification::default()
+    };
     let root = &bundle.root;
-    // Members against the index.
-    let members: std::collections::BTreeSet<&String> = bundle.members.iter().collect();
-    for member in &bundle.members {
-        if member == INDEX {
-            continue;
-        }
-        match bundle.index.files.get(member) {
-            None => v.failures.push(format!("{member} is not in the index")),
-            Some(want) => match file_sha256(&root.join(member)) {
-                Ok(got) if got == *want => {}
-                Ok(_) => v
-                    .failures
-                    .push(format!("{member}: its SHA-256 is not the index's")),
-                Err(e) => v.failures.push(format!("{member}: {e}")),
-            },
-        }
-    }
-    for listed in bundle.index.files.keys() {
-        if !members.contains(listed) {
-            v.failures
-                .push(format!("{listed} is in the index but not in the archive"));
-        }
-    }
     // The suite: a shipped one, byte for byte, found by its hash among the shipped files (the
     // bundle's name for it is never made into a path).
     let name = &bundle.index.suite.name;
@@ -164,45 +174,15 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
             manifests += 1;
             match results::run::record::Manifest::read(&manifest_path) {
                 Ok(m) => {
-                    if m.task_id != task.id || m.level != task.level {
-                        v.failures.push(format!(
-                            "{}: task `{}` at level {}; the shipped task is `{}` at level {}",
-                            rel(root, &manifest_path),
-                            m.task_id,
-                            m.level,
-                            task.id,
-                            task.level
-                        ));
-                    }
-                    if m.autobio_version != bundle.index.autobio_version
-                        || m.model.as_ref().map(|x| &x.profile_sha256)
-                            != bundle.index.model.profile_sha256.as_ref()
-                    {
-                        v.failures.push(format!(
-                            "{}: its autobio version or model profile is not the index's",
-                            rel(root, &manifest_path)
-                        ));
-                    }
-                    if m.task_content_sha256.as_deref() != Some(content.as_str()) {
-                        v.failures.push(format!(
-                            "{}: the results are for a modified task (its compiled content \
-                             differs from the shipped {})",
-                            rel(root, &manifest_path),
-                            protocol.display()
-                        ));
-                    }
-                    if (m.seed, m.episodes, m.runs) != (suite.seed, suite.episodes, suite.runs) {
-                        v.failures.push(format!(
-                            "{}: seed {}, {} episodes x {} runs; the suite says seed {}, {} x {}",
-                            rel(root, &manifest_path),
-                            m.seed,
-                            m.episodes,
-                            m.runs,
-                            suite.seed,
-                            suite.episodes,
-                            suite.runs
-                        ));
-                    }
+                    let shown = rel(root, &manifest_path);
+                    let want = Shipped {
+                        task: &task,
+                        content: &content,
+                        protocol: &protocol,
+                        suite,
+                    };
+                    v.failures
+                        .extend(check_manifest(&m, &shown, &want, &bundle.index));
                 }
                 Err(e) => v
                     .failures
@@ -236,60 +216,166 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
                 task.id
             ));
         }
-        for key in &planned {
-            match seen.get(key) {
-                None => v.failures.push(format!(
-                    "{}: seed {} (run {}) is missing",
-                    task.id, key.1, key.0
-                )),
-                Some(&n) if n > 1 => v.failures.push(format!(
-                    "{}: seed {} (run {}) is in the journals {n} times",
-                    task.id, key.1, key.0
-                )),
-                Some(_) => {}
-            }
-        }
-        for (run, seed) in seen.keys() {
-            if !planned_set.contains(&(*run, *seed)) {
-                v.failures.push(format!(
-                    "{}: seed {seed} (run {run}) is not one the suite plans",
-                    task.id
-                ));
-            }
-        }
+        v.failures
+            .extend(check_seeds(&task.id, &planned, &planned_set, &seen));
         v.tasks += 1;
         tasks.push(task);
     }
     // Nothing else may ride along: every member is the index, or a run folder's suite file, or
     // a suite task's manifest, journal, results or recording (what the site and an audit read
     // is exactly what was checked here).
+    v.failures.extend(check_extras(bundle, &tasks, &run_dirs));
+    v.episodes = claims.len();
+    // Every claimed episode re-enacted from its seed and recorded actions.
+    let start = std::time::Instant::now();
+    let found = reenact_claims(&claims, &tasks, root, reenact, opts.workers);
+    v.reenacted = found.len();
+    v.reenact_wall_s = start.elapsed().as_secs_f64();
+    v.failures.extend(found.into_iter().flatten());
+    v
+}
+
+/// The archive's members against the index: each listed, with the index's SHA-256, and each
+/// listed file present.
+fn check_members(bundle: &Unpacked) -> Vec<String> {
+    let mut failures = Vec::new();
+    let members: std::collections::BTreeSet<&String> = bundle.members.iter().collect();
+    for member in &bundle.members {
+        if member == INDEX {
+            continue;
+        }
+        match bundle.index.files.get(member) {
+            None => failures.push(format!("{member} is not in the index")),
+            Some(want) => match file_sha256(&bundle.root.join(member)) {
+                Ok(got) if got == *want => {}
+                Ok(_) => failures.push(format!("{member}: its SHA-256 is not the index's")),
+                Err(e) => failures.push(format!("{member}: {e}")),
+            },
+        }
+    }
+    for listed in bundle.index.files.keys() {
+        if !members.contains(listed) {
+            failures.push(format!("{listed} is in the index but not in the archive"));
+        }
+    }
+    failures
+}
+
+/// The journals' seeds of a task (`seen`: how many times each) against the suite's plan: each
+/// planned seed once, and no other.
+fn check_seeds(
+    task: &str,
+    planned: &[(u32, u64)],
+    planned_set: &std::collections::BTreeSet<(u32, u64)>,
+    seen: &BTreeMap<(u32, u64), usize>,
+) -> Vec<String> {
+    let mut failures = Vec::new();
+    for key in planned {
+        match seen.get(key) {
+            None => failures.push(format!("{task}: seed {} (run {}) is missing", key.1, key.0)),
+            Some(&n) if n > 1 => failures.push(format!(
+                "{task}: seed {} (run {}) is in the journals {n} times",
+                key.1, key.0
+            )),
+            Some(_) => {}
+        }
+    }
+    for (run, seed) in seen.keys() {
+        if !planned_set.contains(&(*run, *seed)) {
+            failures.push(format!(
+                "{task}: seed {seed} (run {run}) is not one the suite plans"
+            ));
+        }
+    }
+    failures
+}
+
+/// Members that are not a suite run's files, and journals without their manifest.
+fn check_extras(bundle: &Unpacked, tasks: &[Task], run_dirs: &[PathBuf]) -> Vec<String> {
+    let mut failures = Vec::new();
     let ids: Vec<&str> = tasks.iter().map(|t| t.id.as_str()).collect();
     for member in &bundle.members {
         if member != INDEX && !is_run_file(member, &ids) {
-            v.failures.push(format!(
+            failures.push(format!(
                 "{member} is not a file of a suite run (runs/<k>/ with {SUITE_FILE} and each suite \
                  task's manifest, journal, results and recordings)"
             ));
         }
     }
-    for dir in &run_dirs {
+    for dir in run_dirs {
         for id in &ids {
             let journal = results::run::journal_path(dir, id);
             if journal.exists() && !results::run::manifest_path(dir, id).exists() {
-                v.failures.push(format!(
+                failures.push(format!(
                     "{}: a journal without its manifest",
-                    rel(root, &journal)
+                    rel(&bundle.root, &journal)
                 ));
             }
         }
     }
-    v.episodes = claims.len();
-    // Every claimed episode re-enacted from its seed and recorded actions.
-    let start = std::time::Instant::now();
+    failures
+}
+
+/// A shipped task as a run's manifest must match it.
+struct Shipped<'a> {
+    task: &'a Task,
+    /// [`task_content_sha256`] of the task.
+    content: &'a str,
+    protocol: &'a Path,
+    suite: &'a results::suite::Suite,
+}
+
+/// A run's manifest (shown as `shown`) against the shipped task, its suite and the index.
+fn check_manifest(
+    m: &results::run::record::Manifest,
+    shown: &str,
+    want: &Shipped,
+    index: &crate::bundle::Index,
+) -> Vec<String> {
+    let (task, suite) = (want.task, want.suite);
+    let mut failures = Vec::new();
+    if m.task_id != task.id || m.level != task.level {
+        failures.push(format!(
+            "{shown}: task `{}` at level {}; the shipped task is `{}` at level {}",
+            m.task_id, m.level, task.id, task.level
+        ));
+    }
+    if m.autobio_version != index.autobio_version
+        || m.model.as_ref().map(|x| &x.profile_sha256) != index.model.profile_sha256.as_ref()
+    {
+        failures.push(format!(
+            "{shown}: its autobio version or model profile is not the index's"
+        ));
+    }
+    if m.task_content_sha256.as_deref() != Some(want.content) {
+        failures.push(format!(
+            "{shown}: the results are for a modified task (its compiled content \
+             differs from the shipped {})",
+            want.protocol.display()
+        ));
+    }
+    if (m.seed, m.episodes, m.runs) != (suite.seed, suite.episodes, suite.runs) {
+        failures.push(format!(
+            "{shown}: seed {}, {} episodes x {} runs; the suite says seed {}, {} x {}",
+            m.seed, m.episodes, m.runs, suite.seed, suite.episodes, suite.runs
+        ));
+    }
+    failures
+}
+
+/// Re-enacts every claim on `workers` threads; what differs from each claim, in the claims'
+/// order.
+fn reenact_claims(
+    claims: &[Claim],
+    tasks: &[Task],
+    root: &Path,
+    reenact: &Reenact,
+    workers: usize,
+) -> Vec<Option<String>> {
     let next = std::sync::atomic::AtomicUsize::new(0);
     let found = std::sync::Mutex::new(Vec::new());
     std::thread::scope(|s| {
-        for _ in 0..opts.workers.max(1) {
+        for _ in 0..workers.max(1) {
             s.spawn(|| {
                 loop {
                     let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
@@ -302,11 +388,7 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
     });
     let mut found = found.into_inner().unwrap();
     found.sort_by_key(|(k, _)| *k);
-    v.reenacted = found.len();
-    v.reenact_wall_s = start.elapsed().as_secs_f64();
-    v.failures
-        .extend(found.into_iter().filter_map(|(_, problem)| problem));
-    v
+    found.into_iter().map(|(_, problem)| problem).collect()
 }
 
 /// The shipped suite whose file has this SHA-256, if one has.
@@ -421,7 +503,7 @@ fn check_claim(task: &Task, c: &Claim, root: &Path, reenact: &Reenact) -> Option
     }
     let got = match reenact(task, e.seed, &actions) {
         Ok(g) => g,
-        Err(why) => return Some(format!("{what}: cannot be re-enacted: {why}")),
+        Err(e) => return Some(format!("{what}: cannot be re-enacted: {}", e.why)),
     };
     let ended_by_error = e.error.is_some();
     // What the harness recorded for this episode: the judge's verdict, or, for an episode that

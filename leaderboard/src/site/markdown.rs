@@ -1,0 +1,70 @@
+//! The site's Markdown renderer: the exports of its tables, `ranking.md` (a table per group of
+//! comparable conditions) and `tasks/<slug>.md` (a task's rows), cells made safe for a table.
+//!
+//! It turns the view model ([`super::model`]) into text; it computes no figure, writes no file,
+//! and renders only the ranking and task tables (charts, paired comparisons, the paper's
+//! reference and submission pages are the HTML's and the JSON exports').
+
+use super::model::{Site, TaskPage};
+use super::{across_cell, level_cell};
+use std::fmt::Write as _;
+
+/// `ranking.md`.
+pub(super) fn ranking(site: &Site) -> String {
+    let mut md = String::from("# autobio leaderboard\n");
+    for g in &site.groups {
+        let _ = write!(
+            md,
+            "\n## {}\n\n| # | model | training | standing | success % | ± SEM | easy | medium | hard | mean score |\n|---|---|---|---|---|---|---|---|---|---|\n",
+            md_cell(&g.name)
+        );
+        for r in &g.rows {
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {} | {:.1} | {:.1} | {} | {} | {} | {:.3} |",
+                r.rank,
+                md_cell(&r.model),
+                md_cell(&r.training),
+                r.standing,
+                r.success,
+                r.sem,
+                level_cell(r, "easy"),
+                level_cell(r, "medium"),
+                level_cell(r, "hard"),
+                r.mean_score
+            );
+        }
+    }
+    md
+}
+
+/// `tasks/<slug>.md`.
+pub(super) fn task(p: &TaskPage) -> String {
+    let mut md = format!(
+        "# {}\n\n| model | group | standing | success % | Wilson 95% | mean score | runs: mean ± SEM |\n|---|---|---|---|---|---|---|\n",
+        p.id
+    );
+    for r in &p.rows {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {:.1} | [{:.1}, {:.1}] | {:.3} | {} |",
+            md_cell(&r.model),
+            md_cell(&r.group),
+            r.standing,
+            r.success,
+            r.wilson[0],
+            r.wilson[1],
+            r.mean_score,
+            across_cell(r.across_runs)
+        );
+    }
+    md
+}
+
+/// Text for a Markdown table cell: no cell breaks, no line breaks, no raw HTML.
+fn md_cell(s: &str) -> String {
+    s.replace('|', "\\|")
+        .replace(['\n', '\r'], " ")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
