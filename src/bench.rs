@@ -673,7 +673,7 @@ fn model_in_the_loop(task: &compiler::Task) -> Result<()> {
             episodes: n,
             model: Some(scoring::eval::ModelSpec {
                 url,
-                wire: results::run::Wire::Openpi,
+                wire: results::run::record::Wire::Openpi,
                 profile,
                 attempts: 4,
                 backoff_s: 0.25,

@@ -33,7 +33,7 @@ pub fn describe(front: &Front, a: &DescribeArgs) -> Result<ExitCode> {
         .as_ref()
         .context("a protocol or chain file is needed")?;
     let task = front.load(file)?;
-    out!("{}", compiler::describe(&task));
+    out!("{}", compiler::describe::describe(&task));
     out!("{}", reach_margins(&task));
     if let Some(seed) = a.seed {
         out!("{}", compiler::describe::example(&task, seed));

@@ -50,7 +50,7 @@ pub struct EvalArgs {
     model: Option<String>,
     /// The protocol the model server speaks: `openpi` or `vla-eval`
     #[arg(long, default_value = "openpi", requires = "model")]
-    wire: results::run::Wire,
+    wire: results::run::record::Wire,
     /// How observations and actions map onto the model: `pi0`, `rdt` or a profile file
     #[arg(long, default_value = "pi0", requires = "model")]
     profile: String,
@@ -173,7 +173,7 @@ pub fn eval(front: &Front, a: &EvalArgs) -> Result<ExitCode> {
 
 /// Says which stages' time limits the expert's run found tight (`scoring::stage_time`): an author
 /// validating a protocol or chain with the expert learns it before a model is held to them.
-fn warn_tight_stages(task: &compiler::Task, episodes: &[results::EpisodeResult]) {
+fn warn_tight_stages(task: &compiler::Task, episodes: &[results::episode::EpisodeResult]) {
     for t in scoring::stage_time::tight_stages(task, episodes) {
         let ran_out = match t.ran_out {
             0 => String::new(),

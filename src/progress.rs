@@ -142,7 +142,7 @@ impl ProgressView {
 
 /// `: \`tube in target.B3\` failed (height 31.0 mm, within 5.0 mm)`: each check that did not
 /// hold at the end, with the parts that failed and by how much, in the author's units.
-fn failed_checks(v: &results::Verdict) -> String {
+fn failed_checks(v: &results::verdict::Verdict) -> String {
     let failed: Vec<String> = v
         .predicates()
         .iter()

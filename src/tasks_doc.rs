@@ -422,7 +422,7 @@ fn render(opts: &Options, rows: &[Row], not_run: &[(String, String)]) -> String 
                 .summary
                 .outcomes
                 .iter()
-                .filter(|(o, _)| **o != results::Outcome::Success)
+                .filter(|(o, _)| **o != results::episode::Outcome::Success)
                 .map(|(o, n)| {
                     let name = serde_json::to_value(o).unwrap_or_default();
                     format!("{} {n}", name.as_str().unwrap_or("?"))

@@ -130,7 +130,7 @@ fn run_stopped(
     t: &compiler::Task,
     seed: u64,
     stop: fn(f64, bool) -> bool,
-) -> results::EpisodeResult {
+) -> results::episode::EpisodeResult {
     let tube = t.labware_index("tube").unwrap();
     let model = t.labware[tube].params.clone();
     run_with(t, seed, &Default::default(), |t, s, i| {

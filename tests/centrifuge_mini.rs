@@ -6,8 +6,8 @@
 use crate::common;
 
 use common::{compile, compile_edited, run, scene, spread};
-use runtime::render::Cameras;
 use results::verdict::Judge;
+use runtime::render::Cameras;
 
 const CLOSE: &str = "protocols/centrifuge_mini/close_lid.toml";
 const OPEN: &str = "protocols/centrifuge_mini/open_lid.toml";
@@ -70,7 +70,7 @@ fn the_closed_check_needs_the_lid_shut() {
     });
     let r = run(&task, 21, "expert");
     assert!(!r.success);
-    assert_eq!(r.outcome, results::Outcome::TimeLimit);
+    assert_eq!(r.outcome, results::episode::Outcome::TimeLimit);
     let p = &r.verdict.predicates()[0];
     assert!((p.value - p.target).abs() > 0.1, "{p:?}");
 }

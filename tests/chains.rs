@@ -3,8 +3,8 @@
 //! time at the offending step, progress scoring gives partial credit, and `describe` / `explain`
 //! / `check --json` work as processes.
 
-use scoring::episode::{EpisodeOptions, run_episode};
 use expert::ExpertPolicy;
+use scoring::episode::{EpisodeOptions, run_episode};
 use std::path::Path;
 use std::process::Command;
 use std::sync::Arc;
@@ -15,7 +15,7 @@ fn compile(path: &str) -> compiler::Task {
     task.unwrap_or_else(|| panic!("{path}: {diags:#?}"))
 }
 
-fn expert(task: &compiler::Task, seed: u64) -> results::EpisodeResult {
+fn expert(task: &compiler::Task, seed: u64) -> results::episode::EpisodeResult {
     let instance = task.sample(seed);
     let scene = Arc::new(runtime::Scene::build(task, &instance).unwrap());
     let mut policy = ExpertPolicy::new(task, &scene, &instance).unwrap();

@@ -60,7 +60,7 @@ fn near_measures_the_distance_from_the_live_pose() {
         scoring::policies::make("expert", t, s, i).unwrap()
     });
     assert!(r.success, "{:?}", r.error);
-    let rec = runtime::record::read_recording(&path).unwrap();
+    let rec = results::recording::read_recording(&path).unwrap();
     let tube = recorded.labware_index("tube").unwrap();
     let start = rec.labware_series[0].1[tube].pose.translation.vector;
     let end = rec.final_labware[tube].pose.translation.vector;

@@ -7,10 +7,10 @@
 
 use crate::common;
 
-use scoring::policies::HoldPolicy;
 use policy::Observation;
 use policy::Policy;
 use policy::PolicyError;
+use scoring::policies::HoldPolicy;
 
 fn task() -> compiler::Task {
     common::compile("protocols/thermal_cycler/close_lid.toml")
@@ -36,13 +36,13 @@ impl<F: FnMut(&Observation) -> Result<Vec<Vec<f64>>, PolicyError>> Policy for Fa
     }
 }
 
-fn run(policy: impl Policy + 'static) -> results::EpisodeResult {
+fn run(policy: impl Policy + 'static) -> results::episode::EpisodeResult {
     common::run_with(&task(), 0, &Default::default(), |_, _, _| Box::new(policy))
 }
 
-fn assert_failed_at(r: &results::EpisodeResult, steps: u64, reason: &str) {
+fn assert_failed_at(r: &results::episode::EpisodeResult, steps: u64, reason: &str) {
     assert!(!r.success && !r.verdict.success, "{r:?}");
-    assert_eq!(r.outcome, results::Outcome::PolicyError, "{r:?}");
+    assert_eq!(r.outcome, results::episode::Outcome::PolicyError, "{r:?}");
     assert_eq!(r.control_steps, steps, "ended at the failing step");
     let error = r.error.as_deref().expect("a reason");
     assert!(error.contains(reason), "{error}");
@@ -104,7 +104,7 @@ fn an_unstable_simulation_ends_the_step_with_its_reason() {
     ep.data.qvel_mut()[0] = f64::NAN;
     let err = ep.control_step().unwrap_err();
     assert!(
-        matches!(err, runtime::episode::StepError::Unstable { .. }),
+        matches!(err, runtime::StepError::Unstable { .. }),
         "{err:?}"
     );
     assert!(
@@ -135,7 +135,8 @@ fn the_journal_has_each_episode_before_the_next_starts() {
         let text = std::fs::read_to_string(&journal).unwrap();
         let lines: Vec<&str> = text.lines().collect();
         assert_eq!(lines.len(), seen.len() + 1);
-        let last: results::EpisodeResult = serde_json::from_str(lines[lines.len() - 1]).unwrap();
+        let last: results::episode::EpisodeResult =
+            serde_json::from_str(lines[lines.len() - 1]).unwrap();
         assert_eq!(&last, e);
         seen.push(e.seed);
     })
@@ -183,7 +184,7 @@ fn an_unstable_simulation_is_an_unstable_episode_in_the_results() {
     let report = scoring::eval::evaluate(&t, &opts, |_| {}).unwrap();
     assert_eq!(report.episodes.len(), 2);
     for e in &report.episodes {
-        assert_eq!(e.outcome, results::Outcome::Unstable, "{e:?}");
+        assert_eq!(e.outcome, results::episode::Outcome::Unstable, "{e:?}");
         assert!(!e.success && e.verdict.score == 0.0);
         let error = e.error.as_deref().unwrap();
         assert!(

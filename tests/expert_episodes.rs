@@ -2,10 +2,10 @@
 //! protocols, the same seed reproduces the same trajectory bit for bit, an episode that leaves the
 //! lid open fails, and a recording re-scores offline to the same verdict.
 
-use scoring::episode::{EpisodeOptions, run_episode};
 use expert::ExpertPolicy;
-use scoring::policies::HoldPolicy;
 use results::verdict::Judge;
+use scoring::episode::{EpisodeOptions, run_episode};
+use scoring::policies::HoldPolicy;
 use std::path::Path;
 use std::sync::Arc;
 
@@ -22,7 +22,7 @@ fn expert_episode(
     task: &compiler::Task,
     seed: u64,
     opts: &EpisodeOptions,
-) -> results::EpisodeResult {
+) -> results::episode::EpisodeResult {
     let instance = task.sample(seed);
     let scene = Arc::new(runtime::Scene::build(task, &instance).unwrap());
     let mut expert = ExpertPolicy::new(task, &scene, &instance).unwrap();
@@ -101,7 +101,7 @@ fn recording_rescores_offline_to_the_same_verdict() {
         },
     );
     assert!(r.success);
-    let rec = runtime::record::read_recording(&path).unwrap();
+    let rec = results::recording::read_recording(&path).unwrap();
     assert_eq!(rec.topics["/task"], 1);
     assert_eq!(rec.topics["/robot/arm/joint_state"], r.control_steps);
     assert_eq!(rec.topics["/robot/arm/action"], r.control_steps);

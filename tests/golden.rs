@@ -35,7 +35,7 @@ fn outputs(path: &Path) -> Vec<(&'static str, String)> {
             "task.json",
             serde_json::to_string_pretty(&task).unwrap() + "\n",
         ),
-        ("sheet.txt", compiler::describe(&task)),
+        ("sheet.txt", compiler::describe::describe(&task)),
         // What the first seeds draw: changing the draw order or the generator fails here.
         (
             "draws.jsonl",

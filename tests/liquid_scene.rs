@@ -7,7 +7,7 @@
 
 use mujoco_rs::prelude::*;
 use physics::liquid::{Container, Liquid, Nanolitres, V3};
-use runtime::record::{LiquidFrame, RecordError, Recorder, read_recording};
+use results::recording::{LiquidFrame, RecordError, Recorder, read_recording};
 
 const R: f64 = physics::scenes::TUBE.0;
 const H: f64 = physics::scenes::TUBE.1;

@@ -30,7 +30,7 @@ impl Policy for Chunked {
         }
     }
     fn act(&mut self, obs: &Observation) -> Result<Vec<Vec<f64>>, PolicyError> {
-        let frames = |imgs: &[runtime::render::Image]| imgs.iter().map(|i| i.rgb.clone()).collect();
+        let frames = |imgs: &[results::Image]| imgs.iter().map(|i| i.rgb.clone()).collect();
         self.seen.push((frames(obs.images), frames(obs.previous)));
         if self.buffer.is_empty() {
             self.buffer = self.inner.act(obs)?;
@@ -63,7 +63,8 @@ fn queries(chunk: usize, history: u32) -> Vec<Frames> {
         history,
         seen: Vec::new(),
     };
-    let r = scoring::episode::run_episode(&task, &scene, &instance, &mut p, &Default::default()).unwrap();
+    let r = scoring::episode::run_episode(&task, &scene, &instance, &mut p, &Default::default())
+        .unwrap();
     assert!(r.success, "{r:?}");
     p.seen
 }

@@ -8,8 +8,8 @@
 use crate::common;
 
 use robots::Detail;
+use runtime::Owner;
 use runtime::render::Cameras;
-use runtime::scene::Owner;
 use std::collections::HashMap;
 use std::sync::Arc;
 

@@ -426,7 +426,7 @@ fn the_expert_transfers_the_set_volume_and_every_step_conserves_it() {
     assert!(r.success, "{:?} {:#?}", r.error, r.verdict);
     let arrived = common::predicate(&r, &format!("target.volume = {volume} µL"));
     assert!((arrived.value - volume).abs() <= 1.0, "{arrived:?}");
-    let rec = runtime::record::read_recording(&path).unwrap();
+    let rec = results::recording::read_recording(&path).unwrap();
     let at = |name: &str| task.labware_index(name).unwrap();
     let held = |s: &[labware::LabwareState], item: &str, key: &str| {
         Nanolitres::from_microlitres(s[at(item)].logic.get(key).copied().unwrap_or(0.0)).0
@@ -485,7 +485,7 @@ fn the_expert_transfers_the_set_volume_and_every_step_conserves_it() {
         scoring::policies::make("expert", t, s, i).unwrap()
     });
     assert!(r.error.is_none(), "{:?}", r.error);
-    let rec = runtime::record::read_recording(&path).unwrap();
+    let rec = results::recording::read_recording(&path).unwrap();
     let v = results::verdict::Judge::replay(&task, &params, &rec.labware_series);
     assert!(!v.success);
     let p = v

@@ -8,15 +8,15 @@ use crate::common;
 
 use common::{compile, run_with, scene};
 use labware::frame::{axis_angle, pose, translation};
-use primitives::Kinematics;
-use primitives::ik::solve_ik;
-use runtime::clearance::{Clearance, KEEP};
-use runtime::kinematics::ArmKinematics;
-use runtime::scene::Owner;
 use policy::Observation;
 use policy::Policy;
 use policy::PolicyError;
 use policy::StageEvent;
+use primitives::Kinematics;
+use primitives::ik::solve_ik;
+use runtime::Owner;
+use runtime::clearance::{Clearance, KEEP};
+use runtime::kinematics::ArmKinematics;
 use std::sync::{Arc, Mutex};
 
 const ROTOR: &str = "protocols/centrifuge/insert_symmetric.toml";

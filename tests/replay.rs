@@ -6,8 +6,8 @@
 //! state is caught; redrawing the cameras from the recorded state gives the recorded frames byte
 //! for byte; and mcap's own protobuf decoder reads the binary channels.
 
-use runtime::record::{RecordError, Recorder, proto, read_recording};
 use crate::common;
+use results::recording::{RecordError, Recorder, proto, read_recording};
 
 use common::{compile, compile_edited, spread};
 use results::verdict::Judge;
@@ -25,7 +25,11 @@ fn record_and_replay(
     expert: bool,
     image_every: u32,
     name: &str,
-) -> (results::EpisodeResult, results::verdict::Verdict, PathBuf) {
+) -> (
+    results::episode::EpisodeResult,
+    results::verdict::Verdict,
+    PathBuf,
+) {
     let path = temp(name);
     let opts = EpisodeOptions {
         record: Some(path.clone()),
@@ -54,7 +58,7 @@ fn frames(path: &PathBuf, topic: &str) -> Vec<Vec<u8>> {
         .map(|m| {
             assert_eq!(m.channel.message_encoding, "protobuf");
             let png = proto::image_data(&m.data).expect("a CompressedImage");
-            let img = runtime::render::Image::from_png("", png).unwrap();
+            let img = results::Image::from_png("", png).unwrap();
             assert_eq!((img.width, img.height), (224, 224));
             img.rgb
         })
@@ -74,7 +78,7 @@ fn a_chain_replays_stage_by_stage_and_its_images_show_the_motion() {
     let task = compile("protocols/thermal_cycler/close_then_open.toml");
     let (live, replayed, path) = record_and_replay(&task, 2, true, 10, "chain.mcap");
     assert!(live.success, "{:?}", live.error);
-    assert_eq!(live.outcome, results::Outcome::Success);
+    assert_eq!(live.outcome, results::episode::Outcome::Success);
     assert_eq!(replayed, live.verdict);
     assert_eq!(replayed.stages.len(), 2);
     // Scored apart from success: both stages count.
@@ -123,7 +127,7 @@ fn a_timed_out_episode_replays_to_its_failure() {
     task.stages[0].time_limit_s = 1.0;
     let (live, replayed, _) = record_and_replay(&task, 8, false, 0, "timeout.mcap");
     assert!(!live.success && live.error.is_none());
-    assert_eq!(live.outcome, results::Outcome::TimeLimit);
+    assert_eq!(live.outcome, results::episode::Outcome::TimeLimit);
     assert!((live.sim_time_s - 1.0).abs() < 0.05);
     assert_eq!(replayed, live.verdict);
 }
@@ -189,7 +193,7 @@ fn tampered(path: &std::path::Path, step: usize, name: &str) -> PathBuf {
     let out = temp(name);
     let mut w = Recorder::create(&out).unwrap();
     let mut k = 0;
-    runtime::record::for_each_message(path, |m| {
+    results::recording::for_each_message(path, |m| {
         if m.channel.topic != "/physics/state" {
             return w.pass(m);
         }
@@ -284,7 +288,7 @@ fn a_recording_resimulates_from_its_state_and_redraws_its_frames_exactly() {
         "{out}"
     );
     let first = std::fs::read(pngs.join("arm_wrist_00000.png")).unwrap();
-    let img = runtime::render::Image::from_png("wrist", &first).unwrap();
+    let img = results::Image::from_png("wrist", &first).unwrap();
     assert_eq!((img.width, img.height), (320, 240));
     assert!(spread(&img.rgb) > 10.0);
     let (code, out) = replay(&[p, "--render", "--size", "7x7"]);

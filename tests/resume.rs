@@ -60,7 +60,7 @@ fn a_run_resumes_only_with_matching_fingerprints_and_never_reruns_an_episode() {
     let task = common::compile(CLOSE);
     let dir = scratch("resume");
     scoring::eval::evaluate(&task, &opts(&dir, "hold", 2, false), |_| {}).unwrap();
-    let manifest: results::run::Manifest = serde_json::from_str(
+    let manifest: results::run::record::Manifest = serde_json::from_str(
         &std::fs::read_to_string(dir.join("thermal_cycler.close_lid.manifest.json")).unwrap(),
     )
     .unwrap();
@@ -76,8 +76,11 @@ fn a_run_resumes_only_with_matching_fingerprints_and_never_reruns_an_episode() {
         (manifest.episodes, manifest.runs, manifest.shard),
         (2, 1, None)
     );
-    assert_eq!(manifest.git_commit, results::run::GIT_COMMIT);
-    assert_eq!(manifest.conditions, results::run::Conditions::of(&task));
+    assert_eq!(manifest.git_commit, results::run::record::GIT_COMMIT);
+    assert_eq!(
+        manifest.conditions,
+        results::run::record::Conditions::of(&task)
+    );
     assert_eq!(manifest.task_sha256.len(), 64);
     assert!(manifest.protocol_sha256.is_some());
 
@@ -221,12 +224,13 @@ fn an_episode_whose_policy_cannot_be_made_fails_alone() {
     scoring::eval::evaluate(&task, &o, |_| {}).unwrap();
     let policy = format!("replay:{}", recorded.display());
     let report =
-        scoring::eval::evaluate(&task, &opts(&scratch("partial"), &policy, 2, false), |_| {}).unwrap();
+        scoring::eval::evaluate(&task, &opts(&scratch("partial"), &policy, 2, false), |_| {})
+            .unwrap();
     let [first, second] = &report.episodes[..] else {
         panic!("{report:#?}")
     };
     assert!(first.success);
-    assert_eq!(second.outcome, results::Outcome::PolicyError);
+    assert_eq!(second.outcome, results::episode::Outcome::PolicyError);
     let why = second.error.as_deref().unwrap();
     assert!(
         why.contains("seed31.mcap: cannot read the recording"),

@@ -12,8 +12,9 @@ use labware::display::{Cell, Field};
 use labware::thermal_mixer::Params;
 use labware::{LabwareState, Logic};
 use mujoco_rs::prelude::*;
-use runtime::render::{Cameras, Image};
+use results::Image;
 use results::verdict::Judge;
+use runtime::render::Cameras;
 
 const TASK: &str = "protocols/thermal_mixer/set_parameters.toml";
 
@@ -437,10 +438,10 @@ fn a_replay_redraws_the_display_from_the_recorded_panel() {
     assert!(out.status.success(), "{}", common::text(&out.stderr));
     let frames = |path: &std::path::Path| {
         let mut v = Vec::new();
-        runtime::record::for_each_message(path, |m| {
+        results::recording::for_each_message(path, |m| {
             if m.channel.topic == "/camera/table_front" {
                 v.push(
-                    runtime::record::proto::image_data(&m.data)
+                    results::recording::proto::image_data(&m.data)
                         .unwrap()
                         .to_vec(),
                 );

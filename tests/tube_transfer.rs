@@ -2,10 +2,10 @@
 //! by its cap into the named slot and the cap stays on; a tube put in another slot fails the check;
 //! the cap's thread holds the tube's weight and unscrews a pitch per turn at the task's 2 ms step.
 
+use expert::ExpertPolicy;
 use labware::frame::position;
 use mujoco_rs::prelude::*;
 use scoring::episode::{EpisodeOptions, run_episode};
-use expert::ExpertPolicy;
 use std::sync::Arc;
 
 fn task() -> compiler::Task {
@@ -14,7 +14,11 @@ fn task() -> compiler::Task {
     task.unwrap_or_else(|| panic!("{diags:#?}"))
 }
 
-fn expert(task: &compiler::Task, seed: u64, opts: &EpisodeOptions) -> results::EpisodeResult {
+fn expert(
+    task: &compiler::Task,
+    seed: u64,
+    opts: &EpisodeOptions,
+) -> results::episode::EpisodeResult {
     let instance = task.sample(seed);
     let scene = Arc::new(runtime::Scene::build(task, &instance).unwrap());
     let mut policy = ExpertPolicy::new(task, &scene, &instance).unwrap();
@@ -47,7 +51,7 @@ fn the_expert_moves_the_tube_into_the_named_slot_with_its_cap_on() {
     let again = expert(&t, 7, &EpisodeOptions::default());
     assert_eq!(again.trajectory_hash, r.trajectory_hash);
     // The recording's last labware state: the tube stands in the drawn slot, capped.
-    let rec = runtime::record::read_recording(&path).unwrap();
+    let rec = results::recording::read_recording(&path).unwrap();
     let i = t.labware_index("tube").unwrap();
     let tube = &rec.final_labware[i];
     let model = t.labware[i].params.instrument().unwrap();
@@ -103,7 +107,7 @@ fn a_tube_placed_in_the_wrong_slot_fails_its_check() {
     let p = &r.verdict.predicates()[0];
     assert!(!p.holds && p.value > 0.03, "{p:?}");
     // It did stand the tube upright in the other slot: the check, not the expert, said no.
-    let rec = runtime::record::read_recording(&path).unwrap();
+    let rec = results::recording::read_recording(&path).unwrap();
     let target = t.labware_index("target").unwrap();
     let tube = &rec.final_labware[t.labware_index("tube").unwrap()];
     let seat = t.labware[target]

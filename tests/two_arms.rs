@@ -3,8 +3,8 @@
 //! actions concatenate both arms (7 + 7), the expert routes each step to the arm its `with` names,
 //! and the recording has one joint-state and one action channel per arm.
 
-use scoring::episode::{EpisodeOptions, run_episode};
 use expert::ExpertPolicy;
+use scoring::episode::{EpisodeOptions, run_episode};
 use std::sync::Arc;
 
 #[test]
@@ -38,7 +38,7 @@ fn each_arm_does_its_own_step_and_both_are_recorded() {
     assert!(r.verdict.predicates().iter().all(|p| p.holds));
 
     // Each arm's recorded joints: the lid arm moves only during its step, the tube arm only after.
-    let rec = runtime::record::read_recording(&rec_path).unwrap();
+    let rec = results::recording::read_recording(&rec_path).unwrap();
     for arm in ["lidder", "mover"] {
         assert_eq!(
             rec.topics[&format!("/robot/{arm}/joint_state")],
@@ -122,8 +122,8 @@ fn steps_marked_together_move_both_arms_in_the_same_control_steps() {
     };
     let (sequential, parallel) = (compile(&text), compile(&together));
     assert!(parallel.stages[0].plan[1].together && !sequential.stages[0].plan[1].together);
-    assert!(compiler::describe(&parallel).contains("with mover, together with step 1"));
-    assert!(!compiler::describe(&sequential).contains("together"));
+    assert!(compiler::describe::describe(&parallel).contains("with mover, together with step 1"));
+    assert!(!compiler::describe::describe(&sequential).contains("together"));
     let run = |task: &compiler::Task| {
         let instance = task.sample(4);
         let scene = Arc::new(runtime::Scene::build(task, &instance).unwrap());

@@ -74,7 +74,7 @@ impl Policy for Watch {
 }
 
 /// Runs the expert on `task` (seed 3), watching the mixer.
-fn watched(task: &compiler::Task) -> (results::EpisodeResult, Vec<Seen>) {
+fn watched(task: &compiler::Task) -> (results::episode::EpisodeResult, Vec<Seen>) {
     let mixer = task.labware_index("vortex").unwrap();
     let labware::Model::VortexMixer(model) = &task.labware[mixer].params else {
         panic!("a vortex mixer")

@@ -9,10 +9,10 @@ use crate::common;
 
 use common::{compile, predicate, run, run_with};
 use expert::ExpertPolicy;
-use scoring::policies::HoldPolicy;
 use policy::Observation;
 use policy::Policy;
 use policy::PolicyError;
+use scoring::policies::HoldPolicy;
 
 fn task(name: &str) -> compiler::Task {
     compile(&format!("protocols/thermal_cycler/{name}"))
@@ -43,7 +43,7 @@ fn expert_until(
     task: &compiler::Task,
     seed: u64,
     keep_going: impl FnMut(&Observation) -> bool + 'static,
-) -> results::EpisodeResult {
+) -> results::episode::EpisodeResult {
     run_with(task, seed, &Default::default(), |t, s, i| {
         Box::new(ExpertUntil {
             expert: ExpertPolicy::new(t, s, i).unwrap(),

@@ -27,13 +27,12 @@ mod sweep;
 mod task;
 pub mod world;
 
-pub use describe::describe;
-pub use stage_files::{StageError, StageFiles, StageLoader};
 pub use task::*;
 
 use dsl::Diagnostic;
 use dsl::ast::{Document, Protocol};
 use report::Cx;
+use stage_files::{StageFiles, StageLoader};
 
 /// Checks and lowers one protocol to a one-stage task.
 pub fn compile(p: &Protocol, file: &str) -> (Option<Task>, Vec<Diagnostic>) {
@@ -250,7 +249,7 @@ pub fn check_file(
         Some(r) => StageFiles::with_root(r),
         None => StageFiles::new(),
     };
-    let (source, task, diagnostics) = match dsl::decode(&bytes) {
+    let (source, task, diagnostics) = match dsl::source::decode(&bytes) {
         Ok(text) => {
             let (task, diags) = compile_source_with(text, &file, &stages);
             (text.to_string(), task, diags)

@@ -183,7 +183,7 @@ impl StageLoader for StageFiles {
                 limit: MAX_STAGE_BYTES,
             });
         }
-        let text = match dsl::decode(&bytes) {
+        let text = match dsl::source::decode(&bytes) {
             Ok(t) => t.to_string(),
             Err(at) => {
                 let (line, column) =

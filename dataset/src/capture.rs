@@ -5,7 +5,7 @@
 use crate::DatasetError;
 use crate::stats::ImageStats;
 use crate::video::{Codec, VideoWriter};
-use runtime::render::Image;
+use results::Image;
 use runtime::{Env, ObserveError, Observer};
 use std::path::PathBuf;
 

@@ -21,7 +21,6 @@ pub mod source;
 pub use diagnostic::{Code, Diagnostic, Severity, Span, did_you_mean};
 pub use parse::parse;
 pub use quantity::{Dimension, ParseQuantityError, Quantity, parse_quantity};
-pub use source::decode;
 
 /// The protocol-language version this crate reads (`format = 1` at the top of a file).
 pub const FORMAT_VERSION: i64 = 1;

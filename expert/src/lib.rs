@@ -1,6 +1,6 @@
 //! The scripted expert: each planned step goes to the robot its `with` names, expands into the
 //! motions its primitive declares (`compiler::primitives`), and each motion is resolved against
-//! live labware state when it starts (`primitives::resolve`), solved by the IK method the robot's
+//! live labware state when it starts (`primitives::Lab`), solved by the IK method the robot's
 //! model chooses and followed along a TOPP-timed trajectory under the model's limits
 //! ([`motion`]).
 //!
@@ -112,7 +112,7 @@ pub enum PlanFailure {
     IkAt {
         at: usize,
         of: usize,
-        ik: primitives::IkError,
+        ik: primitives::ik::IkError,
     },
     /// A free-space motion's straight path collides and RRTConnect found no way around.
     #[error("the straight path hits {hits}, and {error}")]

@@ -6,7 +6,7 @@
 //! part in the hand takes the grasp about its axis from which the arm can make the turn
 //! (`with_room_to_turn`); a dial is turned a grip at a time and looked at again after each grip,
 //! let go, turned back and gripped again until it rests in its notch. A new motion
-//! kind is a `compiler::motion::Motion` variant and its arm here (or in `primitives::resolve` for
+//! kind is a `compiler::motion::Motion` variant and its arm here (or in `primitives::Lab` for
 //! its poses).
 
 use crate::route::{Route, route};
@@ -14,8 +14,9 @@ use crate::{ExpertPolicy, Lane, PlanFailure, Queued, planning};
 use compiler::motion::Motion;
 use policy::{Observation, PolicyError, StageEvent};
 use primitives::alternatives::Scope;
+use primitives::ik::{solutions, solve_with};
 use primitives::topp::{Limits, Trajectory, plan_trajectory};
-use primitives::{Kinematics, Lab, StepFrame, solutions, solve_with};
+use primitives::{Kinematics, Lab, StepFrame};
 use robots::RobotModel;
 use runtime::clearance::Clearance;
 use runtime::kinematics::ArmKinematics;

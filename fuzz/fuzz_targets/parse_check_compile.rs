@@ -8,7 +8,7 @@ use libfuzzer_sys::fuzz_target;
 const STAGE: &str = include_str!("../../protocols/thermal_cycler/close_lid.toml");
 
 fuzz_target!(|data: &[u8]| {
-    let source = match dsl::decode(data) {
+    let source = match dsl::source::decode(data) {
         Ok(s) => s,
         Err(d) => {
             // Not UTF-8: located at the first bad byte, inside the input.
@@ -16,7 +16,7 @@ fuzz_target!(|data: &[u8]| {
             return;
         }
     };
-    let load = |path: &str| -> Result<String, compiler::StageError> {
+    let load = |path: &str| -> Result<String, compiler::stage_files::StageError> {
         if path.ends_with("self.toml") {
             Ok(source.to_string())
         } else {
@@ -37,7 +37,7 @@ fuzz_target!(|data: &[u8]| {
         assert!(!diags.iter().any(|d| d.is_error()));
         let json = serde_json::to_string(&t).expect("a task serialises");
         assert!(!json.is_empty());
-        let _ = compiler::describe(&t);
+        let _ = compiler::describe::describe(&t);
         let _ = t.sample(7);
     }
 });

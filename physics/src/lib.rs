@@ -18,7 +18,7 @@ pub mod detent;
 pub mod eccentric;
 pub mod liquid;
 #[cfg(feature = "plugin")]
-pub mod plugin;
+mod plugin;
 pub mod scenes;
 pub mod thread;
 

@@ -1,6 +1,6 @@
-//! Collision-free joint-space paths for the scripted expert: OMPL 1.5's RRTConnect ([`rrt`],
+//! Collision-free joint-space paths for the scripted expert: OMPL 1.5's RRTConnect ([`plan`],
 //! through a one-function C-ABI shim, `cpp/shim.cpp`) finds a path, then seeded random
-//! shortcutting ([`shortcut`]) straightens it. Validity is the caller's closure (the runtime's
+//! shortcutting ([`shortcut()`]) straightens it. Validity is the caller's closure (the runtime's
 //! MuJoCo collision check), so this crate knows no robot, scene or simulator. Timing the path
 //! (TOPP) is `primitives::topp`'s job, not this crate's.
 //!
@@ -9,8 +9,8 @@
 //!
 //! Its tests are in planner/tests/.
 
-pub mod rrt;
-pub mod shortcut;
+mod rrt;
+mod shortcut;
 
 pub use rrt::{PlanError, Problem, plan};
 pub use shortcut::{segment_is_clear, shortcut};

@@ -6,8 +6,8 @@
 //! types are exercised through those crates' tests (tests/episode_failures.rs,
 //! tests/model_servers.rs).
 
-use runtime::LabwareState;
-use runtime::env::RobotState;
+use labware::LabwareState;
+use runtime::RobotState;
 use serde::{Deserialize, Serialize};
 
 /// What a policy sees at one control step.
@@ -21,10 +21,10 @@ pub struct Observation<'a> {
     pub prompt: &'a str,
     /// Every task camera's current frame, in task order, at the size [`Policy::needs`] asks for
     /// (empty when it asks for none).
-    pub images: &'a [runtime::render::Image],
+    pub images: &'a [results::Image],
     /// The same cameras `history_steps` control steps before this observation (the current
     /// frames at an episode's first query).
-    pub previous: &'a [runtime::render::Image],
+    pub previous: &'a [results::Image],
     /// Privileged simulator state, used only by the scripted expert and the controls; never sent
     /// to models.
     pub privileged: Privileged,

@@ -2,7 +2,7 @@
 //!
 //! A planned lab step's motions (its expansion, declared beside the primitive in
 //! `compiler::primitives`) are resolved against live labware state into tool poses
-//! ([`resolve`]), turned into joint waypoints by a clarabel QP inverse kinematics ([`ik`]) and
+//! ([`Lab`]), turned into joint waypoints by a clarabel QP inverse kinematics ([`ik`]) and
 //! timed under velocity/acceleration limits by TOPP ([`topp`]). Kinematics come from outside
 //! through the [`Kinematics`] trait (the runtime implements it on MuJoCo), so this crate runs no
 //! simulation and names no instrument: affordances and joint goals come from the labware models.
@@ -13,13 +13,11 @@
 pub mod alternatives;
 pub mod analytic_ik;
 pub mod ik;
-pub mod resolve;
+mod resolve;
 pub mod spline;
 pub mod topp;
 
-pub use ik::{IkError, solutions, solve_ik, solve_with};
-pub use resolve::{Lab, PlanError, StepFrame};
-pub use topp::{Limits, Trajectory, plan_trajectory};
+pub use resolve::{Lab, PlanError, StepFrame, first_target};
 
 use labware::Pose;
 

@@ -1,7 +1,7 @@
 //! What episodes and runs produce, readable without a simulator: the judge and its verdicts
 //! ([`verdict`]), an episode's result and the trajectory-hash rule ([`episode`]), run records,
 //! statistics and merging shards ([`run`]), model profiles ([`profile`]), camera frames
-//! ([`image`]), MCAP recordings, written and read ([`recording`]), and suites ([`suite`]).
+//! ([`Image`]), MCAP recordings, written and read ([`recording`]), and suites ([`suite`]).
 //!
 //! It links no simulator (no MuJoCo, no EGL): a leaderboard, a verifier's bookkeeping and CI for
 //! submissions build on it alone. It does not run episodes (the runtime and `scoring` do) and
@@ -11,14 +11,16 @@
 //! tests/no_simulator.rs (that it links no simulator).
 
 pub mod episode;
-pub mod image;
+mod image;
 pub mod profile;
 pub mod recording;
 pub mod run;
 pub mod suite;
 pub mod verdict;
 
-pub use episode::{EpisodeResult, Outcome, TrajectoryHash};
 pub use image::Image;
+
+// Second paths the leaderboard (owned elsewhere) still uses; the module paths are canonical.
+pub use episode::EpisodeResult;
 pub use run::{EvalReport, RESULTS_SCHEMA_VERSION, RunError};
-pub use verdict::{Judge, PartValue, PredicateValue, StageVerdict, Verdict};
+pub use verdict::Verdict;

@@ -128,10 +128,6 @@ impl LoadedProfile {
             text,
         })
     }
-
-    pub fn sha256(&self) -> String {
-        crate::run::sha256_hex(self.text.as_bytes())
-    }
 }
 
 impl Profile {

@@ -5,20 +5,22 @@
 //!
 //! What watches an episode is an [`Observer`] handed to [`Env::step_with`]: the recorder, a
 //! dataset capture, a policy's history frames. The trajectory hash is the environment's own
-//! observer ([`results::TrajectoryHash`], the one rule for "the same trajectory"). Cameras are one
-//! set, sized by [`EnvOptions::image_size`] or else by the task's own camera spec, drawn at most
-//! once per control step whoever asks ([`Env::frames`]).
+//! observer ([`results::episode::TrajectoryHash`], the one rule for "the same trajectory").
+//! Cameras are one set, sized by [`EnvOptions::image_size`] or else by the task's own camera
+//! spec, drawn at most once per control step whoever asks ([`Env::frames`]).
 //!
 //! It does not decide actions (policies do, in `scoring`) and does not write results; it reports
 //! state, frames and the judge's verdict.
 
 use crate::episode::{Episode, StepError};
-use crate::render::{Cameras, Image, RenderError};
+use crate::render::{Cameras, RenderError};
 use crate::scene::{Scene, SceneError};
 use compiler::{SceneInstance, Task};
 use labware::LabwareState;
+use results::Image;
+use results::episode::TrajectoryHash;
 use results::recording::RecordError;
-use results::{Judge, TrajectoryHash, Verdict};
+use results::verdict::{Judge, Verdict};
 use std::sync::Arc;
 
 /// How an environment draws its cameras.

@@ -405,10 +405,12 @@ impl Episode {
             .collect()
     }
 
-    /// MuJoCo's full state ([`crate::record::proto::STATE_SPEC`]): with each item's logic, all a
-    /// step depends on.
+    /// MuJoCo's full state ([`results::recording::proto::STATE_SPEC`]): with each item's logic,
+    /// all a step depends on.
     pub fn physics_state(&self) -> Vec<f64> {
-        self.data.state(crate::record::proto::STATE_SPEC).into_vec()
+        self.data
+            .state(results::recording::proto::STATE_SPEC)
+            .into_vec()
     }
 
     /// Each item's logic state, in task order.
@@ -422,7 +424,7 @@ impl Episode {
         let want = self
             .scene
             .model
-            .state_size(crate::record::proto::STATE_SPEC);
+            .state_size(results::recording::proto::STATE_SPEC);
         if state.len() != want || logic.len() != self.logic.len() {
             return Err(RestoreError {
                 state: state.len(),
@@ -432,7 +434,7 @@ impl Episode {
             });
         }
         let set = |d: &mut MjData<Arc<MjModel>>| {
-            d.set_state(state, crate::record::proto::STATE_SPEC)
+            d.set_state(state, results::recording::proto::STATE_SPEC)
                 .map_err(|_| RestoreError {
                     state: state.len(),
                     want,

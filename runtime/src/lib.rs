@@ -12,17 +12,15 @@
 
 pub mod clearance;
 pub mod deps;
-pub mod env;
-pub mod episode;
+mod env;
+mod episode;
 pub mod kinematics;
 pub mod picture;
 pub mod render;
-pub mod scene;
+mod scene;
 
-/// Recordings are written and read by `results` (no simulator needed to read one).
-pub use results::recording as record;
-
-pub use env::{Env, EnvError, EnvOptions, ObserveError, Observer, Transition};
-pub use episode::{Episode, StepError, check_action};
-pub use labware::LabwareState;
-pub use scene::{Scene, SceneError};
+pub use env::{
+    Env, EnvError, EnvOptions, Observation, ObserveError, Observer, RobotState, Transition,
+};
+pub use episode::{Episode, RestoreError, StepError, check_action};
+pub use scene::{FreeJoint, LabwareIds, Owner, RobotIds, Scene, SceneError};

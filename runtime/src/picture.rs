@@ -4,8 +4,9 @@
 //! draws; it steps nothing.
 
 use crate::env::{Env, EnvError, EnvOptions};
-use crate::render::{Image, View};
+use crate::render::View;
 use compiler::Task;
+use results::Image;
 
 /// The task cameras' frames of episode `seed` at its start, then the view from above, each
 /// `size` (width, height).

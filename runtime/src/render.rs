@@ -74,7 +74,7 @@ struct Screen {
     scratch: Vec<u8>,
 }
 
-pub use results::Image;
+use results::Image;
 
 /// Why cameras could not be made or could not draw a frame. MuJoCo's renderer reports its
 /// failures as debug text, kept here as it came.

@@ -6,11 +6,12 @@
 //! simulation ends the episode as a failure with its reason; a recording or renderer fault ends
 //! the loop with a typed [`EpisodeError`].
 
-use policy::{Observation, Policy, Privileged};
 use compiler::{SceneInstance, Task};
+use policy::{Observation, Policy, Privileged};
+use results::Image;
+use results::episode::{EpisodeResult, Outcome};
 use results::recording::{RecordError, Recorder};
-pub use results::{EpisodeResult, Outcome};
-use runtime::render::{Image, RenderError};
+use runtime::render::RenderError;
 use runtime::{Env, EnvError, EnvOptions, ObserveError, Observer};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -82,7 +83,7 @@ pub fn policy_failed(
         control_steps: 0,
         wall_time_s: 0.0,
         policy_time_s: 0.0,
-        trajectory_hash: results::TrajectoryHash::new().hex(),
+        trajectory_hash: results::episode::TrajectoryHash::new().hex(),
         recording: record.map(|p| p.display().to_string()),
     })
 }
@@ -133,7 +134,7 @@ impl Recording {
         mut self,
         env: &Env,
         error: Option<&str>,
-        verdict: &results::Verdict,
+        verdict: &results::verdict::Verdict,
     ) -> Result<(), EpisodeError> {
         let t = env.time();
         let ep = env.episode();

@@ -4,8 +4,8 @@
 //! evaluation asks it to make the policy for each episode, so every policy takes the same path.
 //! A model server is not made here: `--model` connects through [`crate::remote`].
 
-use policy::{Observation, Policy, PolicyError};
 use compiler::{SceneInstance, Task};
+use policy::{Observation, Policy, PolicyError};
 use runtime::Scene;
 
 /// The no-motion control: holds every robot where its targets are. Every simulated task must
@@ -45,7 +45,7 @@ impl ReplayPolicy {
         };
         let failed =
             |why: String| PolicyError::Failed(format!("replay of {}: {why}", file.display()));
-        let rec = runtime::record::read_recording(&file).map_err(|e| failed(e.to_string()))?;
+        let rec = results::recording::read_recording(&file).map_err(|e| failed(e.to_string()))?;
         let id = rec.task["id"].as_str().unwrap_or_default();
         if id != task.id {
             return Err(failed(format!("it records task `{id}`, not `{}`", task.id)));
@@ -152,9 +152,7 @@ impl PolicySpec {
         instance: &SceneInstance,
     ) -> Result<Box<dyn Policy>, PolicyError> {
         Ok(match self {
-            PolicySpec::Expert => {
-                Box::new(expert::ExpertPolicy::new(task, scene, instance)?)
-            }
+            PolicySpec::Expert => Box::new(expert::ExpertPolicy::new(task, scene, instance)?),
             PolicySpec::Hold => Box::new(HoldPolicy),
             PolicySpec::Replay(path) => Box::new(ReplayPolicy::new(path, task, instance)?),
         })

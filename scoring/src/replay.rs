@@ -12,11 +12,12 @@
 //!
 //! Offline re-scoring from the labware series alone is [`results::verdict::Judge::replay`].
 
-use results::verdict::{Judge, Verdict};
 use compiler::{SceneInstance, Task};
-use results::TrajectoryHash;
-use runtime::record::{RecordError, Recorder, RecordingSummary};
-use runtime::render::{Cameras, Image, RenderError};
+use results::Image;
+use results::episode::TrajectoryHash;
+use results::recording::{RecordError, Recorder, RecordingSummary};
+use results::verdict::{Judge, Verdict};
+use runtime::render::{Cameras, RenderError};
 use runtime::{Episode, Scene};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -30,7 +31,7 @@ pub enum ReplayError {
     #[error(transparent)]
     Scene(#[from] runtime::SceneError),
     #[error(transparent)]
-    Restore(#[from] runtime::episode::RestoreError),
+    Restore(#[from] runtime::RestoreError),
     #[error(
         "the recording has no MuJoCo state (`/physics/state`); it was made before recordings carried it"
     )]
@@ -66,7 +67,7 @@ pub struct Recording {
 
 impl Recording {
     pub fn open(path: &Path) -> Result<Recording, ReplayError> {
-        let summary = runtime::record::read_recording(path)?;
+        let summary = results::recording::read_recording(path)?;
         let task = serde_json::from_value(summary.task.clone())
             .map_err(|e| ReplayError::Schema("task", e))?;
         let instance = serde_json::from_value(summary.instance.clone())
@@ -231,8 +232,8 @@ pub fn reenact(
     task: &Task,
     seed: u64,
     actions: &[Vec<f64>],
-) -> Result<Reenacted, runtime::env::EnvError> {
-    let mut env = runtime::Env::make(task, seed, runtime::env::EnvOptions::default())?;
+) -> Result<Reenacted, runtime::EnvError> {
+    let mut env = runtime::Env::make(task, seed, runtime::EnvOptions::default())?;
     let mut refused = None;
     let mut used = 0;
     for a in actions {
@@ -343,7 +344,7 @@ pub fn render(
         std::fs::create_dir_all(d).map_err(write_err(d))?;
     }
     let mut w = Recorder::create(out)?;
-    runtime::record::for_each_message(&rec.path, |m| {
+    results::recording::for_each_message(&rec.path, |m| {
         if m.channel.topic.starts_with("/camera/") {
             Ok(())
         } else {

@@ -4,8 +4,8 @@
 //! written with can be tight there. Only the figures; `eval` words the warning. Runs of other
 //! policies say nothing about the task's time limits and are not read here.
 
-use results::{EpisodeResult, Outcome};
 use compiler::Task;
+use results::episode::{EpisodeResult, Outcome};
 
 /// One stage whose time limit the expert's run found tight.
 #[derive(Clone, Debug, PartialEq)]

@@ -9,7 +9,10 @@ use std::process::{Command, Output};
 use std::sync::Arc;
 
 /// The value of the predicate written `text` in an episode's verdict.
-pub fn predicate<'a>(r: &'a results::EpisodeResult, text: &str) -> &'a results::verdict::PredicateValue {
+pub fn predicate<'a>(
+    r: &'a results::episode::EpisodeResult,
+    text: &str,
+) -> &'a results::verdict::PredicateValue {
     r.verdict
         .predicates()
         .iter()
@@ -46,14 +49,14 @@ pub fn run_with(
         &runtime::Scene,
         &compiler::SceneInstance,
     ) -> Box<dyn policy::Policy>,
-) -> results::EpisodeResult {
+) -> results::episode::EpisodeResult {
     let (instance, scene) = scene(task, seed);
     let mut policy = make(task, &scene, &instance);
     scoring::episode::run_episode(task, &scene, &instance, policy.as_mut(), opts).unwrap()
 }
 
 /// One episode with a policy by name (`expert`, `hold`), not recorded.
-pub fn run(task: &compiler::Task, seed: u64, policy: &str) -> results::EpisodeResult {
+pub fn run(task: &compiler::Task, seed: u64, policy: &str) -> results::episode::EpisodeResult {
     run_with(
         task,
         seed,
@@ -171,10 +174,7 @@ pub fn text(bytes: &[u8]) -> String {
 pub fn scratch(name: &str) -> PathBuf {
     static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
     let n = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let dir = std::env::temp_dir().join(format!(
-        "autobio-test-{}-{n}-{name}",
-        std::process::id()
-    ));
+    let dir = std::env::temp_dir().join(format!("autobio-test-{}-{n}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir

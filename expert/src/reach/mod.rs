@@ -42,8 +42,8 @@ use dsl::ast::Document;
 use dsl::{Code, Diagnostic};
 use hint::base_for_every_layout;
 use labware::{LabwareState, Pose};
-use primitives::resolve::first_target;
-use primitives::{Lab, StepFrame, solve_with};
+use primitives::ik::solve_with;
+use primitives::{Lab, StepFrame, first_target};
 use runtime::clearance::Clearance;
 use runtime::kinematics::ArmKinematics;
 use runtime::{Episode, Scene};
@@ -447,8 +447,8 @@ fn reach(
         stopped: None,
         limit: None,
     };
-    let note = |e: &primitives::IkError, miss: &mut Miss| {
-        if let primitives::IkError::NoConvergence { pos_err, rot_err } = e {
+    let note = |e: &primitives::ik::IkError, miss: &mut Miss| {
+        if let primitives::ik::IkError::NoConvergence { pos_err, rot_err } = e {
             let closer = miss
                 .short_by
                 .is_none_or(|(p, r)| (*pos_err, *rot_err) < (p, r));

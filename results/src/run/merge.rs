@@ -6,8 +6,9 @@
 //! It reads the shards' records and never writes them (the merged record goes to another
 //! folder); it runs nothing.
 
-use super::record::{Manifest, RunRecord, read_journal_only, write_json};
-use super::{EvalReport, RESULTS_SCHEMA_VERSION, RunError, plan, results_path, summarise};
+use super::record::{Manifest, RunRecord, read_journal_only, results_path, write_json};
+use super::stats::summarise;
+use super::{EvalReport, RESULTS_SCHEMA_VERSION, RunError, plan};
 use crate::episode::EpisodeResult;
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};

@@ -9,13 +9,13 @@ pub mod record;
 pub mod stats;
 
 pub use merge::merge;
-pub use record::{
-    Conditions, GIT_COMMIT, Manifest, ModelRecord, RunRecord, Wire, journal_path, manifest_path,
-    results_path, sha256_hex,
-};
-pub use stats::{
-    AcrossRuns, Aggregate, EvalSummary, RunSummary, aggregate, mean_sem, summarise, wilson,
-};
+// Second paths the leaderboard and `src/submissions.rs` (owned elsewhere) still use; `record::`
+// and `stats::` are canonical.
+pub use record::{Wire, journal_path, manifest_path};
+pub use stats::aggregate;
+
+use record::{Conditions, ModelRecord};
+use stats::EvalSummary;
 
 use crate::episode::EpisodeResult;
 use compiler::Task;

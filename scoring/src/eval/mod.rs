@@ -6,20 +6,22 @@
 //!
 //! It does not simulate (the runtime does) and does not render reports (the leaderboard does).
 
-use results::run::{
-    Conditions, EvalReport, GIT_COMMIT, Manifest, ModelRecord, RESULTS_SCHEMA_VERSION,
-    RUN_SEED_STRIDE, RunError, Shard, plan, recording_path, results_path, sha256_hex, summarise,
+use results::run::record::{
+    self, Conditions, GIT_COMMIT, Manifest, ModelRecord, results_path, sha256_hex,
 };
-use results::run::record;
+use results::run::stats::summarise;
+use results::run::{
+    EvalReport, RESULTS_SCHEMA_VERSION, RUN_SEED_STRIDE, RunError, Shard, plan, recording_path,
+};
 
 use crate::episode::{EpisodeError, EpisodeOptions, run_episode};
 use crate::policies;
-use policy::PolicyError;
 use crate::remote::Model;
-use policy::WireError;
 use compiler::Task;
+use policy::PolicyError;
+use policy::WireError;
 use record::RunRecord;
-use results::EpisodeResult;
+use results::episode::EpisodeResult;
 use results::profile::{Layout, ProfileError};
 use std::collections::{HashMap, HashSet};
 use std::path::PathBuf;
@@ -56,7 +58,7 @@ pub enum EvalError {
 #[derive(Clone, Debug)]
 pub struct ModelSpec {
     pub url: String,
-    pub wire: results::run::Wire,
+    pub wire: results::run::record::Wire,
     pub profile: results::profile::LoadedProfile,
     /// Connection attempts per episode and the first retry's wait (doubled per retry).
     pub attempts: u32,
@@ -154,7 +156,7 @@ pub fn evaluate(
         url: m.url().to_string(),
         wire: m.wire,
         profile_origin: m.profile.origin.clone(),
-        profile_sha256: m.profile.sha256(),
+        profile_sha256: sha256_hex(m.profile.text.as_bytes()),
         profile: m.profile.profile.clone(),
         metadata: m.metadata.clone(),
     });

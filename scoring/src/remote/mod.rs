@@ -20,7 +20,7 @@
 //! [`policy::PolicyError::BadActions`]. It does not render or step the simulation.
 
 pub mod codec;
-pub mod link;
+mod link;
 
 use codec::Keys;
 pub use link::{Frame, Link};
@@ -30,7 +30,7 @@ use results::profile::{ImageEncoding, Layout, LoadedProfile};
 use rmpv::Value;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
-use results::run::Wire;
+use results::run::record::Wire;
 
 /// How long a fresh openpi connection waits for the server's metadata frame before taking the
 /// server for one that sends none (a late one is still recognised).
@@ -345,7 +345,7 @@ impl Model {
             Wire::Openpi => Keys::Binary,
             Wire::VlaEval => Keys::Text,
         };
-        let image = |img: Option<&runtime::render::Image>| match img {
+        let image = |img: Option<&results::Image>| match img {
             None => Value::Nil,
             Some(i) => match self.wire {
                 Wire::Openpi => codec::image_array(keys, &i.rgb, i.width, i.height),
