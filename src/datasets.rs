@@ -140,9 +140,7 @@ fn with_progress(
     label: &str,
     verb: &str,
     out: &Path,
-    job: impl FnOnce(
-        &mut dyn FnMut(demos::Step<'_>),
-    ) -> Result<demos::Generated, dataset::DatasetError>,
+    job: impl FnOnce(&mut dyn FnMut(demos::Step<'_>)) -> Result<demos::Generated, dataset::DatasetError>,
 ) -> Result<ExitCode> {
     let mut view = ProgressView::new(label);
     let done = job(&mut |s| view.step(&s));

@@ -76,7 +76,8 @@ pub fn run(a: &ReplayArgs) -> Result<ExitCode> {
 
 fn rescore(rec: &Recording) -> bool {
     let s = &rec.summary;
-    let verdict = results::verdict::Judge::replay(&rec.task, &rec.instance.params, &s.labware_series);
+    let verdict =
+        results::verdict::Judge::replay(&rec.task, &rec.instance.params, &s.labware_series);
     outln!(
         "{}: {} messages over {:.2} s",
         rec.path.display(),

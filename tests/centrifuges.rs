@@ -13,8 +13,8 @@ use crate::common;
 
 use common::{compile, run, scene, spread};
 use mujoco_rs::prelude::*;
-use runtime::render::Cameras;
 use results::verdict::Judge;
+use runtime::render::Cameras;
 
 const C5430: &str = "protocols/centrifuge_5430/close_lid.toml";
 const C5910: &str = "protocols/centrifuge_5910/close_lid.toml";

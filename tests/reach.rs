@@ -443,7 +443,11 @@ fn kept_reach_outcomes_give_the_same_diagnostics_and_an_edit_is_solved_afresh() 
         for f in kept(&cache) {
             std::fs::write(f, "{ not json").unwrap();
         }
-        assert_eq!(check_cached(file, &cache), cold, "{file}: a corrupt entry is a miss");
+        assert_eq!(
+            check_cached(file, &cache),
+            cold,
+            "{file}: a corrupt entry is a miss"
+        );
         // What the store says is what was solved: the faulty file's error is in it.
         if file.contains("faulty") {
             assert!(cold.contains("E0036"), "{cold}");
@@ -463,7 +467,10 @@ fn kept_reach_outcomes_give_the_same_diagnostics_and_an_edit_is_solved_afresh() 
     let before = kept(&cache).len();
     let out = check_cached(moved.to_str().unwrap(), &cache);
     assert!(out.contains("E0036"), "{out}");
-    assert!(kept(&cache).len() > before, "the edited task was not solved");
+    assert!(
+        kept(&cache).len() > before,
+        "the edited task was not solved"
+    );
     // An empty AUTOBIO_CACHE_DIR keeps nothing (not even in the home folder's cache).
     let home = common::scratch("reach-store-home");
     let none = std::process::Command::new(env!("CARGO_BIN_EXE_autobio"))

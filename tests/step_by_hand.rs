@@ -6,8 +6,8 @@
 
 use crate::common;
 
-use runtime::{Env, EnvError, EnvOptions};
 use policy::{Observation, Policy, Privileged};
+use runtime::{Env, EnvError, EnvOptions};
 use std::process::Command;
 
 /// One query of `policy` on the environment's state now (no images: the expert and hold need

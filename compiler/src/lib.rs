@@ -9,6 +9,10 @@
 //! This crate runs no physics and plans no motion; its only IO is reading the file
 //! [`check_file`] is given and a chain's stage files, through [`stage_files`] (whose rules confine
 //! a chain to its protocol root) or a loader the caller passes.
+//!
+//! Its tests are beside the code (`check/`, `quantities.rs`, `primitives/`: unit tests on real
+//! protocol text) and in the workspace's tests/golden.rs (every shipped protocol's task and sheet),
+//! tests/faulty_corpus.rs (tests/corpus/faulty/) and tests/protocol_diagnostics.rs.
 
 pub mod bench;
 mod chain;
@@ -18,8 +22,8 @@ pub mod motion;
 pub mod params;
 pub mod predicates;
 pub mod primitives;
-pub mod quantities;
 mod proof;
+pub mod quantities;
 mod report;
 mod scene_file;
 pub mod stage_files;
