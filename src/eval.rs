@@ -163,8 +163,8 @@ pub fn eval(front: &Front, a: &EvalArgs) -> Result<ExitCode> {
             written.push(results_path(o, &task.id));
         }
     }
-    out!("{}", leaderboard::results_table(&rows));
-    out!("{}", leaderboard::runs_table(&rows));
+    out!("{}", leaderboard::table::results_table(&rows));
+    out!("{}", leaderboard::table::runs_table(&rows));
     for path in written {
         outln!("results: {}", path.display());
     }
@@ -237,8 +237,8 @@ pub fn results(c: &ResultsCommand) -> Result<ExitCode> {
     match c {
         ResultsCommand::Merge { shards, out } => {
             let rows = results::run::merge(shards, out)?;
-            out!("{}", leaderboard::results_table(&rows));
-            out!("{}", leaderboard::runs_table(&rows));
+            out!("{}", leaderboard::table::results_table(&rows));
+            out!("{}", leaderboard::table::runs_table(&rows));
             for r in &rows {
                 outln!("merged: {}", results_path(out, &r.task_id).display());
             }

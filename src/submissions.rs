@@ -50,7 +50,7 @@ pub enum LeaderboardCommand {
         model: String,
         /// The protocol the model server speaks: `openpi` or `vla-eval`
         #[arg(long, default_value = "openpi")]
-        wire: results::run::Wire,
+        wire: results::run::record::Wire,
         /// The model's profile (`pi0`, `rdt` or a file): use the one the bundle's runs used
         #[arg(long, default_value = "pi0")]
         profile: String,

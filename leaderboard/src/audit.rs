@@ -93,7 +93,7 @@ pub fn audit(tasks: Vec<(String, Count, Count)>) -> Audit {
 /// What a bundle claims per task: successes out of episodes, over every run folder's journal.
 pub fn claimed(
     bundle: &crate::bundle::Unpacked,
-) -> Result<std::collections::BTreeMap<String, Count>, results::RunError> {
+) -> Result<std::collections::BTreeMap<String, Count>, results::run::RunError> {
     let mut out: std::collections::BTreeMap<String, Count> = Default::default();
     for member in &bundle.members {
         let Some(task) = member

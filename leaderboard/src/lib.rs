@@ -1,5 +1,5 @@
-//! The leaderboard: evaluation results (`results::EvalReport`, results schema
-//! [`results::RESULTS_SCHEMA_VERSION`]) turned into reports and submissions. The results tables
+//! The leaderboard: evaluation results (`results::run::EvalReport`, results schema
+//! [`results::run::RESULTS_SCHEMA_VERSION`]) turned into reports and submissions. The results tables
 //! `autobio eval` and `autobio results merge` print ([`table`]); submission bundles packed from
 //! suite runs and unpacked from strangers' files under limits ([`bundle`]); and their offline
 //! verification ([`verify`]), which re-enacts every episode from its seed and actions through a
@@ -16,5 +16,3 @@ pub mod bundle;
 pub mod site;
 pub mod table;
 pub mod verify;
-
-pub use table::{results_table, runs_table};

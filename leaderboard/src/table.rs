@@ -2,8 +2,8 @@
 //! mean score, episodes, wall time), then, over several tasks, the mean per level and overall,
 //! and over several runs, each task's per-run rates with their mean ± SEM.
 
-use results::EvalReport;
-use results::run::aggregate;
+use results::run::EvalReport;
+use results::run::stats::aggregate;
 use std::fmt::Write;
 
 /// One row per task.

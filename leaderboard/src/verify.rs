@@ -13,7 +13,7 @@
 
 use crate::bundle::{INDEX, Unpacked};
 use compiler::Task;
-use results::EpisodeResult;
+use results::episode::EpisodeResult;
 use results::run::record::{sha256_hex, task_content_sha256};
 use results::suite::{LoadedSuite, SUITE_FILE};
 use std::collections::BTreeMap;
@@ -167,7 +167,7 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
         let mut seen: BTreeMap<(u32, u64), usize> = BTreeMap::new();
         let mut manifests = 0;
         for dir in &run_dirs {
-            let manifest_path = results::run::manifest_path(dir, &task.id);
+            let manifest_path = results::run::record::manifest_path(dir, &task.id);
             if !manifest_path.exists() {
                 continue;
             }
@@ -188,7 +188,7 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
                     .failures
                     .push(format!("{}: {e}", rel(root, &manifest_path))),
             }
-            let journal = results::run::journal_path(dir, &task.id);
+            let journal = results::run::record::journal_path(dir, &task.id);
             let episodes = match results::run::record::read_journal_only(&journal) {
                 Ok(e) => e,
                 Err(e) => {
@@ -304,8 +304,8 @@ fn check_extras(bundle: &Unpacked, tasks: &[Task], run_dirs: &[PathBuf]) -> Vec<
     }
     for dir in run_dirs {
         for id in &ids {
-            let journal = results::run::journal_path(dir, id);
-            if journal.exists() && !results::run::manifest_path(dir, id).exists() {
+            let journal = results::run::record::journal_path(dir, id);
+            if journal.exists() && !results::run::record::manifest_path(dir, id).exists() {
                 failures.push(format!(
                     "{}: a journal without its manifest",
                     rel(&bundle.root, &journal)
@@ -508,7 +508,7 @@ fn check_claim(task: &Task, c: &Claim, root: &Path, reenact: &Reenact) -> Option
     let ended_by_error = e.error.is_some();
     // What the harness recorded for this episode: the judge's verdict, or, for an episode that
     // ended in an error, the failure that scores 0 (`Verdict::ended_by_error`).
-    let mut judged = results::Verdict {
+    let mut judged = results::verdict::Verdict {
         success: got.success,
         score: got.score,
         stages: Vec::new(),

@@ -2,7 +2,7 @@
 //! (`tests/data/`, written by `autobio eval --policy hold --runs 2`) read back through `results`
 //! and printed as `autobio eval` prints them. Regenerate with `UPDATE_GOLDEN=1`.
 
-use results::EvalReport;
+use results::run::EvalReport;
 use std::path::Path;
 
 fn reports() -> Vec<EvalReport> {
@@ -23,7 +23,7 @@ fn reports() -> Vec<EvalReport> {
 fn the_results_tables_are_what_eval_prints() {
     let rows = reports();
     assert_eq!(rows.len(), 2);
-    let text = leaderboard::results_table(&rows) + &leaderboard::runs_table(&rows);
+    let text = leaderboard::table::results_table(&rows) + &leaderboard::table::runs_table(&rows);
     let golden = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/tables.txt");
     if std::env::var_os("UPDATE_GOLDEN").is_some() {
         std::fs::write(&golden, &text).unwrap();
@@ -35,5 +35,8 @@ fn the_results_tables_are_what_eval_prints() {
     }
     assert_eq!(text, std::fs::read_to_string(&golden).unwrap());
     // One task of one run has no aggregate lines.
-    assert_eq!(leaderboard::runs_table(&rows[..1]).lines().count(), 1);
+    assert_eq!(
+        leaderboard::table::runs_table(&rows[..1]).lines().count(),
+        1
+    );
 }

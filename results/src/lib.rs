@@ -19,8 +19,3 @@ pub mod suite;
 pub mod verdict;
 
 pub use image::Image;
-
-// Second paths the leaderboard (owned elsewhere) still uses; the module paths are canonical.
-pub use episode::EpisodeResult;
-pub use run::{EvalReport, RESULTS_SCHEMA_VERSION, RunError};
-pub use verdict::Verdict;

@@ -7,7 +7,7 @@
 
 use super::{SiteError, io, slug};
 use crate::bundle::{Index, Limits, unpack};
-use results::EpisodeResult;
+use results::episode::EpisodeResult;
 use results::run::record::{Manifest, sha256_hex};
 use results::run::stats::{EvalSummary, summarise};
 use serde::{Deserialize, Serialize};

@@ -61,7 +61,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Vec<EvalReport>, RunError> 
         .map(|(task, shards)| merge_task(task, shards))
         .collect::<Result<_, _>>()?;
     for (manifest, _) in &merged {
-        let journal = super::journal_path(out, &manifest.task_id);
+        let journal = super::record::journal_path(out, &manifest.task_id);
         if std::fs::metadata(&journal).is_ok_and(|m| m.len() > 0) {
             return Err(RunError::Exists {
                 dir: out.to_path_buf(),
@@ -134,7 +134,7 @@ fn merge_task(
         .collect();
     let mut episodes: Vec<Option<EpisodeResult>> = vec![None; planned.len()];
     for (dir, _) in shards {
-        for e in read_journal_only(&super::journal_path(dir, task))? {
+        for e in read_journal_only(&super::record::journal_path(dir, task))? {
             let Some(&k) = position.get(&e.seed) else {
                 return fail(format!(
                     "{} has seed {}, which no shard plans",

@@ -11,8 +11,6 @@ pub mod stats;
 pub use merge::merge;
 // Second paths the leaderboard and `src/submissions.rs` (owned elsewhere) still use; `record::`
 // and `stats::` are canonical.
-pub use record::{Wire, journal_path, manifest_path};
-pub use stats::aggregate;
 
 use record::{Conditions, ModelRecord};
 use stats::EvalSummary;
