@@ -54,7 +54,7 @@ demo: build
 	  --episodes 3 --seed 0
 
 test: setup
-	$(CARGO) test --release --workspace
+	$(CARGO) test --release --workspace --no-fail-fast
 	# The Python package (python/tests) in its own environment, against the CLI just built.
 	AUTOBIO_BIN=$${CARGO_TARGET_DIR:-target}/release/autobio \
 	  .deps/python-env/bin/python -m pytest python/tests -q -p no:cacheprovider
