@@ -949,6 +949,8 @@ impl Parser {
         }
     }
 
+    // Long on purpose: one arm per domain form a `[params.x]` table may take (choice, int, real,
+    // slot, opposite), each reporting its own mistakes at their spans, in the order they are read.
     fn param(&mut self, name: Spanned<String>, t: &DeTable<'_>) -> Param {
         let mut domains: Vec<(Span, ParamDomain)> = Vec::new();
         let mut exclude = Vec::new();
