@@ -5,8 +5,8 @@
 //! and the build of the program that solved it (its commit and its executable's size and time).
 //! A protocol whose task is unchanged is answered from its files; an edited one misses and is
 //! solved afresh; a rebuilt program starts over. A file that cannot be read or parsed is a miss,
-//! never an error, and entries are written to a temporary name and renamed, so concurrent checks
-//! never read half a file.
+//! never an error (two checks writing one entry at once can leave it so: it is solved again), and
+//! entries are written to a temporary name and renamed (`results::run::record::write_atomic`).
 //!
 //! Where the files go is the caller's choice ([`Store::from_env`]: `AUTOBIO_CACHE_DIR`, else the
 //! user's cache folder; [`Store::none`] keeps nothing). It does not decide what is solved (the
@@ -77,7 +77,10 @@ impl Store {
         let solved = solve();
         if let Ok(bytes) = serde_json::to_vec(&solved) {
             // A store that cannot be written is a store that keeps nothing.
-            let _ = write_atomic(&path, &bytes);
+            let _ = path
+                .parent()
+                .map_or(Ok(()), std::fs::create_dir_all)
+                .and_then(|_| results::run::record::write_atomic(&path, &bytes));
         }
         solved
     }
@@ -113,13 +116,4 @@ fn build_identity() -> String {
             format!("{}:{modified}", m.len())
         })
         .unwrap_or_default()
-}
-
-fn write_atomic(path: &std::path::Path, bytes: &[u8]) -> std::io::Result<()> {
-    if let Some(dir) = path.parent() {
-        std::fs::create_dir_all(dir)?;
-    }
-    let tmp = path.with_extension(format!("tmp{}", std::process::id()));
-    std::fs::write(&tmp, bytes)?;
-    std::fs::rename(&tmp, path)
 }
