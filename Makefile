@@ -37,6 +37,7 @@ demo: build
 	  --protocol protocols/tube/pick_up.toml \
 	  --protocol protocols/tube/unscrew_cap.toml \
 	  --protocol protocols/tube/screw_cap.toml \
+	  --protocol protocols/tube/recap.toml \
 	  --protocol protocols/vortex_mixer/mix_tube.toml \
 	  --episodes 5 --seed 0 --out out/demo --record
 	CARGO="$(CARGO)" ./scripts/demo-model.sh

@@ -73,6 +73,15 @@ pub struct EvalArgs {
     /// robot that does nothing would pass it)
     #[arg(long)]
     allow_trivial: bool,
+    /// The checkpoint the model serves, one of several trained alike on different training
+    /// seeds (a path, a hub revision, a hash): recorded in the run, so that a leaderboard shows
+    /// the SEM over training seeds, as the paper does. Needs --training-seed
+    #[arg(long, value_name = "NAME", requires = "training_seed")]
+    checkpoint: Option<String>,
+    /// Which training seed the checkpoint is (0-based): only run K of the runs is evaluated, so
+    /// one --out per training seed, packed together, covers every run once
+    #[arg(long, value_name = "K", requires = "checkpoint")]
+    training_seed: Option<u32>,
 }
 
 #[derive(Clone, Debug, clap::Subcommand)]
@@ -124,6 +133,11 @@ pub fn eval(front: &Front, a: &EvalArgs) -> Result<ExitCode> {
             runs,
             workers: a.workers as usize,
             shard: a.shard,
+            checkpoint: a
+                .checkpoint
+                .clone()
+                .zip(a.training_seed)
+                .map(|(name, run)| results::run::Checkpoint { run, name }),
         };
         errln!(
             "evaluating {} ({} episodes{}{} from seed {}{})",

@@ -383,7 +383,7 @@ fn describe_with_a_seed_shows_everything_the_seed_draws() {
 fn a_tube_whose_cap_starts_off_is_simulated_open() {
     let catalogue = autobio_ok(&["describe", "--catalogue"]);
     assert!(
-        catalogue.contains("part cap: on | off (may start on | off)\n"),
+        catalogue.contains("part cap: on | off | apart (may start on | off | apart)\n"),
         "{catalogue}"
     );
     assert!(!catalogue.contains("not simulated yet"), "{catalogue}");

@@ -272,7 +272,9 @@ fn balanced_needs_the_tube_down_in_the_slot_across_from_the_loaded_one() {
 
 #[test]
 fn the_rotor_camera_shows_where_the_loaded_tube_is() {
-    let task = compile(ROTOR);
+    // The variant whose fixed camera looks into the rotor (the paper task's, upstream's front
+    // camera, sees the open lid).
+    let task = compile("protocols/centrifuge/insert_symmetric_rotor_view.toml");
     let arm = task.sample(0).robot_q;
     let rotor = task.sample(0).labware_joints;
     // The first frame of a draw, with the arm and the rotor where draw 0 has them: only the

@@ -34,6 +34,7 @@ fn the_simulated_tasks_are_the_tables_and_a_motionless_robot_fails_one() {
         simulated,
         [
             "centrifuge.insert_symmetric",
+            "centrifuge.insert_symmetric_rotor_view",
             "centrifuge_5430.close_lid",
             "centrifuge_5430.open_lid",
             "centrifuge_5430.open_then_close",
@@ -52,7 +53,9 @@ fn the_simulated_tasks_are_the_tables_and_a_motionless_robot_fails_one() {
             "thermal_cycler.open_lid",
             "thermal_cycler.open_then_close",
             "thermal_mixer.set_parameters",
+            "thermal_mixer.set_parameters_legible",
             "tube.pick_up",
+            "tube.recap",
             "tube.screw_cap",
             "tube.transfer",
             "tube.unscrew_cap",

@@ -666,8 +666,8 @@ fn the_site_ranks_verified_bundles_beside_the_paper_and_is_the_same_twice() {
     assert_eq!(
         rows,
         [
-            "| 1 | scripted expert | none | verified | 100.0 | 0.0 | 100.0 | – | – | 1.000 |",
-            "| 2 | no motion |  | reported | 0.0 | 0.0 | 0.0 | – | – | 0.000 |",
+            "| 1 | scripted expert | none | verified | 100.0 | – | – | 100.0 | – | – | 1.000 |",
+            "| 2 | no motion |  | reported | 0.0 | – | – | 0.0 | – | – | 0.000 |",
         ],
         "{ranking}"
     );
@@ -925,4 +925,129 @@ fn a_run_of_a_trivial_task_is_not_submitted() {
     );
     assert!(said.contains("open_and_close.toml:"), "{said}");
     assert!(!bundle.exists());
+}
+
+/// One run folder per training seed (`eval --checkpoint NAME --training-seed K`, each only run K
+/// of a 3-run suite) packed together verify, and the site shows their ± in the column over
+/// training seeds, never in the one over evaluation runs; a bundle that mixes the two kinds, or
+/// evaluates a checkpoint on another run's episodes, is refused; a training seed past the runs
+/// is refused before anything runs.
+#[test]
+fn training_seed_runs_verify_and_show_their_sem_over_training_seeds() {
+    let suites = scratch("lb-seed-suites");
+    std::fs::write(
+        suites.join("seeds.toml"),
+        format!(
+            "format = 1\n[suite]\nname = \"seeds\"\nepisodes = 1\nseed = 0\nruns = 3\ntasks = [\"{}\"]\n",
+            repo("protocols/thermal_cycler/close_lid.toml")
+        ),
+    )
+    .unwrap();
+    let suite = suites.join("seeds.toml");
+    let root = scratch("lb-seed-runs");
+    let runs: Vec<PathBuf> = (0..3).map(|k| root.join(format!("seed{k}"))).collect();
+    for (k, dir) in runs.iter().enumerate() {
+        let (name, seed) = (format!("ckpt-{k}"), k.to_string());
+        common::eval_suite(
+            &suite,
+            dir,
+            &["--checkpoint", &name, "--training-seed", &seed],
+        );
+        // Only its own run's episode.
+        let journal = common::journal(dir, TASK);
+        assert_eq!(journal.len(), 1, "{journal:?}");
+        assert_eq!(journal[0]["run"], k as u64);
+    }
+    let out = autobio(&[
+        "eval",
+        "--suite",
+        suite.to_str().unwrap(),
+        "--out",
+        root.join("seed3").to_str().unwrap(),
+        "--checkpoint",
+        "ckpt-3",
+        "--training-seed",
+        "3",
+    ]);
+    let said = text(&out.stderr);
+    assert!(!out.status.success(), "{said}");
+    assert!(
+        said.contains("training seed 3 has no run to evaluate: the run has 3"),
+        "{said}"
+    );
+    let bundles = scratch("lb-seed-bundles");
+    let bundle = bundles.join("seeds.tar.zst");
+    let mut args = vec!["leaderboard", "submit"];
+    args.extend(runs.iter().map(|r| r.to_str().unwrap()));
+    args.extend([
+        "--model-name",
+        "three seeds",
+        "--out",
+        bundle.to_str().unwrap(),
+    ]);
+    common::autobio_ok(&args);
+    let (code, said) = verify(&bundle, &suites);
+    assert_eq!(code, 0, "{said}");
+
+    // The site: the ± in the training-seed column of the ranking and of the task's table.
+    let site = scratch("lb-seed-site");
+    let only = scratch("lb-seed-only");
+    std::fs::copy(&bundle, only.join("seeds.tar.zst")).unwrap();
+    common::autobio_ok(&[
+        "leaderboard",
+        "build",
+        only.to_str().unwrap(),
+        "--out",
+        site.to_str().unwrap(),
+    ]);
+    let ranking = std::fs::read_to_string(site.join("ranking.md")).unwrap();
+    assert!(
+        ranking.contains("| ± SEM over training seeds | ± SEM over evaluation runs |"),
+        "{ranking}"
+    );
+    let row = ranking.lines().find(|l| l.contains("three seeds")).unwrap();
+    let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+    // | # | model | training | standing | success | ± training seeds | ± evaluation runs | ...
+    assert!(cells[6].parse::<f64>().is_ok(), "{row}");
+    assert_eq!(cells[7], "–", "{row}");
+    let pages: Vec<PathBuf> = std::fs::read_dir(site.join("submissions"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "html"))
+        .collect();
+    let [page] = &pages[..] else {
+        panic!("one submission page: {pages:?}")
+    };
+    let page = std::fs::read_to_string(page).unwrap();
+    assert!(
+        page.contains("training seed 0: ckpt-0; training seed 1: ckpt-1; training seed 2: ckpt-2"),
+        "{page}"
+    );
+
+    // A folder whose manifest names no checkpoint beside two that do.
+    let m = members(&bundle);
+    let manifest = format!("runs/2/{TASK}.manifest.json");
+    let mut bare = m.clone();
+    let mut value: Value = serde_json::from_slice(&m[&manifest]).unwrap();
+    value.as_object_mut().unwrap().remove("checkpoint");
+    bare.insert(manifest.clone(), serde_json::to_vec_pretty(&value).unwrap());
+    let forged = bundles.join("bare.tar.zst");
+    pack(&bare, &forged, true);
+    refused(
+        &forged,
+        &suites,
+        "some runs name their training-seed checkpoint and",
+    );
+    // A checkpoint said to be training seed 1 beside run 2's episode.
+    let mut moved = m.clone();
+    let mut value: Value = serde_json::from_slice(&m[&manifest]).unwrap();
+    value["checkpoint"]["run"] = Value::from(1);
+    moved.insert(manifest, serde_json::to_vec_pretty(&value).unwrap());
+    let forged = bundles.join("moved.tar.zst");
+    pack(&moved, &forged, true);
+    refused(
+        &forged,
+        &suites,
+        "the checkpoint of training seed 1 is evaluated on run 1 only",
+    );
 }

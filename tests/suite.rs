@@ -31,6 +31,7 @@ mod model_faults;
 mod model_servers;
 mod no_simulator;
 mod observation_history;
+mod paper_fidelity;
 mod pictures;
 mod pipette;
 mod planning;

@@ -69,6 +69,14 @@ pub fn describe(task: &Task) -> String {
                 format!(", {}", state.join(", "))
             }
         );
+        for (part, pose) in &l.parts {
+            let p = labware::frame::position(pose);
+            let _ = writeln!(
+                w,
+                "    {part} lies apart at ({:.3}, {:.3}, {:.3}) m",
+                p[0], p[1], p[2]
+            );
+        }
     }
     let _ = writeln!(w, "\nrandomisation (per episode, from the seed)");
     let mut any = false;
@@ -98,6 +106,17 @@ pub fn describe(task: &Task) -> String {
         for (role, j) in &l.joint_jitter {
             any = true;
             let _ = writeln!(w, "  {}.{role} ± {} rad", l.name, format_number(*j));
+        }
+        if l.parts_radius_m > 0.0 {
+            any = true;
+            for part in l.parts.keys() {
+                let _ = writeln!(
+                    w,
+                    "  {}.{part} in a disc of {} mm about where it lies",
+                    l.name,
+                    format_number(l.parts_radius_m * 1000.0)
+                );
+            }
         }
     }
     for p in &task.params {

@@ -11,10 +11,14 @@
 //! - `<item> in <holder>.<slot>`                   object in slot
 //! - `<container>.volume <op> <quantity>`          volume, op one of `=`, `>=`, `<=`
 //! - `<instrument>.<panel value> = <quantity>`     display value
-//! - `<robot> touches <item>`                      contact
+//! - `<robot> touches <item>`                      contact (any of the robot's bodies)
+//! - `<robot> holds <item>[.<part>]`               a finger of the robot's gripper or hand
+//!   touches the item, or that part of it (upstream's finger-on-cap checks)
 //! - `<item> near [<x>, <y>, <z>] <unit>`          pose within tolerance
 //! - `<item> lifted <quantity>`                    raised at least this far above where it
 //!   started (its start slot's seat, else its placement): held clear, not resting
+//! - `<item>.<part> lifted <quantity>`             a loose part raised at least this far above
+//!   its seat on the item, along the item's axis (a cap off its tube's thread)
 //!
 //! Any form but contact, joint range and `lifted` may end in `within <quantity>` to give its
 //! tolerance inline.
@@ -96,15 +100,25 @@ pub enum Check {
         robot: String,
         item: String,
     },
+    /// A finger of the robot touches the item, or its `part` (a tube's cap).
+    Holds {
+        robot: String,
+        item: String,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        part: Option<String>,
+    },
     Position {
         item: String,
         pos: [f64; 3],
         tolerance: Tolerance,
     },
-    /// The item stands at least `height` (m) above where it started.
+    /// The item stands at least `height` (m) above where it started; with `part`, that part
+    /// stands at least `height` above its seat on the item.
     Lifted {
         item: String,
         height: f64,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        part: Option<String>,
     },
 }
 
@@ -149,6 +163,11 @@ pub enum Form {
         robot: String,
         item: String,
     },
+    Holds {
+        robot: String,
+        item: String,
+        part: Option<String>,
+    },
     Near {
         item: String,
         pos: [f64; 3],
@@ -156,6 +175,7 @@ pub enum Form {
     Lifted {
         item: String,
         height: f64,
+        part: Option<String>,
     },
 }
 
@@ -201,11 +221,13 @@ pub enum PredicateError {
     NotLocation { location: String },
     #[error("write `<robot> touches <item>`")]
     NotContact,
+    #[error("write `<robot> holds <item>` or `<robot> holds <item>.<part>`")]
+    NotHolds,
     #[error("`{unit}` is not a unit of length")]
     NotLengthUnit { unit: String },
     #[error("`{height}` is not a height: write a length above zero, e.g. `lifted 5 cm`")]
     NotHeight { height: String },
-    #[error("expected `is`, `was`, `in`, `=`, `>=`, `<=`, `touches`, `near` or `lifted`")]
+    #[error("expected `is`, `was`, `in`, `=`, `>=`, `<=`, `touches`, `holds`, `near` or `lifted`")]
     NoForm,
     #[error("`{lhs}` must be `<labware>.<value>`")]
     NotLabwareValue { lhs: String },
@@ -234,6 +256,14 @@ pub enum ValueError {
 fn split_dot(s: &str) -> Option<(String, String)> {
     let (a, b) = s.split_once('.')?;
     (!a.is_empty() && !b.is_empty() && !b.contains('.')).then(|| (a.to_string(), b.to_string()))
+}
+
+/// `<item>` or `<item>.<part>`; `None` for an empty name or a second dot.
+fn item_and_part(s: &str) -> Option<(String, Option<String>)> {
+    match s.split_once('.') {
+        None => (!s.is_empty()).then(|| (s.to_string(), None)),
+        Some(_) => split_dot(s).map(|(item, part)| (item, Some(part))),
+    }
 }
 
 fn bracketed(s: &str, n: usize) -> Result<(Vec<f64>, &str), PredicateError> {
@@ -339,6 +369,17 @@ pub fn parse(text: &str) -> Result<Parsed, PredicateError> {
             robot: robot.into(),
             item: item.into(),
         }
+    } else if let Some((robot, target)) = body.split_once(" holds ") {
+        let (robot, target) = (robot.trim(), target.trim());
+        if robot.contains(' ') || target.contains(' ') || robot.is_empty() || target.is_empty() {
+            return Err(PredicateError::NotHolds);
+        }
+        let (item, part) = item_and_part(target).ok_or(PredicateError::NotHolds)?;
+        Form::Holds {
+            robot: robot.into(),
+            item,
+            part,
+        }
     } else if let Some((item, rest)) = body.split_once(" near ") {
         let (v, unit) = bracketed(rest, 3)?;
         let q = parse_quantity(&format!("1 {unit}"))
@@ -353,11 +394,13 @@ pub fn parse(text: &str) -> Result<Parsed, PredicateError> {
         }
     } else if let Some((item, height)) = body.split_once(" lifted ") {
         let item = item.trim();
+        let not_item = || PredicateError::NotItemName {
+            name: item.to_string(),
+        };
         if item.contains(' ') || item.is_empty() {
-            return Err(PredicateError::NotItemName {
-                name: item.to_string(),
-            });
+            return Err(not_item());
         }
+        let (item, part) = item_and_part(item).ok_or_else(not_item)?;
         let q = parse_quantity(height.trim())?;
         if q.dimension != Dimension::Length || q.si <= 0.0 {
             return Err(PredicateError::NotHeight {
@@ -365,8 +408,9 @@ pub fn parse(text: &str) -> Result<Parsed, PredicateError> {
             });
         }
         Form::Lifted {
-            item: item.into(),
+            item,
             height: q.si,
+            part,
         }
     } else {
         let (lhs, cmp, rhs) = [(">=", Cmp::Ge), ("<=", Cmp::Le), ("=", Cmp::Eq)]
@@ -455,6 +499,8 @@ impl Check {
                     // A locked lid is also closed; an open or merely closed one is unlocked.
                     "closed" => s == "closed" || s == "locked",
                     "unlocked" => s != "locked",
+                    // A cap lying apart from its tube is off it.
+                    "off" => s == "off" || s == "apart",
                     st => s == st,
                 })
             }
@@ -492,8 +538,31 @@ impl Check {
                     .unwrap_or(*initial);
                 Some(compare(v, Cmp::Eq, target, tolerance.value))
             }
-            Check::Contact { robot, item } => match w.hand(robot) {
+            Check::Contact { robot, item }
+            | Check::Holds {
+                robot,
+                item,
+                part: None,
+            } => match w.hand(robot) {
                 Hand::Item(i) | Hand::Stabilising(i) if i == item => Some(true),
+                _ => None,
+            },
+            // A cap in the hand that took it off is held, and clear of its seat.
+            Check::Holds {
+                robot,
+                item,
+                part: Some(_),
+            } => match w.hand(robot) {
+                Hand::Cap(i) if i == item => Some(true),
+                _ => None,
+            },
+            Check::Lifted {
+                item,
+                part: Some(part),
+                ..
+            } => match w.part(item, part)? {
+                "off" if w.hands.values().any(|h| h == &Hand::Cap(item.clone())) => Some(true),
+                "on" => Some(false),
                 _ => None,
             },
             // Held is lifted; standing in a slot or on the bench is not.
@@ -527,8 +596,11 @@ mod tests {
             "tube.volume >= 200 µL",
             "mixer.speed = {rpm} rpm",
             "arm touches tube",
+            "arm holds tube",
+            "opener holds tube.cap",
             "tube near [0.3, 0.2, 0.83] m within 5 mm",
             "tube lifted 9.5 cm",
+            "tube.cap lifted 3 cm",
         ];
         for t in ok {
             assert!(parse(t).is_ok(), "{t}: {:?}", parse(t));
@@ -602,6 +674,30 @@ mod tests {
                 item: s("tube")
             }
         );
+        assert_eq!(
+            form("opener holds tube.cap"),
+            Form::Holds {
+                robot: s("opener"),
+                item: s("tube"),
+                part: Some(s("cap"))
+            }
+        );
+        assert_eq!(
+            form("arm holds tube"),
+            Form::Holds {
+                robot: s("arm"),
+                item: s("tube"),
+                part: None
+            }
+        );
+        assert_eq!(
+            form("tube.cap lifted 30 mm"),
+            Form::Lifted {
+                item: s("tube"),
+                height: 0.03,
+                part: Some(s("cap"))
+            }
+        );
         let Form::Near { pos, .. } = form("tube near [300, 200, 830] mm") else {
             panic!("a position")
         };
@@ -619,13 +715,20 @@ mod tests {
     #[test]
     fn rejects_malformed_forms() {
         // Each refused for its own reason, not just refused.
-        let verb = "expected `is`, `was`, `in`, `=`, `>=`, `<=`, `touches`, `near` or `lifted`";
+        let verb =
+            "expected `is`, `was`, `in`, `=`, `>=`, `<=`, `touches`, `holds`, `near` or `lifted`";
         for (t, why) in [
             ("cycler lid closed", verb),
             ("cycler.lid is", verb),
             ("cycler.lid in [1] rad", "`[1]` must hold 2 numbers"),
             ("cycler.lid in [2, 1] rad", "the range [2, 1] is empty"),
             ("tube near [1, 2] m", "`[1, 2]` must hold 3 numbers"),
+            ("opener holds", verb),
+            ("opener holds tube.cap.top", "write `<robot> holds <item>`"),
+            (
+                "tube.cap.top lifted 3 cm",
+                "`tube.cap.top` is not an item name",
+            ),
             ("tube.volume = ", "a comparison needs a value with a unit"),
             (
                 "cycler.lid is closed within 3 parsecs",

@@ -136,6 +136,10 @@ pub(crate) fn merge(
                     x.held_by = l.held_by;
                     x.at = None;
                 }
+                for (k, pose) in l.parts {
+                    x.parts.retain(|(kx, _)| kx.value != k.value);
+                    x.parts.push((k, pose));
+                }
             }
             None if l.kind.is_none() => cx.push(
                 Diagnostic::new(

@@ -112,6 +112,17 @@ pub struct LabwareSpec {
     pub joint_jitter: BTreeMap<String, f64>,
     /// Initial part states (every part of the kind).
     pub initial: BTreeMap<String, String>,
+    /// Where each loose part that starts `apart` lies (world), by role; the item's own place is
+    /// `placement` or `at` as for any item.
+    #[serde(
+        default,
+        skip_serializing_if = "BTreeMap::is_empty",
+        with = "labware::frame::serde_pose_map"
+    )]
+    pub parts: BTreeMap<String, Pose>,
+    /// Radius (m) of the disc each part lying apart is drawn in about its `parts` pose.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub parts_radius_m: f64,
     /// Where a movable item starts (template `holder.slot`); `None`: at `placement`.
     pub at: Option<String>,
     /// The robot whose hand holds the item at the start (welded at its grasp; `at` is then none).
@@ -183,6 +194,13 @@ pub struct SceneInstance {
     /// Offsets of labware joints' start angles (rad), by item and role: only the jittered ones.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub labware_joints: BTreeMap<String, BTreeMap<String, f64>>,
+    /// Where each loose part that starts apart lies (world), by `item.part`.
+    #[serde(
+        default,
+        skip_serializing_if = "BTreeMap::is_empty",
+        with = "labware::frame::serde_pose_map"
+    )]
+    pub part_placement: BTreeMap<String, Pose>,
     /// The task's instruction, and each stage's, with the parameters filled in.
     pub instruction: String,
     pub stage_instructions: Vec<String>,
@@ -191,8 +209,10 @@ pub struct SceneInstance {
 impl Task {
     /// Draws the scene for `seed`. Draw order: robots in order (one draw per joint), then labware in
     /// order (x, y, yaw), then parameters in order, then labware joint offsets (items in order,
-    /// roles in name order; last, so that adding one leaves every other draw as it was). The same
-    /// task and seed always give the same instance.
+    /// roles in name order), then the places of parts lying apart (items in order, parts in name
+    /// order: radius, then angle, upstream's disc draw; only where a radius is given). Each kind
+    /// of draw comes after the older ones, so that adding one leaves every other draw as it was.
+    /// The same task and seed always give the same instance.
     pub fn sample(&self, seed: u64) -> SceneInstance {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
         let robot_q = self
@@ -240,6 +260,19 @@ impl Task {
                 (l.name.clone(), offsets)
             })
             .collect();
+        let mut part_placement = BTreeMap::new();
+        for l in &self.labware {
+            for (part, pose) in &l.parts {
+                let mut p = *pose;
+                if l.parts_radius_m > 0.0 {
+                    let r = l.parts_radius_m * uniform(&mut rng, 0.0, 1.0).sqrt();
+                    let a = uniform(&mut rng, 0.0, std::f64::consts::TAU);
+                    p.translation.vector.x += r * a.cos();
+                    p.translation.vector.y += r * a.sin();
+                }
+                part_placement.insert(format!("{}.{part}", l.name), p);
+            }
+        }
         let fill = |t: &str| render(t, &params).unwrap_or_else(|_| t.to_string());
         SceneInstance {
             seed,
@@ -249,6 +282,7 @@ impl Task {
             stage_instructions: self.stages.iter().map(|s| fill(&s.instruction)).collect(),
             params,
             labware_joints,
+            part_placement,
         }
     }
 
@@ -299,4 +333,8 @@ impl Task {
         }
         carried.filter(|c| is_tool(c))
     }
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }

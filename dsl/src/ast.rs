@@ -121,6 +121,10 @@ pub struct Labware {
     pub held_by: Option<Spanned<String>>,
     /// Initial state, e.g. `lid = "open"`, `volume = "1 mL"`, `speed = "900 rpm"`: (key, value).
     pub state: Vec<(Spanned<String>, Spanned<Scalar>)>,
+    /// Where each loose part that starts apart from the item lies (`parts = { cap = { pos_m =
+    /// [..] } }`, with `state = { cap = "apart" }`): (part, pose).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub parts: Vec<(Spanned<String>, Pose)>,
 }
 
 /// One `[params.<name>]` table: a value drawn per episode.
@@ -176,6 +180,9 @@ pub enum RandomItem {
     Xy(Spanned<f64>),
     /// Uniform yaw offset: ± radians.
     Yaw(Spanned<f64>),
+    /// Where a labware item's loose parts that start apart lie: uniformly in a disc of this
+    /// radius (m) about each one's `parts` pose.
+    PartsRadius(Spanned<f64>),
     /// Uniform offsets of a labware item's joints, by role: ± radians (a rotor's start angle).
     LabwareJoints {
         joints: Vec<(Spanned<String>, Spanned<f64>)>,
@@ -274,6 +281,10 @@ impl Protocol {
                 s(&mut k.span);
                 s(&mut v.span);
             }
+            for (k, p) in &mut l.parts {
+                s(&mut k.span);
+                pose(p, &s);
+            }
         }
         for r in &mut self.randomise {
             s(&mut r.target.span);
@@ -284,7 +295,9 @@ impl Protocol {
                         s(&mut high.span);
                         s(span);
                     }
-                    RandomItem::Xy(x) | RandomItem::Yaw(x) => s(&mut x.span),
+                    RandomItem::Xy(x) | RandomItem::Yaw(x) | RandomItem::PartsRadius(x) => {
+                        s(&mut x.span)
+                    }
                     RandomItem::LabwareJoints { joints, span } => {
                         for (k, v) in joints {
                             s(&mut k.span);

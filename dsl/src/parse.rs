@@ -119,9 +119,9 @@ const PARAM_KEYS: &[&str] = &[
 ];
 const PROTOCOL_KEYS: &[&str] = &["id", "version", "level", "instruction", "time_limit"];
 const ROBOT_KEYS: &[&str] = &["model", "base"];
-const LABWARE_KEYS: &[&str] = &["kind", "pose", "at", "held_by", "state"];
+const LABWARE_KEYS: &[&str] = &["kind", "pose", "at", "held_by", "state", "parts"];
 const POSE_KEYS: &[&str] = &["pos", "yaw"];
-const RANDOM_KEYS: &[&str] = &["joints", "xy", "yaw"];
+const RANDOM_KEYS: &[&str] = &["joints", "xy", "yaw", "parts_radius"];
 const SUCCESS_KEYS: &[&str] = &["all", "scoring", "weights", "settle"];
 const CAMERA_KEYS: &[&str] = &["pos", "look_at", "fovy"];
 const SCORINGS: &[&str] = &["binary", "progress"];
@@ -620,6 +620,7 @@ impl Parser {
             at: None,
             held_by: None,
             state: Vec::new(),
+            parts: Vec::new(),
         };
         for (key, value) in self.settings(t) {
             match key.get_ref().as_ref() {
@@ -636,6 +637,15 @@ impl Parser {
                                     s,
                                 ));
                             }
+                        }
+                    }
+                }
+                "parts" => {
+                    if let Some(parts) = self.table(value, "`parts`") {
+                        for (part, pose) in ordered(parts) {
+                            let name = Spanned::new(part.get_ref().to_string(), span_of(part));
+                            let pose = self.pose(pose);
+                            l.parts.push((name, pose));
                         }
                     }
                 }
@@ -825,6 +835,11 @@ impl Parser {
                 "yaw" => {
                     if let Some(q) = self.quantity(k, value, Dimension::Angle) {
                         r.items.push(RandomItem::Yaw(q))
+                    }
+                }
+                "parts_radius" => {
+                    if let Some(q) = self.quantity(k, value, Dimension::Length) {
+                        r.items.push(RandomItem::PartsRadius(q))
                     }
                 }
                 _ => self.unknown_key(key, RANDOM_KEYS, "a randomisation"),

@@ -210,10 +210,12 @@ const LID_PLAIN: PartState = PartState {
     states: &["open", "closed"],
     initial: &["open", "closed"],
 };
+/// A screw cap: on its tube, off it (a tube made open, or a cap taken off), or lying apart from
+/// the tube where the protocol's `parts` puts it (a cap a robot picks up to screw on).
 const CAP: PartState = PartState {
     part: "cap",
-    states: &["on", "off"],
-    initial: &["on", "off"],
+    states: &["on", "off", "apart"],
+    initial: &["on", "off", "apart"],
 };
 /// What a lid takes, by its latch: none (opened and shut), a latch locked and unlocked by hand
 /// (a lever), or a latch that catches as the lid shuts and a panel key releases (no `lock`).
@@ -235,6 +237,7 @@ const TUBE_PRIMITIVES: &[&str] = &[
     "hold",
     "hand_over",
     "unscrew_cap",
+    "pick_cap",
     "screw_cap",
     "aspirate",
     "dispense",

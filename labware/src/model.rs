@@ -61,6 +61,19 @@ pub struct LabwareState {
     /// distance), in task order; what a `<robot> touches <item>` predicate measures.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub touched_by: Vec<String>,
+    /// The robots whose fingers touch this item, and where: what a `<robot> holds <item>`
+    /// predicate measures. In task order, then the item's own body before its parts.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub held_by: Vec<FingerContact>,
+}
+
+/// A robot's finger touching an item (a MuJoCo contact at zero or negative distance).
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+pub struct FingerContact {
+    pub robot: String,
+    /// The loose part touched (a tube's cap); `None`: the item's own body.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub part: Option<String>,
 }
 
 impl LabwareState {
@@ -144,6 +157,20 @@ pub trait Part {
     /// The measured value of `state` (tolerance: the predicate's, else the part's); `None` for
     /// a state the part does not have.
     fn state(&self, state: &str, tolerance: Option<f64>, s: &LabwareState) -> Option<Measure>;
+
+    /// How far the part stands above its seat on the item, along the item's axis (m; negative:
+    /// pushed below it); `None` where the part is not there to measure (a tube made open) or
+    /// moves on a joint (a lid).
+    fn rise(&self, _s: &LabwareState) -> Option<f64> {
+        None
+    }
+
+    /// The part's frame when it lies apart from the item the right way up, relative to the point
+    /// of the bench under it (what a protocol's `parts` pose names); identity for a part with
+    /// its frame at its base.
+    fn lying(&self) -> crate::frame::Pose {
+        crate::frame::Pose::identity()
+    }
 }
 
 /// How an affordance frame may be turned and still be the same grasp.

@@ -115,6 +115,7 @@ mod tests {
                 parts: Default::default(),
                 logic: Default::default(),
                 touched_by: Vec::new(),
+                held_by: Vec::new(),
             };
             let seats: Vec<[f64; 3]> = slots
                 .layout

@@ -239,10 +239,10 @@ impl Part for Params {
     fn state(&self, state: &str, tolerance: Option<f64>, s: &LabwareState) -> Option<Measure> {
         let tolerance = tolerance.unwrap_or(0.002);
         if self.open {
-            // No cap: off, as far as a cap can be.
+            // No cap: off, as far as a cap can be (and apart from nothing).
             let off = state == "off";
             // Its value: as far as a cap can be from the seat, the tube's height.
-            return (state == "on" || off).then_some(Measure {
+            return matches!(state, "on" | "off" | "apart").then_some(Measure {
                 value: self.height,
                 target: if off { self.cap_off_rise } else { 0.0 },
                 tolerance,
@@ -277,8 +277,32 @@ impl Part for Params {
                     holds: rise >= self.cap_off_rise || aside >= self.radius + self.cap_radius,
                 }
             }
+            // Apart: clear of the tube's neck, its skirt no longer around it, wherever it is (a
+            // cap lying on the bench); its value how far aside it is.
+            "apart" => {
+                let (_, aside) = cap_rise_and_aside(self, s)?;
+                let clear = self.radius + self.cap_radius;
+                Measure {
+                    value: aside,
+                    target: clear,
+                    tolerance,
+                    holds: aside >= clear,
+                }
+            }
             _ => return None,
         })
+    }
+
+    fn rise(&self, s: &LabwareState) -> Option<f64> {
+        if self.open {
+            return None;
+        }
+        cap_rise_and_aside(self, s).map(|(rise, _)| rise)
+    }
+
+    /// A cap lies on its rim, top up: its frame a cap's height less its top's offset above.
+    fn lying(&self) -> Pose {
+        translation([0.0, 0.0, self.cap_height - Self::CAP_TOP_ABOVE_ORIGIN])
     }
 }
 
@@ -626,6 +650,7 @@ mod tests {
                 parts: BTreeMap::from([("cap".into(), held)]),
                 logic: Default::default(),
                 touched_by: Vec::new(),
+                held_by: Vec::new(),
             };
             let start = p.affordance("cap_start", &s).unwrap().pose;
             let seated = p.affordance("cap_seated", &s).unwrap().pose;
@@ -657,6 +682,7 @@ mod tests {
             parts: BTreeMap::from([("cap".into(), placed[1].1)]),
             logic: Default::default(),
             touched_by: Vec::new(),
+            held_by: Vec::new(),
         };
         assert!(cap_offset(&p, &s).unwrap().0 < 1e-12);
         let g = p.affordance("grasp", &s).unwrap();

@@ -443,6 +443,7 @@ mod tests {
             parts: BTreeMap::new(),
             logic,
             touched_by: Vec::new(),
+            held_by: Vec::new(),
         }
     }
 

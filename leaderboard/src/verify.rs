@@ -5,6 +5,8 @@
 //! - every task's compiled content is the shipped protocol's ([`task_content_sha256`]): a result
 //!   for a modified task is refused;
 //! - the journals hold every episode the suite plans, each once, and no other;
+//! - runs of training seeds (`eval --checkpoint`) are all the bundle's runs or none, each folder
+//!   holds only its training seed's run, and each training seed is one checkpoint;
 //! - every episode, re-enacted from the scene its seed builds for the shipped task and the
 //!   recorded actions alone, reproduces the journal's trajectory hash, success, score and length.
 //!
@@ -137,6 +139,8 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
     // Every task: the shipped protocol compiled, the manifests' task and the journals' seeds.
     let mut tasks: Vec<Task> = Vec::new();
     let mut claims: Vec<Claim> = Vec::new();
+    // Each run folder's training-seed checkpoint, by task, and the runs of its episodes.
+    let mut checkpoints: Vec<Checkpointed> = Vec::new();
     for protocol in shipped.protocols() {
         let task = match compiler::check_file(&protocol, None) {
             Ok(c) if c.trivial_at().is_some() => {
@@ -172,8 +176,10 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
                 continue;
             }
             manifests += 1;
+            let mut checkpoint = None;
             match results::run::record::Manifest::read(&manifest_path) {
                 Ok(m) => {
+                    checkpoint = Some(m.checkpoint.clone());
                     let shown = rel(root, &manifest_path);
                     let want = Shipped {
                         task: &task,
@@ -196,6 +202,13 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
                     continue;
                 }
             };
+            if let Some(checkpoint) = checkpoint {
+                checkpoints.push(Checkpointed {
+                    shown: rel(root, &journal),
+                    checkpoint,
+                    runs: episodes.iter().map(|e| e.run).collect(),
+                });
+            }
             for e in episodes {
                 let n = seen.entry((e.run, e.seed)).or_default();
                 *n += 1;
@@ -221,6 +234,7 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
         v.tasks += 1;
         tasks.push(task);
     }
+    v.failures.extend(check_checkpoints(&checkpoints));
     // Nothing else may ride along: every member is the index, or a run folder's suite file, or
     // a suite task's manifest, journal, results or recording (what the site and an audit read
     // is exactly what was checked here).
@@ -359,6 +373,58 @@ fn check_manifest(
             "{shown}: seed {}, {} episodes x {} runs; the suite says seed {}, {} x {}",
             m.seed, m.episodes, m.runs, suite.seed, suite.episodes, suite.runs
         ));
+    }
+    failures
+}
+
+/// One task's run in one run folder: the checkpoint its manifest names and the runs its
+/// journal's episodes belong to.
+struct Checkpointed {
+    shown: String,
+    checkpoint: Option<results::run::Checkpoint>,
+    runs: std::collections::BTreeSet<u32>,
+}
+
+/// A submission of training-seed runs (`eval --checkpoint`) is one: every task's run names its
+/// checkpoint or none does (an SEM over training seeds and one over evaluation runs are never
+/// mixed), a folder holds only its training seed's run, and each training seed is one
+/// checkpoint throughout the suite.
+fn check_checkpoints(runs: &[Checkpointed]) -> Vec<String> {
+    let mut failures = Vec::new();
+    let named = runs.iter().filter(|r| r.checkpoint.is_some()).count();
+    if named == 0 {
+        return failures;
+    }
+    if named < runs.len() {
+        let bare: Vec<&str> = runs
+            .iter()
+            .filter(|r| r.checkpoint.is_none())
+            .map(|r| r.shown.as_str())
+            .collect();
+        failures.push(format!(
+            "some runs name their training-seed checkpoint and {} do not: a submission's runs              are all training seeds or all evaluation runs of one model",
+            bare.join(", ")
+        ));
+    }
+    let mut names: BTreeMap<u32, (&str, &str)> = BTreeMap::new();
+    for r in runs {
+        let Some(c) = &r.checkpoint else { continue };
+        if let Some(other) = r.runs.iter().find(|&&run| run != c.run) {
+            failures.push(format!(
+                "{}: the checkpoint of training seed {} is evaluated on run {} only, but an                  episode of run {other} is here",
+                r.shown, c.run, c.run
+            ));
+        }
+        match names.get(&c.run) {
+            Some((name, first)) if *name != c.name => failures.push(format!(
+                "{}: training seed {} is checkpoint `{}`, but `{}` in {first}",
+                r.shown, c.run, c.name, name
+            )),
+            Some(_) => {}
+            None => {
+                names.insert(c.run, (c.name.as_str(), r.shown.as_str()));
+            }
+        }
     }
     failures
 }

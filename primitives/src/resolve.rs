@@ -834,6 +834,7 @@ mod tests {
             parts: BTreeMap::new(),
             logic: BTreeMap::new(),
             touched_by: Vec::new(),
+            held_by: Vec::new(),
         }
     }
 
@@ -845,6 +846,7 @@ mod tests {
             parts: BTreeMap::new(),
             logic: BTreeMap::new(),
             touched_by: Vec::new(),
+            held_by: Vec::new(),
         }
     }
 
@@ -914,6 +916,7 @@ mod tests {
             parts: BTreeMap::new(),
             logic: BTreeMap::new(),
             touched_by: Vec::new(),
+            held_by: Vec::new(),
         };
         // The tube hangs slightly tilted in the hand, somewhere above the bench.
         let tube_s = LabwareState {
@@ -968,6 +971,7 @@ mod tests {
             parts: BTreeMap::new(),
             logic: BTreeMap::new(),
             touched_by: Vec::new(),
+            held_by: Vec::new(),
         };
         let rack_s = LabwareState {
             name: "rack".into(),
@@ -1041,6 +1045,7 @@ mod tests {
             parts: BTreeMap::from([("cap".into(), placed[1].1)]),
             logic: BTreeMap::new(),
             touched_by: Vec::new(),
+            held_by: Vec::new(),
         };
         let params = Bindings::new();
         let lab = Lab {
@@ -1277,6 +1282,7 @@ mod tests {
             parts: BTreeMap::new(),
             logic: BTreeMap::new(),
             touched_by: Vec::new(),
+            held_by: Vec::new(),
         };
         let params = Bindings::from([("rpm".to_string(), "2000".to_string())]);
         let turn = |knob: f64, per_grip: f64| {

@@ -168,6 +168,38 @@ fn measure(
                 holds: touching,
             })
         }
+        // A finger of the robot touches the item, or the part (value 1), or not (0).
+        Check::Holds { robot, item, part } => {
+            let holding = state_of(item)?
+                .held_by
+                .iter()
+                .any(|f| &f.robot == robot && (part.is_none() || f.part == *part));
+            Some(Measure {
+                value: f64::from(u8::from(holding)),
+                target: 1.0,
+                tolerance: 0.0,
+                holds: holding,
+            })
+        }
+        // How far the part stands above its seat on the item (m), along the item's axis.
+        Check::Lifted {
+            item,
+            height,
+            part: Some(part),
+        } => {
+            let (role, measured) = spec_of(item)?.params.instrument()?.part()?;
+            let value = if role == part {
+                measured.rise(state_of(item)?)?
+            } else {
+                return None;
+            };
+            Some(Measure {
+                value,
+                target: *height,
+                tolerance: 0.0,
+                holds: value >= *height,
+            })
+        }
         // The item's distance from the point (m).
         Check::Position {
             item,
@@ -185,7 +217,11 @@ fn measure(
         }
         // How far the item stands above where it started: its start slot's seat (the holder
         // as it is now), else its placement.
-        Check::Lifted { item, height } => {
+        Check::Lifted {
+            item,
+            height,
+            part: None,
+        } => {
             let spec = spec_of(item)?;
             let start = match &spec.at {
                 Some(_) => {

@@ -50,6 +50,7 @@ pub const MODEL: RobotModel = RobotModel {
     tcp_site: "tcp",
     tcp_body: "gripper_link",
     hand_bodies: &["gripper_link"],
+    fingers: &["left_finger_link", "right_finger_link"],
     wrist_camera: "wrist_cam",
     // The ViperX faces +x at waist 0.
     mount_yaw: 0.0,

@@ -123,6 +123,9 @@ pub struct RobotModel {
     /// of these (relative to the prefix).
     pub tcp_body: &'static str,
     pub hand_bodies: &'static [&'static str],
+    /// The bodies that are its fingers (with the bodies they carry: pads), relative to the
+    /// prefix: what a `<robot> holds <item>` predicate measures contact with.
+    pub fingers: &'static [&'static str],
     pub wrist_camera: &'static str,
     /// Yaw (rad) added to the mount so that a protocol's yaw 0 reaches along +x.
     pub mount_yaw: f64,

@@ -36,6 +36,7 @@ pub const MODEL: RobotModel = RobotModel {
     tcp_site: "tcp",
     tcp_body: "tool",
     hand_bodies: &["gripper/base_mount", "gripper/base"],
+    fingers: &["gripper/left_follower", "gripper/right_follower"],
     wrist_camera: "wrist_cam",
     // The Menagerie UR5e faces -x at zero pan; a half turn makes a mount yaw of 0 reach along +x.
     mount_yaw: PI,

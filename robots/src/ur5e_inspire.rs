@@ -54,6 +54,14 @@ pub const MODEL: RobotModel = RobotModel {
         "hand/r_pinky_proximal",
         "hand/r_pinky_distal",
     ],
+    // The thumb and the four fingers from their first phalanx on.
+    fingers: &[
+        "hand/r_thumb_proximal_1",
+        "hand/r_index_proximal",
+        "hand/r_middle_proximal",
+        "hand/r_ring_proximal",
+        "hand/r_pinky_proximal",
+    ],
     mount_yaw: PI,
     root_body: "base",
     home: HOME,

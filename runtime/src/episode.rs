@@ -163,6 +163,7 @@ impl Episode {
             self.logic[i] = reset.logic;
             let root = self.start_pose(i, instance);
             self.place_item(i, &root);
+            self.place_apart(i, instance);
         }
         self.place_held();
         // `Scene::build` and `Scene::reuse_or_build` refuse an instance whose quantities do not
@@ -211,6 +212,32 @@ impl Episode {
         let ids = &scene.labware[i];
         for (joint, pose) in instrument(&self.task, i).place(&self.task.labware[i].name, root) {
             if let Some(f) = ids.free.iter().find(|f| f.name == joint) {
+                let (p, q) = (position(&pose), wxyz(&pose.rotation));
+                let qpos = self.data.qpos_mut();
+                qpos[f.qpos..f.qpos + 3].copy_from_slice(&p);
+                qpos[f.qpos + 3..f.qpos + 7].copy_from_slice(&q);
+                self.data.qvel_mut()[f.dof..f.dof + 6].fill(0.0);
+            }
+        }
+    }
+
+    /// Loose parts of item `i` that start apart from it (a cap lying on the bench) go where the
+    /// instance drew them, at rest.
+    fn place_apart(&mut self, i: usize, instance: &SceneInstance) {
+        let scene = self.scene.clone();
+        let ids = &scene.labware[i];
+        let name = &self.task.labware[i].name;
+        let model = instrument(&self.task, i);
+        for (role, body) in &ids.parts {
+            let Some(at) = instance.part_placement.get(&format!("{name}.{role}")) else {
+                continue;
+            };
+            let lying = model
+                .part()
+                .filter(|(r, _)| r == role)
+                .map_or(Pose::identity(), |(_, p)| p.lying());
+            let pose = at * lying;
+            if let Some(f) = ids.free.iter().find(|f| f.body == *body) {
                 let (p, q) = (position(&pose), wxyz(&pose.rotation));
                 let qpos = self.data.qpos_mut();
                 qpos[f.qpos..f.qpos + 3].copy_from_slice(&p);
@@ -478,7 +505,41 @@ impl Episode {
                 .collect(),
             logic: self.logic[i].clone(),
             touched_by: self.touching(i),
+            held_by: self.fingering(i),
         }
+    }
+
+    /// The robots' fingers in contact with labware item `i` now, and where (its own body or a
+    /// loose part), in task order, the item's body before its parts.
+    fn fingering(&self, item: usize) -> Vec<labware::model::FingerContact> {
+        use crate::scene::Owner;
+        let geom_body = self.scene.model.geom_bodyid();
+        let body = |g: i32| Some(*geom_body.get(usize::try_from(g).ok()?)? as usize);
+        let mut found = std::collections::BTreeSet::new();
+        for c in self.data.contact() {
+            if c.exclude != 0 || c.dist > c.includemargin {
+                continue;
+            }
+            let (Some(a), Some(b)) = (body(c.geom[0]), body(c.geom[1])) else {
+                continue;
+            };
+            for (finger, other) in [(a, b), (b, a)] {
+                let Some(robot) = self.scene.body_finger.get(finger).copied().flatten() else {
+                    continue;
+                };
+                if self.scene.body_owner.get(other).copied().flatten() == Some(Owner::Labware(item))
+                {
+                    found.insert((robot, self.scene.body_part.get(other).copied().flatten()));
+                }
+            }
+        }
+        found
+            .into_iter()
+            .map(|(r, part)| labware::model::FingerContact {
+                robot: self.scene.robots[r].name.clone(),
+                part: part.map(str::to_string),
+            })
+            .collect()
     }
 
     /// The robots in contact with labware item `i` now, in task order.

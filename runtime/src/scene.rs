@@ -63,6 +63,8 @@ pub struct RobotIds {
 #[derive(Clone, Debug)]
 pub struct FreeJoint {
     pub name: String,
+    /// The body it frees (an item's root or a loose part).
+    pub body: usize,
     pub qpos: usize,
     pub dof: usize,
 }
@@ -102,6 +104,10 @@ pub struct Scene {
     pub placements: Vec<Pose>,
     /// Each body's owner (`None`: the world, the bench, the room), for contact predicates.
     pub body_owner: Vec<Option<Owner>>,
+    /// Each body's finger (the robot whose finger it is or hangs from) and loose part (the
+    /// role of the part it is or hangs from), for `holds` predicates.
+    pub body_finger: Vec<Option<usize>>,
+    pub body_part: Vec<Option<&'static str>>,
     /// Items a hand holds from the start: the item, the robot's TCP body and the item's root
     /// pose in that body's frame (where reset puts it; the weld keeps it there).
     pub held: Vec<(usize, usize, Pose)>,
@@ -345,6 +351,7 @@ pub(crate) fn held_pose(
         parts: Default::default(),
         logic: Default::default(),
         touched_by: Vec::new(),
+        held_by: Vec::new(),
     };
     let grasp = item
         .affordance("grasp", &at_origin)
@@ -459,6 +466,7 @@ fn labware_ids(m: &MjModel, l: &compiler::LabwareSpec) -> Result<LabwareIds, Sce
             let id = joint_id(m, &j)?;
             Ok(FreeJoint {
                 name: j,
+                body: m.jnt_bodyid()[id] as usize,
                 qpos: joint_qposadr(m, id),
                 dof: joint_dofadr(m, id),
             })
@@ -547,6 +555,19 @@ impl Scene {
             cameras.push(id_of(m, MjtObjBase::mjOBJ_CAMERA, "camera", &name)?);
         }
         let body_owner = body_owners(m, &robots, &labware)?;
+        let mut fingers = Vec::new();
+        for (r, ids) in robots.iter().enumerate() {
+            for finger in ids.model.fingers {
+                let body = format!("{}/{finger}", ids.name);
+                fingers.push((id_of(m, MjtObjBase::mjOBJ_BODY, "body", &body)?, r));
+            }
+        }
+        let body_finger = below(m, &fingers);
+        let parts: Vec<(usize, &'static str)> = labware
+            .iter()
+            .flat_map(|ids| ids.parts.iter().map(|(role, b)| (*b, *role)))
+            .collect();
+        let body_part = below(m, &parts);
         let mut held = Vec::new();
         for (i, l) in task.labware.iter().enumerate() {
             let Some(robot) = &l.held_by else { continue };
@@ -566,6 +587,8 @@ impl Scene {
             xml,
             placements,
             body_owner,
+            body_finger,
+            body_part,
             task: task.clone(),
             simplified: OnceLock::new(),
         })
@@ -617,13 +640,18 @@ fn body_owners(
         roots.push((ids.root_body, Owner::Labware(i)));
         roots.extend(ids.parts.iter().map(|(_, b)| (*b, Owner::Labware(i))));
     }
+    Ok(below(m, &roots))
+}
+
+/// For each body, the value of the nearest of `roots` it is or hangs from (`None`: none).
+fn below<T: Copy>(m: &MjModel, roots: &[(usize, T)]) -> Vec<Option<T>> {
     let parent = m.body_parentid();
-    Ok((0..parent.len())
+    (0..parent.len())
         .map(|b| {
             let mut at = b;
             loop {
-                if let Some((_, owner)) = roots.iter().find(|(root, _)| *root == at) {
-                    return Some(*owner);
+                if let Some((_, v)) = roots.iter().find(|(root, _)| *root == at) {
+                    return Some(*v);
                 }
                 if at == 0 {
                     return None;
@@ -631,7 +659,7 @@ fn body_owners(
                 at = parent[at] as usize;
             }
         })
-        .collect())
+        .collect()
 }
 
 /// Every success check can be measured: a task whose check the judge cannot measure could never
@@ -668,6 +696,7 @@ fn check_measurable(task: &Task) -> Result<(), SceneError> {
                             parts: Default::default(),
                             logic: Default::default(),
                             touched_by: Vec::new(),
+                            held_by: Vec::new(),
                         };
                         m.panel()
                             .is_some_and(|p| p.panel_value(param, &probe).is_some())
@@ -736,6 +765,7 @@ pub(crate) fn start_seat(task: &Task, instance: &SceneInstance, i: usize) -> Opt
         parts: BTreeMap::new(),
         logic: Logic::new(),
         touched_by: Vec::new(),
+        held_by: Vec::new(),
     };
     model.slot_seat(slot, &holder_state)
 }

@@ -87,6 +87,8 @@ fn lower_item(
             .iter()
             .map(|ps| (ps.part.to_string(), ps.initial[0].to_string()))
             .collect(),
+        parts: BTreeMap::new(),
+        parts_radius_m: 0.0,
         at: l.at.as_ref().map(|a| a.value.clone()),
         held_by: None,
         volume: None,
@@ -109,9 +111,71 @@ fn lower_item(
     for (key, value) in &l.state {
         initial_state(cx, k, &mut spec, key, value);
     }
+    parts_apart(cx, l, k, &mut spec);
     spec.params = spec.params.for_start(&spec.initial);
     unsupported_start(cx, l, &spec);
     Some(spec)
+}
+
+/// `parts = { <part> = <pose> }`: where each loose part that starts `apart` lies. A part given
+/// a place must be a loose part of the kind that starts apart, and a part that starts apart
+/// needs a place (E0017 and E0002, at the item's name for a missing place).
+fn parts_apart(cx: &mut Cx, l: &dsl::ast::Labware, k: &LabwareKind, spec: &mut LabwareSpec) {
+    for (part, at) in &l.parts {
+        let loose = k
+            .part(&part.value)
+            .is_some_and(|ps| ps.initial.contains(&"apart"));
+        if !loose {
+            let apart: Vec<&str> = k
+                .parts
+                .iter()
+                .filter(|ps| ps.initial.contains(&"apart"))
+                .map(|ps| ps.part)
+                .collect();
+            cx.err(
+                Code::E0017,
+                part.span,
+                format!(
+                    "a {} has no part `{}` that can lie apart",
+                    k.name, part.value
+                ),
+                Some(hint_for(&part.value, &apart, "parts that can lie apart")),
+            );
+        } else if spec.initial.get(&part.value).map(String::as_str) != Some("apart") {
+            cx.err(
+                Code::E0017,
+                part.span,
+                format!(
+                    "`{}` is given a place to lie, but it does not start apart",
+                    part.value
+                ),
+                Some(format!(
+                    "start it apart: `state = {{ {} = \"apart\" }}`",
+                    part.value
+                )),
+            );
+        } else {
+            spec.parts.insert(part.value.clone(), pose(at));
+        }
+    }
+    for (part, state) in &spec.initial {
+        if state == "apart"
+            && !spec.parts.contains_key(part)
+            && !l.parts.iter().any(|(p, _)| &p.value == part)
+        {
+            cx.err(
+                Code::E0002,
+                l.name.span,
+                format!(
+                    "`{}`'s {part} starts apart, but nothing says where it lies",
+                    l.name.value
+                ),
+                Some(format!(
+                    "add `parts = {{ {part} = {{ pos_m = [x, y, z] }} }}` (on the bench)"
+                )),
+            );
+        }
+    }
 }
 
 /// `held_by = "<robot>"`: the item starts in that robot's hand, if the robot exists (E0013), the

@@ -84,7 +84,7 @@ fn randomise_robot(
                 ),
                 Some("e.g. `joints = { low = [-0.1, 0, 0, 0, 0, 0], high = [0.1, 0, 0, 0, 0, 0] }`; `role = angle` pairs are for labware joints".into()),
             ),
-            RandomItem::Xy(q) | RandomItem::Yaw(q) => cx.err(
+            RandomItem::Xy(q) | RandomItem::Yaw(q) | RandomItem::PartsRadius(q) => cx.err(
                 Code::E0003,
                 q.span,
                 format!("robot `{}` cannot be moved by randomisation", target.value),
@@ -105,6 +105,13 @@ fn randomise_labware(
         match item {
             RandomItem::Xy(q) => lw.xy_jitter_m = q.value.abs(),
             RandomItem::Yaw(q) => lw.yaw_jitter_rad = q.value.abs(),
+            RandomItem::PartsRadius(q) if lw.parts.is_empty() => cx.err(
+                Code::E0003,
+                q.span,
+                format!("`{}` has no part lying apart to draw a place for", target.value),
+                Some("`parts_radius` draws where a part given in `parts` lies; give it one, or drop this".into()),
+            ),
+            RandomItem::PartsRadius(q) => lw.parts_radius_m = q.value.abs(),
             RandomItem::Joints { span, .. } => cx.err(
                 Code::E0004,
                 *span,

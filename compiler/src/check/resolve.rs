@@ -77,12 +77,17 @@ pub(super) fn resolve_check(
                 Some(("position".into(), v, Dimension::Length)),
             ))
         }
-        Form::Lifted { item, height } => {
-            names.labware(cx, item)?;
+        Form::Holds { robot, item, part } => names.holds(cx, robot, item, part.as_deref()),
+        Form::Lifted { item, height, part } => {
+            let kind = names.labware(cx, item)?;
+            if let Some(part) = part {
+                names.loose_part(cx, kind, part)?;
+            }
             Some((
                 Check::Lifted {
                     item: item.clone(),
                     height: *height,
+                    part: part.clone(),
                 },
                 None,
             ))
@@ -327,18 +332,68 @@ impl Names<'_> {
         ))
     }
 
+    /// `<robot> holds <item>[.<part>]`: a declared robot, item and (if given) a loose part of
+    /// the item's kind; no tolerance.
+    fn holds(&self, cx: &mut Cx, robot: &str, item: &str, part: Option<&str>) -> Resolved {
+        self.robot(cx, robot)?;
+        let kind = self.labware(cx, item)?;
+        if let Some(part) = part {
+            self.loose_part(cx, kind, part)?;
+        }
+        Some((
+            Check::Holds {
+                robot: robot.to_string(),
+                item: item.to_string(),
+                part: part.map(str::to_string),
+            },
+            None,
+        ))
+    }
+
+    /// A part of the kind that comes away from it (a tube's cap, not a lid on a hinge): E0030
+    /// otherwise.
+    fn loose_part(&self, cx: &mut Cx, kind: &LabwareKind, part: &str) -> Option<()> {
+        if kind.part(part).is_some() && !kind.joints.iter().any(|(j, _)| *j == part) {
+            return Some(());
+        }
+        let loose: Vec<&str> = kind
+            .parts
+            .iter()
+            .map(|p| p.part)
+            .filter(|p| !kind.joints.iter().any(|(j, _)| j == p))
+            .collect();
+        let hint = if loose.is_empty() {
+            format!("a {} has no loose part", kind.name)
+        } else {
+            hint_for(part, &loose, "loose parts")
+        };
+        cx.err(
+            Code::E0030,
+            self.text.span,
+            format!("a {} has no loose part `{part}`", kind.name),
+            Some(hint),
+        );
+        None
+    }
+
+    /// A declared robot: E0013 otherwise.
+    fn robot(&self, cx: &mut Cx, robot: &str) -> Option<()> {
+        if self.robots.iter().any(|r| r == robot) {
+            return Some(());
+        }
+        let names: Vec<&str> = self.robots.iter().map(String::as_str).collect();
+        cx.err(
+            Code::E0013,
+            self.text.span,
+            format!("no robot named `{robot}`"),
+            Some(hint_for(robot, &names, "robots")),
+        );
+        None
+    }
+
     /// `<robot> touches <item>`: a declared robot and item; no tolerance.
     fn contact(&self, cx: &mut Cx, robot: &str, item: &str) -> Resolved {
-        if !self.robots.iter().any(|r| r == robot) {
-            let names: Vec<&str> = self.robots.iter().map(String::as_str).collect();
-            cx.err(
-                Code::E0013,
-                self.text.span,
-                format!("no robot named `{robot}`"),
-                Some(hint_for(robot, &names, "robots")),
-            );
-            return None;
-        }
+        self.robot(cx, robot)?;
         self.labware(cx, item)?;
         Some((
             Check::Contact {
@@ -396,6 +451,17 @@ mod tests {
                 "`tube` (a tube_50ml) has no slots",
             ),
             ("arn touches tube", Code::E0013, "no robot named `arn`"),
+            ("arn holds tube.cap", Code::E0013, "no robot named `arn`"),
+            (
+                "arm holds tube.lid",
+                Code::E0030,
+                "a tube_50ml has no loose part `lid`",
+            ),
+            (
+                "target.cap lifted 3 cm",
+                Code::E0030,
+                "a tube_rack has no loose part `cap`",
+            ),
             (
                 "tube.rotor in [0, 1] rad",
                 Code::E0030,

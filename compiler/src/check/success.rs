@@ -185,7 +185,10 @@ fn apply_tolerance(
         | Check::Volume { tolerance, .. }
         | Check::Panel { tolerance, .. }
         | Check::Position { tolerance, .. } => *tolerance = t,
-        Check::JointRange { .. } | Check::Contact { .. } | Check::Lifted { .. } => {}
+        Check::JointRange { .. }
+        | Check::Contact { .. }
+        | Check::Holds { .. }
+        | Check::Lifted { .. } => {}
     }
     check
 }

@@ -193,6 +193,7 @@ mod liquid;
 mod lock;
 mod open_lid;
 mod pick;
+mod pick_cap;
 mod place;
 mod press;
 mod release;
@@ -222,6 +223,7 @@ pub const CATALOGUE: &[&LabPrimitive] = &[
     &lock::PRIMITIVE,
     &unlock::PRIMITIVE,
     &unscrew_cap::PRIMITIVE,
+    &pick_cap::PRIMITIVE,
     &screw_cap::PRIMITIVE,
     &aspirate::PRIMITIVE,
     &dispense::PRIMITIVE,

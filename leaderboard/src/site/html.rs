@@ -10,7 +10,7 @@ use super::chart::chart;
 use super::model::{EpisodeTable, Frames, Group, Site, SubmissionPage, TaskPage, TaskRow};
 use super::paper::Reference;
 use super::stats::Paired;
-use super::{across_cell, level_cell};
+use super::{across_cell, level_cell, rank_sem_cells, spread_cells};
 use std::fmt::Write as _;
 
 /// `index.html`.
@@ -51,14 +51,16 @@ fn ranking(body: &mut String, g: &Group) {
     let _ = write!(
         body,
         "<h2>{}</h2><table><tr><th>#</th><th>model</th><th>training</th><th>standing</th>\
-         <th>success %</th><th>± SEM</th><th>easy</th><th>medium</th><th>hard</th><th>mean score</th></tr>",
+         <th>success %</th><th>± SEM over training seeds</th><th>± SEM over evaluation runs</th>\
+         <th>easy</th><th>medium</th><th>hard</th><th>mean score</th></tr>",
         esc(&g.name)
     );
     for r in &g.rows {
+        let sem = rank_sem_cells(r);
         let _ = write!(
             body,
             "<tr><td>{}</td><td class=l><a href=\"{}\">{}</a></td><td class=l>{}</td><td class=\"l {}\">{}</td>\
-             <td>{:.1}</td><td>{:.1}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.3}</td></tr>",
+             <td>{:.1}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.3}</td></tr>",
             r.rank,
             r.page,
             esc(&r.model),
@@ -66,7 +68,8 @@ fn ranking(body: &mut String, g: &Group) {
             r.standing,
             r.standing,
             r.success,
-            r.sem,
+            sem[0],
+            sem[1],
             level_cell(r, "easy"),
             level_cell(r, "medium"),
             level_cell(r, "hard"),
@@ -105,8 +108,16 @@ fn reference(body: &mut String, reference: &Reference) {
         }
         body.push_str("</tr>");
     }
+    body.push_str("</table>");
+    if !reference.notes.is_empty() {
+        body.push_str("<ul>");
+        for n in &reference.notes {
+            let _ = write!(body, "<li><small>{}</small></li>", esc(n));
+        }
+        body.push_str("</ul>");
+    }
     body.push_str(
-        "</table><h3>Long horizon (the paper's concatenation table)</h3><table><tr><th>model</th>",
+        "<h3>Long horizon (the paper's concatenation table)</h3><table><tr><th>model</th>",
     );
     for s in reference.chain.first().map_or(&[][..], |c| &c.stages) {
         let _ = write!(body, "<th>{}</th>", esc(&s.task));
@@ -125,7 +136,7 @@ fn reference(body: &mut String, reference: &Reference) {
 /// `tasks/<slug>.html`.
 pub(super) fn task(p: &TaskPage) -> String {
     let mut body = format!("<p>level: {}</p>", esc(&p.level));
-    body.push_str("<table><tr><th>model</th><th>conditions</th><th>standing</th><th>success %</th><th>Wilson 95%</th><th>mean score</th><th>runs: mean ± SEM</th></tr>");
+    body.push_str("<table><tr><th>model</th><th>conditions</th><th>standing</th><th>success %</th><th>Wilson 95%</th><th>mean score</th><th>training seeds: mean ± SEM</th><th>evaluation runs: mean ± SEM</th></tr>");
     for r in &p.rows {
         task_row(&mut body, r);
     }
@@ -168,10 +179,11 @@ pub(super) fn task(p: &TaskPage) -> String {
 }
 
 fn task_row(body: &mut String, r: &TaskRow) {
+    let across = spread_cells(r.spread, across_cell(r.across_runs));
     let _ = write!(
         body,
         "<tr><td class=l><a href=\"../submissions/{}.html\">{}</a></td><td class=l><small>{}</small></td><td class=\"l {}\">{}</td>\
-         <td>{:.1}</td><td>[{:.1}, {:.1}]</td><td>{:.3}</td><td>{}</td></tr>",
+         <td>{:.1}</td><td>[{:.1}, {:.1}]</td><td>{:.3}</td><td>{}</td><td>{}</td></tr>",
         r.submission,
         esc(&r.model),
         esc(&r.group),
@@ -181,7 +193,8 @@ fn task_row(body: &mut String, r: &TaskRow) {
         r.wilson[0],
         r.wilson[1],
         r.mean_score,
-        across_cell(r.across_runs)
+        across[0],
+        across[1]
     );
 }
 

@@ -99,6 +99,21 @@ pub struct Submission {
     pub tasks: Vec<TaskResult>,
     /// Manifest facts shown on its page (per task: conditions as JSON).
     pub conditions: BTreeMap<String, serde_json::Value>,
+    /// The checkpoint each run evaluated, by run, for a submission of training-seed runs
+    /// (`eval --checkpoint`); empty for runs of one model.
+    pub checkpoints: BTreeMap<u32, String>,
+}
+
+impl Submission {
+    /// What its ± is taken over: training seeds when its runs name their checkpoints (verify
+    /// refuses a bundle where only some do), else evaluation runs of one model.
+    pub fn spread(&self) -> super::stats::Spread {
+        if self.checkpoints.is_empty() {
+            super::stats::Spread::EvaluationRuns
+        } else {
+            super::stats::Spread::TrainingSeeds
+        }
+    }
 }
 
 /// Every bundle (`*.tar`, `*.tar.zst`) in `dir`, read with its standing; a bundle that does not
@@ -156,6 +171,7 @@ pub fn load(dir: &Path, work: &Path) -> Result<Vec<Submission>, SiteError> {
             index,
             tasks: runs.tasks,
             conditions: runs.conditions,
+            checkpoints: runs.checkpoints,
         });
     }
     Ok(out)
@@ -183,6 +199,7 @@ fn standing(file: &Path, sha: &str) -> Standing {
 struct Runs {
     tasks: Vec<TaskResult>,
     conditions: BTreeMap<String, serde_json::Value>,
+    checkpoints: BTreeMap<u32, String>,
     /// The model profile the runs recorded, as the group names it.
     profile: String,
 }
@@ -193,6 +210,7 @@ fn read_runs(here: &Path, members: &[String]) -> Runs {
     let mut by_task: BTreeMap<String, (String, Vec<EpisodeResult>)> = BTreeMap::new();
     let mut recordings: BTreeMap<String, BTreeMap<(u32, u64), PathBuf>> = BTreeMap::new();
     let mut conditions = BTreeMap::new();
+    let mut checkpoints = BTreeMap::new();
     let mut profile = String::from("no model profile");
     // Only run folders' files: what verification checks (a verified bundle has no others).
     for member in members.iter().filter(|m| m.starts_with("runs/")) {
@@ -201,6 +219,9 @@ fn read_runs(here: &Path, members: &[String]) -> Runs {
             let task = task.rsplit('/').next().unwrap_or(task).to_string();
             if let Ok(m) = Manifest::read(&path) {
                 by_task.entry(task.clone()).or_default().0 = m.level.clone();
+                if let Some(c) = &m.checkpoint {
+                    checkpoints.insert(c.run, c.name.clone());
+                }
                 conditions.insert(
                     task,
                     serde_json::to_value(&m.conditions).unwrap_or_default(),
@@ -247,6 +268,7 @@ fn read_runs(here: &Path, members: &[String]) -> Runs {
     Runs {
         tasks,
         conditions,
+        checkpoints,
         profile,
     }
 }
@@ -283,5 +305,6 @@ fn refused_unreadable(name: &str, sha: &str, why: String) -> Submission {
         group: String::new(),
         tasks: Vec::new(),
         conditions: BTreeMap::new(),
+        checkpoints: BTreeMap::new(),
     }
 }

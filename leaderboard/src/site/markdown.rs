@@ -6,7 +6,7 @@
 //! reference and submission pages are the HTML's and the JSON exports').
 
 use super::model::{Site, TaskPage};
-use super::{across_cell, level_cell};
+use super::{across_cell, level_cell, rank_sem_cells, spread_cells};
 use std::fmt::Write as _;
 
 /// `ranking.md`.
@@ -15,19 +15,21 @@ pub(super) fn ranking(site: &Site) -> String {
     for g in &site.groups {
         let _ = write!(
             md,
-            "\n## {}\n\n| # | model | training | standing | success % | ± SEM | easy | medium | hard | mean score |\n|---|---|---|---|---|---|---|---|---|---|\n",
+            "\n## {}\n\n| # | model | training | standing | success % | ± SEM over training seeds | ± SEM over evaluation runs | easy | medium | hard | mean score |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
             md_cell(&g.name)
         );
         for r in &g.rows {
+            let sem = rank_sem_cells(r);
             let _ = writeln!(
                 md,
-                "| {} | {} | {} | {} | {:.1} | {:.1} | {} | {} | {} | {:.3} |",
+                "| {} | {} | {} | {} | {:.1} | {} | {} | {} | {} | {} | {:.3} |",
                 r.rank,
                 md_cell(&r.model),
                 md_cell(&r.training),
                 r.standing,
                 r.success,
-                r.sem,
+                sem[0],
+                sem[1],
                 level_cell(r, "easy"),
                 level_cell(r, "medium"),
                 level_cell(r, "hard"),
@@ -41,13 +43,14 @@ pub(super) fn ranking(site: &Site) -> String {
 /// `tasks/<slug>.md`.
 pub(super) fn task(p: &TaskPage) -> String {
     let mut md = format!(
-        "# {}\n\n| model | group | standing | success % | Wilson 95% | mean score | runs: mean ± SEM |\n|---|---|---|---|---|---|---|\n",
+        "# {}\n\n| model | group | standing | success % | Wilson 95% | mean score | training seeds: mean ± SEM | evaluation runs: mean ± SEM |\n|---|---|---|---|---|---|---|---|\n",
         p.id
     );
     for r in &p.rows {
+        let across = spread_cells(r.spread, across_cell(r.across_runs));
         let _ = writeln!(
             md,
-            "| {} | {} | {} | {:.1} | [{:.1}, {:.1}] | {:.3} | {} |",
+            "| {} | {} | {} | {:.1} | [{:.1}, {:.1}] | {:.3} | {} | {} |",
             md_cell(&r.model),
             md_cell(&r.group),
             r.standing,
@@ -55,7 +58,8 @@ pub(super) fn task(p: &TaskPage) -> String {
             r.wilson[0],
             r.wilson[1],
             r.mean_score,
-            across_cell(r.across_runs)
+            across[0],
+            across[1]
         );
     }
     md

@@ -92,6 +92,25 @@ fn across_cell(across: Option<(f64, f64)>) -> String {
     })
 }
 
+/// The two ± columns, over training seeds and over evaluation runs of one model: `cell` in the
+/// one its runs are, `–` in the other (the two are never one column).
+fn spread_cells(over: stats::Spread, cell: String) -> [String; 2] {
+    match over {
+        stats::Spread::TrainingSeeds => [cell, "–".into()],
+        stats::Spread::EvaluationRuns => ["–".into(), cell],
+    }
+}
+
+/// A ranking row's ± cells (see [`spread_cells`]): its SEM over two or more runs, else `–`.
+fn rank_sem_cells(r: &stats::RankRow) -> [String; 2] {
+    let cell = if r.runs > 1 {
+        format!("{:.1}", r.sem)
+    } else {
+        "–".into()
+    };
+    spread_cells(r.spread, cell)
+}
+
 /// Writes the site for `subs` into `out` (made if missing); with `frames`, each submission's
 /// page shows frames of its best and worst episode of every task. Returns the files written.
 pub fn build(

@@ -9,7 +9,7 @@
 use super::load::{Submission, TaskResult};
 use super::paper::{Reference, paper};
 use super::slug;
-use super::stats::{Paired, RankRow, paired, paired_over_suite, rankings};
+use super::stats::{Paired, RankRow, Spread, paired, paired_over_suite, rankings};
 use results::run::stats::EvalSummary;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -89,8 +89,10 @@ pub struct TaskRow {
     pub success: f64,
     pub wilson: [f64; 2],
     pub mean_score: f64,
-    /// Over two or more runs: the runs' mean success ± its SEM (percent).
+    /// Over two or more runs: the runs' mean success ± its SEM (percent), and what the runs
+    /// are (training seeds, or evaluation runs of one model).
     pub across_runs: Option<(f64, f64)>,
+    pub spread: Spread,
     /// The summary as computed, for the JSON export.
     pub summary: EvalSummary,
 }
@@ -303,6 +305,7 @@ fn task_row(s: &Submission, t: &TaskResult) -> TaskRow {
             .across_runs
             .as_ref()
             .map(|a| (100.0 * a.success_rate_mean, 100.0 * a.success_rate_sem)),
+        spread: s.spread(),
         summary: m.clone(),
     }
 }
@@ -361,6 +364,18 @@ fn submission_page(s: &Submission) -> SubmissionPage {
             ("wire", i.model.wire.clone().unwrap_or_default()),
             ("profile", i.model.profile.clone().unwrap_or_default()),
             ("conditions", s.group.clone()),
+            (
+                "runs",
+                match s.spread() {
+                    Spread::EvaluationRuns => "evaluation runs of one model".into(),
+                    Spread::TrainingSeeds => s
+                        .checkpoints
+                        .iter()
+                        .map(|(run, name)| format!("training seed {run}: {name}"))
+                        .collect::<Vec<_>>()
+                        .join("; "),
+                },
+            ),
         ],
         refused: match &s.standing {
             super::Standing::Refused(why) => Some(why.clone()),

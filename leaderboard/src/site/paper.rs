@@ -9,6 +9,10 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Debug, Deserialize, Serialize)]
 pub struct Reference {
     pub source: String,
+    /// What a reader must know to compare with the paper's rows (what its ± is taken over,
+    /// where our robots differ from upstream's), shown under them.
+    #[serde(default)]
+    pub notes: Vec<String>,
     pub entry: Vec<ReferenceEntry>,
     pub chain: Vec<ReferenceChain>,
 }

@@ -9,6 +9,16 @@ use results::run::stats::mean_sem;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
+/// What a ± is taken over. The paper's is the SEM over three models trained alike on different
+/// training seeds; re-evaluating one model on fresh seeds measures only the evaluation's own
+/// spread, a smaller one. The site never puts the two in one column.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Spread {
+    TrainingSeeds,
+    EvaluationRuns,
+}
+
 /// One ranked row.
 #[derive(Clone, Debug, Serialize)]
 pub struct RankRow {
@@ -17,9 +27,12 @@ pub struct RankRow {
     pub training: String,
     pub standing: String,
     pub page: String,
-    /// Mean over the suite's tasks of the success rate, and its SEM across runs (percent).
+    /// Mean over the suite's tasks of the success rate, and its SEM across runs (percent; 0
+    /// for a single run), taken over what `spread` says.
     pub success: f64,
     pub sem: f64,
+    pub runs: usize,
+    pub spread: Spread,
     pub by_level: BTreeMap<String, f64>,
     pub mean_score: f64,
 }
@@ -64,6 +77,8 @@ pub fn rankings(subs: &[Submission]) -> BTreeMap<String, Vec<RankRow>> {
             page: format!("submissions/{}.html", s.slug),
             success: 100.0 * rates.iter().sum::<f64>() / rates.len() as f64,
             sem: 100.0 * if runs > 1 { sem } else { 0.0 },
+            runs,
+            spread: s.spread(),
             by_level: by_level
                 .into_iter()
                 .map(|(l, xs)| (l, 100.0 * xs.iter().sum::<f64>() / xs.len() as f64))

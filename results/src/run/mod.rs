@@ -59,6 +59,8 @@ pub enum RunError {
     Shard(String),
     #[error("{0} episodes per run is more than a run's {RUN_SEED_STRIDE} seeds; use --runs")]
     TooManyEpisodes(usize),
+    #[error("training seed {run} has no run to evaluate: the run has {runs} (training seeds 0 to {})", runs - 1)]
+    CheckpointRun { run: u32, runs: u32 },
 }
 
 impl RunError {
@@ -68,6 +70,24 @@ impl RunError {
             path: path.to_path_buf(),
             source,
         }
+    }
+}
+
+/// The trained checkpoint a suite run's model server serves, one of several trained alike on
+/// different training seeds (the paper's ± is the SEM over three such). Training seed `run`'s
+/// checkpoint is evaluated on the suite's run `run` only, so that one folder per training seed
+/// together covers every planned episode once, as the runs of one model do.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Checkpoint {
+    /// The training seed's index (0-based): the suite run it is evaluated on.
+    pub run: u32,
+    /// The submitter's name for the checkpoint (a path, a hub revision, a hash).
+    pub name: String,
+}
+
+impl std::fmt::Display for Checkpoint {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "training seed {}: {}", self.run, self.name)
     }
 }
 

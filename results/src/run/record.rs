@@ -203,6 +203,10 @@ pub struct Manifest {
     pub runs: u32,
     /// This folder's share of the episodes (`--shard I/N`), if it is a shard.
     pub shard: Option<Shard>,
+    /// The checkpoint the model server served, for a run of one training seed's model
+    /// (`--checkpoint`): only its run's episodes are in this folder.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub checkpoint: Option<super::Checkpoint>,
     pub conditions: Conditions,
     /// The model server, when the policy is one: its wire and profile are fingerprints (its
     /// address is not: a resumed run may find it elsewhere; its metadata only when both runs
@@ -223,7 +227,7 @@ impl Manifest {
             },
             _ => true,
         };
-        let fields: [(&str, bool); 14] = [
+        let fields: [(&str, bool); 15] = [
             (
                 "results schema version",
                 self.results_schema_version == other.results_schema_version,
@@ -243,6 +247,7 @@ impl Manifest {
             ("seed", self.seed == other.seed),
             ("runs", self.runs == other.runs),
             ("shard", self.shard == other.shard),
+            ("checkpoint", self.checkpoint == other.checkpoint),
             // A shard's share depends on the episodes per run: it cannot change under a shard.
             (
                 "episodes per run of a shard",

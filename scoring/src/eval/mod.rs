@@ -96,6 +96,9 @@ pub struct EvalOptions {
     /// connection).
     pub workers: usize,
     pub shard: Option<Shard>,
+    /// The checkpoint the model server serves, one per training seed: only its run is
+    /// evaluated.
+    pub checkpoint: Option<results::run::Checkpoint>,
 }
 
 impl Default for EvalOptions {
@@ -113,6 +116,7 @@ impl Default for EvalOptions {
             runs: 1,
             workers: 1,
             shard: None,
+            checkpoint: None,
         }
     }
 }
@@ -179,6 +183,7 @@ pub fn evaluate(
         episodes: opts.episodes,
         runs: opts.runs.max(1),
         shard: opts.shard,
+        checkpoint: opts.checkpoint.clone(),
         conditions: Conditions::of(task),
         model: model_record.clone(),
     };
@@ -192,7 +197,17 @@ pub fn evaluate(
         }
         None => (None, Vec::new()),
     };
-    let planned = plan(opts.seed, opts.episodes, here.runs, opts.shard);
+    let mut planned = plan(opts.seed, opts.episodes, here.runs, opts.shard);
+    if let Some(c) = &opts.checkpoint {
+        if c.run >= here.runs {
+            return Err(RunError::CheckpointRun {
+                run: c.run,
+                runs: here.runs,
+            }
+            .into());
+        }
+        planned.retain(|(run, _)| *run == c.run);
+    }
     let position: HashMap<u64, usize> = planned
         .iter()
         .enumerate()
