@@ -213,7 +213,7 @@ mod tests {
             parts: BTreeMap::new(),
             logic: Logic::new(),
             touched_by: Vec::new(),
-            held_by: Vec::new(),
+            finger_contacts: Vec::new(),
         };
         let closed = |lid| p.measure("lid", "closed", None, &state(lid)).unwrap().holds;
         assert!(closed(p.lid_closed + 0.005));

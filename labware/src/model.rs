@@ -64,7 +64,7 @@ pub struct LabwareState {
     /// The robots whose fingers touch this item, and where: what a `<robot> holds <item>`
     /// predicate measures. In task order, then the item's own body before its parts.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub held_by: Vec<FingerContact>,
+    pub finger_contacts: Vec<FingerContact>,
 }
 
 /// A robot's finger touching an item (a MuJoCo contact at zero or negative distance).

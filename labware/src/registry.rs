@@ -115,7 +115,7 @@ mod tests {
                 parts: Default::default(),
                 logic: Default::default(),
                 touched_by: Vec::new(),
-                held_by: Vec::new(),
+                finger_contacts: Vec::new(),
             };
             let seats: Vec<[f64; 3]> = slots
                 .layout

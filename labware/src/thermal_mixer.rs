@@ -547,7 +547,7 @@ mod tests {
             parts: BTreeMap::new(),
             logic,
             touched_by: Vec::new(),
-            held_by: Vec::new(),
+            finger_contacts: Vec::new(),
         }
     }
 

@@ -650,7 +650,7 @@ mod tests {
                 parts: BTreeMap::from([("cap".into(), held)]),
                 logic: Default::default(),
                 touched_by: Vec::new(),
-                held_by: Vec::new(),
+                finger_contacts: Vec::new(),
             };
             let start = p.affordance("cap_start", &s).unwrap().pose;
             let seated = p.affordance("cap_seated", &s).unwrap().pose;
@@ -682,7 +682,7 @@ mod tests {
             parts: BTreeMap::from([("cap".into(), placed[1].1)]),
             logic: Default::default(),
             touched_by: Vec::new(),
-            held_by: Vec::new(),
+            finger_contacts: Vec::new(),
         };
         assert!(cap_offset(&p, &s).unwrap().0 < 1e-12);
         let g = p.affordance("grasp", &s).unwrap();

@@ -834,7 +834,7 @@ mod tests {
             parts: BTreeMap::new(),
             logic: BTreeMap::new(),
             touched_by: Vec::new(),
-            held_by: Vec::new(),
+            finger_contacts: Vec::new(),
         }
     }
 
@@ -846,7 +846,7 @@ mod tests {
             parts: BTreeMap::new(),
             logic: BTreeMap::new(),
             touched_by: Vec::new(),
-            held_by: Vec::new(),
+            finger_contacts: Vec::new(),
         }
     }
 
@@ -916,7 +916,7 @@ mod tests {
             parts: BTreeMap::new(),
             logic: BTreeMap::new(),
             touched_by: Vec::new(),
-            held_by: Vec::new(),
+            finger_contacts: Vec::new(),
         };
         // The tube hangs slightly tilted in the hand, somewhere above the bench.
         let tube_s = LabwareState {
@@ -971,7 +971,7 @@ mod tests {
             parts: BTreeMap::new(),
             logic: BTreeMap::new(),
             touched_by: Vec::new(),
-            held_by: Vec::new(),
+            finger_contacts: Vec::new(),
         };
         let rack_s = LabwareState {
             name: "rack".into(),
@@ -1045,7 +1045,7 @@ mod tests {
             parts: BTreeMap::from([("cap".into(), placed[1].1)]),
             logic: BTreeMap::new(),
             touched_by: Vec::new(),
-            held_by: Vec::new(),
+            finger_contacts: Vec::new(),
         };
         let params = Bindings::new();
         let lab = Lab {
@@ -1282,7 +1282,7 @@ mod tests {
             parts: BTreeMap::new(),
             logic: BTreeMap::new(),
             touched_by: Vec::new(),
-            held_by: Vec::new(),
+            finger_contacts: Vec::new(),
         };
         let params = Bindings::from([("rpm".to_string(), "2000".to_string())]);
         let turn = |knob: f64, per_grip: f64| {

@@ -171,7 +171,7 @@ fn measure(
         // A finger of the robot touches the item, or the part (value 1), or not (0).
         Check::Holds { robot, item, part } => {
             let holding = state_of(item)?
-                .held_by
+                .finger_contacts
                 .iter()
                 .any(|f| &f.robot == robot && (part.is_none() || f.part == *part));
             Some(Measure {

@@ -505,7 +505,7 @@ impl Episode {
                 .collect(),
             logic: self.logic[i].clone(),
             touched_by: self.touching(i),
-            held_by: self.fingering(i),
+            finger_contacts: self.fingering(i),
         }
     }
 

@@ -351,7 +351,7 @@ pub(crate) fn held_pose(
         parts: Default::default(),
         logic: Default::default(),
         touched_by: Vec::new(),
-        held_by: Vec::new(),
+        finger_contacts: Vec::new(),
     };
     let grasp = item
         .affordance("grasp", &at_origin)
@@ -696,7 +696,7 @@ fn check_measurable(task: &Task) -> Result<(), SceneError> {
                             parts: Default::default(),
                             logic: Default::default(),
                             touched_by: Vec::new(),
-                            held_by: Vec::new(),
+                            finger_contacts: Vec::new(),
                         };
                         m.panel()
                             .is_some_and(|p| p.panel_value(param, &probe).is_some())
@@ -765,7 +765,7 @@ pub(crate) fn start_seat(task: &Task, instance: &SceneInstance, i: usize) -> Opt
         parts: BTreeMap::new(),
         logic: Logic::new(),
         touched_by: Vec::new(),
-        held_by: Vec::new(),
+        finger_contacts: Vec::new(),
     };
     model.slot_seat(slot, &holder_state)
 }
