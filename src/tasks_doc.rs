@@ -9,7 +9,7 @@
 //! `--verify-hold TABLE` re-measures only the hold column of a written table, on the seeds the
 //! table says it ran (or the first `--first N` of them), and fails unless every task scores 0
 //! with no motion (each episode run to its time limit, with no error, some measured check
-//! failing) and the table lists exactly the tasks that run (CI runs it on the first 40 on every
+//! failing) and the table lists exactly the tasks that run (CI runs it on the first 30 on every
 //! commit: `make hold-column`; it is the suite's every-task hold spread). It does not re-run the expert (that is `make tasks-doc`,
 //! about 17 minutes).
 
