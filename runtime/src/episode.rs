@@ -212,13 +212,18 @@ impl Episode {
         let ids = &scene.labware[i];
         for (joint, pose) in instrument(&self.task, i).place(&self.task.labware[i].name, root) {
             if let Some(f) = ids.free.iter().find(|f| f.name == joint) {
-                let (p, q) = (position(&pose), wxyz(&pose.rotation));
-                let qpos = self.data.qpos_mut();
-                qpos[f.qpos..f.qpos + 3].copy_from_slice(&p);
-                qpos[f.qpos + 3..f.qpos + 7].copy_from_slice(&q);
-                self.data.qvel_mut()[f.dof..f.dof + 6].fill(0.0);
+                self.set_free(f, &pose);
             }
         }
+    }
+
+    /// Puts free joint `f` at `pose`, at rest.
+    fn set_free(&mut self, f: &crate::scene::FreeJoint, pose: &Pose) {
+        let (p, q) = (position(pose), wxyz(&pose.rotation));
+        let qpos = self.data.qpos_mut();
+        qpos[f.qpos..f.qpos + 3].copy_from_slice(&p);
+        qpos[f.qpos + 3..f.qpos + 7].copy_from_slice(&q);
+        self.data.qvel_mut()[f.dof..f.dof + 6].fill(0.0);
     }
 
     /// Loose parts of item `i` that start apart from it (a cap lying on the bench) go where the
@@ -228,22 +233,21 @@ impl Episode {
         let ids = &scene.labware[i];
         let name = &self.task.labware[i].name;
         let model = instrument(&self.task, i);
-        for (role, body) in &ids.parts {
-            let Some(at) = instance.part_placement.get(&format!("{name}.{role}")) else {
-                continue;
-            };
-            let lying = model
-                .part()
-                .filter(|(r, _)| r == role)
-                .map_or(Pose::identity(), |(_, p)| p.lying());
-            let pose = at * lying;
-            if let Some(f) = ids.free.iter().find(|f| f.body == *body) {
-                let (p, q) = (position(&pose), wxyz(&pose.rotation));
-                let qpos = self.data.qpos_mut();
-                qpos[f.qpos..f.qpos + 3].copy_from_slice(&p);
-                qpos[f.qpos + 3..f.qpos + 7].copy_from_slice(&q);
-                self.data.qvel_mut()[f.dof..f.dof + 6].fill(0.0);
-            }
+        let apart: Vec<(usize, Pose)> = ids
+            .parts
+            .iter()
+            .filter_map(|(role, body)| {
+                let at = instance.part_placement.get(&format!("{name}.{role}"))?;
+                let lying = model
+                    .part()
+                    .filter(|(r, _)| r == role)
+                    .map_or(Pose::identity(), |(_, p)| p.lying());
+                let f = ids.free.iter().position(|f| f.body == *body)?;
+                Some((f, at * lying))
+            })
+            .collect();
+        for (f, pose) in apart {
+            self.set_free(&ids.free[f], &pose);
         }
     }
 
