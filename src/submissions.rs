@@ -29,9 +29,10 @@ pub enum LeaderboardCommand {
     /// 1: refused (each reason listed)
     Verify {
         bundle: PathBuf,
-        /// Where the shipped suites are
-        #[arg(long, default_value = "suites")]
-        suites: PathBuf,
+        /// A folder of suites to verify against (default: the suites and protocols this autobio
+        /// shipped, compiled into it: verification needs no checkout)
+        #[arg(long)]
+        suites: Option<PathBuf>,
         /// Episodes re-enacted at once
         #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=256))]
         workers: u32,
@@ -39,6 +40,10 @@ pub enum LeaderboardCommand {
         /// removed afterwards)
         #[arg(long)]
         work: Option<PathBuf>,
+        /// Lower unpacking limits than a bundle's (members, bytes of a member, bytes in all):
+        /// for tests of the refusals at the limits, which real bundles are far from
+        #[arg(long, hide = true, num_args = 3, value_names = ["MEMBERS", "MEMBER_BYTES", "TOTAL_BYTES"])]
+        limits: Option<Vec<u64>>,
     },
     /// Audit a bundle against the submitter's live model server: its success rate on fresh seeds,
     /// per suite task, tested against the bundle's claim (one-sided Fisher exact test). Exit 0:
@@ -61,9 +66,9 @@ pub enum LeaderboardCommand {
         /// printed, above any seed a suite plans); give it to repeat an audit
         #[arg(long)]
         seed: Option<u64>,
-        /// Where the shipped suites are
-        #[arg(long, default_value = "suites")]
-        suites: PathBuf,
+        /// A folder of suites (default: the ones this autobio shipped, compiled into it)
+        #[arg(long)]
+        suites: Option<PathBuf>,
         /// Episodes run at once
         #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=256))]
         workers: u32,
@@ -105,7 +110,22 @@ pub fn run(c: &LeaderboardCommand) -> Result<ExitCode> {
             suites,
             workers,
             work,
-        } => verify(bundle, suites, *workers as usize, work.as_deref()),
+            limits,
+        } => {
+            let mut lim = leaderboard::bundle::Limits::default();
+            if let Some([members, member, total]) = limits.as_deref() {
+                lim.max_members = *members as usize;
+                lim.max_member = *member;
+                lim.max_total = *total;
+            }
+            verify(
+                bundle,
+                suites.as_deref(),
+                *workers as usize,
+                work.as_deref(),
+                &lim,
+            )
+        }
         LeaderboardCommand::Audit { .. } => audit(c),
         LeaderboardCommand::Build { dir, out } => {
             // A fresh private folder, removed when dropped.
@@ -129,16 +149,24 @@ pub fn reenact(
     task: &compiler::Task,
     seed: u64,
     actions: &[Vec<f64>],
+    ask: &leaderboard::verify::ReenactAsk,
 ) -> Result<leaderboard::verify::Reenacted, leaderboard::verify::ReenactError> {
-    scoring::replay::reenact(task, seed, actions)
+    let opts = scoring::replay::ReenactOptions {
+        record: Some(ask.record.to_path_buf()),
+        image_every: ask.image_every,
+        image_size: ask.image_size,
+        error: ask.error.map(str::to_string),
+    };
+    scoring::replay::reenact(task, seed, actions, &opts)
         .map(|r| leaderboard::verify::Reenacted {
             hash: r.hash,
-            success: r.verdict.success,
-            score: r.verdict.score,
+            verdict: r.verdict,
+            time_s: r.time_s,
             control_steps: r.control_steps,
             finished: r.finished,
             unused_actions: r.unused_actions,
             refused: r.refused,
+            unstable: r.unstable,
         })
         .map_err(|e| leaderboard::verify::ReenactError::new(task, seed, e))
 }
@@ -197,8 +225,10 @@ fn audit(c: &LeaderboardCommand) -> Result<ExitCode> {
     let temp = tempfile::Builder::new()
         .prefix("autobio-audit-")
         .tempdir()?;
-    let unpacked = leaderboard::bundle::unpack(bundle, temp.path(), &Default::default())
-        .with_context(|| format!("reading {}", bundle.display()))?;
+    let suites = &suites_folder(suites.as_deref(), temp.path())?;
+    let unpacked =
+        leaderboard::bundle::unpack(bundle, &temp.path().join("bundle"), &Default::default())
+            .with_context(|| format!("reading {}", bundle.display()))?;
     let claimed = leaderboard::audit::claimed(&unpacked)?;
     // The shipped suite the bundle ran, found by its file's hash (its name is never a path).
     let suite = leaderboard::verify::shipped_suite(suites, &unpacked.index.suite_sha256)
@@ -308,18 +338,35 @@ fn audit(c: &LeaderboardCommand) -> Result<ExitCode> {
     }
 }
 
+/// The suites folder to check a bundle against: the one given, or the shipped suites and
+/// protocols compiled into this autobio, written out under `scratch`.
+fn suites_folder(
+    given: Option<&std::path::Path>,
+    scratch: &std::path::Path,
+) -> Result<std::path::PathBuf> {
+    use anyhow::Context;
+    match given {
+        Some(dir) => Ok(dir.to_path_buf()),
+        None => leaderboard::shipped::write_out(&scratch.join("shipped"))
+            .with_context(|| format!("writing the shipped suites under {}", scratch.display())),
+    }
+}
+
 fn verify(
     bundle: &std::path::Path,
-    suites: &std::path::Path,
+    suites: Option<&std::path::Path>,
     workers: usize,
     work: Option<&std::path::Path>,
+    limits: &leaderboard::bundle::Limits,
 ) -> Result<ExitCode> {
-    // A fresh private folder (removed when dropped) unless --work names one.
+    // Fresh private folders (removed when dropped): the shipped files, and the bundle unpacked
+    // unless --work names a folder for it.
     let temp = tempfile::Builder::new()
         .prefix("autobio-verify-")
         .tempdir()?;
-    let dir = work.unwrap_or(temp.path());
-    let unpacked = leaderboard::bundle::unpack(bundle, dir, &Default::default());
+    let suites = suites_folder(suites, temp.path())?;
+    let dir = work.map_or_else(|| temp.path().join("bundle"), |w| w.to_path_buf());
+    let unpacked = leaderboard::bundle::unpack(bundle, &dir, limits);
     let unpacked = match unpacked {
         Ok(u) => u,
         Err(e) => {
@@ -328,10 +375,7 @@ fn verify(
             return Ok(ExitCode::from(1));
         }
     };
-    let opts = leaderboard::verify::VerifyOptions {
-        suites: suites.to_path_buf(),
-        workers,
-    };
+    let opts = leaderboard::verify::VerifyOptions { suites, workers };
     let v = leaderboard::verify::verify(&unpacked, &opts, &reenact);
     drop(temp);
     // The record the site reads: this verification, of these exact bytes.

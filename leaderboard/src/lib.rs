@@ -4,7 +4,8 @@
 //! suite runs and unpacked from strangers' files under limits ([`bundle`]); and their offline
 //! verification ([`verify`]), which re-enacts every episode from its seed and actions through a
 //! simulator the caller hands in; the online audit's statistics ([`audit`]); and the static site
-//! built from a folder of bundles ([`site`]).
+//! built from a folder of bundles ([`site`]). The shipped suites and protocols are compiled in
+//! ([`shipped`]): verification needs no checkout.
 //!
 //! It links no simulator: it reads what runs wrote, through `results`, and runs nothing itself.
 //!
@@ -13,6 +14,7 @@
 
 pub mod audit;
 pub mod bundle;
+pub mod shipped;
 pub mod site;
 pub mod table;
 pub mod verify;

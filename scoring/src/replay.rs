@@ -215,44 +215,105 @@ pub fn resimulate(rec: &Recording, from_step: usize) -> Result<Resimulation, Rep
 pub struct Reenacted {
     /// The trajectory hash over the control steps the actions drove.
     pub hash: String,
+    /// The judge's verdict, scored 0 when the episode ended by an error (`error`).
     pub verdict: Verdict,
+    /// Simulated time at the end (s).
+    pub time_s: f64,
     pub control_steps: u64,
     /// The episode ended (success or time limit) with the last action.
     pub finished: bool,
     /// Actions left over once the episode had ended (a claimed episode that ran on after its
-    /// end), and why the simulation refused an action, if it did.
+    /// end).
     pub unused_actions: usize,
+    /// Why the simulation refused an action, if it did, and whether it was because the
+    /// simulation became unstable.
     pub refused: Option<String>,
+    pub unstable: bool,
+}
+
+/// What a re-enactment writes besides its outcome.
+#[derive(Clone, Debug, Default)]
+pub struct ReenactOptions {
+    /// Write the re-enacted episode's recording here, as `eval` writes one (with camera frames
+    /// every `image_every` control steps at `image_size`; 0: none).
+    pub record: Option<PathBuf>,
+    pub image_every: u32,
+    pub image_size: Option<[usize; 2]>,
+    /// The error the episode is said to have ended with, where no action was refused: a policy's
+    /// or a model server's, which only the harness saw. The verdict then scores 0 and the
+    /// recording's verdict carries it, as the harness wrote them.
+    pub error: Option<String>,
 }
 
 /// Re-enacts an episode of `task` (the verifier's own, not a recording's) from the scene `seed`
 /// draws and `actions` (one per control step, every robot's part in task order). Trusts
-/// nothing recorded but the actions.
+/// nothing recorded but the actions (and, for an episode that ended by a policy's or server's
+/// error, that error's text).
 pub fn reenact(
     task: &Task,
     seed: u64,
     actions: &[Vec<f64>],
-) -> Result<Reenacted, runtime::EnvError> {
-    let mut env = runtime::Env::make(task, seed, runtime::EnvOptions::default())?;
+    opts: &ReenactOptions,
+) -> Result<Reenacted, crate::episode::EpisodeError> {
+    use crate::episode::{EpisodeError, Recording};
+    let instance = task.sample(seed);
+    let scene = Arc::new(
+        Scene::build(task, &instance)
+            .map_err(runtime::EnvError::from)
+            .map_err(EpisodeError::Env)?,
+    );
+    let env_opts = runtime::EnvOptions {
+        image_size: opts.image_size,
+    };
+    let mut env = runtime::Env::new(scene, task, &instance, env_opts);
+    let mut recording = match &opts.record {
+        Some(p) => Some(Recording::create(
+            p.clone(),
+            task,
+            &instance,
+            opts.image_every,
+        )?),
+        None => None,
+    };
     let mut refused = None;
+    let mut unstable = false;
     let mut used = 0;
     for a in actions {
         if env.done() {
             break;
         }
         used += 1;
-        if let Err(e) = env.step(a) {
-            refused = Some(e.to_string());
-            break;
+        let mut observers: Vec<&mut dyn runtime::Observer> = Vec::new();
+        if let Some(r) = recording.as_mut() {
+            observers.push(r);
         }
+        match env.step_with(a, &mut observers) {
+            Ok(_) => {}
+            Err(runtime::EnvError::Step(e)) => {
+                unstable = matches!(e, runtime::StepError::Unstable { .. });
+                refused = Some(e.to_string());
+                break;
+            }
+            Err(e) => return Err(EpisodeError::Env(e)),
+        }
+    }
+    let error = refused.clone().or_else(|| opts.error.clone());
+    let mut verdict = env.verdict();
+    if error.is_some() {
+        verdict.ended_by_error();
+    }
+    if let Some(r) = recording {
+        r.finish(&env, error.as_deref(), &verdict)?;
     }
     Ok(Reenacted {
         hash: env.trajectory_hash(),
-        verdict: env.verdict(),
+        verdict,
+        time_s: env.time(),
         control_steps: env.control_steps(),
         finished: env.done() && refused.is_none(),
         unused_actions: actions.len() - used,
         refused,
+        unstable,
     })
 }
 

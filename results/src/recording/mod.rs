@@ -28,6 +28,7 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
+pub mod compare;
 pub mod proto;
 
 /// 2: one joint-state and action channel per robot; labware state with poses, parts and logic.

@@ -1,23 +1,40 @@
 //! Offline verification of a submission bundle, trusting nothing the submitter wrote but the
-//! actions. A bundle is accepted only if:
+//! actions. Everything the site publishes is re-derived here, and every member is either
+//! re-derived or checked; a bundle is accepted only if:
 //! - every member's SHA-256 is the index's, and every member is in the index;
 //! - its suite is a shipped one, byte for byte (`suites/<name>.toml`);
 //! - every task's compiled content is the shipped protocol's ([`task_content_sha256`]): a result
 //!   for a modified task is refused;
+//! - every manifest names what verification derives: this autobio's results schema, the index's
+//!   autobio version, commit and model, the shipped protocol (its path ends with the suite's
+//!   entry for it, and its SHA-256, the compiled task's and every protocol file's are the shipped
+//!   files'), the suite's seed and sizes, the task's conditions ([`manifest`]);
 //! - the journals hold every episode the suite plans, each once, and no other;
 //! - runs of training seeds (`eval --checkpoint`) are all the bundle's runs or none, each folder
 //!   holds only its training seed's run, and each training seed is one checkpoint;
 //! - every episode, re-enacted from the scene its seed builds for the shipped task and the
-//!   recorded actions alone, reproduces the journal's trajectory hash, success, score and length.
+//!   recorded actions alone, reproduces the journal's line field by field (trajectory hash,
+//!   outcome, verdict with every stage's success, score and time and every predicate's value,
+//!   length, simulated time), and its recording message by message: the re-enactment writes its
+//!   own, and the two must be the same but for the policy's `/stage` labels ([`claim`]);
+//! - every results file is the report of its verified journal ([`manifest::check_results`]).
 //!
-//! Each failure is named; verification goes on past the first so one run lists them all. The
-//! re-enactment itself is the caller's ([`Reenact`]): this crate links no simulator.
+//! Only what no re-enactment can know is taken as claimed, and checked for form: wall times, an
+//! error text a policy or server ended an episode with, and the policy's stage labels. JSON is
+//! parsed into typed records (no NaN or infinity, nesting at most 128 deep). Each failure is
+//! named; verification goes on past the first so one run lists them all. The re-enactment
+//! itself is the caller's ([`Reenact`]): this crate links no simulator.
+
+mod claim;
+mod differ;
+mod manifest;
 
 use crate::bundle::{INDEX, Unpacked};
 use compiler::Task;
 use results::episode::EpisodeResult;
 use results::run::record::{sha256_hex, task_content_sha256};
 use results::suite::{LoadedSuite, SUITE_FILE};
+use results::verdict::Verdict;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -25,19 +42,33 @@ use std::path::{Path, PathBuf};
 #[derive(Clone, Debug, PartialEq)]
 pub struct Reenacted {
     pub hash: String,
-    pub success: bool,
-    pub score: f64,
+    /// The judge's verdict, scored 0 where the episode ended by an error.
+    pub verdict: Verdict,
+    /// Simulated time at the end (s).
+    pub time_s: f64,
     pub control_steps: u64,
     /// The episode ended (success or time limit) exactly with the last action.
     pub finished: bool,
     pub unused_actions: usize,
-    /// Why the simulation refused an action, if it did.
+    /// Why the simulation refused an action, if it did, and whether it became unstable.
     pub refused: Option<String>,
+    pub unstable: bool,
+}
+
+/// What a re-enactment must write besides its outcome: a recording at `record`, as `eval`
+/// writes one (camera frames every `image_every` control steps at `image_size`; 0: none), whose
+/// verdict carries `error` where the episode claims one and no action is refused.
+#[derive(Clone, Debug)]
+pub struct ReenactAsk<'a> {
+    pub record: &'a Path,
+    pub image_every: u32,
+    pub image_size: Option<[usize; 2]>,
+    pub error: Option<&'a str>,
 }
 
 /// Re-enacts an episode of the (shipped) task from its seed and actions, in a simulator.
 pub type Reenact<'a> =
-    dyn Fn(&Task, u64, &[Vec<f64>]) -> Result<Reenacted, ReenactError> + Sync + 'a;
+    dyn Fn(&Task, u64, &[Vec<f64>], &ReenactAsk) -> Result<Reenacted, ReenactError> + Sync + 'a;
 
 /// Why the caller's simulator could not re-enact an episode ([`Reenact`]'s error): the task and
 /// seed it was asked to re-enact, and what the simulator said. Verification names the episode
@@ -70,7 +101,7 @@ impl ReenactError {
 
 #[derive(Clone, Debug)]
 pub struct VerifyOptions {
-    /// Where the shipped suites are (`suites/`).
+    /// Where the shipped suites are (`suites/`, with the protocols they name beside it).
     pub suites: PathBuf,
     /// Episodes re-enacted at once.
     pub workers: usize,
@@ -94,7 +125,8 @@ impl Verification {
     }
 }
 
-/// One claimed episode to re-enact.
+/// One claimed episode to re-enact: the task as its run compiled it (the shipped task under
+/// the run's own paths) and the claim.
 struct Claim {
     task: usize,
     run_dir: PathBuf,
@@ -137,11 +169,15 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
     let planned = results::run::plan(suite.seed, suite.episodes, suite.runs, None);
     let planned_set: std::collections::BTreeSet<(u32, u64)> = planned.iter().copied().collect();
     // Every task: the shipped protocol compiled, the manifests' task and the journals' seeds.
-    let mut tasks: Vec<Task> = Vec::new();
+    let mut ids: Vec<String> = Vec::new();
+    let mut as_run: Vec<Task> = Vec::new();
     let mut claims: Vec<Claim> = Vec::new();
+    let mut manifests_seen: Vec<results::run::record::Manifest> = Vec::new();
     // Each run folder's training-seed checkpoint, by task, and the runs of its episodes.
     let mut checkpoints: Vec<Checkpointed> = Vec::new();
-    for protocol in shipped.protocols() {
+    // Each (folder, task)'s manifest and journal, for its results file.
+    let mut reports: Vec<manifest::Reported> = Vec::new();
+    for (entry, protocol) in suite.tasks.iter().zip(shipped.protocols()) {
         let task = match compiler::check_file(&protocol, None) {
             Ok(c) if c.trivial_at().is_some() => {
                 v.failures.push(format!(
@@ -168,6 +204,13 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
             }
         };
         let content = task_content_sha256(&task);
+        let want = manifest::Shipped {
+            task: &task,
+            content: &content,
+            protocol: &protocol,
+            entry,
+            suite,
+        };
         let mut seen: BTreeMap<(u32, u64), usize> = BTreeMap::new();
         let mut manifests = 0;
         for dir in &run_dirs {
@@ -176,24 +219,16 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
                 continue;
             }
             manifests += 1;
-            let mut checkpoint = None;
-            match results::run::record::Manifest::read(&manifest_path) {
-                Ok(m) => {
-                    checkpoint = Some(m.checkpoint.clone());
-                    let shown = rel(root, &manifest_path);
-                    let want = Shipped {
-                        task: &task,
-                        content: &content,
-                        protocol: &protocol,
-                        suite,
-                    };
-                    v.failures
-                        .extend(check_manifest(&m, &shown, &want, &bundle.index));
+            let shown = rel(root, &manifest_path);
+            let m = match results::run::record::Manifest::read(&manifest_path) {
+                Ok(m) => m,
+                Err(e) => {
+                    v.failures.push(format!("{shown}: {e}"));
+                    continue;
                 }
-                Err(e) => v
-                    .failures
-                    .push(format!("{}: {e}", rel(root, &manifest_path))),
-            }
+            };
+            let (ran, found) = manifest::check(&m, &shown, &want, &bundle.index);
+            v.failures.extend(found);
             let journal = results::run::record::journal_path(dir, &task.id);
             let episodes = match results::run::record::read_journal_only(&journal) {
                 Ok(e) => e,
@@ -202,26 +237,32 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
                     continue;
                 }
             };
-            if let Some(checkpoint) = checkpoint {
-                checkpoints.push(Checkpointed {
-                    shown: rel(root, &journal),
-                    checkpoint,
-                    runs: episodes.iter().map(|e| e.run).collect(),
-                });
-            }
-            for e in episodes {
+            checkpoints.push(Checkpointed {
+                shown: rel(root, &journal),
+                checkpoint: m.checkpoint.clone(),
+                runs: episodes.iter().map(|e| e.run).collect(),
+            });
+            let slot = as_run.len();
+            as_run.push(ran);
+            for e in &episodes {
                 let n = seen.entry((e.run, e.seed)).or_default();
                 *n += 1;
                 // Only a planned episode's first claim is re-enacted; the rest are refused below
                 // without costing a simulation.
                 if *n == 1 && planned_set.contains(&(e.run, e.seed)) {
                     claims.push(Claim {
-                        task: tasks.len(),
+                        task: slot,
                         run_dir: dir.clone(),
-                        claimed: e,
+                        claimed: e.clone(),
                     });
                 }
             }
+            reports.push(manifest::Reported {
+                dir: dir.clone(),
+                manifest: m.clone(),
+                episodes,
+            });
+            manifests_seen.push(m);
         }
         if manifests == 0 {
             v.failures.push(format!(
@@ -232,20 +273,39 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
         v.failures
             .extend(check_seeds(&task.id, &planned, &planned_set, &seen));
         v.tasks += 1;
-        tasks.push(task);
+        ids.push(task.id.clone());
     }
+    v.failures
+        .extend(manifest::check_index(&bundle.index, &manifests_seen));
     v.failures.extend(check_checkpoints(&checkpoints));
     // Nothing else may ride along: every member is the index, or a run folder's suite file, or
     // a suite task's manifest, journal, results or recording (what the site and an audit read
     // is exactly what was checked here).
-    v.failures.extend(check_extras(bundle, &tasks, &run_dirs));
+    v.failures.extend(check_extras(bundle, &ids, &run_dirs));
     v.episodes = claims.len();
     // Every claimed episode re-enacted from its seed and recorded actions.
     let start = std::time::Instant::now();
-    let found = reenact_claims(&claims, &tasks, root, reenact, opts.workers);
+    let found = reenact_claims(&claims, &as_run, root, reenact, opts.workers);
     v.reenacted = found.len();
     v.reenact_wall_s = start.elapsed().as_secs_f64();
+    let unverified: std::collections::BTreeSet<(PathBuf, u32, u64)> = claims
+        .iter()
+        .zip(&found)
+        .filter(|(_, f)| f.is_some())
+        .map(|(c, _)| (c.run_dir.clone(), c.claimed.run, c.claimed.seed))
+        .collect();
     v.failures.extend(found.into_iter().flatten());
+    // Each results file: the report of its journal (only once every episode in it verified,
+    // so that one forged line is refused once, as the episode it is).
+    for r in &reports {
+        let clean = r
+            .episodes
+            .iter()
+            .all(|e| !unverified.contains(&(r.dir.clone(), e.run, e.seed)));
+        if clean {
+            v.failures.extend(manifest::check_results(r, root));
+        }
+    }
     v
 }
 
@@ -305,9 +365,9 @@ fn check_seeds(
 }
 
 /// Members that are not a suite run's files, and journals without their manifest.
-fn check_extras(bundle: &Unpacked, tasks: &[Task], run_dirs: &[PathBuf]) -> Vec<String> {
+fn check_extras(bundle: &Unpacked, ids: &[String], run_dirs: &[PathBuf]) -> Vec<String> {
     let mut failures = Vec::new();
-    let ids: Vec<&str> = tasks.iter().map(|t| t.id.as_str()).collect();
+    let ids: Vec<&str> = ids.iter().map(String::as_str).collect();
     for member in &bundle.members {
         if member != INDEX && !is_run_file(member, &ids) {
             failures.push(format!(
@@ -326,53 +386,6 @@ fn check_extras(bundle: &Unpacked, tasks: &[Task], run_dirs: &[PathBuf]) -> Vec<
                 ));
             }
         }
-    }
-    failures
-}
-
-/// A shipped task as a run's manifest must match it.
-struct Shipped<'a> {
-    task: &'a Task,
-    /// [`task_content_sha256`] of the task.
-    content: &'a str,
-    protocol: &'a Path,
-    suite: &'a results::suite::Suite,
-}
-
-/// A run's manifest (shown as `shown`) against the shipped task, its suite and the index.
-fn check_manifest(
-    m: &results::run::record::Manifest,
-    shown: &str,
-    want: &Shipped,
-    index: &crate::bundle::Index,
-) -> Vec<String> {
-    let (task, suite) = (want.task, want.suite);
-    let mut failures = Vec::new();
-    if m.task_id != task.id || m.level != task.level {
-        failures.push(format!(
-            "{shown}: task `{}` at level {}; the shipped task is `{}` at level {}",
-            m.task_id, m.level, task.id, task.level
-        ));
-    }
-    if m.autobio_version != index.autobio_version
-        || m.model.as_ref().map(|x| &x.profile_sha256) != index.model.profile_sha256.as_ref()
-    {
-        failures.push(format!(
-            "{shown}: its autobio version or model profile is not the index's"
-        ));
-    }
-    if m.task_content_sha256.as_deref() != Some(want.content) {
-        failures.push(format!(
-            "{shown}: the results are for a modified task (its compiled content \
-             differs from the shipped {})",
-            want.protocol.display()
-        ));
-    }
-    if (m.seed, m.episodes, m.runs) != (suite.seed, suite.episodes, suite.runs) {
-        failures.push(format!(
-            "{shown}: seed {}, {} episodes x {} runs; the suite says seed {}, {} x {}",
-            m.seed, m.episodes, m.runs, suite.seed, suite.episodes, suite.runs
-        ));
     }
     failures
 }
@@ -429,8 +442,8 @@ fn check_checkpoints(runs: &[Checkpointed]) -> Vec<String> {
     failures
 }
 
-/// Re-enacts every claim on `workers` threads; what differs from each claim, in the claims'
-/// order.
+/// Re-enacts every claim on `workers` threads, each into its own recording under a private
+/// folder; what differs from each claim, in the claims' order.
 fn reenact_claims(
     claims: &[Claim],
     tasks: &[Task],
@@ -438,6 +451,18 @@ fn reenact_claims(
     reenact: &Reenact,
     workers: usize,
 ) -> Vec<Option<String>> {
+    let scratch = match tempfile::Builder::new()
+        .prefix("autobio-reenact-")
+        .tempdir()
+    {
+        Ok(d) => d,
+        Err(e) => {
+            return claims
+                .iter()
+                .map(|_| Some(format!("no folder to re-enact into: {e}")))
+                .collect();
+        }
+    };
     let next = std::sync::atomic::AtomicUsize::new(0);
     let found = std::sync::Mutex::new(Vec::new());
     std::thread::scope(|s| {
@@ -446,7 +471,9 @@ fn reenact_claims(
                 loop {
                     let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                     let Some(c) = claims.get(k) else { break };
-                    let problem = check_claim(&tasks[c.task], c, root, reenact);
+                    let out = scratch.path().join(format!("{k}.mcap"));
+                    let problem = claim::check(&tasks[c.task], c, root, &out, reenact);
+                    let _ = std::fs::remove_file(&out);
                     found.lock().unwrap().push((k, problem));
                 }
             });
@@ -530,100 +557,9 @@ fn run_dirs(bundle: &Unpacked) -> Vec<PathBuf> {
     dirs
 }
 
-fn rel(root: &Path, path: &Path) -> String {
+pub(crate) fn rel(root: &Path, path: &Path) -> String {
     path.strip_prefix(root)
         .unwrap_or(path)
         .display()
         .to_string()
-}
-
-/// Re-enacts one claimed episode; what differs from the claim, if anything.
-fn check_claim(task: &Task, c: &Claim, root: &Path, reenact: &Reenact) -> Option<String> {
-    let e = &c.claimed;
-    let what = format!("{} seed {} (run {})", task.id, e.seed, e.run);
-    let path = c.run_dir.join(format!("{}_seed{}.mcap", task.id, e.seed));
-    let summary = match results::recording::read_recording(&path) {
-        Ok(s) => s,
-        Err(err) => {
-            return Some(format!(
-                "{what}: its recording {} does not read: {err}",
-                rel(root, &path)
-            ));
-        }
-    };
-    // The actions, in the shipped task's robot order; nothing else of the recording is used.
-    let steps = summary.actions.values().map(Vec::len).max().unwrap_or(0);
-    let mut actions = vec![Vec::new(); steps];
-    for r in &task.robots {
-        let mine = summary.actions.get(&r.name).map_or(&[][..], Vec::as_slice);
-        if mine.len() != steps {
-            return Some(format!(
-                "{what}: the recording has {} actions for robot `{}` and {steps} for another",
-                mine.len(),
-                r.name
-            ));
-        }
-        for (k, a) in actions.iter_mut().enumerate() {
-            a.extend_from_slice(&mine[k]);
-        }
-    }
-    let got = match reenact(task, e.seed, &actions) {
-        Ok(g) => g,
-        Err(e) => return Some(format!("{what}: cannot be re-enacted: {}", e.why)),
-    };
-    let ended_by_error = e.error.is_some();
-    // What the harness recorded for this episode: the judge's verdict, or, for an episode that
-    // ended in an error, the failure that scores 0 (`Verdict::ended_by_error`).
-    let mut judged = results::verdict::Verdict {
-        success: got.success,
-        score: got.score,
-        stages: Vec::new(),
-    };
-    if ended_by_error {
-        judged.ended_by_error();
-    }
-    let (want_success, want_score) = (judged.success, judged.score);
-    let mut differs = Vec::new();
-    if got.hash != e.trajectory_hash {
-        differs.push(format!(
-            "trajectory hash {} (claimed {})",
-            short(&got.hash),
-            short(&e.trajectory_hash)
-        ));
-    }
-    if want_success != e.success {
-        differs.push(format!("success {want_success} (claimed {})", e.success));
-    }
-    if want_score != e.verdict.score {
-        differs.push(format!("score {want_score} (claimed {})", e.verdict.score));
-    }
-    if got.control_steps != e.control_steps {
-        differs.push(format!(
-            "{} control steps (claimed {})",
-            got.control_steps, e.control_steps
-        ));
-    }
-    if !ended_by_error && !got.finished {
-        differs.push(match &got.refused {
-            Some(why) => format!("the simulation refused an action: {why}"),
-            None => "the actions run out before the episode ends".into(),
-        });
-    }
-    if got.unused_actions > 0 {
-        differs.push(format!(
-            "{} actions recorded after the episode ended",
-            got.unused_actions
-        ));
-    }
-    if differs.is_empty() {
-        return None;
-    }
-    Some(format!(
-        "{what}: re-enacted from its seed and recorded actions, {}",
-        differs.join(", ")
-    ))
-}
-
-fn short(hash: &str) -> &str {
-    &hash[..hash.len().min(12)]
 }

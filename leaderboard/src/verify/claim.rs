@@ -1,0 +1,188 @@
+//! One claimed episode against its re-enactment: the recording's actions replayed on the
+//! shipped task from the seed's scene, then the journal's line re-derived field by field and the
+//! recording message by message.
+//!
+//! What the re-enactment cannot know is taken from the claim: the wall times (checked finite and
+//! not negative), the text of an error a policy or model server ended the episode with (only
+//! where no action was refused; its outcome must then be one of those two), the recording's path
+//! on the submitter's machine (it must name the recording), and the policy's `/stage` labels.
+
+use super::{Claim, Reenact, ReenactAsk, differ, rel};
+use compiler::Task;
+use results::episode::{EpisodeResult, Outcome};
+use std::path::Path;
+
+/// Re-enacts one claimed episode of `task` (as its run compiled it), writing the re-enactment's
+/// recording to `out`; what differs from the claim, if anything.
+pub(super) fn check(
+    task: &Task,
+    c: &Claim,
+    root: &Path,
+    out: &Path,
+    reenact: &Reenact,
+) -> Option<String> {
+    let e = &c.claimed;
+    let what = format!("{} seed {} (run {})", task.id, e.seed, e.run);
+    let name = format!("{}_seed{}.mcap", task.id, e.seed);
+    let path = c.run_dir.join(&name);
+    let summary = match results::recording::read_recording(&path) {
+        Ok(s) => s,
+        Err(err) => {
+            return Some(format!(
+                "{what}: its recording {} does not read: {err}",
+                rel(root, &path)
+            ));
+        }
+    };
+    // The actions, in the shipped task's robot order; nothing else of the recording is used.
+    let steps = summary.actions.values().map(Vec::len).max().unwrap_or(0);
+    let mut actions = vec![Vec::new(); steps];
+    for r in &task.robots {
+        let mine = summary.actions.get(&r.name).map_or(&[][..], Vec::as_slice);
+        if mine.len() != steps {
+            return Some(format!(
+                "{what}: the recording has {} actions for robot `{}` and {steps} for another",
+                mine.len(),
+                r.name
+            ));
+        }
+        for (k, a) in actions.iter_mut().enumerate() {
+            a.extend_from_slice(&mine[k]);
+        }
+    }
+    if let Some(other) = summary
+        .actions
+        .keys()
+        .find(|k| !task.robots.iter().any(|r| &r.name == *k))
+    {
+        return Some(format!(
+            "{what}: the recording has actions for `{other}`, no robot of the task"
+        ));
+    }
+    let (image_every, image_size) = match frames_of(task, &summary) {
+        Ok(f) => f,
+        Err(why) => return Some(format!("{what}: its recording's camera frames: {why}")),
+    };
+    let ask = ReenactAsk {
+        record: out,
+        image_every,
+        image_size,
+        error: e.error.as_deref(),
+    };
+    let got = match reenact(task, e.seed, &actions, &ask) {
+        Ok(g) => g,
+        Err(err) => return Some(format!("{what}: cannot be re-enacted: {}", err.why)),
+    };
+    let mut differs = Vec::new();
+    if e.error.is_none() && !got.finished {
+        differs.push(match &got.refused {
+            Some(why) => format!("the simulation refused an action: {why}"),
+            None => "the actions run out before the episode ends".into(),
+        });
+    }
+    if got.unused_actions > 0 {
+        differs.push(format!(
+            "{} actions recorded after the episode ended",
+            got.unused_actions
+        ));
+    }
+    if let Some(d) = journal_line(task, e, &got, &name) {
+        differs.push(d);
+    }
+    if differs.is_empty() {
+        // The journal agrees: the recording must be the one the episode writes.
+        let stage = |topic: &str| topic == "/stage";
+        match results::recording::compare::first_difference(&path, out, &stage) {
+            Ok(None) => {}
+            Ok(Some(d)) => {
+                return Some(format!(
+                    "{what}: its recording {} is not the re-enacted episode's: {d}",
+                    rel(root, &path)
+                ));
+            }
+            Err(err) => return Some(format!("{what}: the re-enacted recording: {err}")),
+        }
+        return None;
+    }
+    Some(format!(
+        "{what}: re-enacted from its seed and recorded actions, {}",
+        differs.join(", ")
+    ))
+}
+
+/// The journal's line against the one the re-enactment derives; the first difference, by field.
+fn journal_line(
+    task: &Task,
+    e: &EpisodeResult,
+    got: &super::Reenacted,
+    name: &str,
+) -> Option<String> {
+    // The error: the refused action's, else the claimed one (a policy's or server's).
+    let error = got.refused.clone().or_else(|| e.error.clone());
+    let outcome = match (&got.refused, &e.error) {
+        (Some(_), _) if got.unstable => Outcome::Unstable,
+        (Some(_), _) => Outcome::PolicyError,
+        (None, Some(_)) => match e.outcome {
+            Outcome::PolicyError | Outcome::ServerFault => e.outcome,
+            _ => Outcome::PolicyError,
+        },
+        (None, None) if got.verdict.success => Outcome::Success,
+        (None, None) => Outcome::TimeLimit,
+    };
+    let fine = |x: f64| x.is_finite() && x >= 0.0;
+    if !fine(e.wall_time_s) || !fine(e.policy_time_s) {
+        return Some(format!(
+            "wall time {} s and policy time {} s (times are finite and not negative)",
+            e.wall_time_s, e.policy_time_s
+        ));
+    }
+    let recording = e
+        .recording
+        .clone()
+        .filter(|r| Path::new(r).file_name().is_some_and(|f| f == name))
+        .or_else(|| Some(name.to_string()));
+    let derived = EpisodeResult {
+        seed: e.seed,
+        run: e.run,
+        success: got.verdict.success,
+        outcome,
+        verdict: got.verdict.clone(),
+        error,
+        sim_time_s: got.time_s,
+        control_steps: got.control_steps,
+        wall_time_s: e.wall_time_s,
+        policy_time_s: e.policy_time_s,
+        trajectory_hash: got.hash.clone(),
+        recording,
+    };
+    // Both sides through the same JSON text and parser: a figure is equal when its JSON is.
+    let value = |r: &EpisodeResult| {
+        serde_json::to_string(r)
+            .ok()
+            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+            .unwrap_or_default()
+    };
+    let _ = task;
+    differ::first_difference(&value(e), &value(&derived))
+}
+
+/// The recording's camera cadence (control steps between frames) and size, as the re-enactment
+/// must draw them: none, or every camera of the task at one size from step 0.
+fn frames_of(
+    task: &Task,
+    s: &results::recording::RecordingSummary,
+) -> Result<(u32, Option<[usize; 2]>), String> {
+    let Some((_, first)) = s.images.iter().next() else {
+        return Ok((0, None));
+    };
+    let Some((_, png)) = first.first() else {
+        return Ok((0, None));
+    };
+    let img = results::Image::from_png("", png).map_err(|e| e.to_string())?;
+    let period = task.physics.timestep_s * task.physics.substeps as f64;
+    let every = match first.as_slice() {
+        [(a, _), (b, _), ..] => ((b - a) / period).round().clamp(1.0, u32::MAX as f64) as u32,
+        _ => u32::MAX,
+    };
+    Ok((every, Some([img.width, img.height])))
+}
