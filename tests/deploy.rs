@@ -207,7 +207,7 @@ fn a_job_array_verifies_one_bundle_per_task_and_records_each() {
         flipped["reasons"][0]
             .as_str()
             .unwrap()
-            .contains("success true (claimed false)"),
+            .ends_with("success: false (derived true)"),
         "{flipped}"
     );
     // An index past the bundles is an error, not a silent success.

@@ -84,16 +84,36 @@ fn verify(bundle: &Path, suites: &Path) -> (i32, String) {
     )
 }
 
-fn refused(bundle: &Path, suites: &Path, reason: &str) -> String {
+/// `verify` refuses the bundle for exactly `reasons`, in the verifier's own words.
+fn refused<S: AsRef<str>>(bundle: &Path, suites: &Path, reasons: &[S]) -> String {
     let (code, said) = verify(bundle, suites);
     assert_eq!(code, 1, "{said}");
-    assert!(said.contains(reason), "wanted `{reason}` in:\n{said}");
+    let found: Vec<&str> = said
+        .lines()
+        .filter_map(|l| l.strip_prefix("refused: "))
+        .collect();
+    let want: Vec<&str> = reasons.iter().map(AsRef::as_ref).collect();
+    assert_eq!(found, want, "{said}");
     assert!(!said.contains("\naccepted"), "{said}");
     said
 }
 
+/// The control: the bundle's members repacked unchanged by [`pack`] (rehashed) verify.
+fn repacked_verifies(bundle: &Path, suites: &Path) {
+    let out = scratch("lb-control").join("same.tar.zst");
+    pack(&members(bundle), &out, true);
+    let (code, said) = verify(&out, suites);
+    assert_eq!(code, 0, "{said}");
+}
+
+/// `WHO: re-enacted from its seed and recorded actions, WHAT`: the verifier's words for an
+/// episode whose re-enactment differs from its claim.
+fn reenacted(who: &str, what: &str) -> String {
+    format!("{who}: re-enacted from its seed and recorded actions, {what}")
+}
+
 /// Every member of a bundle, by name.
-fn members(bundle: &Path) -> BTreeMap<String, Vec<u8>> {
+pub(crate) fn members(bundle: &Path) -> BTreeMap<String, Vec<u8>> {
     let file = std::fs::File::open(bundle).unwrap();
     let mut archive = tar::Archive::new(zstd::Decoder::new(file).unwrap());
     let mut out = BTreeMap::new();
@@ -113,7 +133,7 @@ fn sha256(bytes: &[u8]) -> String {
 
 /// Writes `members` as a bundle; with `rehash`, the index lists each member's SHA-256 as a
 /// forger would.
-fn pack(members: &BTreeMap<String, Vec<u8>>, out: &Path, rehash: bool) {
+pub(crate) fn pack(members: &BTreeMap<String, Vec<u8>>, out: &Path, rehash: bool) {
     let mut members = members.clone();
     if rehash {
         let mut index: Value = serde_json::from_slice(&members["index.json"]).unwrap();
@@ -158,7 +178,11 @@ fn edit_journal_of(
 }
 
 /// A copy of recording `src` with each message's data passed through `edit(topic, data)`.
-fn rewrite(src: &Path, dst: &Path, mut edit: impl FnMut(&str, &[u8]) -> Option<Vec<u8>>) {
+pub(crate) fn rewrite(
+    src: &Path,
+    dst: &Path,
+    mut edit: impl FnMut(&str, &[u8]) -> Option<Vec<u8>>,
+) {
     let mut w = results::recording::Recorder::create(dst).unwrap();
     results::recording::for_each_message(src, |m| match edit(&m.channel.topic, &m.data) {
         Some(data) => w.pass(&mcap::Message {
@@ -216,10 +240,14 @@ fn a_flipped_verdict_is_refused() {
     });
     let out = scratch("lb-flipped").join("b.tar.zst");
     pack(&m, &out, true);
+    repacked_verifies(&f.bundle, &f.suites);
     refused(
         &out,
         &f.suites,
-        "seed 0 (run 0): re-enacted from its seed and recorded actions, success true (claimed false)",
+        &[reenacted(
+            &format!("{TASK} seed 0 (run 0)"),
+            "outcome: \"time_limit\" (derived \"success\")",
+        )],
     );
 }
 
@@ -227,23 +255,28 @@ fn a_flipped_verdict_is_refused() {
 fn an_edited_journal_is_refused_with_or_without_its_hash_updated() {
     let f = fixture();
     let mut m = members(&f.bundle);
+    let steps = common::journal(&f.run, TASK)[1]["control_steps"].clone();
     edit_journal(&mut m, |mut lines| {
         lines[1] = lines[1].replace("\"control_steps\":", "\"control_steps\":1");
         lines
     });
     let dir = scratch("lb-edited");
+    let edited = reenacted(
+        &format!("{TASK} seed 1 (run 0)"),
+        &format!("control_steps: 1{steps} (derived {steps})"),
+    );
     pack(&m, &dir.join("a.tar.zst"), false);
     refused(
         &dir.join("a.tar.zst"),
         &f.suites,
-        &format!("{}: its SHA-256 is not the index's", journal_member()),
+        &[
+            format!("{}: its SHA-256 is not the index's", journal_member()),
+            edited.clone(),
+        ],
     );
     pack(&m, &dir.join("b.tar.zst"), true);
-    refused(
-        &dir.join("b.tar.zst"),
-        &f.suites,
-        "seed 1 (run 0): re-enacted",
-    );
+    repacked_verifies(&f.bundle, &f.suites);
+    refused(&dir.join("b.tar.zst"), &f.suites, &[edited]);
 }
 
 #[test]
@@ -283,12 +316,15 @@ fn forged_recorded_states_do_not_pass_where_plain_replay_is_fooled() {
     );
     let out = dir.join("b.tar.zst");
     pack(&m, &out, true);
-    let said = refused(
+    repacked_verifies(&f.bundle, &f.suites);
+    refused(
         &out,
         &f.suites,
-        "seed 1 (run 0): re-enacted from its seed and recorded actions, trajectory hash",
+        &[reenacted(
+            &format!("{TASK} seed 1 (run 0)"),
+            "the actions run out before the episode ends, outcome: \"success\" (derived \"time_limit\")",
+        )],
     );
-    assert!(said.contains("success false (claimed true)"), "{said}");
 }
 
 #[test]
@@ -317,10 +353,22 @@ fn an_action_changed_by_a_nanoradian_is_refused() {
     );
     let out = dir.join("b.tar.zst");
     pack(&m, &out, true);
-    refused(
-        &out,
-        &f.suites,
-        "seed 0 (run 0): re-enacted from its seed and recorded actions, trajectory hash",
+    repacked_verifies(&f.bundle, &f.suites);
+    let claimed = common::journal(&f.run, TASK)[0]["trajectory_hash"].clone();
+    let (code, said) = verify(&out, &f.suites);
+    assert_eq!(code, 1, "{said}");
+    let found: Vec<&str> = said
+        .lines()
+        .filter_map(|l| l.strip_prefix("refused: "))
+        .collect();
+    let words = reenacted(
+        &format!("{TASK} seed 0 (run 0)"),
+        &format!("trajectory_hash: {claimed} (derived \""),
+    );
+    // One reason: the hash (the derived one is whatever the nudged actions make).
+    assert!(
+        found.len() == 1 && found[0].starts_with(&words) && found[0].ends_with("\")"),
+        "{said}"
     );
 }
 
@@ -338,7 +386,15 @@ fn results_for_a_changed_protocol_are_refused() {
     std::fs::write(&protocol, &original).unwrap();
     let bundle = dir.join("b.tar");
     common::submit(&run, "x", &bundle, &[]);
-    refused(&bundle, &suites, "the results are for a modified task");
+    refused(
+        &bundle,
+        &suites,
+        &[format!(
+            "runs/0/{TASK}.manifest.json: the results are for a modified task (its compiled \
+             content differs from the shipped {})",
+            suites.join(&protocol).display()
+        )],
+    );
 }
 
 #[test]
@@ -348,10 +404,11 @@ fn a_missing_or_duplicated_seed_is_refused() {
     let mut m = members(&f.bundle);
     edit_journal(&mut m, |lines| vec![lines[0].clone()]);
     pack(&m, &dir.join("missing.tar.zst"), true);
+    repacked_verifies(&f.bundle, &f.suites);
     refused(
         &dir.join("missing.tar.zst"),
         &f.suites,
-        &format!("{TASK}: seed 1 (run 0) is missing"),
+        &[format!("{TASK}: seed 1 (run 0) is missing")],
     );
     let mut m = members(&f.bundle);
     edit_journal(&mut m, |lines| {
@@ -361,7 +418,7 @@ fn a_missing_or_duplicated_seed_is_refused() {
     refused(
         &dir.join("twice.tar.zst"),
         &f.suites,
-        &format!("{TASK}: seed 1 (run 0) is in the journals 2 times"),
+        &[format!("{TASK}: seed 1 (run 0) is in the journals 2 times")],
     );
 }
 
@@ -776,10 +833,14 @@ fn claims_the_checks_do_not_cover_are_refused() {
         m[&journal_member()].clone(),
     );
     pack(&m, &dir.join("stray.tar.zst"), true);
+    repacked_verifies(&f.bundle, &f.suites);
     refused(
         &dir.join("stray.tar.zst"),
         &f.suites,
-        &format!("extra/{TASK}.journal.jsonl is not a file of a suite run"),
+        &[format!(
+            "extra/{TASK}.journal.jsonl is not a file of a suite run (runs/<k>/ with suite.toml \
+             and each suite task's manifest, journal, results and recordings)"
+        )],
     );
     // A manifest claiming another level (the per-level columns).
     let mut m = members(&f.bundle);
@@ -791,7 +852,10 @@ fn claims_the_checks_do_not_cover_are_refused() {
     refused(
         &dir.join("level.tar.zst"),
         &f.suites,
-        "at level hard; the shipped task",
+        &[format!(
+            "runs/0/{TASK}.manifest.json: task `{TASK}` at level hard; the shipped task is \
+             `{TASK}` at level easy"
+        )],
     );
     // A suite of the bundle's own, named as a path to it: the verifier finds shipped suites by
     // their hash, never by the bundle's name for them.
@@ -806,7 +870,10 @@ fn claims_the_checks_do_not_cover_are_refused() {
     refused(
         &dir.join("own-suite.tar.zst"),
         &f.suites,
-        "suite `../../runs/0/suite` is not a shipped suite",
+        &[format!(
+            "suite `../../runs/0/suite` is not a shipped suite: no file in {} has its SHA-256",
+            f.suites.display()
+        )],
     );
 }
 
@@ -882,7 +949,14 @@ fn episodes_that_ended_in_an_error_verify_at_score_zero() {
     });
     let out = dir.join("forged.tar.zst");
     pack(&forged, &out, true);
-    refused(&out, &suites, "seed 0 (run 0)");
+    refused(
+        &out,
+        &suites,
+        &[reenacted(
+            "tube.hand_over seed 0 (run 0)",
+            "verdict.score: 1.0 (derived 0.0)",
+        )],
+    );
 }
 
 /// A task whose success holds before the first step is run only under `--allow-trivial`, and such
@@ -1033,10 +1107,14 @@ fn training_seed_runs_verify_and_show_their_sem_over_training_seeds() {
     bare.insert(manifest.clone(), serde_json::to_vec_pretty(&value).unwrap());
     let forged = bundles.join("bare.tar.zst");
     pack(&bare, &forged, true);
+    repacked_verifies(&bundle, &suites);
     refused(
         &forged,
         &suites,
-        "some runs name their training-seed checkpoint and",
+        &[format!(
+            "some runs name their training-seed checkpoint and runs/2/{TASK}.journal.jsonl do \
+             not: a submission's runs are all training seeds or all evaluation runs of one model"
+        )],
     );
     // A checkpoint said to be training seed 1 beside run 2's episode.
     let mut moved = m.clone();
@@ -1048,6 +1126,15 @@ fn training_seed_runs_verify_and_show_their_sem_over_training_seeds() {
     refused(
         &forged,
         &suites,
-        "the checkpoint of training seed 1 is evaluated on run 1 only",
+        &[
+            format!(
+                "runs/2/{TASK}.journal.jsonl: the checkpoint of training seed 1 is evaluated on \
+                 run 1 only, but an episode of run 2 is here"
+            ),
+            format!(
+                "runs/2/{TASK}.journal.jsonl: training seed 1 is checkpoint `ckpt-2`, but \
+                 `ckpt-1` in runs/1/{TASK}.journal.jsonl"
+            ),
+        ],
     );
 }

@@ -1,6 +1,6 @@
 //! Submission bundles: finished suite runs (`autobio eval --suite ... --out RUN`) packed into one
 //! tar archive (zstd-compressed when its name ends in `.zst`) with a top-level `index.json`:
-//! schema version, autobio version and commit, the model (name, training note, metadata and
+//! schema version, the autobio version and commit that ran the runs (one for all), the model (name, training note, metadata and
 //! profile from the runs' manifests), the suite, and the SHA-256 of every other member.
 //!
 //! A bundle is a stranger's file. [`unpack`] extracts it into a work folder of its own and
@@ -121,6 +121,8 @@ pub fn submit(runs: &[PathBuf], opts: &SubmitOptions) -> Result<Index, BundleErr
     let mut members: Vec<(String, PathBuf)> = Vec::new();
     let mut suite: Option<(Vec<u8>, PathBuf)> = None;
     let mut model: Option<results::run::record::ModelRecord> = None;
+    // The autobio that ran the runs (version and commit), one for all.
+    let mut build: Option<(String, String, PathBuf)> = None;
     for (k, dir) in runs.iter().enumerate() {
         let suite_file = dir.join(SUITE_FILE);
         let bytes = std::fs::read(&suite_file).map_err(|_| {
@@ -150,6 +152,21 @@ pub fn submit(runs: &[PathBuf], opts: &SubmitOptions) -> Result<Index, BundleErr
                 let m = Manifest::read(&file)
                     .map_err(|e| BundleError::Runs(format!("{}: {e}", file.display())))?;
                 refuse_trivial(&m)?;
+                let here = (m.autobio_version.clone(), m.git_commit.clone());
+                match &build {
+                    Some((v, c, first)) if (v, c) != (&here.0, &here.1) => {
+                        return Err(BundleError::Runs(format!(
+                            "{} was run by autobio {} at {}, {} by {v} at {c}: a submission's \
+                             runs are one build's",
+                            file.display(),
+                            here.0,
+                            here.1,
+                            first.display()
+                        )));
+                    }
+                    Some(_) => {}
+                    None => build = Some((here.0, here.1, file.clone())),
+                }
                 if let Some(here) = m.model {
                     match &model {
                         Some(first) if first.profile_sha256 != here.profile_sha256 => {
@@ -177,10 +194,17 @@ pub fn submit(runs: &[PathBuf], opts: &SubmitOptions) -> Result<Index, BundleErr
         let bytes = std::fs::read(path).map_err(io("read", path))?;
         files.insert(name.clone(), sha256_hex(&bytes));
     }
+    let (autobio_version, git_commit) = match build {
+        Some((v, c, _)) => (v, c),
+        None => (
+            env!("CARGO_PKG_VERSION").to_string(),
+            results::run::record::GIT_COMMIT.to_string(),
+        ),
+    };
     let index = Index {
         schema_version: BUNDLE_SCHEMA_VERSION,
-        autobio_version: env!("CARGO_PKG_VERSION").to_string(),
-        git_commit: results::run::record::GIT_COMMIT.to_string(),
+        autobio_version,
+        git_commit,
         model: ModelEntry {
             name: opts.model_name.clone(),
             training: opts.training.clone(),

@@ -4,7 +4,24 @@
 //!
 //! It compares values; it neither reads files nor decides what must be equal.
 
+use serde::Serialize;
+use serde::de::DeserializeOwned;
 use serde_json::Value;
+
+/// Parses a record strictly: JSON (no NaN or infinity, nesting at most 128 deep) into `T`, and
+/// nothing in the text that `T` does not hold (an unknown field is a claim nobody checks).
+pub fn strict<T: DeserializeOwned + Serialize>(text: &[u8]) -> Result<T, String> {
+    let typed: T = serde_json::from_slice(text).map_err(|e| e.to_string())?;
+    let raw: Value = serde_json::from_slice(text).map_err(|e| e.to_string())?;
+    let back = serde_json::to_string(&typed)
+        .ok()
+        .and_then(|t| serde_json::from_str::<Value>(&t).ok())
+        .unwrap_or_default();
+    match first_difference(&raw, &back) {
+        None => Ok(typed),
+        Some(d) => Err(d),
+    }
+}
 
 /// The first place where `claimed` is not `derived` (objects by key in order, arrays by index),
 /// as `path: claimed (derived ...)`; `None` where they are equal.

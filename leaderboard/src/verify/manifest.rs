@@ -26,14 +26,16 @@ pub(super) struct Shipped<'a> {
     pub suite: &'a results::suite::Suite,
 }
 
-/// The task as the run compiled it (the shipped task under the run's paths), and each way the
-/// manifest (shown as `shown`) differs from what verification derives.
+/// The task as the run compiled it (the shipped task under the run's paths; `None` where its
+/// path does not name the shipped protocol or it ran another task, so that its episodes cannot
+/// be re-derived), and each
+/// way the manifest (shown as `shown`) differs from what verification derives.
 pub(super) fn check(
     m: &Manifest,
     shown: &str,
     want: &Shipped,
     index: &Index,
-) -> (Task, Vec<String>) {
+) -> (Option<Task>, Vec<String>) {
     let (task, suite) = (want.task, want.suite);
     let mut failures = Vec::new();
     if m.results_schema_version != RESULTS_SCHEMA_VERSION {
@@ -63,26 +65,29 @@ pub(super) fn check(
         ));
     }
     if m.task_content_sha256.as_deref() != Some(want.content) {
+        // Everything else derived from the task (its hashes, files, conditions, episodes)
+        // differs for this one reason.
         failures.push(format!(
             "{shown}: the results are for a modified task (its compiled content \
              differs from the shipped {})",
             want.protocol.display()
         ));
+        return (None, failures);
     }
     // The run's path to the shipped protocol: its own prefix, then the suite's entry.
     let ours = want.protocol.display().to_string();
     let our_prefix = ours.strip_suffix(want.entry).unwrap_or_default();
     let run_prefix = match m.protocol.strip_suffix(want.entry) {
-        Some(p) if p.is_empty() || p.ends_with('/') || p.ends_with('\\') => p,
+        Some(p) if p.is_empty() || p.ends_with('/') || p.ends_with('\\') => Some(p),
         _ => {
             failures.push(format!(
                 "{shown}: protocol `{}` is not the suite's `{}`",
                 m.protocol, want.entry
             ));
-            our_prefix
+            None
         }
     };
-    let ran = as_run(task, our_prefix, run_prefix);
+    let ran = as_run(task, our_prefix, run_prefix.unwrap_or(our_prefix));
     let shipped_sha = std::fs::read(want.protocol).ok().map(|b| sha256_hex(&b));
     if m.protocol_sha256 != shipped_sha {
         failures.push(format!(
@@ -94,7 +99,7 @@ pub(super) fn check(
     let task_sha = serde_json::to_vec(&ran)
         .map(|b| sha256_hex(&b))
         .unwrap_or_default();
-    if m.task_sha256 != task_sha {
+    if run_prefix.is_some() && m.task_sha256 != task_sha {
         failures.push(format!(
             "{shown}: compiled task SHA-256 {}; the shipped task compiled from its paths is {}",
             m.task_sha256, task_sha
@@ -103,9 +108,14 @@ pub(super) fn check(
     // Every file read where the verifier has it, named as the run named it.
     let files: std::collections::BTreeMap<String, Option<String>> = protocol_files(task)
         .into_iter()
-        .map(|(k, sha)| (swap_prefix(&k, our_prefix, run_prefix), sha))
+        .map(|(k, sha)| {
+            (
+                swap_prefix(&k, our_prefix, run_prefix.unwrap_or(our_prefix)),
+                sha,
+            )
+        })
         .collect();
-    if m.protocol_files != files {
+    if run_prefix.is_some() && m.protocol_files != files {
         let value = |x| serde_json::to_value(x).unwrap_or_default();
         failures.push(format!(
             "{shown}: protocol files: {}",
@@ -150,7 +160,7 @@ pub(super) fn check(
         (None, None) if index.model.profile.is_none() && index.model.metadata.is_none() => {}
         (None, _) => failures.push(format!("{shown}: no model server, but the index names one")),
     }
-    (ran, failures)
+    (run_prefix.is_some().then_some(ran), failures)
 }
 
 /// A commit as `results` records it: 40 hexadecimal digits, `-dirty` where the work tree had
@@ -180,8 +190,12 @@ fn as_run(task: &Task, ours: &str, from: &str) -> Task {
 
 /// The index against the manifests it packs: every one was made by the index's autobio and
 /// commit (checked per manifest), and a bundle of runs names no model server that no run used.
-pub(super) fn check_index(index: &Index, manifests: &[Manifest]) -> Vec<String> {
+pub(super) fn check_index(index: &Index, path: &Path, manifests: &[Manifest]) -> Vec<String> {
     let mut failures = Vec::new();
+    let text = std::fs::read(path).unwrap_or_default();
+    if let Err(e) = differ::strict::<Index>(&text) {
+        failures.push(format!("{}: {e}", crate::bundle::INDEX));
+    }
     if index.model.name.trim().is_empty() {
         failures.push("the index names no model".to_string());
     }
@@ -212,7 +226,7 @@ pub(super) fn check_results(r: &Reported, root: &Path) -> Vec<String> {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Vec::new(),
         Err(e) => return vec![format!("{shown}: {e}")],
     };
-    let claimed: EvalReport = match serde_json::from_slice(&text) {
+    let claimed: EvalReport = match differ::strict(&text) {
         Ok(c) => c,
         Err(e) => return vec![format!("{shown}: not a results file: {e}")],
     };

@@ -178,6 +178,8 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
     // Each (folder, task)'s manifest and journal, for its results file.
     let mut reports: Vec<manifest::Reported> = Vec::new();
     for (entry, protocol) in suite.tasks.iter().zip(shipped.protocols()) {
+        // This task's results files, checked once its seeds are the plan's.
+        let mut task_reports: Vec<manifest::Reported> = Vec::new();
         let task = match compiler::check_file(&protocol, None) {
             Ok(c) if c.trivial_at().is_some() => {
                 v.failures.push(format!(
@@ -213,6 +215,9 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
         };
         let mut seen: BTreeMap<(u32, u64), usize> = BTreeMap::new();
         let mut manifests = 0;
+        // A manifest or journal that does not read is its own refusal: its seeds are not missing
+        // as well.
+        let mut unreadable = false;
         for dir in &run_dirs {
             let manifest_path = results::run::record::manifest_path(dir, &task.id);
             if !manifest_path.exists() {
@@ -220,20 +225,23 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
             }
             manifests += 1;
             let shown = rel(root, &manifest_path);
-            let m = match results::run::record::Manifest::read(&manifest_path) {
+            let m = match read_strict::<results::run::record::Manifest>(&manifest_path) {
                 Ok(m) => m,
                 Err(e) => {
-                    v.failures.push(format!("{shown}: {e}"));
+                    v.failures.push(format!("{shown}: not a manifest: {e}"));
+                    unreadable = true;
                     continue;
                 }
             };
             let (ran, found) = manifest::check(&m, &shown, &want, &bundle.index);
+            let manifest_clean = found.is_empty();
             v.failures.extend(found);
             let journal = results::run::record::journal_path(dir, &task.id);
-            let episodes = match results::run::record::read_journal_only(&journal) {
+            let episodes = match read_journal(&journal) {
                 Ok(e) => e,
                 Err(e) => {
                     v.failures.push(format!("{}: {e}", rel(root, &journal)));
+                    unreadable = true;
                     continue;
                 }
             };
@@ -243,13 +251,15 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
                 runs: episodes.iter().map(|e| e.run).collect(),
             });
             let slot = as_run.len();
-            as_run.push(ran);
+            let reenactable = ran.is_some();
+            as_run.push(ran.unwrap_or_else(|| task.clone()));
             for e in &episodes {
                 let n = seen.entry((e.run, e.seed)).or_default();
                 *n += 1;
                 // Only a planned episode's first claim is re-enacted; the rest are refused below
-                // without costing a simulation.
-                if *n == 1 && planned_set.contains(&(e.run, e.seed)) {
+                // without costing a simulation. A run whose paths are not the shipped ones has
+                // been refused for them: its episodes cannot be re-derived.
+                if reenactable && *n == 1 && planned_set.contains(&(e.run, e.seed)) {
                     claims.push(Claim {
                         task: slot,
                         run_dir: dir.clone(),
@@ -257,11 +267,13 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
                     });
                 }
             }
-            reports.push(manifest::Reported {
-                dir: dir.clone(),
-                manifest: m.clone(),
-                episodes,
-            });
+            if manifest_clean {
+                task_reports.push(manifest::Reported {
+                    dir: dir.clone(),
+                    manifest: m.clone(),
+                    episodes,
+                });
+            }
             manifests_seen.push(m);
         }
         if manifests == 0 {
@@ -270,13 +282,21 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
                 task.id
             ));
         }
-        v.failures
-            .extend(check_seeds(&task.id, &planned, &planned_set, &seen));
+        if manifests > 0 && !unreadable {
+            let wrong = check_seeds(&task.id, &planned, &planned_set, &seen);
+            if wrong.is_empty() {
+                reports.extend(task_reports);
+            }
+            v.failures.extend(wrong);
+        }
         v.tasks += 1;
         ids.push(task.id.clone());
     }
-    v.failures
-        .extend(manifest::check_index(&bundle.index, &manifests_seen));
+    v.failures.extend(manifest::check_index(
+        &bundle.index,
+        &root.join(INDEX),
+        &manifests_seen,
+    ));
     v.failures.extend(check_checkpoints(&checkpoints));
     // Nothing else may ride along: every member is the index, or a run folder's suite file, or
     // a suite task's manifest, journal, results or recording (what the site and an audit read
@@ -288,25 +308,56 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
     let found = reenact_claims(&claims, &as_run, root, reenact, opts.workers);
     v.reenacted = found.len();
     v.reenact_wall_s = start.elapsed().as_secs_f64();
-    let unverified: std::collections::BTreeSet<(PathBuf, u32, u64)> = claims
+    let verified: std::collections::BTreeSet<(PathBuf, u32, u64)> = claims
         .iter()
         .zip(&found)
-        .filter(|(_, f)| f.is_some())
+        .filter(|(_, f)| f.is_none())
         .map(|(c, _)| (c.run_dir.clone(), c.claimed.run, c.claimed.seed))
         .collect();
     v.failures.extend(found.into_iter().flatten());
-    // Each results file: the report of its journal (only once every episode in it verified,
-    // so that one forged line is refused once, as the episode it is).
+    // Each results file: the report of its journal, once its manifest checked clean and every
+    // line of the journal verified (so that a forged line or manifest field, an unplanned or a
+    // repeated seed is refused once, as what it is).
     for r in &reports {
-        let clean = r
-            .episodes
-            .iter()
-            .all(|e| !unverified.contains(&(r.dir.clone(), e.run, e.seed)));
+        let keys: std::collections::BTreeSet<(u32, u64)> =
+            r.episodes.iter().map(|e| (e.run, e.seed)).collect();
+        let clean = keys.len() == r.episodes.len()
+            && r.episodes
+                .iter()
+                .all(|e| verified.contains(&(r.dir.clone(), e.run, e.seed)));
         if clean {
             v.failures.extend(manifest::check_results(r, root));
         }
     }
     v
+}
+
+/// A JSON record read by [`differ::strict`].
+fn read_strict<T: serde::de::DeserializeOwned + serde::Serialize>(
+    path: &Path,
+) -> Result<T, String> {
+    let text = std::fs::read(path).map_err(|e| e.to_string())?;
+    differ::strict(&text)
+}
+
+/// A journal's episodes, each line read by [`differ::strict`]; a bundle's journal is whole (a
+/// last line cut short is refused, not skipped as a crash's trace).
+fn read_journal(path: &Path) -> Result<Vec<EpisodeResult>, String> {
+    let text = match std::fs::read(path) {
+        Ok(t) => t,
+        Err(e) => return Err(e.to_string()),
+    };
+    let mut out = Vec::new();
+    for (k, line) in text.split_inclusive(|b| *b == b'\n').enumerate() {
+        let Some(line) = line.strip_suffix(b"\n") else {
+            return Err(format!("line {} is cut short", k + 1));
+        };
+        out.push(
+            differ::strict(line)
+                .map_err(|e| format!("line {} is not an episode result: {e}", k + 1))?,
+        );
+    }
+    Ok(out)
 }
 
 /// The archive's members against the index: each listed, with the index's SHA-256, and each
@@ -415,7 +466,8 @@ fn check_checkpoints(runs: &[Checkpointed]) -> Vec<String> {
             .map(|r| r.shown.as_str())
             .collect();
         failures.push(format!(
-            "some runs name their training-seed checkpoint and {} do not: a submission's runs              are all training seeds or all evaluation runs of one model",
+            "some runs name their training-seed checkpoint and {} do not: a submission's runs \
+             are all training seeds or all evaluation runs of one model",
             bare.join(", ")
         ));
     }
@@ -424,7 +476,8 @@ fn check_checkpoints(runs: &[Checkpointed]) -> Vec<String> {
         let Some(c) = &r.checkpoint else { continue };
         if let Some(other) = r.runs.iter().find(|&&run| run != c.run) {
             failures.push(format!(
-                "{}: the checkpoint of training seed {} is evaluated on run {} only, but an                  episode of run {other} is here",
+                "{}: the checkpoint of training seed {} is evaluated on run {} only, but an \
+                 episode of run {other} is here",
                 r.shown, c.run, c.run
             ));
         }
