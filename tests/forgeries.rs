@@ -694,3 +694,191 @@ fn archives_past_the_limits_are_refused() {
         )
     );
 }
+
+/// The paper suite's two-robot tasks, one expert episode each, in a suite of their own (the
+/// shipped paper suite plans 300 episodes a task): the run, its bundle and the suites folder.
+struct TwoRobots {
+    suites: PathBuf,
+    run: PathBuf,
+    bundle: PathBuf,
+}
+
+const TWO_ROBOT_TASKS: [(&str, &str); 3] = [
+    ("pipette.aspirate", "protocols/pipette/aspirate.toml"),
+    ("tube.unscrew_cap", "protocols/tube/unscrew_cap.toml"),
+    ("tube.screw_cap", "protocols/tube/screw_cap.toml"),
+];
+
+fn two_robots() -> &'static TwoRobots {
+    static F: OnceLock<TwoRobots> = OnceLock::new();
+    F.get_or_init(|| {
+        let root = scratch("two-robots");
+        let suites = root.join("suites");
+        std::fs::create_dir_all(&suites).unwrap();
+        let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let tasks: Vec<String> = TWO_ROBOT_TASKS
+            .iter()
+            .map(|(_, p)| format!("{:?}", repo.join(p).display().to_string()))
+            .collect();
+        std::fs::write(
+            suites.join("two.toml"),
+            format!(
+                "format = 1\n[suite]\nname = \"two\"\nepisodes = 1\nseed = 0\nruns = 1\ntasks = [{}]\n",
+                tasks.join(", ")
+            ),
+        )
+        .unwrap();
+        let run = root.join("run");
+        common::eval_suite(&suites.join("two.toml"), &run, &["--policy", "expert"]);
+        let bundle = root.join("two.tar.zst");
+        common::submit(&run, "scripted expert", &bundle, &[]);
+        TwoRobots { suites, run, bundle }
+    })
+}
+
+/// The robots of a two-robot task's recording, in its channels' order, and its action count.
+fn robots_of(recording: &[u8]) -> (Vec<String>, usize) {
+    let path = scratch("robots-of").join("r.mcap");
+    std::fs::write(&path, recording).unwrap();
+    let s = results::recording::read_recording(&path).unwrap();
+    let robots: Vec<String> = s.actions.keys().cloned().collect();
+    let steps = s.actions.values().next().unwrap().len();
+    (robots, steps)
+}
+
+#[test]
+fn two_robot_episodes_re_enact_and_an_action_of_the_second_robot_is_checked() {
+    let f = two_robots();
+    let suites = f.suites.to_str().unwrap();
+    let (code, refusals, said) = verify_away(&f.bundle, &["--suites", suites]);
+    assert_eq!((code, refusals.len()), (0, 0), "{said}");
+    assert!(said.contains("(3 tasks, 3 episodes)"), "{said}");
+    let genuine = members(&f.bundle);
+    // Every task's second robot nudged by 1e-9 at step 40: each episode refused.
+    let mut m = genuine.clone();
+    let mut want = Vec::new();
+    for (task, _) in TWO_ROBOT_TASKS {
+        let key = format!("runs/0/{task}_seed0.mcap");
+        let (robots, _) = robots_of(&m[&key]);
+        assert_eq!(robots.len(), 2, "{task}: {robots:?}");
+        let topic = format!("/robot/{}/action", robots[1]);
+        let dir = scratch("nudge-second");
+        let (src, dst) = (dir.join("in.mcap"), dir.join("out.mcap"));
+        std::fs::write(&src, &m[&key]).unwrap();
+        let mut k = 0;
+        rewrite(&src, &dst, |t, data| {
+            if t != topic {
+                return None;
+            }
+            k += 1;
+            (k == 40).then(|| {
+                let mut v: Value = serde_json::from_slice(data).unwrap();
+                v["action"][0] = Value::from(v["action"][0].as_f64().unwrap() + 1e-9);
+                serde_json::to_vec(&v).unwrap()
+            })
+        });
+        m.insert(key, std::fs::read(&dst).unwrap());
+        want.push(format!(
+            "{task} seed 0 (run 0): re-enacted from its seed and recorded actions, "
+        ));
+    }
+    let out = scratch("two-nudged").join("b.tar.zst");
+    pack(&m, &out, true);
+    let (code, refusals, said) = verify_away(&out, &["--suites", suites]);
+    assert_eq!((code, refusals.len()), (1, 3), "{said}");
+    // Each episode refused once, on what the nudge changed (its hash, or its length where the
+    // episode now ends a step sooner).
+    for (r, w) in refusals.iter().zip(&want) {
+        assert!(r.starts_with(w.as_str()), "{r}\nwanted {w}...");
+    }
+    // One robot's actions one short of the other's.
+    let (task, _) = TWO_ROBOT_TASKS[2];
+    let key = format!("runs/0/{task}_seed0.mcap");
+    let (robots, steps) = robots_of(&genuine[&key]);
+    let topic = format!("/robot/{}/action", robots[1]);
+    let dir = scratch("short-second");
+    let src = dir.join("in.mcap");
+    std::fs::write(&src, &genuine[&key]).unwrap();
+    let mut out_bytes = std::io::Cursor::new(Vec::new());
+    {
+        let mut w = mcap::Writer::new(&mut out_bytes).unwrap();
+        let mut channels = BTreeMap::new();
+        let mut k = 0;
+        results::recording::for_each_message(&src, |msg| {
+            if msg.channel.topic == topic {
+                k += 1;
+                if k == steps {
+                    return Ok(());
+                }
+            }
+            let schema = msg.channel.schema.clone();
+            let id = *channels
+                .entry(msg.channel.topic.clone())
+                .or_insert_with(|| {
+                    let sid = schema
+                        .map(|s| w.add_schema(&s.name, &s.encoding, &s.data).unwrap())
+                        .unwrap_or(0);
+                    w.add_channel(
+                        sid,
+                        &msg.channel.topic,
+                        &msg.channel.message_encoding,
+                        &msg.channel.metadata,
+                    )
+                    .unwrap()
+                });
+            w.write_to_known_channel(
+                &mcap::records::MessageHeader {
+                    channel_id: id,
+                    sequence: msg.sequence,
+                    log_time: msg.log_time,
+                    publish_time: msg.publish_time,
+                },
+                &msg.data,
+            )
+            .unwrap();
+            Ok(())
+        })
+        .unwrap();
+        w.finish().unwrap();
+    }
+    let mut m = genuine.clone();
+    m.insert(key, out_bytes.into_inner());
+    let out = scratch("two-short").join("b.tar.zst");
+    pack(&m, &out, true);
+    let (code, refusals, said) = verify_away(&out, &["--suites", suites]);
+    assert_eq!(code, 1, "{said}");
+    assert_eq!(
+        refusals,
+        [format!(
+            "{task} seed 0 (run 0): the recording has {} actions for robot `{}` and {steps} for another",
+            steps - 1,
+            robots[1]
+        )],
+        "{said}"
+    );
+}
+
+#[test]
+fn a_two_robot_recording_re_simulates_bit_for_bit() {
+    let f = two_robots();
+    for (task, _) in TWO_ROBOT_TASKS {
+        let rec = f.run.join(format!("{task}_seed0.mcap"));
+        let said = common::autobio_ok(&["replay", rec.to_str().unwrap(), "--simulate"]);
+        let hash = common::journal(&f.run, task)[0]["trajectory_hash"]
+            .as_str()
+            .unwrap()
+            .to_string();
+        assert!(
+            said.contains(&format!("trajectory hash  {hash}")),
+            "{task}: {said}"
+        );
+        assert!(
+            said.contains("every state equal to the recorded one, bit for bit"),
+            "{task}: {said}"
+        );
+        assert!(
+            said.contains("reproduced (re-judged: success"),
+            "{task}: {said}"
+        );
+    }
+}

@@ -9,6 +9,7 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import autobio
+from conftest import run_autobio
 
 SHIPPED = [t["id"] for t in autobio.tasks()]
 
@@ -76,6 +77,28 @@ def test_the_experts_recorded_actions_give_evals_episode(expert_runs, task):
     rec = autobio.load_recording(folder / f"{task}_seed{second['seed']}.mcap")
     _, terminated, _, info = replay_until_done(env, first["seed"], rec.actions)
     assert info["trajectory_hash"] != first["trajectory_hash"]
+
+
+def test_a_two_robot_episode_replays_to_evals_hash(tmp_path):
+    """Both arms' recorded actions (each robot's block in task order) stepped through the Python
+    env give the episode `autobio eval` ran: its hash, length and success."""
+    task = "tube.screw_cap"
+    run_autobio("eval", "--protocol", "protocols/tube/screw_cap.toml", "--episodes", 1,
+                "--seed", 0, "--out", tmp_path, "--record")
+    episode = json.loads((tmp_path / f"{task}.results.json").read_text())["episodes"][0]
+    rec = autobio.load_recording(tmp_path / f"{task}_seed0.mcap")
+    env = autobio.make(task, image_size=(32, 32))
+    assert len(rec.robots) == 2 and rec.task_id == task
+    assert rec.actions.shape == (episode["control_steps"], len(env.action_names))
+    reward, terminated, truncated, info = replay(env, 0, rec.actions)
+    assert episode["success"] and terminated and not truncated and reward == 1.0
+    assert info["trajectory_hash"] == episode["trajectory_hash"] == rec.trajectory_hash
+    assert info["control_steps"] == episode["control_steps"]
+    # The second arm's action at step 40 nudged by 1e-9: another trajectory.
+    nudged = rec.actions.copy()
+    nudged[40, rec.actions.shape[1] // 2] += 1e-9  # its first joint (both are Aloha arms)
+    _, _, _, info = replay_until_done(env, 0, nudged)
+    assert info["trajectory_hash"] != episode["trajectory_hash"]
 
 
 def replay_until_done(env, seed, actions):
