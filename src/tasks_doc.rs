@@ -10,8 +10,10 @@
 //! table says it ran (or the first `--first N` of them), and fails unless every task scores 0
 //! with no motion (each episode run to its time limit, with no error, some measured check
 //! failing) and the table lists exactly the tasks that run (CI runs it on the first 30 on every
-//! commit: `make hold-column`; it is the suite's every-task hold spread). It does not re-run the expert (that is `make tasks-doc`,
-//! about 17 minutes).
+//! commit: `make hold-column`; it is the suite's every-task hold spread). With `--expert-first M`
+//! it also re-runs the scripted expert on the table's first M seeds and fails where a task wins a
+//! smaller share of them than its row's Wilson lower bound: the expert column, guarded like the
+//! hold column (the whole table is `make tasks-doc`, about 40 minutes on 2 cores).
 
 use anyhow::{Context, Result};
 use results::run::EvalReport;
@@ -46,6 +48,10 @@ pub struct TasksArgs {
     /// table's own count when it has fewer
     #[arg(long, value_name = "N", requires = "verify_hold", value_parser = clap::value_parser!(u32).range(1..))]
     first: Option<u32>,
+    /// With --verify-hold: also run the scripted expert on the table's first M seeds, and fail
+    /// where a task wins a smaller share of them than its row's Wilson lower bound
+    #[arg(long, value_name = "M", requires = "verify_hold", value_parser = clap::value_parser!(u32).range(1..))]
+    expert_first: Option<u32>,
 }
 
 /// `autobio tasks`: measures the table and writes it.
@@ -137,6 +143,16 @@ struct Written {
     seed: u64,
     /// Task id and its hold score cell, as written.
     hold: Vec<(String, String)>,
+    /// Task id and the lower end of its expert success's Wilson interval (a fraction), where
+    /// its row gives one (`100/100 (100%, [96, 100])`).
+    expert_low: Vec<(String, f64)>,
+}
+
+/// The lower end of the Wilson interval in an expert success cell, as a fraction.
+fn wilson_low(cell: &str) -> Option<f64> {
+    let rest = &cell[cell.find("%, [")? + 4..];
+    let low: f64 = rest[..rest.find(',')?].trim().parse().ok()?;
+    Some(low / 100.0)
 }
 
 /// Reads the header's `--episodes N --seed S` and every task row's last cell.
@@ -164,10 +180,25 @@ fn read_written(text: &str) -> Option<Written> {
             Some((id, cells.last()?.to_string()))
         })
         .collect();
+    let expert_low = text
+        .lines()
+        .filter(|l| l.starts_with("| `"))
+        .filter_map(|l| {
+            let cells: Vec<&str> = l
+                .trim()
+                .trim_matches('|')
+                .split('|')
+                .map(str::trim)
+                .collect();
+            let id = cells.first()?.trim_matches('`').to_string();
+            Some((id, cells.iter().find_map(|c| wilson_low(c))?))
+        })
+        .collect();
     Some(Written {
         episodes,
         seed,
         hold,
+        expert_low,
     })
 }
 
@@ -188,7 +219,8 @@ fn verify_hold_cli(path: &Path, a: &TasksArgs) -> Result<ExitCode> {
         seed: written.seed,
         workers: a.workers as usize,
     };
-    let problems = verify_hold(&opts, &written, |line| eprintln!("{line}"))?;
+    let expert = a.expert_first.map(|m| written.episodes.min(m as usize));
+    let problems = verify_hold(&opts, &written, expert, |line| eprintln!("{line}"))?;
     if problems.is_empty() {
         outln!(
             "hold column of {} holds: every task scored 0 on seeds {}..{}",
@@ -196,6 +228,13 @@ fn verify_hold_cli(path: &Path, a: &TasksArgs) -> Result<ExitCode> {
             opts.seed,
             opts.seed + opts.episodes as u64 - 1
         );
+        if let Some(m) = expert {
+            outln!(
+                "expert column holds: every task won at least its row's Wilson lower bound on seeds {}..{}",
+                opts.seed,
+                opts.seed + m as u64 - 1
+            );
+        }
         return Ok(ExitCode::SUCCESS);
     }
     for p in &problems {
@@ -210,10 +249,12 @@ fn verify_hold_cli(path: &Path, a: &TasksArgs) -> Result<ExitCode> {
     Ok(ExitCode::from(1))
 }
 
-/// Runs every task under hold on the written seeds; each returned line is one problem.
+/// Runs every task under hold on the written seeds (and, with `expert`, the expert on the first
+/// that many); each returned line is one problem.
 fn verify_hold(
     opts: &Options,
     written: &Written,
+    expert: Option<usize>,
     mut log: impl FnMut(&str),
 ) -> Result<Vec<String>> {
     let mut problems = Vec::new();
@@ -245,6 +286,29 @@ fn verify_hold(
             ));
         }
         problems.extend(hold_episode_problems(&task, &hold, &file));
+        if let Some(m) = expert {
+            let first = Options {
+                dirs: Vec::new(),
+                episodes: m,
+                seed: opts.seed,
+                workers: opts.workers,
+            };
+            let won = run(&task, PolicySpec::Expert, &first)?.summary.successes;
+            log(&format!("{}: expert {won}/{m}", task.id));
+            match written.expert_low.iter().find(|(id, _)| *id == task.id) {
+                None => problems.push(format!(
+                    "{}: the table's row gives no expert interval to hold it to",
+                    task.id
+                )),
+                Some((_, low)) if (won as f64) < low * m as f64 - 1e-9 => problems.push(format!(
+                    "{} ({file}): the expert won {won} of the table's first {m} seeds, below its \
+                     row's Wilson lower bound of {:.0}%",
+                    task.id,
+                    low * 100.0
+                )),
+                Some(_) => {}
+            }
+        }
         match written.hold.iter().find(|(id, _)| *id == task.id) {
             None => problems.push(format!(
                 "{} ({file}) runs, but the table has no row for it",
@@ -472,8 +536,17 @@ mod tests {
                     ("a.b".into(), "0.000".into()),
                     ("c.d".into(), "0.250".into())
                 ],
+                expert_low: vec![],
             })
         );
+        let row = "Generated by `autobio tasks protocols --episodes 100 --seed 0`\n\
+                   | `a.b` | easy | 95/100 (95%, [89, 98]) | 0.950 | 0.000 |\n";
+        assert_eq!(
+            read_written(row).unwrap().expert_low,
+            [("a.b".into(), 0.89)]
+        );
+        assert_eq!(wilson_low("100/100 (100%, [96, 100])"), Some(0.96));
+        assert_eq!(wilson_low("0.950"), None);
         assert_eq!(read_written("| `a.b` | 0.000 |\n"), None);
     }
 }

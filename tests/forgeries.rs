@@ -601,6 +601,30 @@ fn index_membership_is_checked_both_ways_and_an_unknown_index_field_is_refused()
         [format!("{RESULTS} is in the index but not in the archive")],
         "{said}"
     );
+    // An index that does not parse, and one of another schema version.
+    let unpacked = |name: &str, index: &[u8]| -> Vec<String> {
+        let mut m = fixture().members.clone();
+        m.insert("index.json".into(), index.to_vec());
+        let out = scratch(name).join("b.tar.zst");
+        pack(&m, &out, false);
+        let (code, refusals, said) = verify_away(&out, &[]);
+        assert_eq!(code, 1, "{said}");
+        refusals
+            .iter()
+            .map(|r| r.replacen(&format!("{}: ", out.display()), "", 1))
+            .collect()
+    };
+    let why = serde_json::from_slice::<Value>(b"{").unwrap_err();
+    assert_eq!(
+        unpacked("forged-index-cut", b"{"),
+        [format!("index.json does not read: {why}")]
+    );
+    let mut i = json(&fixture().members, "index.json");
+    i["schema_version"] = 2.into();
+    assert_eq!(
+        unpacked("forged-index-schema", &serde_json::to_vec(&i).unwrap()),
+        ["index.json is schema version 2; this autobio reads version 1"]
+    );
     refused_exactly(
         "forged-index-extra",
         |m| {
