@@ -99,7 +99,9 @@ fn an_all_error_run_scores_zero_even_on_a_task_whose_checks_hold() {
         out.to_str().unwrap(),
     ]);
     let results = transfer_results(&out);
-    for e in results["episodes"].as_array().unwrap() {
+    let episodes = results["episodes"].as_array().unwrap();
+    assert!(!episodes.is_empty(), "{results}");
+    for e in episodes {
         assert_eq!(e["outcome"], "policy_error", "{e}");
         assert_eq!(e["verdict"]["score"], 0.0, "{e}");
         // The checks did hold: what scores 0 is the error, not the state.
@@ -133,7 +135,9 @@ fn results_name_the_real_file_and_the_filled_in_predicate() {
     let results: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
     let task = common::compile("protocols/tube/transfer.toml");
-    for e in results["episodes"].as_array().unwrap() {
+    let episodes = results["episodes"].as_array().unwrap();
+    assert_eq!(episodes.len(), 2, "{results}");
+    for e in episodes {
         let drawn = task.sample(e["seed"].as_u64().unwrap()).params;
         let want = format!("tube in target.{}{}", drawn["row"], drawn["col"]);
         let text = &e["verdict"]["stages"][0]["predicates"][0]["text"];

@@ -166,7 +166,12 @@ fn every_warning_file_compiles_with_its_warning_at_its_place() {
 
 #[test]
 fn fuzzer_findings_stay_fixed() {
-    for path in files("tests/corpus/fuzz") {
+    let findings = files("tests/corpus/fuzz");
+    assert!(
+        !findings.is_empty(),
+        "no fuzzer finding under tests/corpus/fuzz"
+    );
+    for path in findings {
         let source = std::fs::read_to_string(&path).unwrap();
         let name = path.display().to_string();
         let (_, diags) = compiler::compile_source(&source, &name);

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
-/// Longer than any run here takes (three episodes, faults at a 2 s timeout), far shorter than a
+/// Longer than any run here takes (three episodes, faults at a 5 s timeout), far shorter than a
 /// hang.
 const WATCHDOG: Duration = Duration::from_secs(120);
 
@@ -43,12 +43,13 @@ fn recordings() -> &'static Path {
     })
 }
 
-/// pi0's layout with reset frames and a 2 s reply timeout.
+/// pi0's layout with reset frames and a 5 s reply timeout: a thousand times a healthy reply on a
+/// loaded 2-core machine, short enough for the faults that must reach it.
 fn profile(dir: &Path) -> PathBuf {
     let text = std::fs::read_to_string("profiles/pi0.toml")
         .unwrap()
         .replace("reset_frame = false", "reset_frame = true")
-        .replace("timeout_s = 30.0", "timeout_s = 2.0");
+        .replace("timeout_s = 30.0", "timeout_s = 5.0");
     let path = dir.join("profile.toml");
     std::fs::write(&path, text).unwrap();
     path
@@ -144,25 +145,39 @@ fn a_server_that_closes_mid_episode() {
 
 #[test]
 fn a_server_that_stalls_past_the_timeout() {
-    fault("stall", "server_fault", "no reply within 2 s");
+    fault("stall", "server_fault", "no reply within 5 s");
+}
+
+/// What a server logged with `--events` (one JSON object a line).
+fn events(path: &Path) -> Vec<Value> {
+    std::fs::read_to_string(path)
+        .unwrap_or_default()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect()
 }
 
 #[test]
 fn a_server_that_pings_while_it_stalls_does_not_stretch_the_timeout() {
-    // websockets' keepalive every 0.2 s: each ping is read (and answered) within the timeout.
+    // A keepalive ping every 0.2 s: each ping is read (and answered) within the timeout.
+    let log = scratch("fault-pings").join("events.jsonl");
+    let log_arg = log.to_str().unwrap().to_string();
     fault_with(
         "stall",
-        &["--ping-interval", "0.2"],
+        &["--ping-interval", "0.2", "--events", &log_arg],
         "server_fault",
-        "no reply within 2 s",
+        "no reply within 5 s",
     );
+    // The pings were sent: many over the 5 s the stalled reply was waited for.
+    let pings = events(&log).iter().filter(|e| e["event"] == "ping").count();
+    assert!(pings >= 15, "{pings} pings sent");
 }
 
 #[test]
 fn a_server_that_trickles_its_reply_does_not_stretch_the_timeout() {
     // The reply in 16-byte fragments 0.05 s apart takes seconds; a timeout per read would never
     // fire (and the episode would succeed), the one deadline per reply does.
-    fault("trickle", "server_fault", "no reply within 2 s");
+    fault("trickle", "server_fault", "no reply within 5 s");
 }
 
 #[test]
@@ -249,17 +264,28 @@ fn a_vla_eval_reply_for_an_earlier_request_fails_only_its_episode() {
 #[test]
 fn error_frames_for_other_requests_do_not_stretch_a_vla_eval_timeout() {
     // The server sends an `error` frame for another seq every 0.5 s and never answers: the
-    // episode fails at its 2 s timeout, not after the server's minute of noise.
+    // episode fails at its 5 s timeout, not after the server's minute of noise.
     let dir = scratch("fault-vla-eval-noise");
-    let server = Server::start("vla_eval_noise_server.py", &[]);
+    let log = dir.join("events.jsonl");
+    let server = Server::start(
+        "vla_eval_noise_server.py",
+        &["--events", log.to_str().unwrap()],
+    );
     let start = Instant::now();
     let (eps, _) = run_n(&server.url, "vla-eval", &profile(&dir), &dir, "1");
     let took = start.elapsed();
     assert_eq!(eps.len(), 1);
     assert_eq!(eps[0]["outcome"], "server_fault", "{eps:#?}");
     let error = eps[0]["error"].as_str().unwrap();
-    assert!(error.contains("no reply within 2 s"), "{error}");
+    assert!(error.contains("no reply within 5 s"), "{error}");
     assert!(took < Duration::from_secs(30), "took {took:?}");
+    // The noise was made: error frames within the 5 s the reply was waited for.
+    let noise: Vec<f64> = events(&log)
+        .iter()
+        .filter(|e| e["event"] == "error_frame")
+        .map(|e| e["after_s"].as_f64().unwrap())
+        .collect();
+    assert!(noise.iter().filter(|&&t| t < 5.0).count() >= 6, "{noise:?}");
 }
 
 #[test]
@@ -403,11 +429,35 @@ fn a_server_whose_metadata_frame_comes_late() {
     // metadata (no `actions`), not taken for the first reply.
     let dir = scratch("fault-late-metadata");
     let rec = recordings().to_str().unwrap().to_string();
+    let log = dir.join("events.jsonl");
     let server = Server::start(
         "openpi_server.py",
-        &["--recordings", &rec, "--metadata-delay", "1.0"],
+        &[
+            "--recordings",
+            &rec,
+            "--metadata-delay",
+            "1.0",
+            "--events",
+            log.to_str().unwrap(),
+        ],
     );
     let (eps, _) = run(&server.url, "openpi", &profile(&dir), &dir);
     assert_eq!(eps.len(), 3, "{eps:#?}");
     assert!(eps.iter().all(|e| e["outcome"] == "success"), "{eps:#?}");
+    // It was late: sent a second after the connection opened, past the client's wait, which
+    // therefore recorded no metadata in the run's manifest.
+    let sent: Vec<f64> = events(&log)
+        .iter()
+        .filter(|e| e["event"] == "metadata")
+        .map(|e| e["after_s"].as_f64().unwrap())
+        .collect();
+    assert!(
+        !sent.is_empty() && sent.iter().all(|&t| t >= 1.0),
+        "{sent:?}"
+    );
+    let manifest: Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("thermal_cycler.close_lid.manifest.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(manifest["model"]["metadata"], Value::Null, "{manifest}");
 }

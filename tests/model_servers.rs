@@ -288,6 +288,10 @@ fn rdt_profile_sends_the_unified_state_and_a_real_earlier_frame() {
         .collect();
     let first: Vec<&Value> = queries.iter().filter(|q| q["query"] == 0).collect();
     assert!(
+        !first.is_empty(),
+        "the server logged no episode's first query"
+    );
+    assert!(
         first.iter().all(|q| q["history_differs"] == false),
         "an episode's first query repeats its current frame"
     );

@@ -2,7 +2,9 @@
 //! tests/tube_transfer.rs, every task's no-motion run in tests/hold_control.rs): a lid left shut
 //! fails open_lid; a lid shut without pressing the lever fails close_lid on the latch rule; a chain
 //! that finishes only its first stage gets partial credit and fails; the two-arm task fails when
-//! only the lid is done. (The Aloha tasks' wrong outcomes, a tube let go and a cap half
+//! only the lid is done; every chain (the centrifuges' open-then-close, the thermal cycler's round
+//! trips, the workflows) stopped before its last stage fails with partial credit, and one-stage
+//! lids stopped part way fail. (The Aloha tasks' wrong outcomes, a tube let go and a cap half
 //! unscrewed, are in tests/aloha.rs.)
 
 use crate::common;
@@ -137,4 +139,100 @@ fn the_two_arm_task_fails_when_only_the_lid_is_done() {
         .find(|p| p.text.starts_with("tube in target."))
         .unwrap();
     assert!(!moved.holds, "{moved:?}");
+}
+
+/// Stage k of n reached, then stopped: the expert until the chain's last stage starts, then no
+/// motion (that stage's limit cut to 3 s, so the run is short): every earlier stage is done at
+/// its time, the last is not, a check of it fails on the MuJoCo state, and the chain scores
+/// partial credit, no success.
+fn stopped_before_the_last_stage(path: &str, seed: u64) {
+    let mut t = compile(path);
+    let n = t.stages.len();
+    assert!(n >= 2, "{path}: {n} stages");
+    let cut = t.stages[n - 1].time_limit_s - 3.0;
+    t.stages[n - 1].time_limit_s = 3.0;
+    t.time_limit_s -= cut;
+    let r = expert_until(&t, seed, move |obs| obs.stage < n - 1);
+    assert!(!r.success && r.error.is_none(), "{path}: {r:?}");
+    assert_eq!(r.verdict.stages.len(), n, "{path}: {:#?}", r.verdict);
+    for s in &r.verdict.stages[..n - 1] {
+        assert!(s.success && s.completed_at_s.is_some(), "{path}: {s:?}");
+    }
+    let last = &r.verdict.stages[n - 1];
+    assert!(
+        !last.success && last.completed_at_s.is_none(),
+        "{path}: {last:?}"
+    );
+    assert!(
+        last.predicates
+            .iter()
+            .any(|p| !p.value.is_nan() && !p.holds),
+        "{path}: no measured check of the last stage fails: {last:?}"
+    );
+    assert!(
+        r.verdict.score < 1.0 && r.verdict.score >= (n - 1) as f64 / n as f64 - 1e-9,
+        "{path}: score {} for {} of {n} stages",
+        r.verdict.score,
+        n - 1
+    );
+}
+
+/// A one-stage task stopped part way: the expert for `after_s` seconds, then no motion until
+/// the limit (cut to 3 s later): a measured check fails and the episode scores below 1.
+fn stopped_part_way(path: &str, seed: u64, after_s: f64) {
+    let mut t = compile(path);
+    assert_eq!(t.stages.len(), 1, "{path}");
+    t.stages[0].time_limit_s = after_s + 3.0;
+    t.time_limit_s = after_s + 3.0;
+    let r = expert_until(&t, seed, move |obs| obs.time < after_s);
+    assert!(!r.success && r.error.is_none(), "{path}: {r:?}");
+    assert!(
+        r.verdict
+            .predicates()
+            .iter()
+            .any(|p| !p.value.is_nan() && !p.holds),
+        "{path}: no measured check fails: {:#?}",
+        r.verdict
+    );
+    assert!(r.verdict.score < 1.0, "{path}: {:#?}", r.verdict);
+    // And the same seed, run to the end, wins: the stop is what failed it.
+    let full = compile(path);
+    assert!(run(&full, seed, "expert").success, "{path}: seed {seed}");
+}
+
+#[test]
+fn centrifuge_open_then_close_chains_fail_with_the_lid_left_open() {
+    for path in [
+        "protocols/centrifuge_5430/open_then_close.toml",
+        "protocols/centrifuge_5910/open_then_close.toml",
+        "protocols/centrifuge_mini/open_then_close.toml",
+    ] {
+        stopped_before_the_last_stage(path, 1);
+    }
+}
+
+#[test]
+fn thermal_cycler_round_trips_fail_when_the_second_half_is_not_done() {
+    // A chain of two stages, stopped once the first is done.
+    stopped_before_the_last_stage("protocols/thermal_cycler/open_then_close.toml", 2);
+    // One stage of two lab steps (open, then close), stopped after about the first step.
+    stopped_part_way("protocols/thermal_cycler/open_and_close.toml", 2, 10.0);
+}
+
+#[test]
+fn workflows_fail_when_their_last_stage_is_not_done() {
+    for path in [
+        "protocols/workflows/bench_run.toml",
+        "protocols/workflows/centrifuge_run.toml",
+        "protocols/workflows/mixer_cycle.toml",
+        "protocols/workflows/mixer_run.toml",
+    ] {
+        stopped_before_the_last_stage(path, 3);
+    }
+}
+
+#[test]
+fn lids_stopped_part_way_fail() {
+    stopped_part_way("protocols/centrifuge_5910/close_lid_riser.toml", 4, 5.0);
+    stopped_part_way("protocols/centrifuge_mini/open_lid.toml", 5, 5.0);
 }

@@ -3,6 +3,7 @@ against the reference vla-eval model server (tests/servers/vla_eval_server.py, b
 vla-eval's PredictModelServer) replaying the scripted expert's recorded actions."""
 
 import json
+import selectors
 import subprocess
 import sys
 
@@ -11,6 +12,22 @@ import yaml
 import autobio
 from autobio.benchmark import AutobioBenchmark, config_path
 from conftest import ROOT
+
+
+# How long the reference server may take to come up (Python and numpy importing on a loaded
+# 2-core machine take a few seconds): a server that never says it listens fails the test, not
+# hangs it.
+SERVER_START_DEADLINE_S = 60
+
+
+def first_line(proc, deadline_s=SERVER_START_DEADLINE_S):
+    """The process's first line of output, or a failure once `deadline_s` pass without one."""
+    sel = selectors.DefaultSelector()
+    sel.register(proc.stdout, selectors.EVENT_READ)
+    if not sel.select(timeout=deadline_s):
+        proc.kill()
+        raise AssertionError(f"the server printed nothing in {deadline_s} s: {proc.stderr.read()}")
+    return proc.stdout.readline()
 
 
 def test_the_shipped_config_names_the_benchmark_class():
@@ -31,7 +48,7 @@ def test_vla_eval_runs_the_expert_to_success_through_its_orchestrator(expert_run
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )
     try:
-        line = server.stdout.readline()
+        line = first_line(server)
         assert line.startswith("listening on "), line + server.stderr.read()
         url = line.split()[-1]
         config = tmp_path / "autobio.yaml"

@@ -345,7 +345,10 @@ mod tests {
                     / 3.0
             });
             let r = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
-            assert!((1.0 - r) < 0.05, "centroid radius {r}");
+            // The bound is 0.01 of the extent (2): 0.02. The simplifier's error is a quadric
+            // estimate, not a distance; the worst centroid measured is 0.0215 in, so the test
+            // allows a quarter over the bound, not more.
+            assert!((1.0 - r) < 0.025, "centroid radius {r}");
         }
     }
 

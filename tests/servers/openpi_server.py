@@ -27,7 +27,9 @@ the pi0 layout and the recorded instruction, so a client that sends the wrong th
 answers 128-d actions.
 
 `--log FILE` appends each query's task, seed, prompt and connection number, so a test can see the
-instruction switch between a chain's stages and count connections.
+instruction switch between a chain's stages and count connections. `--events FILE` appends what
+the server did on its own (each keepalive ping sent, the metadata frame sent) with its time since
+the connection opened, so a test sees an injected behaviour happen.
 
 Prints `listening on ws://HOST:PORT` once ready (port 0 picks a free one)."""
 
@@ -36,6 +38,7 @@ import asyncio
 import json
 import math
 import sys
+import time
 import traceback
 
 import numpy as np
@@ -90,14 +93,42 @@ async def trickle(data):
         await asyncio.sleep(0.05)
 
 
+def event(args, opened, **fields):
+    """One line of what the server did on its own (`--events`)."""
+    if args.events:
+        with open(args.events, "a") as log:
+            log.write(json.dumps({**fields, "after_s": time.monotonic() - opened}) + "\n")
+
+
+async def keepalive(ws, args, opened):
+    """websockets' keepalive, done here so that each ping is logged: one every interval."""
+    while True:
+        await asyncio.sleep(args.ping_interval)
+        try:
+            await ws.ping()
+        except websockets.ConnectionClosed:
+            return
+        event(args, opened, event="ping")
+
+
 async def handler(ws, library, args, counters):
     counters["connections"] += 1
     connection = counters["connections"]
+    opened = time.monotonic()
+    pinger = asyncio.ensure_future(keepalive(ws, args, opened))
+    try:
+        await serve_connection(ws, library, args, counters, connection, opened)
+    finally:
+        pinger.cancel()
+
+
+async def serve_connection(ws, library, args, counters, connection, opened):
     packer = msgpack_numpy.Packer()
     if args.metadata_delay:
         await asyncio.sleep(args.metadata_delay)
     if not args.no_metadata:
         await ws.send(packer.pack({"server": "autobio reference openpi expert", "action_horizon": args.chunk}))
+        event(args, opened, event="metadata")
     episode = None
     query = 0
     try:
@@ -184,6 +215,7 @@ async def main():
     p.add_argument("--fault-episode", type=int, default=1)
     p.add_argument("--fault-at", type=int, default=1)
     p.add_argument("--log", help="append each query's task, seed and prompt here (JSON lines)")
+    p.add_argument("--events", help="append each ping and metadata frame sent here (JSON lines)")
     args = p.parse_args()
     library = Library(args.recordings)
     counters = {"episodes": 0, "connections": 0}
@@ -193,7 +225,7 @@ async def main():
         args.port,
         compression=None,
         max_size=None,
-        ping_interval=args.ping_interval,
+        ping_interval=None,
     ) as server:
         port = server.sockets[0].getsockname()[1]
         print(f"listening on ws://{args.host}:{port}", flush=True)
