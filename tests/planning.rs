@@ -449,3 +449,53 @@ fn the_expert_goes_around_the_housing_into_the_rotor_with_rrt_connect() {
         r.trajectory_hash
     );
 }
+
+/// The check tests the arm against itself: folding the elbow shut brings the wrist onto the
+/// upper arm (two links that are not parent and child), which it flags; the start pose, where
+/// no link touches another, it does not.
+#[test]
+fn the_check_fails_an_arm_folded_onto_itself() {
+    let OverTheBench {
+        scene, qpos, start, ..
+    } = over_the_bench();
+    let mut clear = Clearance::new(&scene, 0);
+    clear.sync(&qpos, None);
+    assert!(clear.is_clear(&start), "{:?}", clear.collisions(&start));
+    let own = |clear: &Clearance, pairs: &[(usize, usize)]| -> Vec<(String, String)> {
+        pairs
+            .iter()
+            .map(|&(a, b)| (clear.body_name(a), clear.body_name(b)))
+            .filter(|(a, b)| a.starts_with("arm/") && b.starts_with("arm/"))
+            .collect()
+    };
+    // The elbow (the third joint) closed step by step towards its limit.
+    let mut folded = None;
+    for k in 0..=60 {
+        let mut q = start.clone();
+        let sign = if start[2] >= 0.0 { 1.0 } else { -1.0 };
+        q[2] = start[2] + sign * (3.1 - start[2].abs()) * k as f64 / 60.0;
+        let hits = clear.collisions(&q);
+        let mine = own(&clear, &hits);
+        if !mine.is_empty() {
+            folded = Some((q[2], mine));
+            break;
+        }
+    }
+    let (elbow, pairs) = folded.expect("the arm folded shut never touched itself");
+    assert!(elbow.abs() > 2.0, "at elbow {elbow}: {pairs:?}");
+    // Never a link and its parent: MuJoCo does not pair them.
+    let model = &scene.model;
+    let parent = model.body_parentid();
+    for (a, b) in &pairs {
+        let id = |n: &str| {
+            (0..model.ffi().nbody as usize)
+                .find(|&i| clear.body_name(i) == *n)
+                .unwrap()
+        };
+        let (a, b) = (id(a), id(b));
+        assert!(
+            parent[a] as usize != b && parent[b] as usize != a,
+            "{pairs:?}"
+        );
+    }
+}
