@@ -48,7 +48,10 @@ pub fn check(front: &Front, a: &CheckArgs) -> Result<ExitCode> {
                 outln!("{}", diagnostics::to_json(&checked, d));
             }
         } else if checked.diagnostics.is_empty() {
-            outln!("ok: {}", checked.file);
+            match expert::reach::not_checked(&checked) {
+                Some(why) => outln!("ok: {} (reach: {why})", checked.file),
+                None => outln!("ok: {}", checked.file),
+            }
         } else {
             err!("{}", diagnostics::render_all(&checked, front.color));
         }

@@ -80,6 +80,14 @@ fn every_subcommand_says_what_it_was_doing_once_on_a_missing_file() {
         common::text(&out.stdout),
         "ok: protocols/thermal_cycler/close_lid.toml\n"
     );
+    // A chain checks clean, and says what the reach pass left to its stage files.
+    let out = autobio(&["check", "protocols/thermal_cycler/close_then_open.toml"]);
+    assert_eq!(out.status.code(), Some(0));
+    assert_eq!(
+        common::text(&out.stdout),
+        "ok: protocols/thermal_cycler/close_then_open.toml (reach: not checked across the \
+         chain's stages; each stage file is checked alone)\n"
+    );
 }
 
 #[test]

@@ -95,6 +95,14 @@ struct Aim {
     as_started: bool,
 }
 
+/// What the reach pass leaves unchecked in a file as a whole, for `check` to say: a chain's
+/// stages are each checked in their own file, not where the chain leaves the world.
+pub fn not_checked(checked: &Checked) -> Option<&'static str> {
+    let task = checked.task.as_ref()?;
+    (task.stages.len() > 1)
+        .then_some("not checked across the chain's stages; each stage file is checked alone")
+}
+
 /// Every step of `task` (a single stage) whose first target its robot cannot reach in seed 0's
 /// layout; empty when all are reached, or when the pass does not apply (a chain, a scene the
 /// runtime cannot build). Outcomes `store` keeps are not solved again.

@@ -86,7 +86,7 @@ pub(super) fn check(
             got.unused_actions
         ));
     }
-    if let Some(d) = journal_line(task, e, &got, &name) {
+    if let Some(d) = journal_line(e, &got, &name) {
         differs.push(d);
     }
     if differs.is_empty() {
@@ -111,12 +111,7 @@ pub(super) fn check(
 }
 
 /// The journal's line against the one the re-enactment derives; the first difference, by field.
-fn journal_line(
-    task: &Task,
-    e: &EpisodeResult,
-    got: &super::Reenacted,
-    name: &str,
-) -> Option<String> {
+fn journal_line(e: &EpisodeResult, got: &super::Reenacted, name: &str) -> Option<String> {
     // The error: the refused action's, else the claimed one (a policy's or server's).
     let error = got.refused.clone().or_else(|| e.error.clone());
     let outcome = match (&got.refused, &e.error) {
@@ -162,7 +157,6 @@ fn journal_line(
             .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
             .unwrap_or_default()
     };
-    let _ = task;
     differ::first_difference(&value(e), &value(&derived))
 }
 
