@@ -5,10 +5,6 @@
 //! `planner`), and it knows no instrument or joint by name: the moving set is found by body
 //! owner.
 //!
-//! The arm is checked against itself too: two of its bodies that MuJoCo pairs (never a link and
-//! its parent) may not overlap, as a planner's self-collision check has it (a wrist folded onto
-//! its forearm knocks what it holds, and the joint limits' torques fight it).
-//!
 //! Contact pairs already touching when the check is synced (a gripper resting on a handle, a
 //! tube still in its slot's sleeve) are allowed for that motion, as a motion planner's
 //! allowed-collision matrix is seeded from the start state: the motion leaves those contacts,
@@ -192,8 +188,7 @@ impl Clearance {
             .any(|c| c.depth_past(PENETRATION) && !self.allowed.contains(&c.pair))
     }
 
-    /// The contacts of the last collision pass between a moving body and one that is not, and
-    /// between two bodies of the arm itself.
+    /// The contacts of the last collision pass between a moving body and one that is not.
     fn contacts(&self) -> impl Iterator<Item = Contact> + '_ {
         let geom_body = self.data.model().geom_bodyid();
         self.data.contact().iter().filter_map(move |c| {
@@ -201,20 +196,7 @@ impl Clearance {
                 geom_body[c.geom[0] as usize] as usize,
                 geom_body[c.geom[1] as usize] as usize,
             );
-            if c.exclude != 0 {
-                return None;
-            }
-            // The arm against itself: two of its own bodies (MuJoCo pairs no parent with its
-            // child, so adjacent links never show), overlap only, no padding.
-            let own = |body: usize| self.owner[body] == Some(Owner::Robot(self.robot));
-            if self.moving[a] && self.moving[b] {
-                return (own(a) && own(b)).then_some(Contact {
-                    pair: (a.min(b), a.max(b)),
-                    dist: c.dist,
-                    keeps_off: false,
-                });
-            }
-            if self.moving[a] == self.moving[b] {
+            if c.exclude != 0 || self.moving[a] == self.moving[b] {
                 return None;
             }
             let (arm, other) = if self.moving[a] { (a, b) } else { (b, a) };
