@@ -659,6 +659,18 @@ fn journals_without_manifests_and_unplanned_seeds_are_refused() {
         },
         &[format!("{TASK}: seed 5 (run 0) is not one the suite plans")],
     );
+    // A recording no journal line claims (a seed spelt with a leading zero), listed in the index.
+    let stray = "runs/0/thermal_cycler.close_then_open_seed00.mcap";
+    refused_exactly(
+        "forged-stray-recording",
+        |m| {
+            m.insert(stray.into(), m[RECORDING].clone());
+        },
+        &[format!(
+            "{stray} is the recording of no episode verified here (a planned seed of a suite task \
+             in this run folder's journal)"
+        )],
+    );
     refused_exactly(
         "forged-cut-journal",
         |m| {

@@ -134,7 +134,8 @@ fn journal_line(e: &EpisodeResult, got: &super::Reenacted, name: &str) -> Option
     let recording = e
         .recording
         .clone()
-        .filter(|r| Path::new(r).file_name().is_some_and(|f| f == name))
+        // The submitter's path, on whatever system ran it (either separator).
+        .filter(|r| r.rsplit(['/', '\\']).next() == Some(name))
         .or_else(|| Some(name.to_string()));
     let derived = EpisodeResult {
         seed: e.seed,
@@ -172,11 +173,33 @@ fn frames_of(
     let Some((_, png)) = first.first() else {
         return Ok((0, None));
     };
-    let img = results::Image::from_png("", png).map_err(|e| e.to_string())?;
+    // The size from the PNG header, before anything is decoded or drawn at it.
+    let (width, height) = png_size(png).ok_or("the first frame is not a PNG")?;
+    if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE {
+        return Err(format!(
+            "{width}x{height}; a camera frame is at most {MAX_SIDE} pixels a side"
+        ));
+    }
     let period = task.physics.timestep_s * task.physics.substeps as f64;
     let every = match first.as_slice() {
         [(a, _), (b, _), ..] => ((b - a) / period).round().clamp(1.0, u32::MAX as f64) as u32,
         _ => u32::MAX,
     };
-    Ok((every, Some([img.width, img.height])))
+    Ok((every, Some([width as usize, height as usize])))
+}
+
+/// The largest camera frame side a re-enactment draws (pixels): twice a 1080p frame's width,
+/// far past any model's input, small enough that a forged size cannot exhaust the verifier.
+const MAX_SIDE: u32 = 4096;
+
+/// A PNG's width and height, read from its header (`IHDR`, the first chunk).
+fn png_size(png: &[u8]) -> Option<(u32, u32)> {
+    const SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
+    let rest = png.strip_prefix(SIGNATURE)?;
+    let ihdr = rest.get(4..16)?;
+    if &ihdr[..4] != b"IHDR" {
+        return None;
+    }
+    let side = |b: &[u8]| u32::from_be_bytes([b[0], b[1], b[2], b[3]]);
+    Some((side(&ihdr[4..8]), side(&ihdr[8..12])))
 }

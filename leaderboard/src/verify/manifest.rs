@@ -150,7 +150,9 @@ pub(super) fn check(
             let same = index.model.wire.as_deref() == Some(&model.wire.to_string())
                 && index.model.profile.as_deref() == Some(&model.profile.name)
                 && index.model.profile_sha256.as_deref() == Some(&model.profile_sha256)
-                && index.model.metadata == model.metadata;
+                // A resumed run may not have heard the server describe itself (its manifest
+                // keeps none): where it did, it is the index's.
+                && (model.metadata.is_none() || index.model.metadata == model.metadata);
             if !same {
                 failures.push(format!(
                     "{shown}: its model server's wire, profile or metadata is not the index's"
@@ -204,6 +206,15 @@ pub(super) fn check_index(index: &Index, path: &Path, manifests: &[Manifest]) ->
         && index.model.wire.is_some()
     {
         failures.push("the index names a model server no run used".to_string());
+    }
+    if index.model.metadata.is_some()
+        && !manifests.iter().any(|m| {
+            m.model
+                .as_ref()
+                .is_some_and(|x| x.metadata == index.model.metadata)
+        })
+    {
+        failures.push("the index's model metadata is what no run's manifest recorded".to_string());
     }
     failures
 }

@@ -172,6 +172,11 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
     let mut ids: Vec<String> = Vec::new();
     let mut as_run: Vec<Task> = Vec::new();
     let mut claims: Vec<Claim> = Vec::new();
+    // Run folders' tasks whose episodes are not re-enacted, their records refused already (so
+    // their recordings are not refused again).
+    let mut skipped: Vec<(PathBuf, String)> = Vec::new();
+    // Tasks whose journals miss or repeat a planned seed (refused as such).
+    let mut wrong_seeds: std::collections::BTreeSet<String> = std::collections::BTreeSet::new();
     let mut manifests_seen: Vec<results::run::record::Manifest> = Vec::new();
     // Each run folder's training-seed checkpoint, by task, and the runs of its episodes.
     let mut checkpoints: Vec<Checkpointed> = Vec::new();
@@ -230,6 +235,7 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
                 Err(e) => {
                     v.failures.push(format!("{shown}: not a manifest: {e}"));
                     unreadable = true;
+                    skipped.push((dir.clone(), task.id.clone()));
                     continue;
                 }
             };
@@ -242,6 +248,7 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
                 Err(e) => {
                     v.failures.push(format!("{}: {e}", rel(root, &journal)));
                     unreadable = true;
+                    skipped.push((dir.clone(), task.id.clone()));
                     continue;
                 }
             };
@@ -252,6 +259,9 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
             });
             let slot = as_run.len();
             let reenactable = ran.is_some();
+            if !reenactable {
+                skipped.push((dir.clone(), task.id.clone()));
+            }
             as_run.push(ran.unwrap_or_else(|| task.clone()));
             for e in &episodes {
                 let n = seen.entry((e.run, e.seed)).or_default();
@@ -286,6 +296,8 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
             let wrong = check_seeds(&task.id, &planned, &planned_set, &seen);
             if wrong.is_empty() {
                 reports.extend(task_reports);
+            } else {
+                wrong_seeds.insert(task.id.clone());
             }
             v.failures.extend(wrong);
         }
@@ -297,11 +309,59 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
         &root.join(INDEX),
         &manifests_seen,
     ));
-    v.failures.extend(check_checkpoints(&checkpoints));
+    v.failures
+        .extend(check_checkpoints(&checkpoints, suite.runs));
     // Nothing else may ride along: every member is the index, or a run folder's suite file, or
     // a suite task's manifest, journal, results or recording (what the site and an audit read
     // is exactly what was checked here).
     v.failures.extend(check_extras(bundle, &ids, &run_dirs));
+    // Every recording is a claimed episode's (its folder, task and seed).
+    let claimed: std::collections::BTreeSet<PathBuf> = claims
+        .iter()
+        .map(|c| {
+            c.run_dir
+                .join(format!("{}_seed{}.mcap", as_run[c.task].id, c.claimed.seed))
+        })
+        .collect();
+    let mut unread: std::collections::BTreeSet<(PathBuf, String)> =
+        skipped.iter().cloned().collect();
+    // A task folder with no manifest is refused for that (`check_extras`).
+    for dir in &run_dirs {
+        for id in &ids {
+            if !results::run::record::manifest_path(dir, id).exists() {
+                unread.insert((dir.clone(), id.clone()));
+            }
+        }
+    }
+    let planned_seeds: std::collections::BTreeSet<u64> = planned.iter().map(|p| p.1).collect();
+    for member in bundle.members.iter().filter(|m| m.ends_with(".mcap")) {
+        let path = root.join(member);
+        let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        let name = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .unwrap_or_default();
+        // Refused already: a member the index does not list, a folder whose records were
+        // refused, or a planned seed its journal misses or repeats.
+        let excused = !bundle.index.files.contains_key(member)
+            || unread
+                .iter()
+                .any(|(d, id)| *d == dir && name.starts_with(&format!("{id}_seed")))
+            || ids.iter().any(|id| {
+                wrong_seeds.contains(id)
+                    && name
+                        .strip_prefix(&format!("{id}_seed"))
+                        .and_then(|r| r.strip_suffix(".mcap"))
+                        .and_then(|n| n.parse::<u64>().ok().filter(|s| s.to_string() == n))
+                        .is_some_and(|s| planned_seeds.contains(&s))
+            });
+        if !claimed.contains(&path) && !excused {
+            v.failures.push(format!(
+                "{member} is the recording of no episode verified here (a planned seed of a \
+                 suite task in this run folder's journal)"
+            ));
+        }
+    }
     v.episodes = claims.len();
     // Every claimed episode re-enacted from its seed and recorded actions.
     let start = std::time::Instant::now();
@@ -436,6 +496,16 @@ fn check_extras(bundle: &Unpacked, ids: &[String], run_dirs: &[PathBuf]) -> Vec<
                     rel(&bundle.root, &journal)
                 ));
             }
+            let results = results::run::record::results_path(dir, id);
+            if results.exists()
+                && !journal.exists()
+                && !results::run::record::manifest_path(dir, id).exists()
+            {
+                failures.push(format!(
+                    "{}: a results file without its manifest",
+                    rel(&bundle.root, &results)
+                ));
+            }
         }
     }
     failures
@@ -453,8 +523,19 @@ struct Checkpointed {
 /// checkpoint or none does (an SEM over training seeds and one over evaluation runs are never
 /// mixed), a folder holds only its training seed's run, and each training seed is one
 /// checkpoint throughout the suite.
-fn check_checkpoints(runs: &[Checkpointed]) -> Vec<String> {
+fn check_checkpoints(runs: &[Checkpointed], suite_runs: u32) -> Vec<String> {
     let mut failures = Vec::new();
+    for r in runs {
+        if let Some(c) = &r.checkpoint
+            && (c.run >= suite_runs || r.runs.is_empty())
+        {
+            failures.push(format!(
+                "{}: the checkpoint of training seed {} names no run the suite plans (0..{suite_runs}) \
+                 with an episode here",
+                r.shown, c.run
+            ));
+        }
+    }
     let named = runs.iter().filter(|r| r.checkpoint.is_some()).count();
     if named == 0 {
         return failures;
@@ -525,7 +606,17 @@ fn reenact_claims(
                     let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                     let Some(c) = claims.get(k) else { break };
                     let out = scratch.path().join(format!("{k}.mcap"));
-                    let problem = claim::check(&tasks[c.task], c, root, &out, reenact);
+                    // A panic on a stranger's input is that episode's refusal, not the end of
+                    // the verification.
+                    let problem = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                        claim::check(&tasks[c.task], c, root, &out, reenact)
+                    }))
+                    .unwrap_or_else(|_| {
+                        Some(format!(
+                            "{} seed {} (run {}): its re-enactment failed on the bundle's input",
+                            tasks[c.task].id, c.claimed.seed, c.claimed.run
+                        ))
+                    });
                     let _ = std::fs::remove_file(&out);
                     found.lock().unwrap().push((k, problem));
                 }

@@ -50,13 +50,22 @@ fn topics(path: &Path, skip: &dyn Fn(&str) -> bool) -> Result<BTreeMap<String, T
             continue;
         }
         let t = out.entry(m.channel.topic.clone()).or_default();
+        // The schema with its definition, and the channel's encoding and metadata: what a
+        // viewer decodes and shows the messages by.
         t.schema = m
             .channel
             .schema
             .as_ref()
-            .map(|s| format!("{} ({})", s.name, s.encoding))
+            .map(|s| {
+                format!(
+                    "{} ({}, definition {})",
+                    s.name,
+                    s.encoding,
+                    crate::run::record::sha256_hex(&s.data)
+                )
+            })
             .unwrap_or_default();
-        t.encoding = m.channel.message_encoding.clone();
+        t.encoding = format!("{} {:?}", m.channel.message_encoding, m.channel.metadata);
         t.messages.push((m.log_time, m.data.into_owned()));
     }
     Ok(out)
