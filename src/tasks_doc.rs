@@ -166,33 +166,26 @@ fn read_written(text: &str) -> Option<Written> {
     };
     let episodes = flag("--episodes ")?.parse().ok()?;
     let seed = flag("--seed ")?.parse().ok()?;
-    let hold = text
+    // Each task row's cells: its id, its last cell (hold), and an expert success cell's interval.
+    let rows: Vec<Vec<&str>> = text
         .lines()
         .filter(|l| l.starts_with("| `"))
-        .filter_map(|l| {
-            let cells: Vec<&str> = l
-                .trim()
+        .map(|l| {
+            l.trim()
                 .trim_matches('|')
                 .split('|')
                 .map(str::trim)
-                .collect();
-            let id = cells.first()?.trim_matches('`').to_string();
-            Some((id, cells.last()?.to_string()))
+                .collect()
         })
         .collect();
-    let expert_low = text
-        .lines()
-        .filter(|l| l.starts_with("| `"))
-        .filter_map(|l| {
-            let cells: Vec<&str> = l
-                .trim()
-                .trim_matches('|')
-                .split('|')
-                .map(str::trim)
-                .collect();
-            let id = cells.first()?.trim_matches('`').to_string();
-            Some((id, cells.iter().find_map(|c| wilson_low(c))?))
-        })
+    let id = |cells: &[&str]| Some(cells.first()?.trim_matches('`').to_string());
+    let hold = rows
+        .iter()
+        .filter_map(|cells| Some((id(cells)?, cells.last()?.to_string())))
+        .collect();
+    let expert_low = rows
+        .iter()
+        .filter_map(|cells| Some((id(cells)?, cells.iter().find_map(|c| wilson_low(c))?)))
         .collect();
     Some(Written {
         episodes,

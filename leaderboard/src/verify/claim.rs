@@ -151,14 +151,7 @@ fn journal_line(e: &EpisodeResult, got: &super::Reenacted, name: &str) -> Option
         trajectory_hash: got.hash.clone(),
         recording,
     };
-    // Both sides through the same JSON text and parser: a figure is equal when its JSON is.
-    let value = |r: &EpisodeResult| {
-        serde_json::to_string(r)
-            .ok()
-            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
-            .unwrap_or_default()
-    };
-    differ::first_difference(&value(e), &value(&derived))
+    differ::first_difference(&differ::as_json(e), &differ::as_json(&derived))
 }
 
 /// The recording's camera cadence (control steps between frames) and size, as the re-enactment

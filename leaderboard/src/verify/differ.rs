@@ -8,16 +8,21 @@ use serde::Serialize;
 use serde::de::DeserializeOwned;
 use serde_json::Value;
 
+/// A record as JSON, through its text and the parser (what a claimed record went through): two
+/// figures are equal when their JSON is.
+pub fn as_json(record: &impl Serialize) -> Value {
+    serde_json::to_string(record)
+        .ok()
+        .and_then(|t| serde_json::from_str::<Value>(&t).ok())
+        .unwrap_or_default()
+}
+
 /// Parses a record strictly: JSON (no NaN or infinity, nesting at most 128 deep) into `T`, and
 /// nothing in the text that `T` does not hold (an unknown field is a claim nobody checks).
 pub fn strict<T: DeserializeOwned + Serialize>(text: &[u8]) -> Result<T, String> {
     let typed: T = serde_json::from_slice(text).map_err(|e| e.to_string())?;
     let raw: Value = serde_json::from_slice(text).map_err(|e| e.to_string())?;
-    let back = serde_json::to_string(&typed)
-        .ok()
-        .and_then(|t| serde_json::from_str::<Value>(&t).ok())
-        .unwrap_or_default();
-    match first_difference(&raw, &back) {
+    match first_difference(&raw, &as_json(&typed)) {
         None => Ok(typed),
         Some(d) => Err(d),
     }

@@ -116,10 +116,13 @@ pub(super) fn check(
         })
         .collect();
     if run_prefix.is_some() && m.protocol_files != files {
-        let value = |x| serde_json::to_value(x).unwrap_or_default();
         failures.push(format!(
             "{shown}: protocol files: {}",
-            differ::first_difference(&value(&m.protocol_files), &value(&files)).unwrap_or_default()
+            differ::first_difference(
+                &differ::as_json(&m.protocol_files),
+                &differ::as_json(&files)
+            )
+            .unwrap_or_default()
         ));
     }
     if (m.seed, m.episodes, m.runs) != (suite.seed, suite.episodes, suite.runs) {
@@ -130,11 +133,13 @@ pub(super) fn check(
     }
     let conditions = Conditions::of(task);
     if m.conditions != conditions {
-        let value = |x: &Conditions| serde_json::to_value(x).unwrap_or_default();
         failures.push(format!(
             "{shown}: conditions: {}",
-            differ::first_difference(&value(&m.conditions), &value(&conditions))
-                .unwrap_or_default()
+            differ::first_difference(
+                &differ::as_json(&m.conditions),
+                &differ::as_json(&conditions)
+            )
+            .unwrap_or_default()
         ));
     }
     let model_policy = m.model.is_some() == (m.policy == "model");
@@ -275,13 +280,7 @@ pub(super) fn check_results(r: &Reported, root: &Path) -> Vec<String> {
         shard: m.shard,
         episodes,
     };
-    let value = |x: &EvalReport| {
-        serde_json::to_string(x)
-            .ok()
-            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
-            .unwrap_or_default()
-    };
-    match differ::first_difference(&value(&claimed), &value(&derived)) {
+    match differ::first_difference(&differ::as_json(&claimed), &differ::as_json(&derived)) {
         None => Vec::new(),
         Some(d) => vec![format!(
             "{shown}: not the report of its verified journal: {d}"
