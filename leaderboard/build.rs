@@ -1,6 +1,9 @@
 //! Build script of the `leaderboard` package: the shipped suites (`suites/*.toml`) and protocols
 //! (`protocols/**/*.toml`) compiled in, so that `leaderboard verify` and `audit` know what was
 //! shipped wherever the binary runs, with no checkout beside it.
+#[path = "../build/toml_files.rs"]
+mod toml_files;
+
 use std::path::{Path, PathBuf};
 
 fn main() {
@@ -10,9 +13,7 @@ fn main() {
         .expect("the checkout's root");
     let mut files = Vec::new();
     for top in ["suites", "protocols"] {
-        let dir = root.join(top);
-        println!("cargo:rerun-if-changed={}", dir.display());
-        walk(&dir, &mut files);
+        toml_files::walk(&root.join(top), &mut files);
     }
     files.sort();
     let mut table = String::from("pub static SHIPPED: &[(&str, &[u8])] = &[\n");
@@ -27,16 +28,4 @@ fn main() {
     table += "];\n";
     let out = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
     std::fs::write(out.join("shipped.rs"), table).expect("OUT_DIR is writable");
-}
-
-fn walk(dir: &Path, files: &mut Vec<PathBuf>) {
-    for entry in std::fs::read_dir(dir).expect("a readable shipped folder") {
-        let path = entry.expect("a readable entry").path();
-        if path.is_dir() {
-            println!("cargo:rerun-if-changed={}", path.display());
-            walk(&path, files);
-        } else if path.extension().is_some_and(|e| e == "toml") {
-            files.push(path);
-        }
-    }
 }

@@ -3,6 +3,8 @@
 //! extension, so that an installed wheel names every shipped task without a checkout.
 #[path = "../build/rpath.rs"]
 mod rpath;
+#[path = "../build/toml_files.rs"]
+mod toml_files;
 
 use std::path::{Path, PathBuf};
 
@@ -12,9 +14,8 @@ fn main() {
     let root = root
         .canonicalize()
         .expect("the checkout's protocols/ folder");
-    println!("cargo:rerun-if-changed={}", root.display());
     let mut files = Vec::new();
-    walk(&root, &mut files);
+    toml_files::walk(&root, &mut files);
     files.sort();
     let mut table = String::from("pub static SHIPPED: &[(&str, &str)] = &[\n");
     for f in &files {
@@ -28,16 +29,4 @@ fn main() {
     table += "];\n";
     let out = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
     std::fs::write(out.join("protocols.rs"), table).expect("OUT_DIR is writable");
-}
-
-fn walk(dir: &Path, files: &mut Vec<PathBuf>) {
-    for entry in std::fs::read_dir(dir).expect("protocols/ is readable") {
-        let path = entry.expect("a readable entry").path();
-        if path.is_dir() {
-            println!("cargo:rerun-if-changed={}", path.display());
-            walk(&path, files);
-        } else if path.extension().is_some_and(|e| e == "toml") {
-            files.push(path);
-        }
-    }
 }

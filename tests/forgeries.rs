@@ -312,6 +312,58 @@ fn forge_recording(
     m.insert(RECORDING.into(), std::fs::read(&dst).unwrap());
 }
 
+/// A copy of the recording `bytes` written message by message with mcap's own writer (schemas,
+/// channels and times kept), leaving out the messages `keep` refuses, with `extra` written last
+/// (an attachment): what a forger with the mcap library makes.
+fn copy_mcap(
+    bytes: &[u8],
+    mut keep: impl FnMut(&mcap::Message) -> bool,
+    extra: impl FnOnce(&mut mcap::Writer<&mut std::io::Cursor<Vec<u8>>>),
+) -> Vec<u8> {
+    let src = scratch("copy-mcap").join("in.mcap");
+    std::fs::write(&src, bytes).unwrap();
+    let mut out = std::io::Cursor::new(Vec::new());
+    {
+        let mut w = mcap::Writer::new(&mut out).unwrap();
+        let mut channels = BTreeMap::new();
+        results::recording::for_each_message(&src, |msg| {
+            if !keep(msg) {
+                return Ok(());
+            }
+            let schema = msg.channel.schema.clone();
+            let id = *channels
+                .entry(msg.channel.topic.clone())
+                .or_insert_with(|| {
+                    let sid = schema
+                        .map(|s| w.add_schema(&s.name, &s.encoding, &s.data).unwrap())
+                        .unwrap_or(0);
+                    w.add_channel(
+                        sid,
+                        &msg.channel.topic,
+                        &msg.channel.message_encoding,
+                        &msg.channel.metadata,
+                    )
+                    .unwrap()
+                });
+            w.write_to_known_channel(
+                &mcap::records::MessageHeader {
+                    channel_id: id,
+                    sequence: msg.sequence,
+                    log_time: msg.log_time,
+                    publish_time: msg.publish_time,
+                },
+                &msg.data,
+            )
+            .unwrap();
+            Ok(())
+        })
+        .unwrap();
+        extra(&mut w);
+        w.finish().unwrap();
+    }
+    out.into_inner()
+}
+
 /// The log time (s) of message `k` on `topic` in the fixture's recording.
 fn log_time(topic: &str, k: usize) -> f64 {
     let dir = scratch("recording-times");
@@ -389,48 +441,21 @@ fn a_recording_with_an_attachment_padding_or_a_cut_end_is_refused() {
     refused_exactly(
         "forged-attachment",
         |m| {
-            let mut out = std::io::Cursor::new(Vec::new());
-            {
-                let mut w = mcap::Writer::new(&mut out).unwrap();
-                let src = scratch("attach").join("in.mcap");
-                std::fs::write(&src, &m[RECORDING]).unwrap();
-                let mut channels = BTreeMap::new();
-                results::recording::for_each_message(&src, |msg| {
-                    let id = *channels
-                        .entry(msg.channel.topic.clone())
-                        .or_insert_with(|| {
-                            w.add_channel(
-                                0,
-                                &msg.channel.topic,
-                                &msg.channel.message_encoding,
-                                &msg.channel.metadata,
-                            )
-                            .unwrap()
-                        });
-                    w.write_to_known_channel(
-                        &mcap::records::MessageHeader {
-                            channel_id: id,
-                            sequence: msg.sequence,
-                            log_time: msg.log_time,
-                            publish_time: msg.publish_time,
-                        },
-                        &msg.data,
-                    )
+            let forged = copy_mcap(
+                &m[RECORDING],
+                |_| true,
+                |w| {
+                    w.attach(&mcap::Attachment {
+                        log_time: 0,
+                        create_time: 0,
+                        name: "notes.txt".into(),
+                        media_type: "text/plain".into(),
+                        data: std::borrow::Cow::Borrowed(b"the best model"),
+                    })
                     .unwrap();
-                    Ok(())
-                })
-                .unwrap();
-                w.attach(&mcap::Attachment {
-                    log_time: 0,
-                    create_time: 0,
-                    name: "notes.txt".into(),
-                    media_type: "text/plain".into(),
-                    data: std::borrow::Cow::Borrowed(b"the best model"),
-                })
-                .unwrap();
-                w.finish().unwrap();
-            }
-            m.insert(RECORDING.into(), out.into_inner());
+                },
+            );
+            m.insert(RECORDING.into(), forged);
         },
         &not_the_episodes("it carries an attachment `notes.txt`"),
     );
@@ -832,53 +857,19 @@ fn two_robot_episodes_re_enact_and_an_action_of_the_second_robot_is_checked() {
     let key = format!("runs/0/{task}_seed0.mcap");
     let (robots, steps) = robots_of(&genuine[&key]);
     let topic = format!("/robot/{}/action", robots[1]);
-    let dir = scratch("short-second");
-    let src = dir.join("in.mcap");
-    std::fs::write(&src, &genuine[&key]).unwrap();
-    let mut out_bytes = std::io::Cursor::new(Vec::new());
-    {
-        let mut w = mcap::Writer::new(&mut out_bytes).unwrap();
-        let mut channels = BTreeMap::new();
-        let mut k = 0;
-        results::recording::for_each_message(&src, |msg| {
+    let mut k = 0;
+    let short = copy_mcap(
+        &genuine[&key],
+        |msg| {
             if msg.channel.topic == topic {
                 k += 1;
-                if k == steps {
-                    return Ok(());
-                }
             }
-            let schema = msg.channel.schema.clone();
-            let id = *channels
-                .entry(msg.channel.topic.clone())
-                .or_insert_with(|| {
-                    let sid = schema
-                        .map(|s| w.add_schema(&s.name, &s.encoding, &s.data).unwrap())
-                        .unwrap_or(0);
-                    w.add_channel(
-                        sid,
-                        &msg.channel.topic,
-                        &msg.channel.message_encoding,
-                        &msg.channel.metadata,
-                    )
-                    .unwrap()
-                });
-            w.write_to_known_channel(
-                &mcap::records::MessageHeader {
-                    channel_id: id,
-                    sequence: msg.sequence,
-                    log_time: msg.log_time,
-                    publish_time: msg.publish_time,
-                },
-                &msg.data,
-            )
-            .unwrap();
-            Ok(())
-        })
-        .unwrap();
-        w.finish().unwrap();
-    }
+            !(msg.channel.topic == topic && k == steps)
+        },
+        |_| {},
+    );
     let mut m = genuine.clone();
-    m.insert(key, out_bytes.into_inner());
+    m.insert(key, short);
     let out = scratch("two-short").join("b.tar.zst");
     pack(&m, &out, true);
     let (code, refusals, said) = verify_away(&out, &["--suites", suites]);
