@@ -1,7 +1,7 @@
 # Two commands on a fresh machine: `make demo` and `make test`. Both run `make setup` first.
 CARGO ?= cargo
 
-.PHONY: setup build demo test hold-column bench tasks-doc clean
+.PHONY: setup build demo test hold-column bench baseline tasks-doc clean
 
 setup:
 	./scripts/setup.sh
@@ -74,6 +74,14 @@ hold-column: build
 
 bench: build
 	$(CARGO) run --release --quiet -- bench
+
+# The learned baseline (docs/baseline.md): expert demonstrations of suites/baseline.toml's tasks,
+# a state-based ACT trained on each with lerobot-train on the CPU, its learning curve on unseen
+# seeds, the last checkpoints evaluated on the suite, packed, verified and built into
+# out/baseline/site beside the paper's rows. Budget: STEPS (default 6000) per task; OBS=vision
+# DEVICE=cuda for the same recipe with cameras on a GPU.
+baseline: build
+	CARGO="$(CARGO)" ./scripts/baseline.sh
 
 # The task table: every shipped task under the expert and under hold on seeds 0-99
 # (about 15 minutes on 2 cores).

@@ -176,4 +176,21 @@ if [ ! -e "$DEPS/python-env/.wheel-$WHEEL_SUM" ]; then
   "$DEPS/python-env/bin/pip" install -q --disable-pip-version-check --force-reinstall --no-deps "$WHEEL"
   rm -f "$DEPS"/python-env/.wheel-* && touch "$DEPS/python-env/.wheel-$WHEEL_SUM"
 fi
-echo "setup: ok (mujoco $MUJOCO_VERSION, robot models, the mcap reader, the model servers' environment and the Python package under $DEPS/)"
+# LeRobot (python/requirements-lerobot.txt) in its own environment with the autobio wheel: the
+# learned baseline's training (`lerobot-train`), `python -m autobio.serve` and `lerobot-eval`
+# on autobio's envs. Remade when the requirements change; the wheel reinstalled when it changed.
+LRREQS=python/requirements-lerobot.txt
+LRSTAMP="$DEPS/lerobot-env/.requirements-$(sha256sum "$LRREQS" | cut -c1-16)"
+if [ ! -e "$LRSTAMP" ]; then
+  echo "setup: making LeRobot's environment ($DEPS/lerobot-env: lerobot and torch, about 8 GB)"
+  rm -rf "$DEPS/lerobot-env"
+  python3 -m venv "$DEPS/lerobot-env"
+  "$DEPS/lerobot-env/bin/pip" install -q --disable-pip-version-check --no-compile -r "$LRREQS"
+  touch "$LRSTAMP"
+fi
+if [ ! -e "$DEPS/lerobot-env/.wheel-$WHEEL_SUM" ]; then
+  echo "setup: installing $(basename "$WHEEL") into $DEPS/lerobot-env"
+  "$DEPS/lerobot-env/bin/pip" install -q --disable-pip-version-check --force-reinstall --no-deps "$WHEEL"
+  rm -f "$DEPS"/lerobot-env/.wheel-* && touch "$DEPS/lerobot-env/.wheel-$WHEEL_SUM"
+fi
+echo "setup: ok (mujoco $MUJOCO_VERSION, robot models, the mcap reader, the model servers' environment, the Python package and LeRobot's environment under $DEPS/)"

@@ -608,6 +608,7 @@ fn dataset_figures(task: &compiler::Task) -> Result<()> {
             workers,
             shard: None,
             file_sizes: Default::default(),
+            observations: Default::default(),
         };
         let t = Instant::now();
         let done = demos::generate(std::slice::from_ref(task), &opts, |_| {})?;

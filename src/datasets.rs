@@ -41,6 +41,29 @@ impl CodecArg {
     }
 }
 
+/// What a dataset's frames observe (`--observation`).
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum ObservationArg {
+    /// Every task camera and the robots' state (LeRobot's `observation.images.*`,
+    /// `observation.state`)
+    Vision,
+    /// The task's environment state (privileged: `observation.environment_state`) and the
+    /// robots' state; no camera is drawn
+    State,
+    /// Cameras, environment state and robot state
+    All,
+}
+
+impl ObservationArg {
+    pub fn observations(self) -> dataset::Observations {
+        match self {
+            ObservationArg::Vision => dataset::Observations::Vision,
+            ObservationArg::State => dataset::Observations::State,
+            ObservationArg::All => dataset::Observations::All,
+        }
+    }
+}
+
 #[derive(Clone, Debug, clap::Args)]
 pub struct ExportArgs {
     /// Recordings, or folders of them
@@ -57,6 +80,10 @@ pub struct ExportArgs {
     /// Camera image size WxH
     #[arg(long, default_value = "224x224", value_parser = crate::replay::parse_size)]
     size: [usize; 2],
+    /// What the frames observe: `vision` (cameras), `state` (the environment state, no camera)
+    /// or `all`
+    #[arg(long, value_enum, default_value = "vision")]
+    observation: ObservationArg,
     /// Continue the dataset in --out (recordings already in it are skipped)
     #[arg(long)]
     resume: bool,
@@ -86,6 +113,7 @@ pub fn export_cli(a: &ExportArgs) -> Result<ExitCode> {
         image_size: a.size,
         resume: a.resume,
         file_sizes: a.files.sizes(),
+        observations: a.observation.observations(),
     };
     export(&a.recordings, &opts)
 }

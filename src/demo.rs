@@ -1,7 +1,7 @@
 //! `autobio demo`: scripted-expert demonstrations, as one MCAP recording per episode or as a
 //! LeRobot dataset (`demos::generate`, printed by `crate::datasets`).
 
-use crate::datasets::{CodecArg, FileSizeArgs};
+use crate::datasets::{CodecArg, FileSizeArgs, ObservationArg};
 use crate::front::Front;
 use anyhow::{Result, bail};
 use std::path::{Path, PathBuf};
@@ -35,6 +35,10 @@ pub struct DemoArgs {
     /// Camera image size WxH (default: the task's own camera size)
     #[arg(long, value_parser = crate::replay::parse_size)]
     size: Option<[usize; 2]>,
+    /// Datasets: what the frames observe: `vision` (cameras), `state` (the task's environment
+    /// state, privileged; no camera is drawn) or `all`
+    #[arg(long, value_enum, default_value = "vision")]
+    observation: ObservationArg,
     /// Continue the recordings or dataset in --out (episodes already finished there are not
     /// recorded again; one cut short by a killed run is recorded again)
     #[arg(long)]
@@ -81,6 +85,7 @@ pub fn run(front: &Front, a: &DemoArgs) -> Result<ExitCode> {
         workers: a.workers as usize,
         shard: a.shard,
         file_sizes: a.files.sizes(),
+        observations: a.observation.observations(),
     };
     crate::datasets::generate(&tasks, &opts)
 }

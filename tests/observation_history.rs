@@ -27,6 +27,7 @@ impl Policy for Chunked {
         Needs {
             image_size: Some([64, 64]),
             history_steps: self.history,
+            environment_state: false,
         }
     }
     fn act(&mut self, obs: &Observation) -> Result<Vec<Vec<f64>>, PolicyError> {

@@ -78,7 +78,17 @@ fn every_shipped_suite_compiles_and_none_is_trivial() {
         .filter(|n| n.ends_with(".toml"))
         .collect();
     names.sort();
-    assert_eq!(names, ["all.toml", "demo.toml", "paper.toml", "smoke.toml"]);
+    assert_eq!(
+        names,
+        [
+            "all.toml",
+            "baseline.toml",
+            "demo.toml",
+            "learned-smoke.toml",
+            "paper.toml",
+            "smoke.toml"
+        ]
+    );
     for name in &names {
         let s = results::suite::LoadedSuite::read(&root().join("suites").join(name)).unwrap();
         assert!(!s.suite.tasks.is_empty(), "{name} has no task");

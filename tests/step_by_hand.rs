@@ -21,6 +21,7 @@ fn act(env: &Env, policy: &mut dyn Policy) -> Vec<Vec<f64>> {
         prompt: &seen.instruction,
         images: &[],
         previous: &[],
+        environment_state: Vec::new(),
         privileged: Privileged {
             robots: seen.robots,
             labware: seen.labware,

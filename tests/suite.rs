@@ -25,6 +25,7 @@ mod instruments_act;
 mod kinematics;
 mod labware_models;
 mod leaderboard;
+mod learned_policy;
 mod level_of_detail;
 mod liquid_scene;
 mod merge;

@@ -139,6 +139,7 @@ fn steps_marked_together_move_both_arms_in_the_same_control_steps() {
                 prompt: &seen.instruction,
                 images: &[],
                 previous: &[],
+                environment_state: Vec::new(),
                 privileged: policy::Privileged {
                     robots: seen.robots,
                     labware: seen.labware,

@@ -3,9 +3,11 @@
 //! histogram. Nothing reaches the dataset until the writer commits the capture.
 
 use crate::DatasetError;
+use crate::parquet::Frame;
 use crate::stats::ImageStats;
 use crate::video::{Codec, VideoWriter};
 use results::Image;
+use results::environment_state::EnvironmentState;
 use runtime::{Env, ObserveError, Observer};
 use std::path::PathBuf;
 
@@ -13,7 +15,9 @@ pub struct Capture {
     pub(crate) dir: PathBuf,
     pub(crate) task_id: String,
     pub(crate) seed: u64,
-    pub(crate) rows: Vec<(Vec<f32>, Vec<f32>)>,
+    pub(crate) rows: Vec<Frame>,
+    /// Capture the task's environment state too (made from the env's task on the first step).
+    environment_state: Option<Option<EnvironmentState>>,
     pub(crate) videos: Vec<VideoWriter>,
     pub(crate) images: Vec<ImageStats>,
     size: [usize; 2],
@@ -27,6 +31,7 @@ impl Capture {
         size: [usize; 2],
         fps: u32,
         codec: Codec,
+        environment_state: bool,
     ) -> Result<Capture, DatasetError> {
         if dir.exists() {
             std::fs::remove_dir_all(&dir).map_err(|e| DatasetError::io("clear", &dir, e))?;
@@ -48,6 +53,7 @@ impl Capture {
             task_id: String::new(),
             seed: 0,
             rows: Vec::new(),
+            environment_state: environment_state.then_some(None),
             videos,
             images: vec![ImageStats::default(); cameras],
             size,
@@ -70,20 +76,31 @@ impl Capture {
 }
 
 impl Capture {
-    /// One control step: the state the action acts on, the action, every camera's frame.
+    /// One control step: the state the action acts on (the robots', and the environment's
+    /// when the dataset has it, else empty), the action, every camera's frame.
     pub fn push(
         &mut self,
         state: &[f64],
+        environment_state: &[f64],
         action: &[f64],
         images: &[Image],
     ) -> Result<(), DatasetError> {
         let f = |v: &[f64]| v.iter().map(|&x| x as f32).collect();
-        self.rows.push((f(state), f(action)));
+        self.rows.push(Frame {
+            state: f(state),
+            environment_state: f(environment_state),
+            action: f(action),
+        });
         for (k, img) in images.iter().enumerate() {
             self.images[k].add(&img.rgb);
             self.videos[k].push(&img.rgb)?;
         }
         Ok(())
+    }
+
+    /// Whether this capture keeps the environment state.
+    pub fn wants_environment_state(&self) -> bool {
+        self.environment_state.is_some()
     }
 
     /// The frame size this capture's videos take.
@@ -96,8 +113,18 @@ impl Capture {
 impl Observer for Capture {
     fn before_step(&mut self, env: &mut Env, action: &[f64]) -> Result<(), ObserveError> {
         let state = env.episode().state();
-        let frames = env.frames()?;
-        if let Err(e) = self.push(&state, action, frames) {
+        let environment = match &mut self.environment_state {
+            Some(layout) => env
+                .environment_state(layout.get_or_insert_with(|| EnvironmentState::of(env.task()))),
+            None => Vec::new(),
+        };
+        // A dataset without cameras (state observations only) draws nothing.
+        let frames = if self.videos.is_empty() {
+            &[]
+        } else {
+            env.frames()?
+        };
+        if let Err(e) = self.push(&state, &environment, action, frames) {
             let why = e.to_string();
             self.error.get_or_insert(e);
             return Err(ObserveError::Own(why.into()));

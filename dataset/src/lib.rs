@@ -23,7 +23,7 @@ mod writer;
 pub use capture::Capture;
 pub use merge::{Merged, SHARD_FILE, ShardPlan, merge};
 pub use video::Codec;
-pub use writer::{CaptureSpec, DatasetWriter, FileSizes, Layout, Version};
+pub use writer::{CaptureSpec, DatasetWriter, FileSizes, Layout, Observations, Version};
 
 use std::path::{Path, PathBuf};
 

@@ -24,6 +24,8 @@ use std::sync::Arc;
 #[derive(Clone, Debug, PartialEq)]
 pub struct Row {
     pub state: Vec<f32>,
+    /// `observation.environment_state`; empty when the dataset has none.
+    pub environment_state: Vec<f32>,
     pub action: Vec<f32>,
     pub timestamp: f32,
     pub frame_index: i64,
@@ -68,13 +70,14 @@ pub fn write_frames(path: &Path, rows: &[Row]) -> Result<(), DatasetError> {
         why: e,
     };
     let sw = rows.first().map_or(0, |r| r.state.len());
+    let ew = rows.first().map_or(0, |r| r.environment_state.len());
     let aw = rows.first().map_or(0, |r| r.action.len());
     let item = Arc::new(Field::new("item", DataType::Float32, true));
     let seq = |n: usize| DataType::FixedSizeList(item.clone(), n as i32);
     let value = |dtype: &str| json!({"dtype": dtype, "_type": "Value"});
     let sequence =
         |n: usize| json!({"feature": value("float32"), "length": n, "_type": "Sequence"});
-    let hf = json!({"info": {"features": {
+    let mut features = json!({
         "observation.state": sequence(sw),
         "action": sequence(aw),
         "timestamp": value("float32"),
@@ -82,28 +85,47 @@ pub fn write_frames(path: &Path, rows: &[Row]) -> Result<(), DatasetError> {
         "episode_index": value("int64"),
         "index": value("int64"),
         "task_index": value("int64"),
-    }}});
+    });
+    let mut fields = vec![Field::new("observation.state", seq(sw), true)];
+    if ew > 0 {
+        features["observation.environment_state"] = sequence(ew);
+        fields.push(Field::new("observation.environment_state", seq(ew), true));
+    }
+    fields.extend([
+        Field::new("action", seq(aw), true),
+        Field::new("timestamp", DataType::Float32, true),
+        Field::new("frame_index", DataType::Int64, true),
+        Field::new("episode_index", DataType::Int64, true),
+        Field::new("index", DataType::Int64, true),
+        Field::new("task_index", DataType::Int64, true),
+    ]);
+    let hf = json!({"info": {"features": features}});
     let schema = Schema::new_with_metadata(
-        vec![
-            Field::new("observation.state", seq(sw), true),
-            Field::new("action", seq(aw), true),
-            Field::new("timestamp", DataType::Float32, true),
-            Field::new("frame_index", DataType::Int64, true),
-            Field::new("episode_index", DataType::Int64, true),
-            Field::new("index", DataType::Int64, true),
-            Field::new("task_index", DataType::Int64, true),
-        ],
+        fields,
         HashMap::from([("huggingface".to_string(), hf.to_string())]),
     );
     let ints = |f: fn(&Row) -> i64| {
         Arc::new(Int64Array::from(rows.iter().map(f).collect::<Vec<_>>())) as ArrayRef
     };
-    let columns: Vec<ArrayRef> = vec![
+    let mut columns: Vec<ArrayRef> = vec![
         list(
             rows.iter().flat_map(|r| r.state.iter().copied()).collect(),
             sw,
         )
         .map_err(|e| bad(e.to_string()))?,
+    ];
+    if ew > 0 {
+        columns.push(
+            list(
+                rows.iter()
+                    .flat_map(|r| r.environment_state.iter().copied())
+                    .collect(),
+                ew,
+            )
+            .map_err(|e| bad(e.to_string()))?,
+        );
+    }
+    columns.extend([
         list(
             rows.iter().flat_map(|r| r.action.iter().copied()).collect(),
             aw,
@@ -116,7 +138,7 @@ pub fn write_frames(path: &Path, rows: &[Row]) -> Result<(), DatasetError> {
         ints(|r| r.episode_index),
         ints(|r| r.index),
         ints(|r| r.task_index),
-    ];
+    ]);
     let batch = RecordBatch::try_new(Arc::new(schema), columns).map_err(|e| bad(e.to_string()))?;
     write(path, batch)
 }
@@ -325,11 +347,17 @@ fn batches(
         })
 }
 
-/// One frame's `observation.state` and `action`.
-pub type StateAction = (Vec<f32>, Vec<f32>);
+/// One frame's vectors: `observation.state`, `observation.environment_state` (empty when the
+/// table has none) and `action`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Frame {
+    pub state: Vec<f32>,
+    pub environment_state: Vec<f32>,
+    pub action: Vec<f32>,
+}
 
-/// Every frame's `observation.state` and `action` of an episode's frames table, in order.
-pub fn read_state_action(path: &Path) -> Result<Vec<StateAction>, DatasetError> {
+/// Every frame's vectors of an episode's frames table, in order.
+pub fn read_frames(path: &Path) -> Result<Vec<Frame>, DatasetError> {
     use arrow_array::Array;
     let bad = |e: String| DatasetError::Parquet {
         path: path.to_path_buf(),
@@ -354,10 +382,20 @@ pub fn read_state_action(path: &Path) -> Result<Vec<StateAction>, DatasetError> 
                 .map(|i| values.values()[i * width..(i + 1) * width].to_vec())
                 .collect())
         };
+        let environment = match batch.column_by_name("observation.environment_state") {
+            Some(_) => column("observation.environment_state")?,
+            None => vec![Vec::new(); batch.num_rows()],
+        };
         rows.extend(
             column("observation.state")?
                 .into_iter()
-                .zip(column("action")?),
+                .zip(environment)
+                .zip(column("action")?)
+                .map(|((state, environment_state), action)| Frame {
+                    state,
+                    environment_state,
+                    action,
+                }),
         );
     }
     Ok(rows)

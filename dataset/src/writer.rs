@@ -11,9 +11,12 @@
 
 use crate::DatasetError;
 use crate::capture::Capture;
-use crate::parquet::{EpisodeRow, EpisodeVideo, Row, write_episodes, write_frames, write_tasks};
+use crate::parquet::{
+    EpisodeRow, EpisodeVideo, Frame, Row, write_episodes, write_frames, write_tasks,
+};
 use crate::stats::{self, FeatureStats};
 use crate::video::{self, Codec};
+use results::environment_state::EnvironmentState;
 use serde::{Deserialize, Serialize};
 use serde_json::{Value, json};
 use std::collections::BTreeMap;
@@ -56,6 +59,38 @@ pub(crate) struct Committed {
     pub stats: BTreeMap<String, Value>,
 }
 
+/// What a dataset's frames observe: LeRobot's feature sets.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Observations {
+    /// Every task camera (`observation.images.<camera>`) and the robots' state.
+    #[default]
+    Vision,
+    /// The task's environment state (`observation.environment_state`, privileged) and the
+    /// robots' state; no camera is drawn.
+    State,
+    /// Both: cameras, environment state and robot state.
+    All,
+}
+
+impl Observations {
+    pub fn cameras(self) -> bool {
+        self != Observations::State
+    }
+
+    pub fn environment_state(self) -> bool {
+        self != Observations::Vision
+    }
+
+    /// The name `autobio demo --observation` takes and dataset metadata records.
+    pub fn name(self) -> &'static str {
+        match self {
+            Observations::Vision => "vision",
+            Observations::State => "state",
+            Observations::All => "all",
+        }
+    }
+}
+
 /// Where and how captures are staged; a worker thread holds one.
 #[derive(Clone, Debug)]
 pub struct CaptureSpec {
@@ -63,13 +98,21 @@ pub struct CaptureSpec {
     cameras: usize,
     size: [usize; 2],
     codec: Codec,
+    environment_state: bool,
 }
 
 impl CaptureSpec {
     /// A capture staged for an episode of `task` with `seed`.
     pub fn capture(&self, task: &str, seed: u64) -> Result<Capture, DatasetError> {
         let dir = self.staging.join(format!("{task}_seed{seed}"));
-        let mut c = Capture::new(dir, self.cameras, self.size, FPS, self.codec)?;
+        let mut c = Capture::new(
+            dir,
+            self.cameras,
+            self.size,
+            FPS,
+            self.codec,
+            self.environment_state,
+        )?;
         c.task_id = task.to_string();
         c.seed = seed;
         Ok(c)
@@ -82,13 +125,21 @@ pub struct Layout {
     pub robot_type: String,
     pub state_names: Vec<String>,
     pub action_names: Vec<String>,
-    /// Camera names and their feature keys (`observation.images.<camera>`).
+    /// Camera names and their feature keys (`observation.images.<camera>`); none for a
+    /// state-only dataset.
     pub cameras: Vec<(String, String)>,
+    /// `observation.environment_state`'s names; empty: the dataset has no environment state.
+    pub environment_state_names: Vec<String>,
 }
 
 impl Layout {
-    /// The layout of episodes of these tasks, which must share robots and cameras.
-    pub fn of(tasks: &[compiler::Task], root: &Path) -> Result<Layout, DatasetError> {
+    /// The layout of episodes of these tasks, which must share robots and cameras (and, with the
+    /// environment state, its layout), observing `observations`.
+    pub fn of(
+        tasks: &[compiler::Task],
+        root: &Path,
+        observations: Observations,
+    ) -> Result<Layout, DatasetError> {
         let first = tasks.first().ok_or_else(|| DatasetError::Existing {
             path: root.to_path_buf(),
             why: "no task to record".into(),
@@ -126,6 +177,7 @@ impl Layout {
         let cameras = first
             .cameras
             .iter()
+            .filter(|_| observations.cameras())
             .map(|c| {
                 (
                     c.name.clone(),
@@ -133,11 +185,26 @@ impl Layout {
                 )
             })
             .collect();
+        let mut environment_state_names = Vec::new();
+        if observations.environment_state() {
+            let layout = |t: &compiler::Task| EnvironmentState::of(t).names().to_vec();
+            environment_state_names = layout(first);
+            if let Some(t) = tasks.iter().find(|t| layout(t) != environment_state_names) {
+                return Err(DatasetError::Existing {
+                    path: root.to_path_buf(),
+                    why: format!(
+                        "{} and {} have different environment-state layouts; one dataset holds one layout",
+                        first.id, t.id
+                    ),
+                });
+            }
+        }
         Ok(Layout {
             robot_type: robot_type.join("+"),
             state_names,
             action_names,
             cameras,
+            environment_state_names,
         })
     }
 }
@@ -152,6 +219,7 @@ pub struct DatasetWriter {
     action_names: Vec<String>,
     /// Camera names and their feature keys (`observation.images.<camera>`).
     cameras: Vec<(String, String)>,
+    environment_state_names: Vec<String>,
     done: Vec<Committed>,
     file_sizes: FileSizes,
 }
@@ -188,6 +256,7 @@ impl DatasetWriter {
             state_names,
             action_names,
             cameras,
+            environment_state_names,
         } = layout;
         let record = root.join("meta/autobio.jsonl");
         let mut done = Vec::new();
@@ -261,6 +330,7 @@ impl DatasetWriter {
             state_names,
             action_names,
             cameras,
+            environment_state_names,
             done,
             file_sizes: FileSizes::default(),
         };
@@ -299,6 +369,7 @@ impl DatasetWriter {
             cameras: self.cameras.len(),
             size: self.size,
             codec: self.codec,
+            environment_state: !self.environment_state_names.is_empty(),
         }
     }
 
@@ -371,7 +442,7 @@ impl DatasetWriter {
     pub(crate) fn adopt(&mut self, from: &Source, index: usize) -> Result<usize, DatasetError> {
         let c = &from.done[index];
         let (data, videos) = episode_paths(&from.root, from.version, &from.keys(), index);
-        let rows = crate::parquet::read_state_action(&data)?;
+        let rows = crate::parquet::read_frames(&data)?;
         if rows.len() != c.length {
             return Err(DatasetError::Existing {
                 path: data,
@@ -402,12 +473,7 @@ impl DatasetWriter {
     }
 
     /// Writes an episode's table, places its videos, and appends its commit line.
-    fn add(
-        &mut self,
-        e: &Episode,
-        frames: &[(Vec<f32>, Vec<f32>)],
-        staging: &Path,
-    ) -> Result<(), DatasetError> {
+    fn add(&mut self, e: &Episode, frames: &[Frame], staging: &Path) -> Result<(), DatasetError> {
         let index = self.done.len();
         let length = frames.len();
         let mut tasks = self.tasks();
@@ -422,9 +488,10 @@ impl DatasetWriter {
         let rows: Vec<Row> = frames
             .iter()
             .enumerate()
-            .map(|(i, (state, action))| Row {
-                state: state.clone(),
-                action: action.clone(),
+            .map(|(i, f)| Row {
+                state: f.state.clone(),
+                environment_state: f.environment_state.clone(),
+                action: f.action.clone(),
                 timestamp: (i as f64 / FPS as f64) as f32,
                 frame_index: i as i64,
                 episode_index: index as i64,
@@ -437,6 +504,10 @@ impl DatasetWriter {
         let mut stats: BTreeMap<String, Value> = BTreeMap::new();
         let column =
             |f: &dyn Fn(&Row) -> Vec<f64>| stats::vectors(&rows.iter().map(f).collect::<Vec<_>>());
+        if !self.environment_state_names.is_empty() {
+            let s = column(&|r| r.environment_state.iter().map(|&x| x as f64).collect());
+            stats.insert("observation.environment_state".into(), s.to_json(true));
+        }
         let features: [(&str, FeatureStats); 7] = [
             (
                 "observation.state",
@@ -501,6 +572,13 @@ impl DatasetWriter {
             "observation.state".into(),
             json!({"dtype": "float32", "shape": [self.state_names.len()], "names": self.state_names}),
         );
+        if !self.environment_state_names.is_empty() {
+            f.insert(
+                "observation.environment_state".into(),
+                json!({"dtype": "float32", "shape": [self.environment_state_names.len()],
+                       "names": self.environment_state_names}),
+            );
+        }
         f.insert(
             "action".into(),
             json!({"dtype": "float32", "shape": [self.action_names.len()], "names": self.action_names}),
@@ -798,6 +876,7 @@ pub(crate) struct Source {
     pub state_names: Vec<String>,
     pub action_names: Vec<String>,
     pub cameras: Vec<(String, String)>,
+    pub environment_state_names: Vec<String>,
     pub done: Vec<Committed>,
 }
 
@@ -869,6 +948,7 @@ impl Source {
             size: [dim("video.width"), dim("video.height")],
             state_names: names("observation.state"),
             action_names: names("action"),
+            environment_state_names: names("observation.environment_state"),
             // Camera names are not kept in a dataset; the feature keys stand for them.
             cameras: videos
                 .iter()
@@ -895,6 +975,7 @@ impl Source {
             state_names: self.state_names.clone(),
             action_names: self.action_names.clone(),
             cameras: self.cameras.clone(),
+            environment_state_names: self.environment_state_names.clone(),
         }
     }
 }

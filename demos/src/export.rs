@@ -3,10 +3,12 @@
 //! recorded MuJoCo state at the dataset's image size (no simulation, no expert). A recording of
 //! an episode gives the rows and frames `autobio demo` writes for that episode, so exporting the
 //! recordings of a run equals recording the run as a dataset (tested on the frames tables).
-//! Recordings of failed episodes are not written (counted and reported).
+//! Recordings of failed episodes are not written (counted and reported). The environment state
+//! (`--observation state|all`) is read from the recorded labware states before each action.
 
 use crate::{Generated, Step};
-use dataset::{Codec, DatasetError, DatasetWriter, Layout, Version};
+use dataset::{Codec, DatasetError, DatasetWriter, Layout, Observations, Version};
+use results::environment_state::EnvironmentState;
 use scoring::replay::{FrameOptions, Recording, ReplayError};
 use std::path::{Path, PathBuf};
 
@@ -19,6 +21,8 @@ pub struct ExportOptions {
     pub resume: bool,
     /// Where v3.0's shared files roll over.
     pub file_sizes: dataset::FileSizes,
+    /// What the frames observe: cameras, the environment state, or both.
+    pub observations: Observations,
 }
 
 /// The `.mcap` files named, a folder standing for the recordings in it (sorted by name).
@@ -68,7 +72,7 @@ pub fn export(
         &opts.out,
         opts.version,
         opts.codec,
-        Layout::of(&tasks, &opts.out)?,
+        Layout::of(&tasks, &opts.out, opts.observations)?,
         opts.image_size,
         opts.resume,
     )?;
@@ -121,16 +125,39 @@ pub fn export(
             })
             .collect();
         let mut capture = spec.capture(&id, seed)?;
-        let frames = FrameOptions {
-            size: Some(opts.image_size),
-            detail: None,
-            every: Some(1),
+        let environment: Vec<Vec<f64>> = if capture.wants_environment_state() {
+            let layout = EnvironmentState::of(&rec.task);
+            (0..rec.steps())
+                .map(|k| {
+                    let labware = rec
+                        .summary
+                        .labware_series
+                        .get(k)
+                        .map_or(&[][..], |(_, l)| l.as_slice());
+                    layout.values(&rec.task, labware, &rec.instance.params)
+                })
+                .collect()
+        } else {
+            vec![Vec::new(); rec.steps()]
         };
-        let drawn = scoring::replay::frames(rec, &frames, |k, _, images| {
-            capture
-                .push(&states[k], &actions[k], &images)
-                .map_err(|e| ReplayError::Consumer(e.into()))
-        });
+        let drawn = if opts.observations.cameras() {
+            let frames = FrameOptions {
+                size: Some(opts.image_size),
+                detail: None,
+                every: Some(1),
+            };
+            scoring::replay::frames(rec, &frames, |k, _, images| {
+                capture
+                    .push(&states[k], &environment[k], &actions[k], &images)
+                    .map_err(|e| ReplayError::Consumer(e.into()))
+            })
+        } else {
+            (0..rec.steps()).try_for_each(|k| {
+                capture
+                    .push(&states[k], &environment[k], &actions[k], &[])
+                    .map_err(|e| ReplayError::Consumer(e.into()))
+            })
+        };
         if let Err(e) = drawn {
             capture.discard();
             return Err(unreadable(&rec.path, e));

@@ -10,7 +10,8 @@ mod export;
 pub use export::{ExportOptions, export};
 
 use dataset::{
-    Capture, CaptureSpec, Codec, DatasetError, DatasetWriter, FileSizes, Layout, Version,
+    Capture, CaptureSpec, Codec, DatasetError, DatasetWriter, FileSizes, Layout, Observations,
+    Version,
 };
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -33,6 +34,8 @@ pub struct GenerateOptions {
     pub shard: Option<results::run::Shard>,
     /// Where v3.0's shared files roll over.
     pub file_sizes: FileSizes,
+    /// What the frames observe: cameras, the environment state, or both.
+    pub observations: Observations,
 }
 
 /// One episode handled, for progress reports.
@@ -70,7 +73,7 @@ pub fn generate(
         &opts.out,
         opts.version,
         opts.codec,
-        Layout::of(tasks, &opts.out)?,
+        Layout::of(tasks, &opts.out, opts.observations)?,
         opts.image_size,
         opts.resume,
     )?;

@@ -77,6 +77,20 @@ pub struct FingerContact {
 }
 
 impl LabwareState {
+    /// An item's state with nothing measured yet (identity pose, no joints, parts or logic): what
+    /// asks a model which values it can answer at all.
+    pub fn probe(name: &str) -> LabwareState {
+        LabwareState {
+            name: name.to_string(),
+            pose: Pose::identity(),
+            joints: Joints::new(),
+            parts: BTreeMap::new(),
+            logic: Logic::new(),
+            touched_by: Vec::new(),
+            finger_contacts: Vec::new(),
+        }
+    }
+
     pub fn joint(&self, role: &str) -> f64 {
         self.joints.get(role).copied().unwrap_or(f64::NAN)
     }

@@ -25,6 +25,9 @@ pub struct Observation<'a> {
     /// The same cameras `history_steps` control steps before this observation (the current
     /// frames at an episode's first query).
     pub previous: &'a [results::Image],
+    /// The task's environment state (`results::environment_state`), when [`Needs`] asks for
+    /// it; empty otherwise. Privileged: a model that reads it is a state-based model.
+    pub environment_state: Vec<f64>,
     /// Privileged simulator state, used only by the scripted expert and the controls; never sent
     /// to models.
     pub privileged: Privileged,
@@ -82,6 +85,8 @@ pub struct Needs {
     pub image_size: Option<[usize; 2]>,
     /// Also keep the frames from this many control steps before each query.
     pub history_steps: u32,
+    /// Also read the task's environment state before each query ([`Observation::environment_state`]).
+    pub environment_state: bool,
 }
 
 pub trait Policy {

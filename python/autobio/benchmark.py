@@ -14,7 +14,15 @@ Observations are what autobio's own vla-eval client sends (``autobio eval --wire
 ``images`` (camera to uint8 (H, W, 3)), ``states`` (float64, the state layout) and
 ``task_description``. The action is the server's ``actions`` (the action layout; a chunk's first
 row is taken). An episode ends when autobio's judge ends it; its result is ``success``, the task's
-``score`` and the ``seed``.
+``score`` and the ``seed``. With ``environment_state=True`` the observation also holds
+``environment_state`` (float64, the task's privileged state layout; a state-based model).
+
+``get_action_spec`` and ``get_observation_spec`` declare these (vla-eval's ``DimSpec``s), so
+the orchestrator checks a server's declared specs before the first episode: the action is
+``actions`` (format ``autobio_joint_targets``: each robot's joint position targets in rad, then
+its gripper command, in task order; each within its actuator's range), the observation
+``image`` (one per camera, ``rgb_hwc_uint8``), ``state`` (``joint_positions``), ``language``
+and, when asked, ``environment_state``. Where the tasks' layouts differ, ``dims`` is 0.
 """
 
 import os
@@ -22,10 +30,11 @@ import os
 import numpy as np
 
 from . import __version__, _core
-from .env import AutobioEnv
+from .env import AutobioEnv, image_size_pair
 
 try:
     from vla_eval.benchmarks.base import StepBenchmark, StepResult
+    from vla_eval.specs import IMAGE_RGB, LANGUAGE, DimSpec
 except ImportError as e:  # pragma: no cover - the class needs vla-eval
     raise ImportError("autobio.benchmark needs vla-eval: pip install 'autobio[vla-eval]'") from e
 
@@ -40,17 +49,28 @@ class AutobioBenchmark(StepBenchmark):
 
     ``tasks``: shipped task ids or protocol files (default: the paper's seven simulated tasks of
     ``suites/paper.toml``); ``seeds``: the episode seeds (default ``range(seed, seed + episodes)``);
-    ``image_size``: [width, height] of every camera."""
+    ``image_size``: an int (square) or [width, height] of every camera; ``environment_state``:
+    also send the task's environment state (privileged)."""
 
     render_backends = frozenset({"gpu", "cpu"})
 
-    def __init__(self, tasks=None, seeds=None, seed=0, episodes=10, image_size=(224, 224)):
+    def __init__(
+        self,
+        tasks=None,
+        seeds=None,
+        seed=0,
+        episodes=10,
+        image_size=(224, 224),
+        environment_state=False,
+    ):
         super().__init__()
         self.task_ids = list(tasks) if tasks else DEFAULT_TASKS
         self.seeds = [int(s) for s in seeds] if seeds is not None else list(
             range(int(seed), int(seed) + int(episodes))
         )
-        self.image_size = tuple(image_size)
+        self.image_size = image_size_pair(image_size)
+        self.environment_state = bool(environment_state)
+        self._infos = [_core.task_info(t) for t in self.task_ids]
         self._envs = {}
         self._env = None
 
@@ -73,8 +93,56 @@ class AutobioBenchmark(StepBenchmark):
         ]
 
     def get_metadata(self):
-        steps = [_core.task_info(t)["max_steps"] for t in self.task_ids]
+        steps = [i["max_steps"] for i in self._infos]
         return {"max_steps": max(steps), "autobio_version": __version__}
+
+    def _shared(self, key):
+        """The tasks' common layout under ``key`` (a list of names), or None where they differ."""
+        first = self._infos[0][key]
+        return first if all(i[key] == first for i in self._infos) else None
+
+    def get_action_spec(self):
+        names = self._shared("action_names")
+        return {
+            "actions": DimSpec(
+                "actions",
+                len(names) if names else 0,
+                "autobio_joint_targets",
+                description="each robot's joint position targets (rad), then its gripper "
+                + "command, in task order: "
+                + (", ".join(names) if names else "the layout differs between the tasks"),
+            )
+        }
+
+    def get_observation_spec(self):
+        w, h = self.image_size
+        cameras = self._shared("cameras")
+        state = self._shared("state_names")
+        spec = {
+            "image": DimSpec(
+                "image",
+                0,
+                IMAGE_RGB.format,
+                description=f"{w}x{h} uint8 per camera under `images`: "
+                + (", ".join(c.replace("/", "_") for c in cameras) if cameras else "per task"),
+            ),
+            "state": DimSpec(
+                "state",
+                len(state) if state else 0,
+                "joint_positions",
+                description="`states`: " + (", ".join(state) if state else "per task"),
+            ),
+            "language": LANGUAGE,
+        }
+        if self.environment_state:
+            env = self._shared("environment_state_names")
+            spec["environment_state"] = DimSpec(
+                "environment_state",
+                len(env) if env else 0,
+                "autobio_environment_state",
+                description="privileged: " + (", ".join(env) if env else "per task"),
+            )
+        return spec
 
     def get_metric_keys(self):
         return {"success": "mean", "score": "mean"}
@@ -83,7 +151,14 @@ class AutobioBenchmark(StepBenchmark):
         # One environment per task, kept: a seed of the same task reuses its scene and renderer.
         env = self._envs.get(task["id"])
         if env is None:
-            env = self._envs[task["id"]] = AutobioEnv(task["id"], image_size=self.image_size)
+            obs_type = (
+                "pixels_environment_state_agent_pos"
+                if self.environment_state
+                else "pixels_agent_pos"
+            )
+            env = self._envs[task["id"]] = AutobioEnv(
+                task["id"], image_size=self.image_size, obs_type=obs_type
+            )
         self._env = env
         obs, _info = env.reset(seed=int(task["seed"]))
         return obs
@@ -97,11 +172,14 @@ class AutobioBenchmark(StepBenchmark):
         return StepResult(obs=obs, reward=reward, done=terminated or truncated, info=info)
 
     def make_obs(self, raw_obs, task):
-        return {
+        obs = {
             "images": dict(raw_obs["pixels"]),
             "states": raw_obs["agent_pos"],
             "task_description": self._env.task_description,
         }
+        if self.environment_state:
+            obs["environment_state"] = raw_obs["environment_state"]
+        return obs
 
     def get_step_result(self, step_result):
         info = step_result.info or {}

@@ -6,7 +6,15 @@ being every robot's joints in task order (``state_names``). A camera key is the 
 name with ``/`` as ``_`` (``arm/wrist`` is ``arm_wrist``; ``camera_keys``), as autobio's datasets
 name their image features. ``obs_type="pixels"`` drops
 ``agent_pos``; ``instruction_in_obs=True`` adds the running stage's instruction as ``"instruction"``
-(a ``Text`` space). The instruction is always in ``info["instruction"]`` and in the
+(a ``Text`` space).
+
+State-based policies (gym-pusht's convention, LeRobot's ``observation.environment_state``):
+``obs_type="environment_state_agent_pos"`` gives ``{"environment_state": float64 (E,),
+"agent_pos": float64 (S,)}`` and draws no camera at all; ``"pixels_environment_state_agent_pos"``
+gives all three. The environment state is privileged (the poses, joints, panel values and
+volumes of the items the task's success checks read, then the drawn parameters), in the task's
+fixed layout ``environment_state_names`` (docs/python.md); a model that reads it is a state
+model, ranked apart from vision models. The instruction is always in ``info["instruction"]`` and in the
 ``task_description`` / ``task`` attributes LeRobot's eval reads.
 
 The action is every robot's action concatenated in task order (``action_names``: arm joint
@@ -35,10 +43,40 @@ from . import _core
 _TEXT = string.printable
 
 
+OBS_TYPES = (
+    "pixels_agent_pos",
+    "pixels",
+    "environment_state_agent_pos",
+    "pixels_environment_state_agent_pos",
+)
+
+
+def image_size_pair(image_size):
+    """``image_size`` as (width, height): an int is a square camera, a pair is (width,
+    height), ``None`` stays ``None`` (the task's own camera spec)."""
+    if image_size is None:
+        return None
+    if isinstance(image_size, (int, np.integer)) and not isinstance(image_size, bool):
+        size = (int(image_size), int(image_size))
+    else:
+        try:
+            size = tuple(int(x) for x in image_size)
+        except TypeError:
+            raise TypeError(
+                f"image_size {image_size!r}: give an int (square) or (width, height)"
+            ) from None
+        if len(size) != 2:
+            raise ValueError(f"image_size {image_size!r}: give an int or (width, height)")
+    if min(size) < 1 or max(size) > 4096:
+        raise ValueError(f"image_size {image_size!r}: each side between 1 and 4096 pixels")
+    return size
+
+
 def make(task, seed=None, image_size=(224, 224), **kwargs):
     """A gymnasium environment for ``task`` (a shipped task id or a protocol file), reset to
-    episode ``seed`` when one is given. ``image_size`` is (width, height) for every camera
-    (``None``: the task's camera spec). Other keywords go to ``AutobioEnv``."""
+    episode ``seed`` when one is given. ``image_size`` is an int for square cameras or (width,
+    height) for every camera (``None``: the task's camera spec). Other keywords go to
+    ``AutobioEnv`` (``obs_type``, ``instruction_in_obs``, ``seed_stride``)."""
     env = AutobioEnv(task, image_size=image_size, **kwargs)
     if seed is not None:
         env.reset(seed=seed)
@@ -61,9 +99,9 @@ class AutobioEnv(gymnasium.Env):
     ):
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode {render_mode!r}: autobio draws rgb_array frames only")
-        if obs_type not in ("pixels_agent_pos", "pixels"):
-            raise ValueError(f"obs_type {obs_type!r}: use 'pixels_agent_pos' or 'pixels'")
-        self._core = _core.Env(str(task), 0, tuple(image_size) if image_size else None)
+        if obs_type not in OBS_TYPES:
+            raise ValueError(f"obs_type {obs_type!r}: use one of {', '.join(OBS_TYPES)}")
+        self._core = _core.Env(str(task), 0, image_size_pair(image_size))
         self.render_mode = render_mode
         self.obs_type = obs_type
         self.instruction_in_obs = instruction_in_obs
@@ -77,15 +115,20 @@ class AutobioEnv(gymnasium.Env):
         self.camera_keys = [c.replace("/", "_") for c in self.camera_names]
         self.state_names = list(core.state_names)
         self.action_names = list(core.action_names)
+        self.environment_state_names = list(core.environment_state_names)
         self.metadata = dict(self.metadata, render_fps=round(1.0 / core.control_dt))
         self._max_episode_steps = core.max_steps
         w, h = core.image_size
         self._shape = (h, w, 3)
-        pixels = spaces.Dict(
-            {c: spaces.Box(0, 255, self._shape, dtype=np.uint8) for c in self.camera_keys}
-        )
-        obs = {"pixels": pixels}
-        if obs_type == "pixels_agent_pos":
+        obs = {}
+        if self._pixels_in_obs:
+            obs["pixels"] = spaces.Dict(
+                {c: spaces.Box(0, 255, self._shape, dtype=np.uint8) for c in self.camera_keys}
+            )
+        if "environment_state" in obs_type:
+            n = len(self.environment_state_names)
+            obs["environment_state"] = spaces.Box(-np.inf, np.inf, (n,), dtype=np.float64)
+        if obs_type.endswith("agent_pos"):
             n = len(self.state_names)
             obs["agent_pos"] = spaces.Box(-np.inf, np.inf, (n,), dtype=np.float64)
         if instruction_in_obs:
@@ -117,7 +160,18 @@ class AutobioEnv(gymnasium.Env):
     def trajectory_hash(self):
         return self._core.trajectory_hash
 
+    @property
+    def _pixels_in_obs(self):
+        return self.obs_type.startswith("pixels")
+
     def reset(self, *, seed=None, options=None):
+        """Starts an episode and returns ``(observation, info)``.
+
+        ``seed`` is the autobio episode seed (``autobio eval``'s: the same seed draws the same
+        scene and parameters); without one the next seed is taken (the last plus
+        ``seed_stride``; 0 first). ``options`` is accepted for gymnasium and ignored.
+        ``info`` holds ``task``, ``seed``, ``instruction``, ``stage``, ``is_success``,
+        ``score``, ``time``, ``control_steps``, ``trajectory_hash`` and the drawn ``params``."""
         super().reset(seed=seed)
         if seed is not None:
             episode = int(seed)
@@ -132,6 +186,15 @@ class AutobioEnv(gymnasium.Env):
         return self._observation(), info
 
     def step(self, action):
+        """Applies ``action`` for one control step (held for the task's physics substeps) and
+        returns ``(observation, reward, terminated, truncated, info)``.
+
+        ``action`` is every robot's action in ``action_names`` order (float, within
+        ``action_space``); a wrong length, a value outside its range or not finite raises
+        ``ValueError`` and nothing moves. ``reward`` is the task's score on the step that ends
+        the episode, else 0; ``terminated``: the task succeeded; ``truncated``: a stage's or the
+        task's time ran out, or the simulation became unstable (``info["error"]``).
+        ``info["is_success"]`` is the judge's verdict now."""
         if self._episode_seed is None:
             raise gymnasium.error.ResetNeeded("call reset() before step()")
         action = np.asarray(action, dtype=np.float64).reshape(-1)
@@ -165,9 +228,17 @@ class AutobioEnv(gymnasium.Env):
             for c, f in zip(self.camera_keys, frames)
         }
 
+    def environment_state(self):
+        """The task's environment state now (``environment_state_names``), float64."""
+        return np.asarray(self._core.environment_state(), dtype=np.float64)
+
     def _observation(self):
-        obs = {"pixels": self._pixels()}
-        if self.obs_type == "pixels_agent_pos":
+        obs = {}
+        if self._pixels_in_obs:
+            obs["pixels"] = self._pixels()
+        if "environment_state" in self.obs_type:
+            obs["environment_state"] = self.environment_state()
+        if self.obs_type.endswith("agent_pos"):
             obs["agent_pos"] = np.asarray(self._core.state(), dtype=np.float64)
         if self.instruction_in_obs:
             obs["instruction"] = self._core.instruction

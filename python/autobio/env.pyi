@@ -6,8 +6,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from . import _core
 
+OBS_TYPES: tuple[str, ...]
+
+def image_size_pair(image_size: int | tuple[int, int] | None) -> tuple[int, int] | None: ...
 def make(
-    task: str, seed: int | None = None, image_size: tuple[int, int] | None = (224, 224), **kwargs: Any
+    task: str,
+    seed: int | None = None,
+    image_size: int | tuple[int, int] | None = (224, 224),
+    **kwargs: Any,
 ) -> AutobioEnv: ...
 
 class AutobioEnv(gymnasium.Env[dict[str, Any], NDArray[np.float64]]):
@@ -21,12 +27,13 @@ class AutobioEnv(gymnasium.Env[dict[str, Any], NDArray[np.float64]]):
     camera_keys: list[str]
     state_names: list[str]
     action_names: list[str]
+    environment_state_names: list[str]
     _core: _core.Env
     _max_episode_steps: int
     def __init__(
         self,
         task: str,
-        image_size: tuple[int, int] | None = (224, 224),
+        image_size: int | tuple[int, int] | None = (224, 224),
         render_mode: str | None = "rgb_array",
         obs_type: str = "pixels_agent_pos",
         instruction_in_obs: bool = False,
@@ -50,3 +57,4 @@ class AutobioEnv(gymnasium.Env[dict[str, Any], NDArray[np.float64]]):
     def close(self) -> None: ...
     def verdict(self) -> dict[str, Any]: ...
     def labware(self) -> list[dict[str, Any]]: ...
+    def environment_state(self) -> NDArray[np.float64]: ...

@@ -10,7 +10,9 @@ autoreset goes on to that sub-environment's seed plus ``num_envs``, so N sub-env
 seeds ``s, s+1, ...`` without repeating one. The episodes are the single environment's: the
 same seed and actions give the same trajectory hash.
 
-Observations are batched (``pixels/<camera>``: (N, H, W, 3) uint8, ``agent_pos``: (N, S));
+Observations are batched (``pixels/<camera>``: (N, H, W, 3) uint8, ``agent_pos``: (N, S),
+``environment_state``: (N, E) with ``obs_type="environment_state_agent_pos"``, which draws no
+camera; ``AutobioEnv`` lists the observation types);
 ``infos`` holds per-step arrays (``is_success``, ``score``, ``seed``, ``stage``,
 ``trajectory_hash``, ``instruction``, ``error``) with gymnasium's ``_<key>`` masks.
 """
@@ -22,12 +24,12 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from . import _core
-from .env import AutobioEnv
+from .env import AutobioEnv, image_size_pair
 
 
 def make_vec(task, num_envs, image_size=(224, 224), **kwargs):
     """A vector environment of ``num_envs`` episodes of ``task`` (a shipped task id or a protocol
-    file), each on its own thread."""
+    file), each on its own thread. ``image_size``: an int (square) or (width, height)."""
     return AutobioVectorEnv(task, num_envs=num_envs, image_size=image_size, **kwargs)
 
 
@@ -65,7 +67,9 @@ class AutobioVectorEnv(VectorEnv):
         self.obs_type = obs_type
         self.observation_space = batch_space(self.single_observation_space, num_envs)
         self.action_space = batch_space(self.single_action_space, num_envs)
-        self._core = _core.VecEnv(str(task), num_envs, tuple(image_size) if image_size else None)
+        self._core = _core.VecEnv(
+            str(task), num_envs, image_size_pair(image_size), obs_type.startswith("pixels")
+        )
         self._seeds = None
         self._autoreset = np.zeros(num_envs, dtype=bool)
         self._last = None
@@ -129,12 +133,17 @@ class AutobioVectorEnv(VectorEnv):
         return np.frombuffer(f, dtype=np.uint8).reshape(self._shape)
 
     def _observations(self, replies):
-        pixels = {
-            c: np.stack([self._frame(r["frames"][k]) for r in replies])
-            for k, c in enumerate(self.camera_keys)
-        }
-        obs = {"pixels": pixels}
-        if self.obs_type == "pixels_agent_pos":
+        obs = {}
+        if self.obs_type.startswith("pixels"):
+            obs["pixels"] = {
+                c: np.stack([self._frame(r["frames"][k]) for r in replies])
+                for k, c in enumerate(self.camera_keys)
+            }
+        if "environment_state" in self.obs_type:
+            obs["environment_state"] = np.array(
+                [r["environment_state"] for r in replies], dtype=np.float64
+            )
+        if self.obs_type.endswith("agent_pos"):
             obs["agent_pos"] = np.array([r["state"] for r in replies], dtype=np.float64)
         return obs
 

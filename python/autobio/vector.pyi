@@ -5,7 +5,7 @@ from gymnasium.vector import VectorEnv
 from numpy.typing import ArrayLike, NDArray
 
 def make_vec(
-    task: str, num_envs: int, image_size: tuple[int, int] | None = (224, 224), **kwargs: Any
+    task: str, num_envs: int, image_size: int | tuple[int, int] | None = (224, 224), **kwargs: Any
 ) -> AutobioVectorEnv: ...
 
 class AutobioVectorEnv(VectorEnv[dict[str, Any], NDArray[np.float64], NDArray[Any]]):
@@ -18,7 +18,7 @@ class AutobioVectorEnv(VectorEnv[dict[str, Any], NDArray[np.float64], NDArray[An
         self,
         task: str,
         num_envs: int = 1,
-        image_size: tuple[int, int] | None = (224, 224),
+        image_size: int | tuple[int, int] | None = (224, 224),
         render_mode: str | None = "rgb_array",
         obs_type: str = "pixels_agent_pos",
         max_episode_steps: int | None = None,

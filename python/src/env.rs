@@ -12,6 +12,7 @@ use crate::tasks;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
+use results::environment_state::EnvironmentState;
 use runtime::{EnvError, EnvOptions, StepError};
 
 /// What one step did: reward, terminated, truncated, and why the episode ended early, if it did.
@@ -66,6 +67,7 @@ pub fn runtime_err(e: impl std::fmt::Display) -> PyErr {
 pub struct Env {
     env: runtime::Env,
     seed: u64,
+    layout: EnvironmentState,
 }
 
 #[pymethods]
@@ -77,7 +79,8 @@ impl Env {
     fn new(task: &str, seed: u64, image_size: Option<(usize, usize)>) -> PyResult<Self> {
         let task = tasks::load(task).map_err(crate::load_err)?;
         let env = runtime::Env::make(&task, seed, options(image_size)).map_err(runtime_err)?;
-        Ok(Env { env, seed })
+        let layout = EnvironmentState::of(&task);
+        Ok(Env { env, seed, layout })
     }
 
     /// Starts the episode `seed` draws.
@@ -96,6 +99,17 @@ impl Env {
     /// Every robot's state, concatenated in task order (`state_names`).
     fn state(&self) -> Vec<f64> {
         self.env.episode().state()
+    }
+
+    /// The task's environment state now (`environment_state_names`): the poses, joints, panel
+    /// values and volumes its success checks read, then the drawn parameters. Privileged.
+    fn environment_state(&self) -> Vec<f64> {
+        self.env.environment_state(&self.layout)
+    }
+
+    #[getter]
+    fn environment_state_names(&self) -> Vec<String> {
+        self.layout.names().to_vec()
     }
 
     /// Every task camera's frame of the state now (`camera_names` order), as RGB bytes, row-major,

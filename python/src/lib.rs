@@ -29,7 +29,8 @@ pub(crate) fn load_err(e: tasks::LoadError) -> PyErr {
 }
 
 /// Every shipped task: a dict per task with `id`, `file`, `level`, `instruction`, `stages`
-/// (their instructions), `robots`, `cameras`, `state_names`, `action_names`, `time_limit_s`,
+/// (their instructions), `robots`, `cameras`, `state_names`, `action_names`,
+/// `environment_state_names` (the privileged state layout, `results::environment_state`), `time_limit_s`,
 /// `control_dt`, `max_steps`, `params` (names) and `simulated` (the runtime can build its scene).
 #[pyfunction]
 #[pyo3(name = "tasks")]
@@ -72,6 +73,10 @@ fn sheet<'py>(
     d.set_item("cameras", cameras)?;
     d.set_item("state_names", env::layout(t, |m| m.state_names()))?;
     d.set_item("action_names", env::layout(t, |m| m.action_names()))?;
+    d.set_item(
+        "environment_state_names",
+        results::environment_state::EnvironmentState::of(t).names(),
+    )?;
     d.set_item("time_limit_s", t.time_limit_s)?;
     d.set_item("control_dt", env::control_dt(t))?;
     d.set_item("max_steps", env::max_steps(t))?;

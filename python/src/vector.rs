@@ -26,6 +26,7 @@ enum Command {
 struct Reply {
     outcome: Result<Outcome, EnvFailure>,
     state: Vec<f64>,
+    environment_state: Vec<f64>,
     frames: Vec<Vec<u8>>,
     instruction: String,
     stage: usize,
@@ -74,6 +75,7 @@ fn serve(
 ) {
     let mut env: Option<runtime::Env> = None;
     let mut seed = 0;
+    let layout = results::environment_state::EnvironmentState::of(&task);
     for command in commands {
         let result = (|| {
             let step = match command {
@@ -100,6 +102,7 @@ fn serve(
             Ok(Reply {
                 outcome: step,
                 state: e.episode().state(),
+                environment_state: e.environment_state(&layout),
                 frames,
                 instruction: e.instruction().to_string(),
                 stage: e.stage(),
@@ -171,7 +174,7 @@ impl VecEnv {
 
     /// One batch: slot k resets to `resets[k]` when that is a seed, else steps with
     /// `actions[k]`. Every slot runs at once; the replies come back in slot order, each a dict:
-    /// `reward`, `terminated`, `truncated`, `error`, `state`, `frames`, `instruction`, `stage`,
+    /// `reward`, `terminated`, `truncated`, `error`, `state`, `environment_state`, `frames`, `instruction`, `stage`,
     /// `is_success`, `score`, `trajectory_hash`, `control_steps`, `seed`.
     fn batch<'py>(
         &mut self,
@@ -248,6 +251,7 @@ impl VecEnv {
                 d.set_item("truncated", truncated)?;
                 d.set_item("error", error)?;
                 d.set_item("state", r.state)?;
+                d.set_item("environment_state", r.environment_state)?;
                 let frames: Vec<Bound<'py, PyBytes>> =
                     r.frames.iter().map(|f| PyBytes::new(py, f)).collect();
                 d.set_item("frames", frames)?;

@@ -10,6 +10,7 @@
 //! Its tests are beside the code and in the workspace's tests/merge.rs, tests/resume.rs and
 //! tests/no_simulator.rs (that it links no simulator).
 
+pub mod environment_state;
 pub mod episode;
 mod image;
 pub mod profile;

@@ -14,6 +14,10 @@ use std::path::{Path, PathBuf};
 pub const BUILT_IN: &[(&str, &str)] = &[
     ("pi0", include_str!("../../profiles/pi0.toml")),
     ("rdt", include_str!("../../profiles/rdt.toml")),
+    (
+        "lerobot-state",
+        include_str!("../../profiles/lerobot-state.toml"),
+    ),
 ];
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -46,6 +50,23 @@ pub struct Profile {
     pub history_steps: u32,
     #[serde(default, rename = "image")]
     pub images: Vec<ImageKey>,
+    /// Also send the task's environment state (`results::environment_state`: the poses, joints
+    /// and panel values its success checks read) under this key. Privileged: a run with it is a
+    /// state-based run, shown apart from vision models on the leaderboard.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub environment_state_key: Option<String>,
+}
+
+impl Profile {
+    /// The observation this profile's model reads: `state` when it is sent the environment
+    /// state (privileged), else `vision`.
+    pub fn observation_mode(&self) -> &'static str {
+        if self.environment_state_key.is_some() {
+            "state"
+        } else {
+            "vision"
+        }
+    }
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -18,6 +18,7 @@ use crate::scene::{Scene, SceneError};
 use compiler::{SceneInstance, Task};
 use labware::LabwareState;
 use results::Image;
+use results::environment_state::EnvironmentState;
 use results::episode::TrajectoryHash;
 use results::recording::RecordError;
 use results::verdict::{Judge, Verdict};
@@ -232,6 +233,16 @@ impl Env {
             .get(self.stage())
             .map(String::as_str)
             .unwrap_or(&self.instance.instruction)
+    }
+
+    /// The task's environment state now, in `layout` (made once per task with
+    /// [`EnvironmentState::of`]): the privileged observation a state-based policy reads.
+    pub fn environment_state(&self, layout: &EnvironmentState) -> Vec<f64> {
+        layout.values(
+            &self.task,
+            &self.episode.labware_state(),
+            &self.instance.params,
+        )
     }
 
     /// The state now, images aside.

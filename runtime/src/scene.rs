@@ -689,15 +689,7 @@ fn check_measurable(task: &Task) -> Result<(), SceneError> {
                     .find(|l| &l.name == instrument)
                     .and_then(|l| l.params.instrument())
                     .is_some_and(|m| {
-                        let probe = labware::LabwareState {
-                            name: instrument.clone(),
-                            pose: Pose::identity(),
-                            joints: Default::default(),
-                            parts: Default::default(),
-                            logic: Default::default(),
-                            touched_by: Vec::new(),
-                            finger_contacts: Vec::new(),
-                        };
+                        let probe = labware::LabwareState::probe(instrument);
                         m.panel()
                             .is_some_and(|p| p.panel_value(param, &probe).is_some())
                     });

@@ -261,6 +261,9 @@ pub fn run_episode_with(
         None => None,
     };
     let mut history = History::new(needs.history_steps);
+    let layout = needs
+        .environment_state
+        .then(|| results::environment_state::EnvironmentState::of(task));
     let mut policy_time = 0.0;
     let mut failure: Option<(Outcome, String)> = None;
     'episode: while !env.done() {
@@ -273,6 +276,10 @@ pub fn run_episode_with(
         let obs = Observation {
             images: &images,
             previous: &previous,
+            environment_state: layout
+                .as_ref()
+                .map(|l| env.environment_state(l))
+                .unwrap_or_default(),
             time: seen.time,
             state: seen.state,
             stage: seen.stage,

@@ -50,7 +50,7 @@ pub(super) fn index(site: &Site) -> String {
 fn ranking(body: &mut String, g: &Group) {
     let _ = write!(
         body,
-        "<h2>{}</h2><table><tr><th>#</th><th>model</th><th>training</th><th>standing</th>\
+        "<h2>{}</h2><table><tr><th>#</th><th>model</th><th>training</th><th>observation</th><th>standing</th>\
          <th>success %</th><th>± SEM over training seeds</th><th>± SEM over evaluation runs</th>\
          <th>easy</th><th>medium</th><th>hard</th><th>mean score</th></tr>",
         esc(&g.name)
@@ -59,12 +59,13 @@ fn ranking(body: &mut String, g: &Group) {
         let sem = rank_sem_cells(r);
         let _ = write!(
             body,
-            "<tr><td>{}</td><td class=l><a href=\"{}\">{}</a></td><td class=l>{}</td><td class=\"l {}\">{}</td>\
+            "<tr><td>{}</td><td class=l><a href=\"{}\">{}</a></td><td class=l>{}</td><td class=l>{}</td><td class=\"l {}\">{}</td>\
              <td>{:.1}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.3}</td></tr>",
             r.rank,
             r.page,
             esc(&r.model),
             esc(&r.training),
+            esc(&r.observation),
             r.standing,
             r.standing,
             r.success,

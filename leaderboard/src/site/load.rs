@@ -94,8 +94,13 @@ pub struct Submission {
     pub bundle_sha256: String,
     pub standing: Standing,
     pub index: Index,
-    /// The conditions results are grouped by (suite, autobio version, model profile).
+    /// The conditions results are grouped by (suite, autobio version, model profile, what the
+    /// policy observes).
     pub group: String,
+    /// What the policy observes: `vision` (cameras and robot state), `state` (the privileged
+    /// environment state: its own group, never ranked with vision models) or `scripted` (the
+    /// expert and the controls, which read the simulator).
+    pub observation: String,
     pub tasks: Vec<TaskResult>,
     /// Manifest facts shown on its page (per task: conditions as JSON).
     pub conditions: BTreeMap<String, serde_json::Value>,
@@ -165,9 +170,10 @@ pub fn load(dir: &Path, work: &Path) -> Result<Vec<Submission>, SiteError> {
             bundle_sha256: sha,
             standing,
             group: format!(
-                "suite {} · autobio {} · {}",
-                index.suite.name, index.autobio_version, runs.profile
+                "suite {} · autobio {} · {} · {} observation",
+                index.suite.name, index.autobio_version, runs.profile, runs.observation
             ),
+            observation: runs.observation,
             index,
             tasks: runs.tasks,
             conditions: runs.conditions,
@@ -202,6 +208,8 @@ struct Runs {
     checkpoints: BTreeMap<u32, String>,
     /// The model profile the runs recorded, as the group names it.
     profile: String,
+    /// What the policy observes (`Submission::observation`).
+    observation: String,
 }
 
 /// Reads the run folders' manifests and journals of a bundle unpacked in `here`; a file that
@@ -212,6 +220,7 @@ fn read_runs(here: &Path, members: &[String]) -> Runs {
     let mut conditions = BTreeMap::new();
     let mut checkpoints = BTreeMap::new();
     let mut profile = String::from("no model profile");
+    let mut observation = String::from("scripted");
     // Only run folders' files: what verification checks (a verified bundle has no others).
     for member in members.iter().filter(|m| m.starts_with("runs/")) {
         let path = here.join(member);
@@ -233,6 +242,7 @@ fn read_runs(here: &Path, members: &[String]) -> Runs {
                         model.profile.name,
                         sha.get(..12).unwrap_or(sha)
                     );
+                    observation = model.profile.observation_mode().to_string();
                 }
             }
         } else if let Some(task) = member.strip_suffix(".journal.jsonl") {
@@ -270,6 +280,7 @@ fn read_runs(here: &Path, members: &[String]) -> Runs {
         conditions,
         checkpoints,
         profile,
+        observation,
     }
 }
 
@@ -303,6 +314,7 @@ fn refused_unreadable(name: &str, sha: &str, why: String) -> Submission {
             files: BTreeMap::new(),
         },
         group: String::new(),
+        observation: String::new(),
         tasks: Vec::new(),
         conditions: BTreeMap::new(),
         checkpoints: BTreeMap::new(),

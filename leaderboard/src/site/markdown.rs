@@ -15,17 +15,18 @@ pub(super) fn ranking(site: &Site) -> String {
     for g in &site.groups {
         let _ = write!(
             md,
-            "\n## {}\n\n| # | model | training | standing | success % | ± SEM over training seeds | ± SEM over evaluation runs | easy | medium | hard | mean score |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
+            "\n## {}\n\n| # | model | training | observation | standing | success % | ± SEM over training seeds | ± SEM over evaluation runs | easy | medium | hard | mean score |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
             md_cell(&g.name)
         );
         for r in &g.rows {
             let sem = rank_sem_cells(r);
             let _ = writeln!(
                 md,
-                "| {} | {} | {} | {} | {:.1} | {} | {} | {} | {} | {} | {:.3} |",
+                "| {} | {} | {} | {} | {} | {:.1} | {} | {} | {} | {} | {} | {:.3} |",
                 r.rank,
                 md_cell(&r.model),
                 md_cell(&r.training),
+                md_cell(&r.observation),
                 r.standing,
                 r.success,
                 sem[0],

@@ -25,6 +25,8 @@ pub struct RankRow {
     pub rank: usize,
     pub model: String,
     pub training: String,
+    /// What the policy observes: `vision`, `state` (privileged) or `scripted`.
+    pub observation: String,
     pub standing: String,
     pub page: String,
     /// Mean over the suite's tasks of the success rate, and its SEM across runs (percent; 0
@@ -73,6 +75,7 @@ pub fn rankings(subs: &[Submission]) -> BTreeMap<String, Vec<RankRow>> {
             rank: 0,
             model: s.index.model.name.clone(),
             training: s.index.model.training.clone().unwrap_or_default(),
+            observation: s.observation.clone(),
             standing: s.standing.label().to_string(),
             page: format!("submissions/{}.html", s.slug),
             success: 100.0 * rates.iter().sum::<f64>() / rates.len() as f64,

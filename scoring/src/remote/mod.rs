@@ -365,18 +365,28 @@ impl Model {
             }
         }
         let state = codec::floats(keys, &state, p.state_dtype);
+        // Opt-in (the profile's `environment_state_key`): the task's environment state, as
+        // float32 or float64 like the robot state.
+        let environment = p.environment_state_key.as_deref().map(|key| {
+            (
+                key,
+                codec::floats(keys, &obs.environment_state, p.state_dtype),
+            )
+        });
         match self.wire {
             Wire::Openpi => {
                 let mut m = vec![(p.state_key.as_str(), state)];
+                m.extend(environment);
                 m.extend(images);
                 m.push((p.prompt_key.as_str(), codec::str(obs.prompt)));
                 codec::map(m)
             }
-            Wire::VlaEval => codec::map(vec![
-                ("images", codec::map(images)),
-                ("states", state),
-                ("task_description", codec::str(obs.prompt)),
-            ]),
+            Wire::VlaEval => {
+                let mut m = vec![("images", codec::map(images)), ("states", state)];
+                m.extend(environment);
+                m.push(("task_description", codec::str(obs.prompt)));
+                codec::map(m)
+            }
         }
     }
 }
@@ -425,6 +435,7 @@ impl Policy for ModelPolicy<'_> {
         Needs {
             image_size: (!p.images.is_empty()).then_some(p.image_size),
             history_steps: p.history_steps,
+            environment_state: p.environment_state_key.is_some(),
         }
     }
 
