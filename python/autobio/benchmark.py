@@ -108,6 +108,8 @@ class AutobioBenchmark(StepBenchmark):
                 "actions",
                 len(names) if names else 0,
                 "autobio_joint_targets",
+                # A server's `raw` actions are its checkpoint's own: autobio's layout, taken as is.
+                accepts=frozenset({"autobio_joint_targets", "raw"}),
                 description="each robot's joint position targets (rad), then its gripper "
                 + "command, in task order: "
                 + (", ".join(names) if names else "the layout differs between the tasks"),

@@ -59,12 +59,15 @@ def image_size_pair(image_size):
     if isinstance(image_size, (int, np.integer)) and not isinstance(image_size, bool):
         size = (int(image_size), int(image_size))
     else:
+        sides = () if isinstance(image_size, (str, bytes)) else image_size
         try:
-            size = tuple(int(x) for x in image_size)
-        except TypeError:
+            size = tuple(int(x) for x in sides)
+        except (TypeError, ValueError):
+            size = ()
+        if not size:
             raise TypeError(
                 f"image_size {image_size!r}: give an int (square) or (width, height)"
-            ) from None
+            )
         if len(size) != 2:
             raise ValueError(f"image_size {image_size!r}: give an int or (width, height)")
     if min(size) < 1 or max(size) > 4096:
