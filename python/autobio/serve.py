@@ -26,6 +26,7 @@ Prints ``listening on ws://HOST:PORT`` once ready (``--port 0`` picks a free one
 
 import argparse
 import asyncio
+import contextlib
 import copy
 import json
 import os
@@ -222,9 +223,11 @@ async def _main(args):
     from .lerobot import load_policy
 
     loaded = {}
-    for spec in args.policy:
-        task, sep, path = spec.rpartition("=")
-        loaded[task if sep else None] = load_policy(path, device=args.device, clip=args.clip)
+    # `listening on` is the first line on stdout: what LeRobot prints while loading goes to stderr.
+    with contextlib.redirect_stdout(sys.stderr):
+        for spec in args.policy:
+            task, sep, path = spec.rpartition("=")
+            loaded[task if sep else None] = load_policy(path, device=args.device, clip=args.clip)
     connections = [0]
 
     async def handler(ws):
