@@ -109,4 +109,23 @@ autobio leaderboard submit "$OUT/suite" --model-name "ACT ($OBS), autobio baseli
   --out "$OUT/bundles/act-$OBS.tar.zst"
 autobio leaderboard verify "$OUT/bundles/act-$OBS.tar.zst"
 autobio leaderboard build "$OUT/bundles" --out "$OUT/site"
+
+# The diagnosis (python -m autobio.diagnose): the training data re-enacted from its seeds with
+# its own actions (alignment), the last checkpoint's open-loop error on HELD_OUT demonstrations
+# it never saw (seeds 5000 and up), and where DRIFT closed-loop rollouts leave the
+# demonstrations' state distribution.
+HELD_OUT=${HELD_OUT:-10}
+DRIFT=${DRIFT:-5}
+for protocol in $tasks; do
+  id=$(id_of "$protocol")
+  [ -e "$OUT/diagnosis/$id.json" ] && continue
+  mkdir -p "$OUT/diagnosis"
+  held="$OUT/held-out/$id"
+  rm -rf "$held"
+  autobio demo --protocol "$protocol" --episodes "$HELD_OUT" --seed 5000 --format lerobot-v30 \
+    --observation "$OBS" --out "$held"
+  "$LR" -m autobio.diagnose --dataset "$OUT/data/$id" --episodes "$HELD_OUT" \
+    --policy "$OUT/train/$id/checkpoints/last/pretrained_model" --held-out "$held" \
+    --rollouts "$DRIFT" --seed 1000 --json "$OUT/diagnosis/$id.json" | tee "$OUT/diagnosis/$id.txt"
+done
 echo "baseline: site in $OUT/site/index.html; learning curve in $OUT/curve/*/"

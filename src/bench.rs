@@ -17,7 +17,8 @@
 //!   actions), the harness's time per control step beyond the same episodes run in-process:
 //!   rendering, encoding and the round trip, for a query every 50 steps (pi0's chunks) and every
 //!   step (as vla-eval servers are driven); recorded frames/s of dataset generation with one
-//!   worker and two;
+//!   worker (AV1 and H.264; against upstream's expert plus `render.py`, a reference figure) and
+//!   two, and of a state dataset (no camera);
 //! - leaderboard (`crate::bench_leaderboard`): verification's episodes/s with one worker and two,
 //!   and the site's build time from 50 submissions x 16 tasks x 100 episodes.
 
@@ -29,6 +30,13 @@ use std::time::Instant;
 /// Upstream's transfer scene on this machine kind (mesh collisions and the thread SDF), steps/s:
 /// the figure the transfer scene is compared with (not measured here; see docs/physics.md).
 const UPSTREAM_TRANSFER_STEPS_S: f64 = 810.0;
+
+/// Upstream's expert plus `render.py` writing a dataset on this machine kind, frames/s: the
+/// expert at 0.140 s per simulated second of the thermal cycler's close (50 frames) and
+/// `render.py` at 16.1 frames/s with two cameras at 224x224 (../shared/reference/
+/// packages-and-interfaces.md), one after the other: 1 / (0.140 / 50 + 1 / 16.1). Not
+/// measured here: upstream's code is not installed.
+const UPSTREAM_DATASET_FRAMES_S: f64 = 1.0 / (0.140 / 50.0 + 1.0 / 16.1);
 
 /// A group of figures (`autobio bench --only`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -594,32 +602,47 @@ fn harness_figures(task: &compiler::Task) -> Result<()> {
 /// worker and with two.
 fn dataset_figures(task: &compiler::Task) -> Result<()> {
     let dir = std::env::temp_dir().join(format!("autobio-bench-ds-{}", std::process::id()));
-    let mut rates = Vec::new();
-    for workers in [1, 2] {
+    let rate = |codec, workers, observations| -> Result<f64> {
         let _ = std::fs::remove_dir_all(&dir);
         let opts = demos::GenerateOptions {
             episodes: 2,
             seed: 0,
             out: dir.clone(),
-            version: dataset::Version::V21,
-            codec: dataset::Codec::Av1,
+            version: dataset::Version::V30,
+            codec,
             resume: false,
             image_size: [224, 224],
             workers,
             shard: None,
             file_sizes: Default::default(),
-            observations: Default::default(),
+            observations,
         };
         let t = Instant::now();
         let done = demos::generate(std::slice::from_ref(task), &opts, |_| {})?;
-        rates.push(done.frames as f64 / t.elapsed().as_secs_f64());
-    }
+        Ok(done.frames as f64 / t.elapsed().as_secs_f64())
+    };
+    use dataset::{Codec, Observations};
+    let av1 = rate(Codec::Av1, 1, Observations::Vision)?;
+    let av1_2 = rate(Codec::Av1, 2, Observations::Vision)?;
+    let h264 = rate(Codec::H264, 1, Observations::Vision)?;
+    let state = rate(Codec::Av1, 1, Observations::State)?;
     let _ = std::fs::remove_dir_all(&dir);
+    let up = UPSTREAM_DATASET_FRAMES_S;
     outln!(
-        "dataset  lerobot-v21    {:>10.1} frames/s recorded with 2 workers, {:.1} with 1: {:.2}x (2 cameras at 224x224, AV1, 2 episodes)",
-        rates[1],
-        rates[0],
-        rates[1] / rates[0]
+        "dataset  lerobot-v30    {av1:>10.1} frames/s with 1 worker (AV1, LeRobot's default codec; 2 cameras at 224x224, 2 episodes): {:.1}x upstream's expert + render.py ({up:.1} frames/s)",
+        av1 / up
+    );
+    outln!(
+        "dataset  lerobot-v30    {h264:>10.1} frames/s with 1 worker (H.264): {:.1}x upstream's",
+        h264 / up
+    );
+    outln!(
+        "dataset  lerobot-v30    {av1_2:>10.1} frames/s with 2 workers (AV1), {av1:.1} with 1: {:.2}x",
+        av1_2 / av1
+    );
+    outln!(
+        "dataset  lerobot-v30    {state:>10.1} frames/s with 1 worker, --observation state (no camera): {:.1}x upstream's",
+        state / up
     );
     Ok(())
 }

@@ -34,6 +34,7 @@ pub fn describe(front: &Front, a: &DescribeArgs) -> Result<ExitCode> {
         .context("a protocol or chain file is needed")?;
     let task = front.load(file)?;
     out!("{}", compiler::describe::describe(&task));
+    out!("{}", environment_state(&task));
     out!("{}", reach_margins(&task));
     if let Some(seed) = a.seed {
         out!("{}", compiler::describe::example(&task, seed));
@@ -45,6 +46,17 @@ pub fn compile(front: &Front, a: &CompileArgs) -> Result<ExitCode> {
     let task = front.load(&a.file)?;
     outln!("{}", serde_json::to_string_pretty(&task)?);
     Ok(ExitCode::SUCCESS)
+}
+
+/// The task's environment-state layout (`--observation state`, a profile's
+/// `environment_state_key`): every value's name, in order.
+fn environment_state(task: &compiler::Task) -> String {
+    let layout = results::environment_state::EnvironmentState::of(task);
+    format!(
+        "\nenvironment state ({} values, privileged): {}\n",
+        layout.len(),
+        layout.names().join(", ")
+    )
 }
 
 /// Each step's reach margin in seed 0's layout (`expert::reach::margins`), as the sheet's last

@@ -363,3 +363,101 @@ fn recordings_export_and_shards_merge_into_the_dataset_one_run_writes() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn state_datasets_carry_the_environment_state_and_export_the_same() {
+    // `--observation state`: the task's environment state and the robot state, no camera. The
+    // layout's names are the task's, not the seed's; an export of the same episodes recorded as
+    // MCAP writes the same table and statistics.
+    let dir = scratch("state-dataset");
+    let d = |n: &str| dir.join(n);
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let ok = |out: std::process::Output| {
+        assert!(
+            out.status.success(),
+            "{}{}",
+            text(&out.stdout),
+            text(&out.stderr)
+        );
+        text(&out.stdout)
+    };
+    ok(demo(
+        "lerobot-v30",
+        "2",
+        "0",
+        &d("ds"),
+        &["--observation", "state"],
+    ));
+    let summary = check(&d("ds"), "v3.0");
+    assert_eq!(summary["videos"], serde_json::json!({}), "{summary}");
+    let info: Value =
+        serde_json::from_str(&std::fs::read_to_string(d("ds").join("meta/info.json")).unwrap())
+            .unwrap();
+    let env = &info["features"]["observation.environment_state"];
+    let names: Vec<&str> = env["names"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|n| n.as_str().unwrap())
+        .collect();
+    assert_eq!(summary["environment_state"], names.len());
+    // The thermal cycler's pose and its lid and lever joints (what the check reads) are in it.
+    for want in ["cycler.x", "cycler.qw", "cycler.lid", "cycler.lever"] {
+        assert!(
+            names.iter().any(|n| n.starts_with(want)),
+            "{want} not in {names:?}"
+        );
+    }
+    assert!(
+        !dir.join("ds/videos").exists(),
+        "a state dataset draws no camera"
+    );
+
+    // Another seed: the same names in the same order.
+    ok(demo(
+        "lerobot-v30",
+        "1",
+        "7",
+        &d("other"),
+        &["--observation", "state"],
+    ));
+    let other: Value =
+        serde_json::from_str(&std::fs::read_to_string(d("other").join("meta/info.json")).unwrap())
+            .unwrap();
+    assert_eq!(
+        other["features"]["observation.environment_state"]["names"],
+        env["names"]
+    );
+
+    ok(autobio(&[
+        "eval",
+        "--protocol",
+        CLOSE,
+        "--episodes",
+        "2",
+        "--seed",
+        "0",
+        "--record",
+        "--image-every",
+        "0",
+        "--out",
+        &s(&d("rec")),
+    ]));
+    ok(autobio(&[
+        "export",
+        &s(&d("rec")),
+        "--format",
+        "lerobot-v30",
+        "--observation",
+        "state",
+        "--out",
+        &s(&d("ex")),
+    ]));
+    for f in [
+        "data/chunk-000/file-000.parquet",
+        "meta/stats.json",
+        "meta/info.json",
+    ] {
+        same_file(&d("ds").join(f), &d("ex").join(f));
+    }
+}

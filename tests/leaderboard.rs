@@ -723,8 +723,8 @@ fn the_site_ranks_verified_bundles_beside_the_paper_and_is_the_same_twice() {
     assert_eq!(
         rows,
         [
-            "| 1 | scripted expert | none | verified | 100.0 | – | – | 100.0 | – | – | 1.000 |",
-            "| 2 | no motion |  | reported | 0.0 | – | – | 0.0 | – | – | 0.000 |",
+            "| 1 | scripted expert | none | scripted | verified | 100.0 | – | – | 100.0 | – | – | 1.000 |",
+            "| 2 | no motion |  | scripted | reported | 0.0 | – | – | 0.0 | – | – | 0.000 |",
         ],
         "{ranking}"
     );
@@ -1081,9 +1081,10 @@ fn training_seed_runs_verify_and_show_their_sem_over_training_seeds() {
     );
     let row = ranking.lines().find(|l| l.contains("three seeds")).unwrap();
     let cells: Vec<&str> = row.split('|').map(str::trim).collect();
-    // | # | model | training | standing | success | ± training seeds | ± evaluation runs | ...
-    assert!(cells[6].parse::<f64>().is_ok(), "{row}");
-    assert_eq!(cells[7], "–", "{row}");
+    // | # | model | training | observation | standing | success | ± training seeds | ± evaluation runs | ...
+    assert_eq!(cells[4], "scripted", "{row}");
+    assert!(cells[7].parse::<f64>().is_ok(), "{row}");
+    assert_eq!(cells[8], "–", "{row}");
     let pages: Vec<PathBuf> = std::fs::read_dir(site.join("submissions"))
         .unwrap()
         .map(|e| e.unwrap().path())

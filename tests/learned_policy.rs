@@ -3,7 +3,9 @@
 //! `lerobot-train`, the checkpoint served by `python -m autobio.serve` over openpi's websocket,
 //! two episodes of `autobio eval --suite suites/learned-smoke.toml --model` against it, the run
 //! packed and verified (every episode re-enacted), the site labelling it a state model; and the
-//! same checkpoint run in process by LeRobot's own `lerobot-eval` on autobio's gym env.
+//! same checkpoint run in process by LeRobot's own `lerobot-eval` on autobio's gym env; and
+//! `python -m autobio.diagnose` on the dataset and the checkpoint, including a misaligned replay
+//! that its alignment check must catch.
 
 use crate::common::{Server, autobio_ok, journal, scratch, submit};
 use std::path::{Path, PathBuf};
@@ -175,12 +177,14 @@ fn a_trained_lerobot_policy_is_served_evaluated_and_verified() {
         "--out",
         site.to_str().unwrap(),
     ]);
-    let md = std::fs::read_to_string(site.join("index.md")).unwrap();
+    let md = std::fs::read_to_string(site.join("ranking.md")).unwrap();
     assert!(
         md.contains("state observation")
             && md.contains("| tiny ACT (state) | 5 demos, 300 steps | state |"),
         "the site labels the model a state model:\n{md}"
     );
+
+    diagnose(&dir, &data, &ckpt);
 
     // LeRobot's own evaluation loop, pointed at autobio's gym env through its env plugin.
     let evald = dir.join("lerobot-eval");
@@ -206,4 +210,84 @@ fn a_trained_lerobot_policy_is_served_evaluated_and_verified() {
     let overall = &info["overall"];
     assert_eq!(overall["n_episodes"], 1, "{info}");
     assert!(overall["pc_success"].is_number(), "{info}");
+}
+
+/// `python -m autobio.diagnose`: the dataset re-enacts exactly from its seeds with its own
+/// actions (and, shifted by one frame, does not: the check can fail); the checkpoint's open-loop
+/// error on a held-out episode beats always answering the mean; one closed-loop rollout reports
+/// where it went.
+fn diagnose(dir: &Path, data: &Path, ckpt: &Path) {
+    let held = dir.join("held-out");
+    autobio_ok(&[
+        "demo",
+        "--protocol",
+        "protocols/thermal_cycler/close_lid.toml",
+        "--episodes",
+        "1",
+        "--seed",
+        "5000",
+        "--format",
+        "lerobot-v30",
+        "--observation",
+        "state",
+        "--out",
+        held.to_str().unwrap(),
+    ]);
+    let report = |extra: &[&str], name: &str| -> serde_json::Value {
+        let json = dir.join(name);
+        let mut args = vec![
+            "-m",
+            "autobio.diagnose",
+            "--dataset",
+            data.to_str().unwrap(),
+            "--episodes",
+            "2",
+            "--json",
+            json.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        run_python(&args, "autobio.diagnose");
+        serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap()
+    };
+    let r = report(
+        &[
+            "--policy",
+            ckpt.to_str().unwrap(),
+            "--held-out",
+            held.to_str().unwrap(),
+            "--rollouts",
+            "1",
+        ],
+        "diagnosis.json",
+    );
+    let aligned = r["alignment"].as_array().unwrap();
+    assert_eq!(aligned.len(), 2, "{r}");
+    for a in aligned {
+        assert!(
+            a["first_divergent_frame"].is_null() && a["success"] == true,
+            "the dataset's own actions re-enact its episodes: {a}"
+        );
+        assert!(a["max_gap"].as_f64().unwrap() < 1e-3, "{a}");
+    }
+    let open = &r["open_loop"];
+    assert!(open["frames"].as_u64().unwrap() > 100, "{open}");
+    assert!(
+        open["error_std"].as_f64().unwrap() < open["mean_action_error_std"].as_f64().unwrap(),
+        "the trained policy predicts held-out actions better than their mean: {open}"
+    );
+    let rollouts = r["drift"]["rollouts"].as_array().unwrap();
+    assert_eq!(rollouts.len(), 1, "{r}");
+    assert_eq!(rollouts[0]["seed"], 1000);
+    assert!(rollouts[0]["steps"].as_u64().unwrap() > 10, "{r}");
+    let phase = rollouts[0]["furthest_phase"].as_f64().unwrap();
+    assert!((0.0..=1.0).contains(&phase), "{r}");
+
+    // Actions one frame late: the re-enactment leaves the recorded states.
+    let shifted = report(&["--shift", "1"], "shifted.json");
+    for a in shifted["alignment"].as_array().unwrap() {
+        assert!(
+            !a["first_divergent_frame"].is_null(),
+            "a one-frame shift must be caught: {a}"
+        );
+    }
 }

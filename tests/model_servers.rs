@@ -173,6 +173,14 @@ fn openpi_server_reaches_the_experts_success_and_trajectories() {
         .iter()
         .map(|q| q["prompt"].as_str().unwrap())
         .collect();
+    assert!(
+        queries.iter().all(|q| !q["keys"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|k| k.as_str().unwrap().contains("environment_state"))),
+        "a profile without `environment_state_key` sends no environment state"
+    );
     let first = prompts[0];
     let switched = prompts
         .iter()
@@ -298,6 +306,73 @@ fn rdt_profile_sends_the_unified_state_and_a_real_earlier_frame() {
     assert!(
         queries.iter().any(|q| q["history_differs"] == true),
         "the earlier frame must be a real earlier frame while the arm moves: {queries:?}"
+    );
+}
+
+/// The privileged environment state goes out only when the profile names its key: then every
+/// query carries the task's whole layout (`autobio describe` lists it), the expert's episode is
+/// unchanged, and the manifest's profile records the key.
+#[test]
+fn the_environment_state_is_sent_when_the_profile_asks_for_it() {
+    let rec = recordings().to_str().unwrap().to_string();
+    let dir = scratch("openpi-environment-state");
+    let log = dir.join("queries.jsonl");
+    let server = Server::start(
+        "openpi_server.py",
+        &["--recordings", &rec, "--log", log.to_str().unwrap()],
+    );
+    let base = std::fs::read_to_string(profile(&dir, 30.0)).unwrap();
+    let path = dir.join("pi0-state.toml");
+    std::fs::write(
+        &path,
+        base.replace(
+            "prompt_key = \"prompt\"",
+            "prompt_key = \"prompt\"\nenvironment_state_key = \"observation.environment_state\"",
+        ),
+    )
+    .unwrap();
+    let out = eval_model(&server, "openpi", path.to_str().unwrap(), &[CLOSE], 1, &dir);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let e = &journal(&dir, "thermal_cycler.close_lid")[0];
+    assert_eq!(e["outcome"], "success", "{e}");
+    assert_eq!(
+        e["trajectory_hash"],
+        expert("thermal_cycler.close_lid", 0)["trajectory_hash"]
+    );
+    assert_eq!(
+        manifest(&dir, "thermal_cycler.close_lid")["model"]["profile"]["environment_state_key"],
+        "observation.environment_state"
+    );
+    let sheet = text(&autobio(&["describe", CLOSE]).stdout);
+    let line = sheet
+        .lines()
+        .find(|l| l.starts_with("environment state ("))
+        .unwrap_or_else(|| panic!("describe lists no environment state:\n{sheet}"));
+    let n: usize = line["environment state (".len()..]
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    let queries: Vec<Value> = std::fs::read_to_string(&log)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert!(queries.len() > 1);
+    let states: Vec<&Vec<Value>> = queries
+        .iter()
+        .map(|q| {
+            q["environment_state"]
+                .as_array()
+                .expect("no environment state sent")
+        })
+        .collect();
+    assert!(states.iter().all(|s| s.len() == n), "{n} values expected");
+    assert_ne!(
+        states.first(),
+        states.last(),
+        "the lid moves, so the environment state changes over the episode"
     );
 }
 

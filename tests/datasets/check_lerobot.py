@@ -45,7 +45,7 @@ def check_rows(table, episodes, first_index):
     assert row == n, f"{n} rows for {row} frames"
 
 
-def check_schema(schema, state_dim, action_dim):
+def check_schema(schema, state_dim, action_dim, env_dim=None):
     want = {
         "observation.state": pa.list_(pa.float32(), state_dim),
         "action": pa.list_(pa.float32(), action_dim),
@@ -55,6 +55,8 @@ def check_schema(schema, state_dim, action_dim):
         "index": pa.int64(),
         "task_index": pa.int64(),
     }
+    if env_dim is not None:
+        want["observation.environment_state"] = pa.list_(pa.float32(), env_dim)
     for name, t in want.items():
         got = schema.field(name).type
         assert got.equals(t) or str(got).replace("element", "item") == str(t), f"{name}: {got} != {t}"
@@ -82,12 +84,18 @@ def main(root, version):
     assert info["fps"] == FPS
     feats = info["features"]
     video_keys = [k for k, f in feats.items() if f["dtype"] == "video"]
-    assert video_keys, "no camera features"
+    # A state dataset (`--observation state`) has the environment state and no camera.
+    ed = None
+    if "observation.environment_state" in feats:
+        ed = feats["observation.environment_state"]["shape"][0]
+        assert len(feats["observation.environment_state"]["names"]) == ed
+    assert video_keys or ed, "neither camera nor environment-state features"
     for k in video_keys:
         assert feats[k]["names"] == ["height", "width", "channel"]
     sd, ad = feats["observation.state"]["shape"][0], feats["action"]["shape"][0]
     assert len(feats["observation.state"]["names"]) == sd
-    summary = {"episodes": info["total_episodes"], "frames": info["total_frames"], "videos": {}}
+    summary = {"episodes": info["total_episodes"], "frames": info["total_frames"], "videos": {},
+               "environment_state": ed}
     if version == "v2.1":
         episodes = [json.loads(l) for l in open(os.path.join(root, "meta/episodes.jsonl"))]
         tasks = [json.loads(l) for l in open(os.path.join(root, "meta/tasks.jsonl"))]
@@ -99,7 +107,7 @@ def main(root, version):
             i, length = e["episode_index"], e["length"]
             path = os.path.join(root, info["data_path"].format(episode_chunk=i // 1000, episode_index=i))
             table = pq.read_table(path)
-            check_schema(table.schema, sd, ad)
+            check_schema(table.schema, sd, ad, ed)
             check_rows(table, [(i, length)], first)
             assert set(table.column("task_index").to_pylist()) <= {t["task_index"] for t in tasks}
             first += length
@@ -135,7 +143,7 @@ def main(root, version):
         for (c, f), group in sorted(by_file.items()):
             path = os.path.join(root, info["data_path"].format(chunk_index=c, file_index=f))
             data = pq.read_table(path)
-            check_schema(data.schema, sd, ad)
+            check_schema(data.schema, sd, ad, ed)
             assert group[0]["dataset_from_index"] == first, f"{path} starts at {group[0]['dataset_from_index']}"
             check_rows(data, [(e["episode_index"], e["length"]) for e in group], first)
             first += data.num_rows

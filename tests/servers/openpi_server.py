@@ -26,7 +26,8 @@ the pi0 layout and the recorded instruction, so a client that sends the wrong th
 `--layout rdt` expects RDT's layout (a 128-d state, each camera's frame and an earlier one) and
 answers 128-d actions.
 
-`--log FILE` appends each query's task, seed, prompt and connection number, so a test can see the
+`--log FILE` appends each query's task, seed, prompt, connection number and observation keys
+(with the environment state where one was sent), so a test can see the
 instruction switch between a chain's stages and count connections. `--events FILE` appends what
 the server did on its own (each keepalive ping sent, the metadata frame sent) with its time since
 the connection opened, so a test sees an injected behaviour happen.
@@ -147,7 +148,11 @@ async def serve_connection(ws, library, args, counters, connection, opened):
                 if args.log:
                     with open(args.log, "a") as log:
                         line = {"task": task["id"], "seed": task["seed"], "query": query, "prompt": obs["prompt"],
-                                "history_differs": moved, "connection": connection}
+                                "history_differs": moved, "connection": connection,
+                                "keys": sorted(str(k) for k in obs)}
+                        if "observation.environment_state" in obs:
+                            env = np.asarray(obs["observation.environment_state"])
+                            line["environment_state"] = [float(x) for x in env.reshape(-1)]
                         log.write(json.dumps(line) + "\n")
                 chunk = np.asarray(episode.chunk(query * args.execute, args.chunk), dtype=np.float64)
                 if args.layout == "rdt":
