@@ -30,6 +30,9 @@ fn run_python(args: &[&str], what: &str) -> String {
     let out = Command::new(lerobot_python())
         .args(args)
         .env("HF_HUB_OFFLINE", "1")
+        // One thread per torch process: the tiny model gains nothing from two, and the tests
+        // beside it need the other core (two-thread torch beside them oversubscribes it).
+        .env("OMP_NUM_THREADS", "1")
         .output()
         .unwrap();
     let text = format!(
@@ -110,7 +113,8 @@ fn a_trained_lerobot_policy_is_served_evaluated_and_verified() {
     cmd.args(["-m", "autobio.serve", "--policy"])
         .arg(&ckpt)
         .args(["--port", "0"])
-        .env("HF_HUB_OFFLINE", "1");
+        .env("HF_HUB_OFFLINE", "1")
+        .env("OMP_NUM_THREADS", "1");
     let server = Server::spawn(cmd, "autobio.serve", std::time::Duration::from_secs(120))
         .unwrap_or_else(|e| panic!("{e}"));
     let run = dir.join("run");
@@ -134,7 +138,7 @@ fn a_trained_lerobot_policy_is_served_evaluated_and_verified() {
         // policy's actions.
         let outcome = l["outcome"].as_str().unwrap();
         assert!(
-            ["success", "failure", "timeout"].contains(&outcome),
+            ["success", "time_limit"].contains(&outcome),
             "episode ended as {outcome}: {l}"
         );
         assert!(l["control_steps"].as_u64().unwrap() > 10, "{l}");
@@ -158,13 +162,7 @@ fn a_trained_lerobot_policy_is_served_evaluated_and_verified() {
         &bundle,
         &["--training", "5 demos, 300 steps"],
     );
-    let verified = autobio_ok(&[
-        "leaderboard",
-        "verify",
-        bundle.to_str().unwrap(),
-        "--out",
-        dir.join("verify").to_str().unwrap(),
-    ]);
+    let verified = autobio_ok(&["leaderboard", "verify", bundle.to_str().unwrap()]);
     assert!(verified.contains("accepted"), "{verified}");
     let bundles = dir.join("bundles");
     std::fs::create_dir_all(&bundles).unwrap();
@@ -196,6 +194,8 @@ fn a_trained_lerobot_policy_is_served_evaluated_and_verified() {
             "--env.type=autobio",
             "--env.task=thermal_cycler.close_lid",
             "--env.obs_type=environment_state_agent_pos",
+            // Its videos of the episode are drawn at this size: small, to keep the test quick.
+            "--env.image_size=64",
             &format!("--policy.path={}", ckpt.display()),
             "--policy.device=cpu",
             "--eval.n_episodes=1",

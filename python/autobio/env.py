@@ -79,7 +79,7 @@ def make(task, seed=None, image_size=(224, 224), **kwargs):
     """A gymnasium environment for ``task`` (a shipped task id or a protocol file), reset to
     episode ``seed`` when one is given. ``image_size`` is an int for square cameras or (width,
     height) for every camera (``None``: the task's camera spec). Other keywords go to
-    ``AutobioEnv`` (``obs_type``, ``instruction_in_obs``, ``seed_stride``)."""
+    ``AutobioEnv`` (``obs_type``, ``instruction_in_obs``, ``seed_stride``, ``clip_actions``)."""
     env = AutobioEnv(task, image_size=image_size, **kwargs)
     if seed is not None:
         env.reset(seed=seed)
@@ -99,6 +99,7 @@ class AutobioEnv(gymnasium.Env):
         obs_type="pixels_agent_pos",
         instruction_in_obs=False,
         seed_stride=1,
+        clip_actions=False,
     ):
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode {render_mode!r}: autobio draws rgb_array frames only")
@@ -109,6 +110,7 @@ class AutobioEnv(gymnasium.Env):
         self.obs_type = obs_type
         self.instruction_in_obs = instruction_in_obs
         self.seed_stride = seed_stride
+        self.clip_actions = clip_actions
         self._episode_seed = None
         core = self._core
         self.task_id = core.id
@@ -194,13 +196,17 @@ class AutobioEnv(gymnasium.Env):
 
         ``action`` is every robot's action in ``action_names`` order (float, within
         ``action_space``); a wrong length, a value outside its range or not finite raises
-        ``ValueError`` and nothing moves. ``reward`` is the task's score on the step that ends
-        the episode, else 0; ``terminated``: the task succeeded; ``truncated``: a stage's or the
+        ``ValueError`` and nothing moves (with ``clip_actions=True``, a finite value outside
+        its range is clipped to it instead: gymnasium's ``ClipAction``, for loops such as
+        ``lerobot-eval`` that send a policy's raw output). ``reward`` is the task's score on
+        the step that ends the episode, else 0; ``terminated``: the task succeeded; ``truncated``: a stage's or the
         task's time ran out, or the simulation became unstable (``info["error"]``).
         ``info["is_success"]`` is the judge's verdict now."""
         if self._episode_seed is None:
             raise gymnasium.error.ResetNeeded("call reset() before step()")
         action = np.asarray(action, dtype=np.float64).reshape(-1)
+        if self.clip_actions and action.shape == self.action_space.shape:
+            action = np.clip(action, self.action_space.low, self.action_space.high)
         reward, terminated, truncated, error = self._core.step(action.tolist())
         info = self._info()
         if error is not None:

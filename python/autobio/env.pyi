@@ -22,6 +22,7 @@ class AutobioEnv(gymnasium.Env[dict[str, Any], NDArray[np.float64]]):
     obs_type: str
     instruction_in_obs: bool
     seed_stride: int
+    clip_actions: bool
     task_id: str
     camera_names: list[str]
     camera_keys: list[str]
@@ -38,6 +39,7 @@ class AutobioEnv(gymnasium.Env[dict[str, Any], NDArray[np.float64]]):
         obs_type: str = "pixels_agent_pos",
         instruction_in_obs: bool = False,
         seed_stride: int = 1,
+        clip_actions: bool = False,
     ) -> None: ...
     @property
     def task_description(self) -> str: ...

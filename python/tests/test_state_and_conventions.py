@@ -118,3 +118,26 @@ def test_the_vla_eval_benchmark_declares_its_specs_and_a_matching_server_gets_no
     made = with_state.make_obs(raw, with_state.get_tasks()[0])
     assert made["environment_state"].shape == (len(names),)
     with_state.cleanup()
+
+
+def test_out_of_range_actions_are_refused_unless_the_env_clips():
+    # autobio refuses an action outside an actuator's range; `clip_actions=True` (what the
+    # `autobio` env type for lerobot-eval sets) clips a finite one instead, as ClipAction does.
+    env = autobio.make("thermal_cycler.close_lid", seed=0, image_size=8,
+                       obs_type="environment_state_agent_pos")
+    action = env.unwrapped._core.hold_action()
+    over = np.asarray(action, dtype=np.float64)
+    over[-1] = env.action_space.high[-1] + 0.5
+    with pytest.raises(ValueError, match="outside its actuator's range"):
+        env.step(over)
+    clipped = autobio.make("thermal_cycler.close_lid", seed=0, image_size=8,
+                           obs_type="environment_state_agent_pos", clip_actions=True)
+    inside = over.copy()
+    inside[-1] = env.action_space.high[-1]
+    a = clipped.step(over)[0]
+    b = env.step(inside)[0]
+    assert np.array_equal(a["agent_pos"], b["agent_pos"])
+    assert clipped.unwrapped.trajectory_hash == env.unwrapped.trajectory_hash
+    over[0] = np.nan
+    with pytest.raises(ValueError):
+        clipped.step(over)

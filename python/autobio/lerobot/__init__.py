@@ -1,5 +1,8 @@
 """LeRobot policies on autobio tasks (needs ``lerobot`` 0.4.x: ``pip install 'autobio[lerobot]'``).
 
+A package, not a module, because ``lerobot-eval --env.discover_packages_path=autobio.lerobot``
+imports the package it is given and walks its ``__path__``.
+
 - ``load_policy(path)``: any LeRobot checkpoint (a ``pretrained_model`` folder that
   ``lerobot-train`` wrote: ACT, diffusion, or whatever else ``lerobot`` makes from a config) with
   its own pre- and post-processors (normalisation, batching, device), as a ``Runner``.
@@ -30,7 +33,7 @@ try:
 except ImportError as e:  # pragma: no cover - the module needs lerobot
     raise ImportError("autobio.lerobot needs lerobot 0.4: pip install 'autobio[lerobot]'") from e
 
-from . import _core
+from .. import _core
 
 
 def to_batch(observation, task=None):
@@ -99,6 +102,36 @@ class Runner:
         if self.clip:
             action = np.clip(action, self.bounds[0], self.bounds[1])
         return action
+
+
+    @torch.no_grad()
+    def first_actions(self, observations, task=None, batch_size=256):
+        """For a batch of observations (arrays with a leading frame axis, no camera), the first
+        action the policy would take from each with an empty action queue: one forward pass per
+        ``batch_size`` frames where the policy predicts chunks from one frame (ACT), else one
+        ``reset`` and ``act`` per frame."""
+        n = len(next(iter(observations.values())))
+        if self.config.type != "act":
+            out = []
+            for i in range(n):
+                self.reset()
+                out.append(self.act({k: v[i] for k, v in observations.items()}, task))
+            self.reset()
+            return np.asarray(out)
+        out = []
+        for i in range(0, n, batch_size):
+            part = {k: np.asarray(v[i : i + batch_size]) for k, v in observations.items()}
+            batch = to_batch(part)
+            if task is not None:
+                batch["task"] = [task] * len(part["agent_pos"])
+            batch = self.preprocessor(batch)
+            chunk = self.policy.predict_action_chunk(batch)
+            action = self.postprocessor(chunk[:, 0])
+            out.append(action.to("cpu").numpy().astype(np.float64))
+        actions = np.concatenate(out)
+        if self.clip:
+            actions = np.clip(actions, self.bounds[0], self.bounds[1])
+        return actions
 
 
 def demonstrated_action_bounds(path):
@@ -180,4 +213,6 @@ class AutobioEnv(EnvConfig):
 
     @property
     def gym_kwargs(self):
-        return {"obs_type": self.obs_type, "image_size": self.image_size}
+        # lerobot-eval steps the env with the policy's raw output, which overshoots an end stop
+        # by a hair (`Runner` clips for the same reason); autobio's env refuses that unless told.
+        return {"obs_type": self.obs_type, "image_size": self.image_size, "clip_actions": True}
