@@ -63,6 +63,8 @@ for protocol in $tasks; do
   fi
   serve_args+=(--policy "$id=$train/checkpoints/last/pretrained_model")
 done
+# The model profile of the evaluations: what the policy reads, as the wire sends it.
+PROFILE=${PROFILE:-lerobot-$OBS}
 
 # Serves the checkpoints of step $1 (or `last`), one per task; sets $url and $server.
 serve() {
@@ -88,7 +90,7 @@ for k in $(seq 1 "$CURVE"); do
   serve "$step"
   rm -rf "$curve"
   for protocol in $tasks; do
-    autobio eval --protocol "$protocol" --model "$url" --wire openpi --profile lerobot-state \
+    autobio eval --protocol "$protocol" --model "$url" --wire openpi --profile "$PROFILE" \
       --episodes "$CURVE_EPISODES" --seed 1000 --out "$curve"
   done
   kill $server; wait $server 2>/dev/null || true
@@ -99,7 +101,7 @@ done
 if [ ! -e "$OUT/suite/done" ]; then
   serve last
   rm -rf "$OUT/suite"
-  autobio eval --suite "$SUITE" --model "$url" --wire openpi --profile lerobot-state --out "$OUT/suite"
+  autobio eval --suite "$SUITE" --model "$url" --wire openpi --profile "$PROFILE" --out "$OUT/suite"
   kill $server; wait $server 2>/dev/null || true
   touch "$OUT/suite/done"
 fi
@@ -128,4 +130,51 @@ for protocol in $tasks; do
     --policy "$OUT/train/$id/checkpoints/last/pretrained_model" --held-out "$held" \
     --rollouts "$DRIFT" --seed 1000 --json "$OUT/diagnosis/$id.json" | tee "$OUT/diagnosis/$id.txt"
 done
-echo "baseline: site in $OUT/site/index.html; learning curve in $OUT/curve/*/"
+# The figures in one file: success per task with Wilson intervals, the learning curve, the
+# training cost and the diagnosis's headline per task.
+"$LR" - "$OUT" $tasks <<'PY' >"$OUT/summary.md"
+import glob, json, os, sys
+out, protocols = sys.argv[1], sys.argv[2:]
+def results(folder):
+    rows = {}
+    for f in sorted(glob.glob(os.path.join(folder, "*.results.json"))):
+        r = json.load(open(f))
+        rows[r["task_id"]] = r["summary"]
+    return rows
+suite = results(os.path.join(out, "suite"))
+print("| task | success (unseen seeds) | Wilson 95% | training wall time |")
+print("|---|---|---|---|")
+for task, s in suite.items():
+    t = json.load(open(os.path.join(out, "train", task, "autobio-training.json")))
+    lo, hi = s["wilson_95"]
+    print(f"| {task} | {s['successes']}/{s['episodes']} ({100 * s['success_rate']:.0f}%) "
+          f"| [{100 * lo:.0f}, {100 * hi:.0f}] | {t['wall_s'] / 60:.1f} min |")
+print()
+curve = {os.path.basename(d): results(d) for d in sorted(glob.glob(os.path.join(out, "curve", "*")))}
+print("| training steps | " + " | ".join(suite) + " |")
+print("|---" * (len(suite) + 1) + "|")
+for step, rows in curve.items():
+    cells = [f"{rows[t]['successes']}/{rows[t]['episodes']}" if t in rows else "-" for t in suite]
+    print(f"| {int(step)} | " + " | ".join(cells) + " |")
+print()
+for task in suite:
+    f = os.path.join(out, "diagnosis", task + ".json")
+    if not os.path.exists(f):
+        continue
+    d = json.load(open(f))
+    a = d.get("alignment", [])
+    exact = sum(1 for e in a if e["first_divergent_frame"] is None and e["success"])
+    o = d.get("open_loop", {})
+    line = f"- {task}: alignment {exact}/{len(a)} re-enacted exactly"
+    if "error_std" in o:
+        line += (f"; open-loop error {o['error_std']:.3f} std (the mean action: "
+                 f"{o['mean_action_error_std']:.3f}), worst {', '.join(o['worst'][:3])}")
+    for r in d.get("drift", {}).get("rollouts", []):
+        left = r["left_distribution_at"]
+        line += (f"; seed {r['seed']} {'won' if r['success'] else 'lost'}, "
+                 + ("never left" if left is None else f"left at step {left} ({', '.join(r['moved_most'][:2])})")
+                 + f", {100 * r['furthest_phase']:.0f}% through")
+    print(line)
+PY
+cat "$OUT/summary.md"
+echo "baseline: site in $OUT/site/index.html; figures in $OUT/summary.md"

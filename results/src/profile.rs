@@ -18,6 +18,10 @@ pub const BUILT_IN: &[(&str, &str)] = &[
         "lerobot-state",
         include_str!("../../profiles/lerobot-state.toml"),
     ),
+    (
+        "lerobot-vision",
+        include_str!("../../profiles/lerobot-vision.toml"),
+    ),
 ];
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
