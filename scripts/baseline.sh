@@ -28,8 +28,14 @@ POLICY=${POLICY:-act}
 CURVE_EPISODES=${CURVE_EPISODES:-10}
 SUITE=${SUITE:-suites/baseline.toml}
 # ACT sized for a state vector: a small transformer, no VAE, chunks of 20 actions of which 10 run
-# before the policy looks again; learning rate 1e-4 (from scratch).
-POLICY_ARGS=${POLICY_ARGS:---policy.dim_model=256 --policy.n_heads=4 --policy.dim_feedforward=1024 --policy.n_encoder_layers=2 --policy.n_decoder_layers=1 --policy.chunk_size=20 --policy.n_action_steps=10 --policy.use_vae=false --policy.optimizer_lr=1e-4}
+# before the policy looks again; learning rate 1e-4 (from scratch). On cameras: ACT's own sizes
+# (ResNet-18, width 512), the same chunks, the backbone from scratch (torchvision's ImageNet
+# weights need a download: BACKBONE=ResNet18_Weights.IMAGENET1K_V1 where one is possible).
+if [ "$OBS" = state ]; then
+  POLICY_ARGS=${POLICY_ARGS:---policy.dim_model=256 --policy.n_heads=4 --policy.dim_feedforward=1024 --policy.n_encoder_layers=2 --policy.n_decoder_layers=1 --policy.chunk_size=20 --policy.n_action_steps=10 --policy.use_vae=false --policy.optimizer_lr=1e-4}
+else
+  POLICY_ARGS=${POLICY_ARGS:---policy.pretrained_backbone_weights=${BACKBONE:-null} --policy.chunk_size=20 --policy.n_action_steps=10 --policy.use_vae=false --policy.optimizer_lr=1e-4}
+fi
 LR=.deps/lerobot-env/bin/python
 autobio() {
   if [ -n "${AUTOBIO:-}" ]; then "$AUTOBIO" "$@"; else ${CARGO:-cargo} run --release --quiet -- "$@"; fi
@@ -164,8 +170,10 @@ for task in suite:
     d = json.load(open(f))
     a = d.get("alignment", [])
     exact = sum(1 for e in a if e["first_divergent_frame"] is None and e["success"])
+    aligned = sum(1 for e in a if e.get("aligned"))
     o = d.get("open_loop", {})
-    line = f"- {task}: alignment {exact}/{len(a)} re-enacted exactly"
+    line = (f"- {task}: alignment: {aligned}/{len(a)} aligned (action[t] after frame t), "
+            f"{exact}/{len(a)} re-enacted exactly")
     if "error_std" in o:
         line += (f"; open-loop error {o['error_std']:.3f} std (the mean action: "
                  f"{o['mean_action_error_std']:.3f}), worst {', '.join(o['worst'][:3])}")

@@ -268,6 +268,7 @@ fn diagnose(dir: &Path, data: &Path, ckpt: &Path) {
             "the dataset's own actions re-enact its episodes: {a}"
         );
         assert!(a["max_gap"].as_f64().unwrap() < 1e-3, "{a}");
+        assert_eq!(a["aligned"], true, "action[t] follows frame t: {a}");
     }
     let open = &r["open_loop"];
     assert!(open["frames"].as_u64().unwrap() > 100, "{open}");
@@ -282,12 +283,17 @@ fn diagnose(dir: &Path, data: &Path, ckpt: &Path) {
     let phase = rollouts[0]["furthest_phase"].as_f64().unwrap();
     assert!((0.0..=1.0).contains(&phase), "{r}");
 
-    // Actions one frame late: the re-enactment leaves the recorded states.
+    // Actions one frame late: the re-enactment leaves the recorded states, and the unshifted
+    // actions (its neighbour) track them longer.
     let shifted = report(&["--shift", "1"], "shifted.json");
     for a in shifted["alignment"].as_array().unwrap() {
         assert!(
-            !a["first_divergent_frame"].is_null(),
+            !a["first_divergent_frame"].is_null() && a["aligned"] == false,
             "a one-frame shift must be caught: {a}"
+        );
+        assert!(
+            a["frames_tracked"]["-1"].as_u64() > a["frames_tracked"]["0"].as_u64(),
+            "{a}"
         );
     }
 }

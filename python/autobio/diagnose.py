@@ -5,11 +5,13 @@
 ``lerobot`` 0.4.x.
 
 - **alignment** (dataset only): each episode of TRAIN is re-enacted in the simulator from its
-  seed (``meta/autobio.jsonl``) with the dataset's own actions: if ``action[t]`` is what the
-  expert commanded after observing frame ``t``, the re-enactment passes through every recorded
-  ``observation.state`` (and ``observation.environment_state``) and ends in success. A dataset
-  whose actions are shifted by a frame, scaled or reordered diverges at once; ``--shift K``
-  replays ``action[t + K]`` at frame ``t`` to show the check failing.
+  seed (``meta/autobio.jsonl``) with the dataset's own actions, and with them one frame earlier
+  and one later: if ``action[t]`` is what the expert commanded after observing frame ``t``, the
+  re-enactment passes through the recorded ``observation.state`` (and
+  ``observation.environment_state``) to float32's rounding, longer than either shifted one
+  (``aligned``), and ends in success. (float32 actions leave a gap of about 1e-8 that a grasp's
+  contacts can grow past 1e-3 late in an episode; a shifted, scaled or reordered action parts
+  at once.) ``--shift K`` replays ``action[t + K]`` at frame ``t`` to show the check failing.
 - **open-loop** (``--policy`` and ``--held-out``): on each frame of demonstrations the policy
   never saw, the first action the policy predicts from a fresh start, against the expert's
   ``action[t]``; errors per action dimension in units of the training actions' standard
@@ -119,10 +121,35 @@ def read_dataset(root):
     return Dataset(root, episodes, info)
 
 
+def _replay(env, e, shift):
+    """Re-enacts episode ``e`` with ``action[t + shift]`` at frame ``t`` (clamped to the
+    episode): the largest gap to the recorded states, the frames tracked (those before the gap
+    first exceeds 1e-3) and whether the re-enactment succeeded."""
+    obs, _ = env.reset(seed=e.seed)
+    gaps, success = [], False
+    last = len(e.action) - 1
+    for t in range(len(e.action)):
+        gap = float(np.max(np.abs(obs["agent_pos"] - e.state[t])))
+        if e.environment_state is not None:
+            gap = max(gap, float(np.max(np.abs(obs["environment_state"] - e.environment_state[t]))))
+        gaps.append(gap)
+        action = np.clip(e.action[min(max(t + shift, 0), last)], env.action_space.low, env.action_space.high)
+        obs, _, terminated, truncated, info = env.step(action)
+        success = success or info["is_success"]
+        if terminated or truncated:
+            break
+    beyond = [t for t, g in enumerate(gaps) if g > 1e-3]
+    return max(gaps), (beyond[0] if beyond else len(e.action)), success
+
+
 def alignment(dataset, episodes=None, shift=0):
-    """Re-enacts ``episodes`` (all by default) of ``dataset`` with its own actions (``action[t +
-    shift]`` at frame ``t``): per episode the largest gap between the re-enacted and recorded
-    states, the first frame where it exceeds 1e-3, and whether the re-enactment succeeded."""
+    """Re-enacts ``episodes`` (all by default) of ``dataset`` with its own actions
+    (``action[t + shift]`` at frame ``t``), and with them one frame earlier and later: per
+    episode the largest gap between the re-enacted and recorded states, the first frame where it
+    exceeds 1e-3, whether the re-enactment succeeded, and whether it tracks the recording longer
+    than both neighbours (``aligned``: ``action[t]`` is what was commanded after observing frame
+    ``t``). Actions stored as float32 re-enact a contact-rich episode to float32's rounding until
+    a contact amplifies it (a grasp); a misaligned one parts at once."""
     chosen = dataset.episodes if episodes is None else dataset.episodes[:episodes]
     reports = []
     env = None
@@ -130,29 +157,19 @@ def alignment(dataset, episodes=None, shift=0):
         obs_type = "environment_state_agent_pos" if e.environment_state is not None else "pixels_agent_pos"
         if env is None or env.task_id != e.task:
             env = _env.make(e.task, image_size=8, obs_type=obs_type)
-        obs, _ = env.reset(seed=e.seed)
-        gaps, first, success = [], None, False
-        n = len(e.action) - max(shift, 0)
-        for t in range(n):
-            gap = float(np.max(np.abs(obs["agent_pos"] - e.state[t])))
-            if e.environment_state is not None:
-                gap = max(gap, float(np.max(np.abs(obs["environment_state"] - e.environment_state[t]))))
-            gaps.append(gap)
-            if first is None and gap > 1e-3:
-                first = t
-            action = np.clip(e.action[t + shift], env.action_space.low, env.action_space.high)
-            obs, _, terminated, truncated, info = env.step(action)
-            success = success or info["is_success"]
-            if terminated or truncated:
-                break
+        max_gap, tracked, success = _replay(env, e, shift)
+        before = _replay(env, e, shift - 1)[1]
+        after = _replay(env, e, shift + 1)[1]
         reports.append(
             {
                 "episode": e.index,
                 "seed": e.seed,
                 "frames": len(e.action),
-                "max_gap": max(gaps) if gaps else 0.0,
-                "first_divergent_frame": first,
+                "max_gap": max_gap,
+                "first_divergent_frame": None if tracked == len(e.action) else tracked,
                 "success": bool(success),
+                "frames_tracked": {"-1": before, "0": tracked, "+1": after},
+                "aligned": tracked > max(before, after),
             }
         )
     return reports
@@ -274,12 +291,16 @@ def _print_report(report, out):
     if "alignment" in report:
         a = report["alignment"]
         ok = sum(1 for r in a if r["first_divergent_frame"] is None and r["success"])
-        print(f"alignment: {ok}/{len(a)} episodes re-enacted exactly and succeeded "
+        aligned = sum(1 for r in a if r["aligned"])
+        print(f"alignment: {aligned}/{len(a)} episodes track their recording longest with "
+              f"action[t] at frame t; {ok}/{len(a)} re-enacted exactly and succeeded "
               f"(shift {report['shift']})", file=out)
         for r in a:
+            k = r["frames_tracked"]
             print(f"  episode {r['episode']} seed {r['seed']}: {r['frames']} frames, max gap "
                   f"{r['max_gap']:.2e}, first divergent frame {r['first_divergent_frame']}, "
-                  f"success {r['success']}", file=out)
+                  f"success {r['success']}; frames tracked one earlier / as is / one later: "
+                  f"{k['-1']} / {k['0']} / {k['+1']}", file=out)
     if "open_loop" in report and "skipped" in report["open_loop"]:
         print(f"open-loop: skipped ({report['open_loop']['skipped']})", file=out)
     elif "open_loop" in report:
