@@ -236,15 +236,16 @@ fn the_site_loads_from_files_with_no_network_and_shows_the_submitted_numbers() {
             .unwrap();
         assert!(svg >= 1, "{page}: no chart drawn");
         if page == "index.html" {
-            // The ranking row: rank, model, standing, 100.0% success; the paper's pi0 row.
+            // The ranking row: rank, model, training, observation, standing, 100.0% success;
+            // the paper's pi0 row.
             let row = tables
                 .lines()
                 .find(|l| l.contains("scripted expert"))
                 .unwrap_or_else(|| panic!("{tables}"));
             let cells: Vec<&str> = row.split('\t').map(str::trim).collect();
             assert_eq!(
-                cells[..5],
-                ["1", "scripted expert", "", "verified", "100.0"],
+                cells[..6],
+                ["1", "scripted expert", "", "scripted", "verified", "100.0"],
                 "{row}"
             );
             assert!(tables.contains("99.7 ± 0.3"), "the paper's row: {tables}");

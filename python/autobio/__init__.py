@@ -12,6 +12,9 @@ shapes it for the tools VLA researchers use:
   (``autobio.benchmark.config_path()`` is a ready config).
 - ``autobio.load_recording(path)``: a recorded episode (MCAP) as numpy arrays;
   ``autobio.dataset_tasks(root)``: a LeRobot dataset's task table.
+- With ``lerobot`` 0.4 installed (``autobio[lerobot]``): ``autobio.lerobot`` (a checkpoint with its
+  processors; the ``autobio`` env type for ``lerobot-eval``), ``python -m autobio.serve`` (a
+  checkpoint served to ``autobio eval --model``) and ``python -m autobio.diagnose``.
 
 Episodes are ``autobio eval``'s: the same seed and actions give the same episode, outcome and
 trajectory hash.
