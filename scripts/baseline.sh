@@ -45,11 +45,13 @@ mkdir -p "$OUT"
 tasks=$(sed -n 's|^ *"\.\./\(protocols/.*\.toml\)",*|\1|p' "$SUITE")
 id_of() { autobio compile "$1" | sed -n 's/^  "id": "\(.*\)",$/\1/p'; }
 every=$((STEPS / CURVE))
+[ "$every" -ge 1 ] || { echo "baseline: CURVE ($CURVE) must not exceed STEPS ($STEPS)" >&2; exit 1; }
 serve_args=()
 for protocol in $tasks; do
   id=$(id_of "$protocol")
   data="$OUT/data/$id"
-  if [ ! -e "$data/meta/info.json" ] || [ "$(grep -c . "$data/meta/autobio.jsonl" 2>/dev/null || echo 0)" -lt "$DEMOS" ]; then
+  done_demos=$(grep -c . "$data/meta/autobio.jsonl" 2>/dev/null) || true
+  if [ ! -e "$data/meta/info.json" ] || [ "${done_demos:-0}" -lt "$DEMOS" ]; then
     autobio demo --protocol "$protocol" --episodes "$DEMOS" --seed 0 --format lerobot-v30 \
       --observation "$OBS" --out "$data" --resume
   fi
@@ -99,7 +101,7 @@ for k in $(seq 1 "$CURVE"); do
     autobio eval --protocol "$protocol" --model "$url" --wire openpi --profile "$PROFILE" \
       --episodes "$CURVE_EPISODES" --seed 1000 --out "$curve"
   done
-  kill $server; wait $server 2>/dev/null || true
+  kill "$server" 2>/dev/null || true; wait "$server" 2>/dev/null || true
   touch "$curve/done"
 done
 
@@ -108,14 +110,14 @@ if [ ! -e "$OUT/suite/done" ]; then
   serve last
   rm -rf "$OUT/suite"
   autobio eval --suite "$SUITE" --model "$url" --wire openpi --profile "$PROFILE" --out "$OUT/suite"
-  kill $server; wait $server 2>/dev/null || true
+  kill "$server" 2>/dev/null || true; wait "$server" 2>/dev/null || true
   touch "$OUT/suite/done"
 fi
 mkdir -p "$OUT/bundles"
-autobio leaderboard submit "$OUT/suite" --model-name "ACT ($OBS), autobio baseline" \
+autobio leaderboard submit "$OUT/suite" --model-name "$(echo "$POLICY" | tr '[:lower:]' '[:upper:]') ($OBS), autobio baseline" \
   --training "$DEMOS expert demos per task (seeds 0-$((DEMOS - 1))), $STEPS steps, batch $BATCH, $OBS observation, lerobot-train on $DEVICE" \
-  --out "$OUT/bundles/act-$OBS.tar.zst"
-autobio leaderboard verify "$OUT/bundles/act-$OBS.tar.zst"
+  --out "$OUT/bundles/$POLICY-$OBS.tar.zst"
+autobio leaderboard verify "$OUT/bundles/$POLICY-$OBS.tar.zst"
 autobio leaderboard build "$OUT/bundles" --out "$OUT/site"
 
 # The diagnosis (python -m autobio.diagnose): the training data re-enacted from its seeds with

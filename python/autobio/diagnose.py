@@ -139,7 +139,7 @@ def _replay(env, e, shift):
         if terminated or truncated:
             break
     beyond = [t for t, g in enumerate(gaps) if g > 1e-3]
-    return max(gaps), (beyond[0] if beyond else len(e.action)), success
+    return max(gaps), (beyond[0] if beyond else len(gaps)), success
 
 
 def alignment(dataset, episodes=None, shift=0):
@@ -244,7 +244,10 @@ def drift(runner, train, held_out, task, seeds, threshold_quantile=0.99):
     threshold = float(np.quantile(held_dist, threshold_quantile))
     names = train.names(ENVIRONMENT) + train.names(STATE)
     obs_type = "environment_state_agent_pos" if runner.reads_environment_state else "pixels_agent_pos"
-    env = _env.make(task, image_size=8 if obs_type.startswith("environment") else 224, obs_type=obs_type)
+    # Clipped to the actuators' ranges as lerobot-eval's env type does (a checkpoint without
+    # saved action statistics is not clipped by its Runner).
+    env = _env.make(task, image_size=8 if obs_type.startswith("environment") else 224,
+                    obs_type=obs_type, clip_actions=True)
     rollouts = []
     for seed in seeds:
         obs, info = env.reset(seed=seed)

@@ -158,7 +158,9 @@ class Policies:
 
     def __init__(self, loaded, first):
         self.loaded = loaded
-        self.mine = loaded if first else {}
+        # Never the loaded objects themselves: a copy is taken at a connection's first reset, and
+        # another connection may be running its policy meanwhile (eval --workers N).
+        self.mine = {}
         self.runner = None
 
     def select(self, task_id):

@@ -12,7 +12,7 @@
 //!
 //! It reads states (`LabwareState`) and the drawn parameters; it runs nothing and decides nothing.
 //! Images stay a policy's default observation: this is opt-in everywhere (a profile's
-//! `environment_state`, the gym env's `obs_type`, `autobio demo --environment-state`).
+//! `environment_state_key`, the gym env's `obs_type`, `autobio demo --observation state`).
 
 use compiler::Task;
 use compiler::params::{Bindings, Domain};
