@@ -165,6 +165,17 @@ fn a_failed_expert_episode_is_not_written() {
     assert!(!dir.join("ds/data").exists());
 }
 
+/// A process's standard output; it must have succeeded.
+fn ok(out: std::process::Output) -> String {
+    assert!(
+        out.status.success(),
+        "{}{}",
+        text(&out.stdout),
+        text(&out.stderr)
+    );
+    text(&out.stdout)
+}
+
 fn same_file(a: &Path, b: &Path) {
     let (x, y) = (std::fs::read(a).unwrap(), std::fs::read(b).unwrap());
     assert!(x == y, "{} and {} differ", a.display(), b.display());
@@ -175,15 +186,6 @@ fn recordings_export_and_shards_merge_into_the_dataset_one_run_writes() {
     let dir = scratch("export-merge");
     let d = |n: &str| dir.join(n);
     let s = |p: &Path| p.to_str().unwrap().to_string();
-    let ok = |out: std::process::Output| {
-        assert!(
-            out.status.success(),
-            "{}{}",
-            text(&out.stdout),
-            text(&out.stderr)
-        );
-        text(&out.stdout)
-    };
     // The reference: one run of two episodes.
     ok(demo(
         "lerobot-v30",
@@ -372,15 +374,6 @@ fn state_datasets_carry_the_environment_state_and_export_the_same() {
     let dir = scratch("state-dataset");
     let d = |n: &str| dir.join(n);
     let s = |p: &Path| p.to_str().unwrap().to_string();
-    let ok = |out: std::process::Output| {
-        assert!(
-            out.status.success(),
-            "{}{}",
-            text(&out.stdout),
-            text(&out.stderr)
-        );
-        text(&out.stdout)
-    };
     ok(demo(
         "lerobot-v30",
         "2",
