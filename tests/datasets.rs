@@ -176,6 +176,24 @@ fn ok(out: std::process::Output) -> String {
     text(&out.stdout)
 }
 
+/// Seeds 0 and 1 of the thermal cycler's close recorded as MCAP (states and actions, no images).
+fn record_two_episodes(out: &Path) {
+    crate::common::autobio_ok(&[
+        "eval",
+        "--protocol",
+        CLOSE,
+        "--episodes",
+        "2",
+        "--seed",
+        "0",
+        "--record",
+        "--image-every",
+        "0",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+}
+
 fn same_file(a: &Path, b: &Path) {
     let (x, y) = (std::fs::read(a).unwrap(), std::fs::read(b).unwrap());
     assert!(x == y, "{} and {} differ", a.display(), b.display());
@@ -197,20 +215,7 @@ fn recordings_export_and_shards_merge_into_the_dataset_one_run_writes() {
 
     // The same two episodes recorded as MCAP (no images), then exported: the cameras are
     // redrawn from the recorded states, so the tables and statistics are the run's.
-    ok(autobio(&[
-        "eval",
-        "--protocol",
-        CLOSE,
-        "--episodes",
-        "2",
-        "--seed",
-        "0",
-        "--record",
-        "--image-every",
-        "0",
-        "--out",
-        &s(&d("rec")),
-    ]));
+    record_two_episodes(&d("rec"));
     let out = ok(autobio(&[
         "export",
         &s(&d("rec")),
@@ -422,20 +427,7 @@ fn state_datasets_carry_the_environment_state_and_export_the_same() {
         env["names"]
     );
 
-    ok(autobio(&[
-        "eval",
-        "--protocol",
-        CLOSE,
-        "--episodes",
-        "2",
-        "--seed",
-        "0",
-        "--record",
-        "--image-every",
-        "0",
-        "--out",
-        &s(&d("rec")),
-    ]));
+    record_two_episodes(&d("rec"));
     ok(autobio(&[
         "export",
         &s(&d("rec")),
