@@ -514,24 +514,27 @@ fn lower_chain(
             .collect::<Vec<_>>()
             .join(", then "),
     };
-    Some(Task {
-        schema_version: TASK_SCHEMA_VERSION,
-        id: c.meta.id.as_ref()?.value.clone(),
-        version: c.meta.version.as_ref().map(|v| v.value).unwrap_or(1),
-        level: c
-            .meta
-            .level
-            .as_ref()
-            .map(|l| l.value.clone())
-            .unwrap_or_else(|| "hard".into()),
-        instruction,
-        source: file.to_string(),
-        time_limit_s: stages.iter().map(|s| s.time_limit_s).sum(),
-        physics: physics(),
-        robots: first.robots.clone(),
-        labware: first.labware.clone(),
-        cameras: check::default_cameras(&first.robots, first.camera.as_ref()),
-        params,
-        stages,
-    })
+    Some(
+        Task {
+            schema_version: TASK_SCHEMA_VERSION,
+            id: c.meta.id.as_ref()?.value.clone(),
+            version: c.meta.version.as_ref().map(|v| v.value).unwrap_or(1),
+            level: c
+                .meta
+                .level
+                .as_ref()
+                .map(|l| l.value.clone())
+                .unwrap_or_else(|| "hard".into()),
+            instruction,
+            source: file.to_string(),
+            time_limit_s: stages.iter().map(|s| s.time_limit_s).sum(),
+            physics: physics(),
+            robots: first.robots.clone(),
+            labware: first.labware.clone(),
+            cameras: check::default_cameras(&first.robots, first.camera.as_ref()),
+            params,
+            stages,
+        }
+        .with_programmes(),
+    )
 }

@@ -22,6 +22,7 @@ pub mod motion;
 pub mod params;
 pub mod predicates;
 pub mod primitives;
+pub mod profile;
 mod proof;
 pub mod quantities;
 mod report;
@@ -79,21 +80,24 @@ pub fn compile(p: &Protocol, file: &str) -> (Option<Task>, Vec<Diagnostic>) {
                 .collect(),
         };
         proof::prove(&mut cx, &scene, &stages, &low.params);
-        Some(Task {
-            schema_version: TASK_SCHEMA_VERSION,
-            id: low.id.clone(),
-            version: low.version,
-            level: low.level.clone(),
-            instruction: low.stage.instruction.clone(),
-            source: file.to_string(),
-            time_limit_s: low.stage.time_limit_s,
-            physics: physics(),
-            cameras: check::default_cameras(&low.robots, low.camera.as_ref()),
-            robots: low.robots,
-            labware: low.labware,
-            params: low.params,
-            stages: vec![low.stage],
-        })
+        Some(
+            Task {
+                schema_version: TASK_SCHEMA_VERSION,
+                id: low.id.clone(),
+                version: low.version,
+                level: low.level.clone(),
+                instruction: low.stage.instruction.clone(),
+                source: file.to_string(),
+                time_limit_s: low.stage.time_limit_s,
+                physics: physics(),
+                cameras: check::default_cameras(&low.robots, low.camera.as_ref()),
+                robots: low.robots,
+                labware: low.labware,
+                params: low.params,
+                stages: vec![low.stage],
+            }
+            .with_programmes(),
+        )
     });
     let ok = !cx.has_errors();
     (task.filter(|_| ok), cx.diags)

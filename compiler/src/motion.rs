@@ -88,6 +88,9 @@ pub enum Motion {
         value: String,
         timeout_s: f64,
     },
+    /// Keep the tool still until `labware`'s run is done ([`labware::run`]), for at most
+    /// `timeout_s`: the runtime may jump the clock meanwhile.
+    AwaitRun { labware: String, timeout_s: f64 },
     /// Close the hand's actuated finger gradually (a thumb on a pipette's plunger) until every
     /// joint of the held `labware` named in `goals` has reached its goal (its value at the goal,
     /// from the side it started on), or `timeout_s` has passed; the finger then stays there.
@@ -156,6 +159,7 @@ impl Motion {
             Motion::Follow { .. } => "follow",
             Motion::Press { .. } => "press",
             Motion::HoldUntil { .. } => "hold until",
+            Motion::AwaitRun { .. } => "await run",
             Motion::PressPart { .. } => "press part",
             Motion::EasePart { .. } => "ease part",
             Motion::Wait { .. } => "wait",

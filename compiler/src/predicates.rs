@@ -22,11 +22,80 @@
 //!
 //! Any form but contact, joint range and `lifted` may end in `within <quantity>` to give its
 //! tolerance inline.
+//!
+//! A time constraint: any form followed by `for <q> to <q>`, `for at most <q>` or `for at least
+//! <q>` ([`Dwell`]) holds when the form has held for that long in total during the stage (a tube
+//! in a 42 °C block `for 30 s to 40 s`, and no longer): the judge measures it on the episode's
+//! clock; the proof bounds it from below by the waits and runs while the form holds (E0039).
 
 use crate::params::{Bindings, UnknownPlaceholder, render};
 use crate::world::{Hand, Location, World};
 use dsl::{Dimension, ParseQuantityError, parse_quantity};
 use serde::{Deserialize, Serialize};
+
+/// How long a predicate must have held in total during its stage (s): at least, at most, or
+/// both.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Dwell {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub at_least_s: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub at_most_s: Option<f64>,
+}
+
+impl Dwell {
+    /// Whether `held_s` seconds in total keep the constraint.
+    pub fn kept(&self, held_s: f64) -> bool {
+        self.at_least_s.is_none_or(|lo| held_s >= lo - 1e-9)
+            && self.at_most_s.is_none_or(|hi| held_s <= hi + 1e-9)
+    }
+}
+
+/// Splits a time constraint off a predicate's text: `"<form> for 30 s to 40 s"`, `"<form> for at
+/// most 40 s"`, `"<form> for at least 30 s"` ([`Dwell`]); the text unchanged and `None` when it
+/// has none.
+pub fn split_dwell(text: &str) -> Result<(&str, Option<Dwell>), PredicateError> {
+    let Some((body, bounds)) = text.rsplit_once(" for ") else {
+        return Ok((text, None));
+    };
+    let time = |q: &str| -> Result<f64, PredicateError> {
+        let parsed = parse_quantity(q.trim())?;
+        if parsed.dimension != Dimension::Time || parsed.si < 0.0 {
+            return Err(PredicateError::NotDwell {
+                text: bounds.trim().to_string(),
+            });
+        }
+        Ok(parsed.si)
+    };
+    let bounds_t = bounds.trim();
+    let dwell = if let Some(q) = bounds_t.strip_prefix("at most ") {
+        Dwell {
+            at_least_s: None,
+            at_most_s: Some(time(q)?),
+        }
+    } else if let Some(q) = bounds_t.strip_prefix("at least ") {
+        Dwell {
+            at_least_s: Some(time(q)?),
+            at_most_s: None,
+        }
+    } else if let Some((lo, hi)) = bounds_t.split_once(" to ") {
+        let (lo, hi) = (time(lo)?, time(hi)?);
+        if lo > hi {
+            return Err(PredicateError::NotDwell {
+                text: bounds_t.to_string(),
+            });
+        }
+        Dwell {
+            at_least_s: Some(lo),
+            at_most_s: Some(hi),
+        }
+    } else {
+        return Err(PredicateError::NotDwell {
+            text: bounds_t.to_string(),
+        });
+    };
+    Ok((body.trim(), Some(dwell)))
+}
 
 /// A tolerance with the name a `[tolerances]` table can override it by.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -233,6 +302,10 @@ pub enum PredicateError {
     NotLabwareValue { lhs: String },
     #[error("a comparison needs a value with a unit")]
     NoValue,
+    #[error(
+        "`for {text}` is not a time constraint: write `for 30 s to 40 s`, `for at most 40 s` or `for at least 30 s`"
+    )]
+    NotDwell { text: String },
 }
 
 /// Why a quantity template does not read as the quantity needed.

@@ -274,6 +274,63 @@ fn slow_panel(
     cx.push(d);
 }
 
+/// What the proof knows of each predicate's time constraint in one stage: whether its form has
+/// held, since when it holds (on the stage's clock of waits and runs), and the least time it
+/// has held so far.
+struct Dwelling {
+    ever: Vec<bool>,
+    since: Vec<Option<f64>>,
+    least: Vec<f64>,
+}
+
+impl Dwelling {
+    fn new(holds: &[Option<bool>]) -> Dwelling {
+        Dwelling {
+            ever: holds.iter().map(|h| *h == Some(true)).collect(),
+            since: holds
+                .iter()
+                .map(|h| (*h == Some(true)).then_some(0.0))
+                .collect(),
+            least: vec![0.0; holds.len()],
+        }
+    }
+
+    /// After a step that left the clock at `clock` and the form of predicate `k` at `now`.
+    fn step(&mut self, k: usize, now: Option<bool>, clock: f64) {
+        match (now, self.since[k]) {
+            (Some(true), None) => {
+                self.ever[k] = true;
+                self.since[k] = Some(clock);
+            }
+            (Some(false), Some(from)) => {
+                self.least[k] += clock - from;
+                self.since[k] = None;
+            }
+            _ => {}
+        }
+    }
+
+    /// E0039 for the first predicate whose form holds longer than its constraint allows, even
+    /// if every motion took no time.
+    fn broken(&self, predicates: &[CheckedPredicate], clock: f64) -> Option<Diagnostic> {
+        predicates.iter().enumerate().find_map(|(k, p)| {
+            let most = p.predicate.dwell?.at_most_s?;
+            let least = self.least[k] + self.since[k].map_or(0.0, |from| clock - from);
+            (least > most + 1e-9).then(|| {
+                Diagnostic::new(
+                    Code::E0039,
+                    p.span,
+                    format!(
+                        "`{}` cannot be kept: the waits and runs while it holds take at least {least:.0} s, more than {most:.0} s",
+                        p.predicate.text
+                    ),
+                )
+                .with_hint("shorten the waits or runs between the step that makes it true and the one that ends it")
+            })
+        })
+    }
+}
+
 /// Runs the proof and reports into `cx`. Stops tracing a combination at its first failure.
 pub(crate) fn prove(cx: &mut Cx, scene: &ProofScene, stages: &[ProofStage], params: &[ParamSpec]) {
     let (assignments, complete) = proof_assignments(params);
@@ -325,6 +382,7 @@ pub(crate) fn prove(cx: &mut Cx, scene: &ProofScene, stages: &[ProofStage], para
                 carried_over(cx, &w, ast, bound, origin);
             }
             w.panel_hold_s = 0.0;
+            w.clock_s = 0.0;
             for p in stage.predicates {
                 if let Some(e) = p.predicate.check.target_error(bound) {
                     let mut d = Diagnostic::new(Code::E0020, p.span, e.to_string())
@@ -341,6 +399,9 @@ pub(crate) fn prove(cx: &mut Cx, scene: &ProofScene, stages: &[ProofStage], para
                 .collect();
             // `was` checks remember a state seen after any step of the stage.
             let mut seen: Vec<bool> = holds.iter().map(|h| *h == Some(true)).collect();
+            // Time constraints: the least time each form has held (the waits and runs while
+            // it held), and since when on the stage's clock it holds now.
+            let mut dwell = Dwelling::new(&holds);
             if !warned_trivial[si]
                 && !holds.is_empty()
                 && holds.iter().all(|h| *h == Some(true))
@@ -386,19 +447,53 @@ pub(crate) fn prove(cx: &mut Cx, scene: &ProofScene, stages: &[ProofStage], para
                     cx.push(d);
                     continue 'combination;
                 }
+                if w.clock_s > stage.time_limit_s {
+                    let span = step
+                        .ast
+                        .primitive
+                        .as_ref()
+                        .map(|p| p.span)
+                        .unwrap_or(step.ast.span);
+                    let mut d = Diagnostic::new(
+                        Code::E0039,
+                        span,
+                        format!(
+                            "the stage's waits and runs up to this `{}` take at least {:.0} s, past its time limit of {} s",
+                            step.primitive.name, w.clock_s, stage.time_limit_s
+                        ),
+                    )
+                    .with_hint(format!(
+                        "raise `time_limit` above {:.0} s (the motions need time too)",
+                        w.clock_s.ceil()
+                    ));
+                    d.notes.extend(describe(bound));
+                    cx.push(d);
+                    continue 'combination;
+                }
                 if w.panel_hold_s > stage.time_limit_s && held_before <= stage.time_limit_s {
                     slow_panel(cx, step, &args, held_before, &w, stage.time_limit_s, bound);
                 }
                 for (k, p) in stage.predicates.iter().enumerate() {
-                    if p.predicate.check.is_history()
-                        && p.predicate.check.eval_abstract(&w, bound) == Some(true)
-                    {
+                    let now = p.predicate.check.eval_abstract(&w, bound);
+                    if p.predicate.check.is_history() && now == Some(true) {
                         seen[k] = true;
                     }
+                    dwell.step(k, now, w.clock_s);
                 }
             }
+            if let Some(d) = dwell.broken(stage.predicates, w.clock_s) {
+                let mut d = d;
+                d.notes.extend(describe(bound));
+                cx.push(d);
+                continue 'combination;
+            }
             for (k, p) in stage.predicates.iter().enumerate() {
-                let now = if p.predicate.check.is_history() {
+                let now = if let Some(constraint) = &p.predicate.dwell {
+                    // Never held: no time at all, which breaks a least time; else the judge's
+                    // to measure.
+                    let needs_time = constraint.at_least_s.is_some_and(|lo| lo > 0.0);
+                    (needs_time && !dwell.ever[k]).then_some(false)
+                } else if p.predicate.check.is_history() {
                     Some(seen[k])
                 } else {
                     p.predicate.check.eval_abstract(&w, bound)

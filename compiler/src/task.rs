@@ -178,6 +178,11 @@ pub struct Predicate {
     pub check: Check,
     /// Weight in progress scoring.
     pub weight: f64,
+    /// A time constraint on the check (`... for 30 s to 40 s`): it holds when the check has
+    /// held for a total time within these bounds during the stage, as the judge measures it on
+    /// the episode's clock.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dwell: Option<crate::predicates::Dwell>,
 }
 
 /// One concrete episode's scene, drawn from a task and a seed.
@@ -207,6 +212,30 @@ pub struct SceneInstance {
 }
 
 impl Task {
+    /// The task with each item's model running the programmes its run steps carry
+    /// ([`labware::run`]), in the order the stages run them. A run step's arguments are fixed
+    /// when the task compiles (the checks refuse a placeholder in them); a step whose programme
+    /// does not read was reported by the proof.
+    pub fn with_programmes(mut self) -> Task {
+        let mut runs: BTreeMap<String, Vec<labware::run::Programme>> = BTreeMap::new();
+        for step in self.stages.iter().flat_map(|s| &s.plan) {
+            let (Some(on), Some(Ok(p))) = (
+                &step.labware,
+                crate::primitives::run::programme(&step.primitive, &step.args),
+            ) else {
+                continue;
+            };
+            runs.entry(on.clone()).or_default().push(p);
+        }
+        for item in &mut self.labware {
+            if let Some(p) = runs.remove(&item.name) {
+                item.params = std::mem::replace(&mut item.params, labware::Model::Unmodelled)
+                    .with_programmes(p);
+            }
+        }
+        self
+    }
+
     /// Draws the scene for `seed`. Draw order: robots in order (one draw per joint), then labware in
     /// order (x, y, yaw), then parameters in order, then labware joint offsets (items in order,
     /// roles in name order), then the places of parts lying apart (items in order, parts in name

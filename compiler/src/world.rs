@@ -63,6 +63,10 @@ pub struct World {
     /// Seconds of button holding the panel steps so far have needed (the proof resets it at
     /// each stage and compares it with the stage's time limit: W0009).
     pub panel_hold_s: f64,
+    /// Seconds of lab time the stage's steps so far take at least: their waits and instrument
+    /// runs (motions take time on top). The proof resets it at each stage; time constraints and
+    /// E0039 read it.
+    pub clock_s: f64,
 }
 
 impl World {

@@ -90,6 +90,12 @@ pub enum Code {
     E0035,
     /// A step whose robot cannot reach its target.
     E0036,
+    /// A centrifuge run with an unbalanced rotor.
+    E0037,
+    /// An instrument run started while its lid is not shut and latched.
+    E0038,
+    /// A time the plan cannot keep: a time constraint, or runs and waits past the time limit.
+    E0039,
     /// The success condition already holds at the start.
     W0001,
     /// The state proof sampled parameter combinations.
@@ -144,6 +150,9 @@ impl Code {
             Code::E0034 => "E0034",
             Code::E0035 => "E0035",
             Code::E0036 => "E0036",
+            Code::E0037 => "E0037",
+            Code::E0038 => "E0038",
+            Code::E0039 => "E0039",
             Code::W0001 => "W0001",
             Code::W0002 => "W0002",
             Code::W0003 => "W0003",
@@ -157,7 +166,7 @@ impl Code {
         }
     }
 
-    pub const ALL: [Code; 39] = [
+    pub const ALL: [Code; 42] = [
         Code::E0001,
         Code::E0002,
         Code::E0003,
@@ -187,6 +196,9 @@ impl Code {
         Code::E0034,
         Code::E0035,
         Code::E0036,
+        Code::E0037,
+        Code::E0038,
+        Code::E0039,
         Code::W0001,
         Code::W0002,
         Code::W0003,
@@ -237,6 +249,9 @@ impl Code {
             Code::E0034 => "a chain stage that does not fit the chain's scene",
             Code::E0035 => "an unknown or ill-typed tolerance",
             Code::E0036 => "a step whose robot cannot reach its target",
+            Code::E0037 => "a centrifuge run with an unbalanced rotor",
+            Code::E0038 => "an instrument run started with its lid not shut and latched",
+            Code::E0039 => "a time the plan cannot keep",
             Code::W0001 => "the success condition already holds at the start",
             Code::W0002 => "the state proof sampled parameter combinations",
             Code::W0003 => "a position far outside any bench",
@@ -337,6 +352,15 @@ impl Code {
             }
             Code::E0036 => {
                 "The robot a step names cannot bring its tool to the step's first target (the grasp, press or\ndial frame the expert aims at): its inverse kinematics, from the robot's start pose and from its\nhome, in either grasp of a symmetric target, find no solution, in the layout the task's first\nseed draws. The hint names the nearest base position, at the same heading, from which every\ntarget checked for that robot, in all eight sampled layouts, solves with 10 cm to spare: at\nthe robot's height first, else raised (a riser). `autobio check` tests each step's first\ntarget and the point the arm comes in from, the path it then follows holding a part (a lid's\narc, a pick's lift) and the slot it places a picked item in. A target the arm reaches only with\na joint past its range names that joint and the angle it would need instead of a distance. The\nnext seven seeds' layouts are W0010's; free-space paths between targets are not tested."
+            }
+            Code::E0037 => {
+                "A centrifuge refuses to spin an unbalanced load, and so does the proof: the tubes in its rotor\nwhen a `spin` starts must balance, each tube's mass (1 g for a 1.5 mL tube, plus its liquid\nat 1 mg/µL) times its slot's direction summing to under 0.1 g. Put tubes in opposite slots\n(`1` and `16` on a 30-place rotor), or three 120° apart, with equal volumes; add a tube of water\nas a counterweight; the hint names the slots that would balance."
+            }
+            Code::E0038 => {
+                "An instrument runs only shut: a centrifuge spins with its lid latched, a thermal cycler runs its\nprofile with its lid closed and locked (that is what starts it). Close (and lock) the lid in a\nstep before the run."
+            }
+            Code::E0039 => {
+                "The plan's own waits and instrument runs take at least the time shown, so no execution can\nkeep the time: a `within` constraint between two steps is broken by what lies between them, or\nthe stage's `time_limit` is shorter than its runs and waits (motions need time on top).\nShorten the waits or runs between the steps, move the constraint, or raise `time_limit`."
             }
             Code::W0001 => {
                 "Every success predicate is already true in the initial state, so an episode succeeds before the\nrobot moves. Usually an initial `state` or a predicate is wrong. A round trip (open a lid, then\nclose it) is written with `was` (`cycler.lid was open` beside `cycler.lid is closed`) or as a chain. `eval` and `demo` refuse the task unless `--allow-trivial`."

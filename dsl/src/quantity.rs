@@ -33,7 +33,7 @@ impl Dimension {
         match self {
             Dimension::Length => "m, mm, cm",
             Dimension::Angle => "rad, deg",
-            Dimension::Time => "s, ms, min",
+            Dimension::Time => "s, ms, min, h",
             Dimension::Volume => "µL, uL, mL, L",
             Dimension::Temperature => "°C, degC",
             Dimension::Speed => "rpm",
@@ -70,6 +70,7 @@ const UNITS: &[(&str, Dimension, f64)] = &[
     ("s", Dimension::Time, 1.0),
     ("ms", Dimension::Time, 0.001),
     ("min", Dimension::Time, 60.0),
+    ("h", Dimension::Time, 3600.0),
     ("µL", Dimension::Volume, 1.0),
     // The Greek mu, which looks the same; the parser warns about it (W0006).
     ("\u{3bc}L", Dimension::Volume, 1.0),
@@ -105,6 +106,7 @@ pub fn suggest_unit(symbol: &str) -> Option<&'static str> {
         "rpm" | "rpms" | "r/min" => Some("rpm"),
         "sec" | "secs" | "second" | "seconds" => Some("s"),
         "mins" | "minute" | "minutes" => Some("min"),
+        "hr" | "hrs" | "hour" | "hours" => Some("h"),
         "msec" | "msecs" | "millisecond" | "milliseconds" => Some("ms"),
         "degree" | "degrees" => Some("deg"),
         "microliter" | "microliters" | "microlitre" | "microlitres" => Some("µL"),

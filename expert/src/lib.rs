@@ -262,6 +262,10 @@ impl ExpertPolicy {
                             arm.gripper = from + (arm.model.gripper.open - from) * t;
                             t >= 1.0
                         }
+                        Active::Run { labware, deadline } => {
+                            let lab = Lab::new(&self.task, &obs.privileged.labware, &self.params);
+                            lab.run_done(labware) || obs.time >= *deadline
+                        }
                         Active::Until {
                             labware,
                             param,

@@ -43,6 +43,11 @@ pub(super) enum Active {
         t0: f64,
         seconds: f64,
     },
+    /// Still until an instrument's run is done (or the deadline passes).
+    Run {
+        labware: String,
+        deadline: f64,
+    },
     /// Still until a panel shows a value (or the deadline passes: the judge tells what came of it).
     Until {
         labware: String,
@@ -266,6 +271,10 @@ fn in_place(
             from: arm.gripper,
             t0: time,
             seconds: *seconds,
+        },
+        Motion::AwaitRun { labware, timeout_s } => Active::Run {
+            labware: labware.clone(),
+            deadline: time + timeout_s,
         },
         Motion::HoldUntil {
             labware,

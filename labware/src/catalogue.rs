@@ -132,6 +132,9 @@ pub enum ButtonEffect {
         from: &'static str,
         to: &'static str,
     },
+    /// Starts the instrument's next run ([`crate::run`]): what a run step (`spin`, `incubate`)
+    /// presses, never a `press` of its own (the run's programme comes from the step).
+    Start,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -219,18 +222,31 @@ const CAP: PartState = PartState {
 };
 /// What a lid takes, by its latch: none (opened and shut), a latch locked and unlocked by hand
 /// (a lever), or a latch that catches as the lid shuts and a panel key releases (no `lock`).
+/// An instrument's run ([`crate::run`]): idle until its first run starts, running, done once a
+/// run has finished (until the next starts).
+const RUN_PART: PartState = PartState {
+    part: crate::run::RUN,
+    states: &crate::run::STATES,
+    initial: &["idle"],
+};
+/// The key that starts a run.
+const START_KEY: Button = Button {
+    name: "start",
+    effect: ButtonEffect::Start,
+};
 const PLAIN_LID_PRIMITIVES: &[&str] = &["open_lid", "close_lid"];
 const LID_PRIMITIVES: &[&str] = &["open_lid", "close_lid", "lock", "unlock"];
 const KEYED_LID_PRIMITIVES: &[&str] = &["open_lid", "close_lid", "unlock", "press"];
 /// The key on a centrifuge's panel that releases its lid's latch (the lid stays shut).
-const LID_KEY: &[Button] = &[Button {
+const OPEN_KEY: Button = Button {
     name: "open",
     effect: ButtonEffect::Release {
         part: "lid",
         from: "locked",
         to: "closed",
     },
-}];
+};
+const LID_KEY: &[Button] = &[OPEN_KEY];
 const TUBE_PRIMITIVES: &[&str] = &[
     "pick",
     "place",
@@ -390,8 +406,8 @@ const fn lidded(
 pub const KINDS: &[LabwareKind] = &[
     LabwareKind {
         name: "thermal_cycler",
-        description: "thermal cycler with a hinged lid and a two-notch lock lever (Bio-Rad C1000 proportions)",
-        parts: &[LID_LOCKING],
+        description: "thermal cycler with a hinged lid and a two-notch lock lever (Bio-Rad C1000 proportions); it runs a thermal profile, started as its lid locks",
+        parts: &[LID_LOCKING, RUN_PART],
         slots: None,
         capacity_ul: None,
         movable: false,
@@ -404,21 +420,22 @@ pub const KINDS: &[LabwareKind] = &[
             ("lid_open", 0.003),
             ("lid_unlocked", 0.003),
         ],
-        primitives: &["open_lid", "close_lid"],
+        primitives: &["open_lid", "close_lid", "thermocycle"],
         liquid_tool: false,
     },
     LabwareKind {
         // The rotor turns freely: its start angle can be drawn (`[randomise.x] joints`).
         joints: &[("lid", "rad"), ("rotor", "rad")],
+        primitives: &["open_lid", "close_lid", "unlock", "press", "spin"],
         ..lidded(
             "centrifuge_5430",
-            "benchtop centrifuge with a latched lid and a 30-place rotor for 1.5 mL tubes (Eppendorf 5430)",
-            &[LID_LOCKING],
+            "benchtop centrifuge with a latched lid, a start key and a 30-place rotor for 1.5 mL tubes (Eppendorf 5430); it spins only latched and balanced",
+            &[LID_LOCKING, RUN_PART],
             Some(Slots {
                 layout: SlotLayout::Ring { n: 30 },
                 accepts: &["tube_1_5ml"],
             }),
-            LID_KEY,
+            &[OPEN_KEY, START_KEY],
         )
     },
     lidded(
@@ -437,8 +454,8 @@ pub const KINDS: &[LabwareKind] = &[
     ),
     LabwareKind {
         name: "thermal_mixer",
-        description: "thermal mixer with a 24-well block for 1.5 mL tubes, whose speed, temperature and time are set with up/down buttons (Eppendorf ThermoMixer C)",
-        parts: &[],
+        description: "thermal mixer with a 24-well block for 1.5 mL tubes, whose speed, temperature and time are set with up/down buttons and which incubates from its start key (Eppendorf ThermoMixer C)",
+        parts: &[RUN_PART],
         slots: Some(Slots {
             layout: SlotLayout::Grid { rows: 4, cols: 6 },
             accepts: &["tube_1_5ml"],
@@ -520,10 +537,11 @@ pub const KINDS: &[LabwareKind] = &[
                     sign: -1,
                 },
             },
+            START_KEY,
         ],
         joints: &[],
         tolerances: &[("display", 1e-6)],
-        primitives: &["press", "set_parameter"],
+        primitives: &["press", "set_parameter", "incubate"],
         liquid_tool: false,
     },
     LabwareKind {
@@ -665,6 +683,7 @@ mod tests {
                         let p = k.part(part).expect("a released part exists");
                         assert!(p.states.contains(&from) && p.states.contains(&to));
                     }
+                    ButtonEffect::Start => assert!(k.part(crate::run::RUN).is_some()),
                 }
             }
             for p in k.panel {

@@ -18,6 +18,7 @@ use crate::frame::{Pose, Vec3, axis_angle, pose, translation, x_turn};
 use crate::lid::{HasLid, JOINT, LOCK_SWITCH, LOCKED, Lid, LidBody, LidNames};
 use crate::mjcf::{Fragment, pose_attrs, rgba, v3};
 use crate::model::Lidded;
+use crate::run::{Programme, RunState};
 use crate::model::{
     Affordance, Effects, Instrument, Joints, LabwareState, Logic, Measure, Part, Reset, Symmetry,
     flag, set, set_flag,
@@ -78,6 +79,11 @@ pub struct Params {
     pub open_tolerance: f64,
     /// The key on the panel that releases the lid.
     pub key: Key,
+    /// The spins the protocol runs ([`crate::run`]), each started by the panel's start key
+    /// (built only for a centrifuge that spins: the green mark becomes a key). The lid stays
+    /// latched while the rotor turns.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub programmes: Vec<Programme>,
 }
 
 /// Half the inside width of a rotor slot's sleeve: a 1.5 mL tube (5.35 mm radius) with room to
@@ -158,6 +164,7 @@ impl Params {
             closed_tolerance: 0.01,
             open_tolerance: 0.01,
             key: Key::at(0.06),
+            programmes: Vec::new(),
         }
     }
 
@@ -194,6 +201,7 @@ impl Params {
             closed_tolerance: 0.01,
             open_tolerance: 0.01,
             key: Key::at(0.14),
+            programmes: Vec::new(),
         }
     }
 
@@ -277,10 +285,40 @@ impl Params {
         self.panel().0 * translation([x, 0.0, 0.0])
     }
 
-    /// Where the closed fingertips press the lid key: on its cap, pointing into the panel.
-    fn key_affordance(&self, placement: &Pose) -> Pose {
+    /// Where the closed fingertips press a key at `x` across the panel: on its cap, pointing
+    /// into the panel.
+    fn key_affordance(&self, placement: &Pose, x: f64) -> Pose {
         let tool = crate::frame::from_axes([0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]);
-        placement * self.on_panel(self.key.x) * pose([0.0, 0.0, self.key.height], tool)
+        placement * self.on_panel(x) * pose([0.0, 0.0, self.key.height], tool)
+    }
+
+    /// Across the panel from its centre: the start mark, or the start key of a centrifuge that
+    /// spins.
+    fn start_x(&self) -> f64 {
+        0.15 * self.panel().1
+    }
+
+    /// The start key's body: the lid key's feel, a green cap.
+    fn start_key_xml(&self, prefix: &str) -> String {
+        format!(
+            r#"  <body name="{key}" {kat}>
+    <joint name="{key}/press" type="slide" axis="0 0 -1" range="0 {travel}" stiffness="{k}" damping="{d}" springref="0" solreflimit="0.004 1"/>
+    <geom name="{key}/cap" type="cylinder" size="{kr} {kh}" pos="0 0 {kh}" mass="0.004" rgba="0.2 0.65 0.3 1" friction="1.2 0.01 0.001"/>
+  </body>
+"#,
+            key = start_key_name(prefix),
+            kat = pose_attrs(&self.on_panel(self.start_x())),
+            travel = self.key.travel,
+            k = self.key.stiffness,
+            d = self.key.damping,
+            kr = self.key.radius,
+            kh = self.key.height / 2.0,
+        )
+    }
+
+    /// Whether a key pushed in `travel` (m) counts as pressed.
+    fn key_pressed(&self, travel: Option<&f64>) -> bool {
+        travel.is_some_and(|x| *x * self.key.stiffness > self.key.force)
     }
 
     /// Where the gripper holds the grip bar to lift the lid: closing across the bar, pointing
@@ -567,6 +605,11 @@ fn key_name(prefix: &str) -> String {
     format!("{prefix}/key_open")
 }
 
+/// The MuJoCo name of the start key's body.
+fn start_key_name(prefix: &str) -> String {
+    format!("{prefix}/key_start")
+}
+
 impl Instrument for Params {
     fn fragment(&self, name: &str, placement: &Pose) -> Fragment {
         let n = LidNames::new(name);
@@ -590,8 +633,7 @@ impl Instrument for Params {
         let panel = format!(
             r#"  <geom name="{base}/panel" type="box" size="{pw} {pd} 0.008" {at} rgba="0.2 0.22 0.25 1" contype="0" conaffinity="0"/>
   <geom name="{base}/display" type="box" size="{dw} {dd} 0.0005" {dat} rgba="0.35 0.75 0.9 1" contype="0" conaffinity="0"/>
-  <geom name="{base}/start" type="box" size="0.008 0.006 0.0005" {sat} rgba="0.2 0.65 0.3 1" contype="0" conaffinity="0"/>
-  <geom name="{base}/stop" type="box" size="0.008 0.006 0.0005" {tat} rgba="0.8 0.2 0.2 1" contype="0" conaffinity="0"/>
+{start}  <geom name="{base}/stop" type="box" size="0.008 0.006 0.0005" {tat} rgba="0.8 0.2 0.2 1" contype="0" conaffinity="0"/>
   <body name="{key}" {kat}>
     <joint name="{key}/press" type="slide" axis="0 0 -1" range="0 {travel}" stiffness="{k}" damping="{d}" springref="0" solreflimit="0.004 1"/>
     <geom name="{key}/cap" type="cylinder" size="{kr} {kh}" pos="0 0 {kh}" mass="0.004" rgba="0.55 0.57 0.6 1" friction="1.2 0.01 0.001"/>
@@ -603,7 +645,15 @@ impl Instrument for Params {
             dw = 0.4 * pw,
             dd = 0.7 * pd,
             dat = pose_attrs(&on_panel(-0.4 * pw)),
-            sat = pose_attrs(&on_panel(0.15 * pw)),
+            start = if self.programmes.is_empty() {
+                format!(
+                    "  <geom name=\"{}/start\" type=\"box\" size=\"0.008 0.006 0.0005\" {} rgba=\"0.2 0.65 0.3 1\" contype=\"0\" conaffinity=\"0\"/>\n",
+                    n.base,
+                    pose_attrs(&on_panel(0.15 * pw))
+                )
+            } else {
+                self.start_key_xml(name)
+            },
             tat = pose_attrs(&on_panel(0.4 * pw)),
             key = key,
             kat = pose_attrs(&on_panel(self.key.x)),
@@ -655,11 +705,18 @@ impl Instrument for Params {
         let lid_xml = self
             .lid()
             .body_xml(&n, self.hinge_point(), lid_c, &lid_geoms);
-        let contact = format!(
+        let mut contact = format!(
             "<exclude body1=\"{base}\" body2=\"{}\"/>\n<exclude body1=\"{base}\" body2=\"{key}\"/>\n",
             n.body,
             base = n.base
         );
+        if !self.programmes.is_empty() {
+            contact += &format!(
+                "<exclude body1=\"{}\" body2=\"{}\"/>\n",
+                n.base,
+                start_key_name(name)
+            );
+        }
         Fragment {
             worldbody: n.instrument_xml(placement, &geoms, &lid_xml),
             equality: self.lid().lock_xml(&n),
@@ -675,6 +732,12 @@ impl Instrument for Params {
             // The role is the catalogue's name of the key.
             ("open", format!("{}/press", key_name(name))),
         ]
+        .into_iter()
+        .chain(
+            (!self.programmes.is_empty())
+                .then(|| ("start", format!("{}/press", start_key_name(name)))),
+        )
+        .collect()
     }
 
     fn slot_seat(&self, slot: &str, s: &LabwareState) -> Option<Pose> {
@@ -696,6 +759,9 @@ impl Instrument for Params {
         set_flag(&mut logic, LOCKED, state == "locked");
         // A lid that starts shut but unlatched must be lifted clear before the latch can catch.
         set_flag(&mut logic, "armed", state == "open");
+        if !self.programmes.is_empty() {
+            self.run().reset(&mut logic);
+        }
         Reset {
             joints: vec![(JOINT, lid)],
             logic,
@@ -705,19 +771,32 @@ impl Instrument for Params {
     /// The latch: it catches a lid within `latch_catch` of shut when armed; the lid key held
     /// past its press force for `hold_s` releases it and disarms it until the lid has been
     /// lifted twice the catch clear.
+    ///
+    /// A centrifuge that spins: the start key held likewise starts the next spin while the lid
+    /// is latched, and the lid key does nothing while the rotor turns.
     fn step(&self, dt: f64, joints: &Joints, logic: &mut Logic, effects: &mut Effects) {
         let lid = self.lid().angle(joints);
-        let pressed = joints
-            .get("open")
-            .is_some_and(|x| *x * self.key.stiffness > self.key.force);
-        let held = if pressed {
-            logic.get("key_held_s").copied().unwrap_or(0.0) + dt
-        } else {
-            0.0
+        let held_for = |logic: &Logic, key: &str, pressed: bool| {
+            if pressed {
+                logic.get(key).copied().unwrap_or(0.0) + dt
+            } else {
+                0.0
+            }
         };
+        let held = held_for(logic, "key_held_s", self.key_pressed(joints.get("open")));
         let mut locked = flag(logic, LOCKED);
+        let spinning = !self.programmes.is_empty() && {
+            let run = self.run();
+            run.advance(logic, dt);
+            let start = held_for(logic, "start_held_s", self.key_pressed(joints.get("start")));
+            if start >= self.key.hold_s && locked {
+                run.start(logic);
+            }
+            set(logic, "start_held_s", start);
+            run.state(logic) == RunState::Running
+        };
         let mut armed = flag(logic, "armed") || lid > self.lid_closed + 2.0 * self.latch_catch;
-        if held >= self.key.hold_s {
+        if held >= self.key.hold_s && !spinning {
             locked = false;
             armed = false;
         } else if armed && lid <= self.lid_closed + self.latch_catch {
@@ -733,13 +812,24 @@ impl Instrument for Params {
         Some(self)
     }
 
+    fn programmes(&self) -> &[Programme] {
+        &self.programmes
+    }
+
+    fn set_programmes(&mut self, programmes: Vec<Programme>) {
+        self.programmes = programmes;
+    }
+
     /// `lid_close`: the lid is pushed shut (a touch on its face); `lid_open`: it is lifted by its
     /// grip bar; `open`: the lid key.
     fn affordance(&self, name: &str, s: &LabwareState) -> Option<Affordance> {
         let (pose, touch) = match name {
             "lid_close" => (self.push_affordance(&s.pose, s.joint(JOINT)), true),
             "lid_open" => (self.bar_affordance(&s.pose, s.joint(JOINT)), false),
-            "open" => (self.key_affordance(&s.pose), true),
+            "open" => (self.key_affordance(&s.pose, self.key.x), true),
+            "start" if !self.programmes.is_empty() => {
+                (self.key_affordance(&s.pose, self.start_x()), true)
+            }
             _ => return None,
         };
         Some(Affordance {

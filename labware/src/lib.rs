@@ -21,6 +21,7 @@ pub mod mjcf;
 pub mod model;
 pub mod process;
 pub mod registry;
+pub mod run;
 
 pub use catalogue::{
     Button, ButtonEffect, KINDS, LabwareKind, PanelParam, PartState, SlotLayout, Slots, kind,

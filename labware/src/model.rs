@@ -375,13 +375,49 @@ pub trait Instrument {
         tolerance: Option<f64>,
         s: &LabwareState,
     ) -> Option<Measure> {
+        if part == crate::run::RUN && !self.programmes().is_empty() {
+            return self.run().measure(state, &s.logic);
+        }
         let (_, judged) = self.part().filter(|(name, _)| *name == part)?;
         judged.state(state, tolerance, s)
     }
 
     /// The current state of every part (for recordings and reports).
     fn readout(&self, s: &LabwareState) -> BTreeMap<String, String> {
-        self.lidded().map(|l| l.lid_readout(s)).unwrap_or_default()
+        let mut out = self.lidded().map(|l| l.lid_readout(s)).unwrap_or_default();
+        if !self.programmes().is_empty() {
+            out.extend([self.run().readout(&s.logic)]);
+        }
+        out
+    }
+
+    /// The programmes the item runs ([`crate::run`]), in the protocol's order; empty: it runs
+    /// none (and has no `run` part to measure).
+    fn programmes(&self) -> &[crate::run::Programme] {
+        &[]
+    }
+
+    /// Gives a model that runs programmes the protocol's (the compiler, once per item); a model
+    /// that runs none ignores them (the compiler refuses run steps on its kind first).
+    fn set_programmes(&mut self, _programmes: Vec<crate::run::Programme>) {}
+
+    /// The item's runs over its programmes.
+    fn run(&self) -> crate::run::Run<'_> {
+        crate::run::Run {
+            programmes: self.programmes(),
+        }
+    }
+
+    /// Seconds until the item's next event while only its timers run (a run's phase ending);
+    /// `None` while nothing runs. The runtime jumps the clock no further than this.
+    fn next_event(&self, logic: &Logic) -> Option<f64> {
+        self.run().next_event(logic)
+    }
+
+    /// Advances the item's timers over `span` seconds in which the physics stood still (the
+    /// runtime's clock jump): exactly what `span` of physics steps would have done to them.
+    fn skip(&self, span: f64, logic: &mut Logic) {
+        self.run().advance(logic, span);
     }
 
     /// A named affordance in the world frame, from live (or planned) state.

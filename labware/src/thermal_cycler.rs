@@ -15,6 +15,7 @@ use crate::model::{
     Affordance, Effects, Instrument, Joints, LabwareState, Logic, Measure, Mechanism, Part, Reset,
     flag, set_flag,
 };
+use crate::run::{Programme, RunState};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -45,6 +46,11 @@ pub struct Params {
     pub locked_tolerance: f64,
     pub open_tolerance: f64,
     pub unlocked_tolerance: f64,
+    /// The profile the protocol runs ([`crate::run`]): it starts as the lid locks (the cycler's
+    /// software starts it, as a lab automation deck starts its cycler module); none: the cycler
+    /// only opens and closes.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub programmes: Vec<Programme>,
 }
 
 impl Default for Params {
@@ -73,6 +79,7 @@ impl Default for Params {
             locked_tolerance: 0.01,
             open_tolerance: 0.003,
             unlocked_tolerance: 0.003,
+            programmes: Vec::new(),
         }
     }
 }
@@ -277,18 +284,38 @@ impl Instrument for Params {
         };
         let mut logic = Logic::new();
         Latch::default().store(&mut logic);
+        if !self.programmes.is_empty() {
+            self.run().reset(&mut logic);
+        }
         Reset {
             joints: vec![(JOINT, lid), ("lever", lever)],
             logic,
         }
     }
 
-    fn step(&self, _dt: f64, joints: &Joints, logic: &mut Logic, effects: &mut Effects) {
+    /// The latch; then the profile: it runs on while started and starts once the lid is
+    /// locked (one profile per protocol: the compiler refuses a second).
+    fn step(&self, dt: f64, joints: &Joints, logic: &mut Logic, effects: &mut Effects) {
         let mut latch = Latch::from_logic(logic);
         let lever = joints.get("lever").copied().unwrap_or(self.lever_raised);
         let locked = latch.update(self, self.lid().angle(joints), lever);
         latch.store(logic);
         effects.switch(LOCK_SWITCH, locked);
+        if !self.programmes.is_empty() {
+            let run = self.run();
+            run.advance(logic, dt);
+            if locked && run.state(logic) == RunState::Idle {
+                run.start(logic);
+            }
+        }
+    }
+
+    fn programmes(&self) -> &[Programme] {
+        &self.programmes
+    }
+
+    fn set_programmes(&mut self, programmes: Vec<Programme>) {
+        self.programmes = programmes;
     }
 
     fn lidded(&self) -> Option<&dyn Lidded> {

@@ -20,6 +20,7 @@ use crate::mjcf::{Fragment, pose_attrs, rgba, v3};
 use crate::model::{
     Affordance, Display, Effects, Instrument, Joints, LabwareState, Logic, Reset, Symmetry, set,
 };
+use crate::run::Programme;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -65,7 +66,16 @@ pub struct Params {
     /// The thermoblock on the deck behind the panel: 4 x 6 wells for 1.5 mL tubes (slots `A1` ..
     /// `D6`, rows towards the panel, column 1 at the instrument's +x), built as a rack of wells.
     pub block: crate::rack::Params,
+    /// The incubations the protocol runs ([`crate::run`]), each started by the start key
+    /// (built only for a mixer that incubates, at the panel's edge beside the time buttons).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub programmes: Vec<Programme>,
 }
+
+/// Across the panel (instrument x) of the start key: beside the time buttons, at the edge.
+const START_X: f64 = 0.088;
+/// The start key's role and affordance name.
+const START: &str = "start";
 
 impl Default for Params {
     fn default() -> Self {
@@ -117,6 +127,7 @@ impl Default for Params {
                 plate: 0.003,
                 rgba: BLOCK,
             },
+            programmes: Vec::new(),
         }
     }
 }
@@ -173,6 +184,17 @@ impl Params {
                 })
             })
             .collect()
+    }
+
+    /// The start key's top on the panel (panel frame), for a mixer that incubates.
+    fn start_key(&self) -> Option<Pose> {
+        (!self.programmes.is_empty()).then(|| {
+            translation([
+                START_X,
+                (self.up_y + self.down_y) / 2.0,
+                self.button_height,
+            ])
+        })
     }
 
     /// Travel at which the spring pushes back with the press force.
@@ -405,6 +427,23 @@ impl Instrument for Params {
                 key = rgba(KEY),
             );
         }
+        if let Some(top) = self.start_key() {
+            let b = Names::button(name, START);
+            let frame = p * translation([top.translation.x, top.translation.y, 0.0]);
+            let half_h = self.button_height / 2.0;
+            buttons += &format!(
+                r#"  <body name="{b}" {frame}>
+    <joint name="{b}/press" type="slide" axis="0 0 -1" range="0 {travel}" stiffness="{k}" damping="{d}" springref="0" solreflimit="0.004 1"/>
+    <geom name="{b}/key" type="cylinder" size="{r} {half_h}" pos="0 0 {half_h}" mass="0.004" rgba="0.2 0.65 0.3 1" friction="1.2 0.01 0.001"/>
+  </body>
+"#,
+                frame = pose_attrs(&frame),
+                travel = self.button_travel,
+                k = self.button_stiffness,
+                d = self.button_damping,
+                r = self.button_radius,
+            );
+        }
         let worldbody = format!(
             "<body name=\"{base}\" {placement}>\n{body}{buttons}</body>\n",
             base = n.base,
@@ -419,11 +458,13 @@ impl Instrument for Params {
         let contact: String = self
             .buttons()
             .iter()
-            .map(|(button, ..)| {
+            .map(|(button, ..)| button.clone())
+            .chain(self.start_key().map(|_| START.to_string()))
+            .map(|button| {
                 format!(
                     "<exclude body1=\"{}\" body2=\"{}\"/>\n",
                     n.base,
-                    Names::button(name, button)
+                    Names::button(name, &button)
                 )
             })
             .collect();
@@ -441,7 +482,9 @@ impl Instrument for Params {
         let kind = crate::kind("thermal_mixer").expect("catalogue");
         kind.buttons
             .iter()
-            .map(|b| (b.name, format!("{}/press", Names::button(name, b.name))))
+            .map(|b| b.name)
+            .filter(|b| *b != START || self.start_key().is_some())
+            .map(|b| (b, format!("{}/press", Names::button(name, b))))
             .collect()
     }
 
@@ -449,6 +492,9 @@ impl Instrument for Params {
         let mut logic = Logic::new();
         for s in &self.settings {
             logic.insert(s.param.clone(), s.initial);
+        }
+        if !self.programmes.is_empty() {
+            self.run().reset(&mut logic);
         }
         Reset {
             joints: Vec::new(),
@@ -473,6 +519,28 @@ impl Instrument for Params {
             }
             set(logic, &key, held);
         }
+        if self.start_key().is_some() {
+            let run = self.run();
+            run.advance(logic, dt);
+            let pressed = joints.get(START).is_some_and(|x| *x > travel);
+            let held = if pressed {
+                logic.get("held_s/start").copied().unwrap_or(0.0) + dt
+            } else {
+                0.0
+            };
+            if held > self.repeat_s {
+                run.start(logic);
+            }
+            set(logic, "held_s/start", held);
+        }
+    }
+
+    fn programmes(&self) -> &[Programme] {
+        &self.programmes
+    }
+
+    fn set_programmes(&mut self, programmes: Vec<Programme>) {
+        self.programmes = programmes;
     }
 
     fn readout(&self, s: &LabwareState) -> BTreeMap<String, String> {
@@ -482,6 +550,7 @@ impl Instrument for Params {
                 let v = self.value(&s.logic, &set.param);
                 (set.param.clone(), format!("{v} {}", set.unit))
             })
+            .chain((!self.programmes.is_empty()).then(|| self.run().readout(&s.logic)))
             .collect()
     }
 
@@ -492,7 +561,11 @@ impl Instrument for Params {
     }
 
     fn affordance(&self, name: &str, s: &LabwareState) -> Option<Affordance> {
-        let (_, _, _, top) = self.buttons().into_iter().find(|(b, ..)| b == name)?;
+        let top = match self.buttons().into_iter().find(|(b, ..)| b == name) {
+            Some((_, _, _, top)) => top,
+            None if name == START => self.start_key()?,
+            None => return None,
+        };
         // Press along the panel's inward normal, the closed fingers lying along the slope.
         let tool: Rot = from_axes([0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]);
         Some(Affordance {

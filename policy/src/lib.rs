@@ -103,6 +103,11 @@ pub trait Policy {
     fn drain_events(&mut self) -> Vec<StageEvent> {
         Vec::new()
     }
+    /// The policy never moves a robot (the hold control): the environment may then jump an idle
+    /// scene at rest to its deadline (`runtime::clock`).
+    fn never_moves(&self) -> bool {
+        false
+    }
 }
 
 /// How a model server failed us. Each ends the episode it happens in with its reason.

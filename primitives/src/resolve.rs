@@ -184,6 +184,15 @@ impl<'a> Lab<'a> {
         ))
     }
 
+    /// Whether an item's run is done ([`labware::run`]).
+    pub fn run_done(&self, labware: &str) -> bool {
+        self.item(labware).is_ok_and(|(model, state)| {
+            model
+                .measure(labware::run::RUN, "done", None, state)
+                .is_some_and(|m| m.holds)
+        })
+    }
+
     /// The live pose of an item's root body.
     pub fn pose_of(&self, labware: &str) -> Result<Pose, PlanError> {
         Ok(self.item(labware)?.1.pose)
@@ -682,6 +691,7 @@ impl StepFrame {
             Motion::Grasp
             | Motion::Release
             | Motion::HoldUntil { .. }
+            | Motion::AwaitRun { .. }
             | Motion::PressPart { .. }
             | Motion::EasePart { .. }
             | Motion::Wait { .. }

@@ -401,6 +401,7 @@ fn stage_verdict(
     start: &[LabwareState],
     completed_at_s: Option<f64>,
     seen: &[bool],
+    held_s: &[f64],
 ) -> StageVerdict {
     let stage = &task.stages[index];
     let predicates: Vec<PredicateValue> = stage
@@ -414,6 +415,19 @@ fn stage_verdict(
                 v.holds = true;
                 v.progress = 1.0;
                 v.parts.clear();
+            }
+            // A time constraint holds when its form has held for the time it bounds: its value
+            // is that time (s), its target the least (else the most) time.
+            if let Some(dwell) = &p.dwell {
+                let held = held_s.get(k).copied().unwrap_or(0.0);
+                v.holds = dwell.kept(held);
+                v.value = held;
+                v.target = dwell.at_least_s.or(dwell.at_most_s).unwrap_or(0.0);
+                v.tolerance = 0.0;
+                v.progress = f64::from(u8::from(v.holds));
+                if v.holds {
+                    v.parts.clear();
+                }
             }
             v
         })
@@ -469,6 +483,11 @@ pub struct Judge {
     holding_since: Option<f64>,
     /// Per predicate of the current stage: a `was` check's state has been seen.
     seen: Vec<bool>,
+    /// Per predicate of the current stage with a time constraint: the seconds its form has
+    /// held (each update's interval counted when the form holds at its end).
+    held_s: Vec<f64>,
+    /// The time of the last update (s).
+    last_s: f64,
     done: Vec<StageVerdict>,
     last: Option<StageVerdict>,
 }
@@ -493,6 +512,8 @@ impl Judge {
             stage_start: initial.to_vec(),
             holding_since: None,
             seen: Vec::new(),
+            held_s: Vec::new(),
+            last_s: 0.0,
             done: Vec::new(),
             last: None,
         }
@@ -512,6 +533,17 @@ impl Judge {
         while self.stage < self.task.stages.len() {
             let stage = &self.task.stages[self.stage];
             self.seen.resize(stage.success.len(), false);
+            self.held_s.resize(stage.success.len(), 0.0);
+            let interval = time - self.last_s;
+            for (k, p) in stage.success.iter().enumerate() {
+                if p.dwell.is_some()
+                    && measure(&self.task, &self.resolved[self.stage][k], &p.check, states)
+                        .is_some_and(|m| m.holds)
+                {
+                    self.held_s[k] += interval;
+                }
+            }
+            self.last_s = time;
             for (k, p) in stage.success.iter().enumerate() {
                 if p.check.is_history()
                     && measure(&self.task, &self.resolved[self.stage][k], &p.check, states)
@@ -528,6 +560,7 @@ impl Judge {
                 &self.stage_start,
                 Some(time),
                 &self.seen,
+                &self.held_s,
             );
             let settle = self.task.stages[self.stage].settle_s;
             let settled = v.success && {
@@ -544,6 +577,7 @@ impl Judge {
             }
             self.holding_since = None;
             self.seen.clear();
+            self.held_s.clear();
             self.done.push(v);
             self.last = None;
             self.stage += 1;
@@ -551,6 +585,13 @@ impl Judge {
             self.stage_start = states.to_vec();
         }
         true
+    }
+
+    /// When the stage now running runs out of time (s on the episode's clock); `None` once
+    /// every stage is done.
+    pub fn deadline(&self) -> Option<f64> {
+        let stage = self.task.stages.get(self.stage)?;
+        Some(self.stage_start_s + stage.time_limit_s)
     }
 
     /// The verdict so far: completed stages, the current one as last evaluated, the rest unreached.

@@ -9,9 +9,14 @@
 //! Cameras are one set, sized by [`EnvOptions::image_size`] or else by the task's own camera
 //! spec, drawn at most once per control step whoever asks ([`Env::frames`]).
 //!
+//! Lab time is event-driven where nothing but instrument timers runs ([`crate::clock`]): a step
+//! may jump the clock after its physics ([`Transition::skipped_s`]), so a 30-cycle profile costs a
+//! few hundred control steps instead of a few hundred thousand.
+//!
 //! It does not decide actions (policies do, in `scoring`) and does not write results; it reports
 //! state, frames and the judge's verdict.
 
+use crate::clock::IdleClock;
 use crate::episode::{Episode, StepError};
 use crate::render::{Cameras, RenderError};
 use crate::scene::{Scene, SceneError};
@@ -116,6 +121,9 @@ pub struct Transition {
     pub truncated: bool,
     pub time: f64,
     pub control_steps: u64,
+    /// Seconds of lab time the step jumped over after its physics (only instrument timers ran);
+    /// 0 for an ordinary step.
+    pub skipped_s: f64,
 }
 
 impl Transition {
@@ -137,6 +145,10 @@ pub struct Env {
     /// Made on the first frame asked for; the control step its last frames show.
     cameras: Option<Cameras>,
     frames: Option<(u64, Vec<Image>)>,
+    /// How long the robots have been idle (the clock's jumps).
+    clock: IdleClock,
+    /// What the last step jumped over (s).
+    skipped_s: f64,
 }
 
 impl Env {
@@ -163,7 +175,28 @@ impl Env {
             over,
             cameras: None,
             frames: None,
+            clock: IdleClock::default(),
+            skipped_s: 0.0,
         }
+    }
+
+    /// Seconds the last step jumped over (0: an ordinary step).
+    pub fn skipped_s(&self) -> f64 {
+        self.skipped_s
+    }
+
+    /// The policy never moves (the hold control): an idle scene at rest may then jump to its
+    /// deadline with no instrument running ([`IdleClock::never_moves`]).
+    pub fn set_never_moves(&mut self, never: bool) {
+        self.clock.never_moves = never;
+    }
+
+    /// When the stage now running, or the task, runs out of time, whichever is first (s).
+    pub fn deadline(&self) -> f64 {
+        self.judge
+            .deadline()
+            .unwrap_or(f64::INFINITY)
+            .min(self.task.time_limit_s)
     }
 
     /// Starts the episode `seed` draws, on the same scene when its labware stands where it did.
@@ -329,12 +362,24 @@ impl Env {
             self.over = true;
             return Err(e.into());
         }
-        let mut hash = std::mem::take(&mut self.hash);
-        hash.after_step(self)?;
-        self.hash = hash;
+        self.clock.note(action);
         self.over = self
             .judge
             .update(self.time(), &self.episode.labware_state());
+        self.skipped_s = 0.0;
+        if let Some(to) = (!self.over)
+            .then(|| self.clock.jump_to(&self.episode, self.deadline()))
+            .flatten()
+        {
+            self.skipped_s = to - self.time();
+            self.episode.skip_to(to);
+            self.over = self
+                .judge
+                .update(self.time(), &self.episode.labware_state());
+        }
+        let mut hash = std::mem::take(&mut self.hash);
+        hash.after_step(self)?;
+        self.hash = hash;
         for o in observers.iter_mut() {
             o.after_step(self)?;
         }
@@ -347,6 +392,7 @@ impl Env {
             truncated: done && !success,
             time: self.time(),
             control_steps: self.control_steps(),
+            skipped_s: self.skipped_s,
         })
     }
 }

@@ -328,6 +328,45 @@ impl Episode {
         self.data.time()
     }
 
+    /// The earliest next event of any item's timers ([`labware::Instrument::next_event`]):
+    /// seconds from now, `None` while no instrument runs.
+    pub fn next_event(&self) -> Option<f64> {
+        (0..self.logic.len())
+            .filter_map(|i| instrument(&self.task, i).next_event(&self.logic[i]))
+            .min_by(f64::total_cmp)
+    }
+
+    /// Whether every robot's arm is still: each arm joint's velocity under `speed` (rad/s).
+    pub fn at_rest(&self, speed: f64) -> bool {
+        let qvel = self.data.qvel();
+        self.scene
+            .robots
+            .iter()
+            .flat_map(|r| &r.dof)
+            .all(|&d| qvel[d].abs() < speed)
+    }
+
+    /// Seconds one control step lasts (the task's substeps of physics).
+    pub fn control_period(&self) -> f64 {
+        self.task.physics.timestep_s * self.task.physics.substeps as f64
+    }
+
+    /// Jumps the clock to `time` over a span in which the physics stands still and only the
+    /// items' timers run (`crate::clock`): MuJoCo's time moves on, its state does not; each
+    /// item's timers advance by the span ([`labware::Instrument::skip`]) and its logic runs once
+    /// more (a zero step) for the switches and commands it asks for then.
+    pub fn skip_to(&mut self, time: f64) {
+        let span = time - self.data.time();
+        if span <= 0.0 {
+            return;
+        }
+        self.data.set_time(time);
+        for i in 0..self.logic.len() {
+            instrument(&self.task, i).skip(span, &mut self.logic[i]);
+        }
+        self.run_logic(0.0);
+    }
+
     /// Sets every robot's targets from one concatenated action (see the module doc).
     pub fn apply(&mut self, action: &[f64]) -> Result<(), StepError> {
         check_action(&self.action_bounds(), action)?;

@@ -2,8 +2,8 @@
 //!
 //! It assembles the scene (robot models prepared from installed packages + table + labware from
 //! each item's instrument model), steps physics at 500 Hz with each control action held for the
-//! task's substeps, runs instrument logic after every physics step (latches; detents and threads
-//! are plugins), renders cameras headless (EGL) and records episodes as MCAP, one channel per robot.
+//! task's substeps, runs instrument logic after every physics step (latches, runs; detents and
+//! threads are plugins), jumps lab time while only instrument timers run ([`clock`]), renders cameras headless (EGL) and records episodes as MCAP, one channel per robot.
 //! It does not decide what to do (policies live in `scoring`) nor whether an episode succeeded
 //! (verdicts live in `scoring`); it reports state.
 //!
@@ -11,6 +11,7 @@
 //! tests/level_of_detail.rs and tests/pictures.rs.
 
 pub mod clearance;
+pub mod clock;
 pub mod deps;
 mod env;
 mod episode;

@@ -176,6 +176,18 @@ impl Observer for Recording {
         }
         Ok(())
     }
+
+    /// A step that jumped the clock says so on `/stage`, at the time it jumped to.
+    fn after_step(&mut self, env: &Env) -> Result<(), ObserveError> {
+        let skipped = env.skipped_s();
+        if skipped > 0.0 {
+            self.writer.stage(
+                env.time(),
+                &format!("clock jumped {skipped:.3} s: only instrument timers ran"),
+            )?;
+        }
+        Ok(())
+    }
 }
 
 /// The frames a policy asks for from `history_steps` control steps before its next query
@@ -251,6 +263,7 @@ pub fn run_episode_with(
     let needs = policy.needs();
     let image_size = needs.image_size.or(opts.image_size);
     let mut env = Env::new(scene.clone(), task, instance, EnvOptions { image_size });
+    env.set_never_moves(policy.never_moves());
     let mut recording = match &opts.record {
         Some(p) => Some(Recording::create(
             p.clone(),

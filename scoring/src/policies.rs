@@ -20,6 +20,10 @@ impl Policy for HoldPolicy {
     fn act(&mut self, obs: &Observation) -> Result<Vec<Vec<f64>>, PolicyError> {
         Ok(vec![obs.privileged.ctrl()])
     }
+
+    fn never_moves(&self) -> bool {
+        true
+    }
 }
 
 /// Replays the actions a recording of this task and seed carries, control step by control step:

@@ -187,6 +187,11 @@ pub fn resimulate(rec: &Recording, from_step: usize) -> Result<Resimulation, Rep
         ep.apply(action)
             .and_then(|_| ep.control_step())
             .map_err(|error| ReplayError::Step { step: k, error })?;
+        // A step that jumped the clock (`runtime::clock`) recorded the time it jumped to.
+        let recorded_time = rec.summary.physics[k + 1].1[0];
+        if recorded_time > ep.time() + 0.5 * ep.control_period() {
+            ep.skip_to(recorded_time);
+        }
         hash.step(ep.data.qpos());
         let now = ep.physics_state();
         let recorded = &rec.summary.physics[k + 1].1;

@@ -42,6 +42,7 @@ pub(super) fn check_steps<'a>(
         ok &= check_together(cx, p, i, step);
         ok &= check_args(cx, step, prim, params);
         ok &= check_required_args(cx, step, prim, prim_name);
+        ok &= check_fixed_programme(cx, step, prim);
         if !ok {
             continue;
         }
@@ -171,6 +172,30 @@ fn check_required_args(
                 prim_name.span,
                 format!("`{}` needs `{}` ({})", prim.name, a.name, a.doc),
                 Some(format!("`{}`", prim.signature())),
+            );
+            ok = false;
+        }
+    }
+    ok
+}
+
+/// A run step's programme is fixed when the task compiles (the instrument's model carries it):
+/// no placeholder in its arguments but `on`.
+fn check_fixed_programme(cx: &mut Cx, step: &Step, prim: &LabPrimitive) -> bool {
+    if primitives::run::programme(prim.name, &BTreeMap::new()).is_none() {
+        return true;
+    }
+    let mut ok = true;
+    for (k, v) in &step.args {
+        if k.value != "on" && v.value.text().contains('{') {
+            cx.err(
+                Code::E0031,
+                v.span,
+                format!(
+                    "`{}`'s `{}` is a placeholder, but a run's programme is fixed when the task compiles",
+                    prim.name, k.value
+                ),
+                Some("write the value itself; draw the run's settings in another protocol per value".into()),
             );
             ok = false;
         }

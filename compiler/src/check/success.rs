@@ -38,7 +38,19 @@ pub(super) fn lower_predicates(
     let mut out = Vec::new();
     for (i, text) in p.success.all.iter().enumerate() {
         check_placeholders(cx, text, params);
-        let parsed = match predicates::parse(&text.value) {
+        let (body, dwell) = match predicates::split_dwell(&text.value) {
+            Ok(x) => x,
+            Err(e) => {
+                cx.err(
+                    Code::E0030,
+                    text.span,
+                    format!("cannot read predicate `{}`: {e}", text.value),
+                    None,
+                );
+                continue;
+            }
+        };
+        let parsed = match predicates::parse(body) {
             Ok(x) => x,
             Err(e) => {
                 cx.err(
@@ -70,6 +82,7 @@ pub(super) fn lower_predicates(
                 text: text.value.clone(),
                 check,
                 weight,
+                dwell,
             },
         });
     }

@@ -27,6 +27,14 @@ pub enum ArgKind {
     PanelParam,
     /// A quantity in the unit of that panel value.
     PanelValue,
+    /// A time, e.g. "45 s".
+    Duration,
+    /// A rotational speed, e.g. "12000 rpm".
+    Speed,
+    /// A temperature, e.g. "42 °C".
+    Temperature,
+    /// A thermal profile ([`crate::profile`]).
+    Profile,
 }
 
 impl ArgKind {
@@ -39,6 +47,12 @@ impl ArgKind {
             ArgKind::Button => "button name",
             ArgKind::PanelParam => "panel value name",
             ArgKind::PanelValue => "quantity in the panel value's unit",
+            ArgKind::Duration => "time, e.g. \"45 s\"",
+            ArgKind::Speed => "speed, e.g. \"12000 rpm\"",
+            ArgKind::Temperature => "temperature, e.g. \"42 °C\"",
+            ArgKind::Profile => {
+                "profile, e.g. \"95 °C 3 min, 30 x [95 °C 15 s, 55 °C 15 s, 72 °C 30 s]\""
+            }
         }
     }
 }
@@ -188,6 +202,7 @@ mod close_lid;
 mod dispense;
 mod hand_over;
 mod hold;
+mod incubate;
 mod lid;
 mod liquid;
 mod lock;
@@ -198,15 +213,24 @@ mod place;
 mod press;
 mod release;
 mod retract;
+pub mod run;
 mod screw_cap;
 mod set_parameter;
+mod spin;
+mod thermocycle;
 mod unlock;
 mod unscrew_cap;
+mod wait;
 
 pub(super) const ON: Arg = Arg {
     name: "on",
     kind: ArgKind::Labware,
     doc: "the labware acted on",
+};
+pub(super) const DURATION: Arg = Arg {
+    name: "duration",
+    kind: ArgKind::Duration,
+    doc: "how long",
 };
 pub(super) const VOLUME: Arg = Arg {
     name: "volume",
@@ -233,13 +257,17 @@ pub const CATALOGUE: &[&LabPrimitive] = &[
     &release::PRIMITIVE,
     &retract::PRIMITIVE,
     &hand_over::PRIMITIVE,
+    &spin::PRIMITIVE,
+    &thermocycle::PRIMITIVE,
+    &incubate::PRIMITIVE,
+    &wait::PRIMITIVE,
 ];
 
 /// What every primitive's file imports.
 mod prelude {
     pub(super) use super::{
-        Arg, ArgKind, BoundStep, Env, LabPrimitive, ON, VOLUME, Violation, panel_dimension,
-        precondition, resolve_location, stabilised, unknown_name, violation,
+        Arg, ArgKind, BoundStep, DURATION, Env, LabPrimitive, ON, VOLUME, Violation,
+        panel_dimension, precondition, resolve_location, stabilised, unknown_name, violation,
     };
     pub(super) use crate::world::{Hand, Location, World};
     pub(super) use dsl::{Code, Dimension};
@@ -518,7 +546,7 @@ mod tests {
             // `release` and `retract` take no `on`; `lock` is for a latch locked by hand apart
             // from closing, which no kind has yet (the catalogue says so).
             assert!(
-                used || ["release", "retract", "lock"].contains(&p.name),
+                used || ["release", "retract", "lock", "wait"].contains(&p.name),
                 "{} is used by no kind",
                 p.name
             );

@@ -68,6 +68,24 @@ fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
                 w.set_part(&lw, part, to);
             }
         }
+        ButtonEffect::Start => {
+            let run = kind
+                .primitives
+                .iter()
+                .find(|p| ["spin", "incubate", "thermocycle"].contains(p))
+                .copied()
+                .unwrap_or("spin");
+            return Err(Violation {
+                code: Code::E0031,
+                arg: Some("button"),
+                message: format!(
+                    "`{lw}`'s `{b}` key starts a run, whose programme a `{run}` step carries"
+                ),
+                hint: Some(format!(
+                    "write a `{run}` step on `{lw}`: it presses `{b}` and waits for the run"
+                )),
+            });
+        }
         ButtonEffect::Step { param, sign } => {
             let p = kind.panel_param(param).expect("catalogue is consistent");
             let key = (lw.clone(), param.to_string());

@@ -1,0 +1,227 @@
+//! What the run primitives (`spin`, `thermocycle`, `incubate`) share: the programme a step
+//! carries ([`programme`], the one reading of a run step's arguments, for the proof and for the
+//! task's models), the instrument shut and latched (E0038), tubes capped, the rotor balanced
+//! (E0037), and the run left done with its least duration on the world's clock. Not a primitive
+//! itself.
+
+use super::prelude::*;
+use crate::motion::{Motion, MotionStep};
+use labware::run::{Programme, RUN};
+use std::collections::BTreeMap;
+
+/// How long a centrifuge takes to come up to speed and back down (s): the 5430's ramps.
+pub const SPIN_RAMP_S: f64 = 10.0;
+/// The 5430's fastest spin with its 30-place rotor (rpm), and the slowest it offers.
+pub const SPIN_MAX_RPM: f64 = 17_500.0;
+pub const SPIN_MIN_RPM: f64 = 100.0;
+/// The thermal mixer's shaking range (rpm) and its timer's longest run (s, 99:30 h).
+pub const SHAKE_MIN_RPM: f64 = 300.0;
+pub const SHAKE_MAX_RPM: f64 = 3000.0;
+pub const INCUBATE_MAX_S: f64 = 99.5 * 3600.0;
+/// A heated lid's temperature (°C), as cyclers default it.
+pub const LID_C: f64 = 105.0;
+/// The mass (g) a tube adds to a rotor besides its liquid, and the imbalance a rotor tolerates
+/// (g, the tubes' masses times their slots' unit directions summed).
+const TUBE_G: f64 = 1.0;
+const IMBALANCE_G: f64 = 0.1;
+
+/// The programme a run step carries, from its arguments (rendered): `None` for a step that runs
+/// nothing.
+pub fn programme(
+    primitive: &str,
+    args: &BTreeMap<String, String>,
+) -> Option<Result<Programme, Violation>> {
+    let q = |name: &'static str, dim: Dimension| quantity(args, name, dim);
+    Some(match primitive {
+        "spin" => (|| {
+            let rpm = q("speed", Dimension::Speed)?;
+            let seconds = q("duration", Dimension::Time)?;
+            in_range("speed", rpm, SPIN_MIN_RPM, SPIN_MAX_RPM, "rpm")?;
+            in_range("duration", seconds, 1.0, INCUBATE_MAX_S, "s")?;
+            Ok(Programme::Spin {
+                rpm,
+                seconds,
+                ramp_s: SPIN_RAMP_S,
+            })
+        })(),
+        "thermocycle" => (|| {
+            let text = args.get("profile").map(String::as_str).unwrap_or_default();
+            let holds = crate::profile::parse_profile(text)
+                .map_err(|e| violation(Code::E0021, Some("profile"), e.to_string()))?;
+            Ok(Programme::Thermocycle {
+                holds,
+                lid_c: LID_C,
+            })
+        })(),
+        "incubate" => (|| {
+            let celsius = q("temperature", Dimension::Temperature)?;
+            let rpm = q("speed", Dimension::Speed)?;
+            let seconds = q("duration", Dimension::Time)?;
+            in_range(
+                "temperature",
+                celsius,
+                crate::profile::BLOCK_MIN_C,
+                crate::profile::BLOCK_MAX_C,
+                "°C",
+            )?;
+            in_range("speed", rpm, SHAKE_MIN_RPM, SHAKE_MAX_RPM, "rpm")?;
+            in_range("duration", seconds, 1.0, INCUBATE_MAX_S, "s")?;
+            Ok(Programme::Incubate {
+                celsius,
+                rpm,
+                seconds,
+            })
+        })(),
+        _ => return None,
+    })
+}
+
+fn quantity(
+    args: &BTreeMap<String, String>,
+    name: &'static str,
+    dim: Dimension,
+) -> Result<f64, Violation> {
+    let text = args.get(name).map(String::as_str).unwrap_or_default();
+    match dsl::parse_quantity(text) {
+        Ok(q) if q.dimension == dim => Ok(q.si),
+        Ok(q) => Err(violation(
+            Code::E0020,
+            Some(name),
+            format!(
+                "`{text}` is a {}, but `{name}` is a {}",
+                q.dimension.name(),
+                dim.name()
+            ),
+        )),
+        Err(e) => Err(violation(Code::E0020, Some(name), e.to_string())),
+    }
+}
+
+fn in_range(name: &'static str, v: f64, lo: f64, hi: f64, unit: &str) -> Result<(), Violation> {
+    if (lo..=hi).contains(&v) {
+        return Ok(());
+    }
+    Err(violation(
+        Code::E0021,
+        Some(name),
+        format!("`{name}` is {v} {unit}, outside the instrument's {lo}..{hi} {unit}"),
+    ))
+}
+
+/// The step's programme, its violations as the proof reports them.
+pub(super) fn step_programme(step: &BoundStep) -> Result<Programme, Violation> {
+    programme(step.primitive.name, step.args).expect("a run primitive carries a programme")
+}
+
+/// The instrument's lid is closed and latched (E0038).
+pub(super) fn require_shut(w: &World, lw: &str, what: &str) -> Result<(), Violation> {
+    let state = w.part(lw, "lid").unwrap_or("locked");
+    if state == "locked" {
+        return Ok(());
+    }
+    Err(Violation {
+        code: Code::E0038,
+        arg: None,
+        message: format!("`{what}` needs `{lw}`'s lid closed and latched, but it is {state}"),
+        hint: Some(format!(
+            "add a `close_lid` step on `{lw}` before this one (it latches the lid as it shuts)"
+        )),
+    })
+}
+
+/// The items standing in `holder`'s slots, with their slots.
+fn loaded<'w>(w: &'w World, holder: &str) -> Vec<(&'w str, &'w str)> {
+    w.locations
+        .iter()
+        .filter_map(|(item, loc)| match loc {
+            Location::Slot { holder: h, slot } if h == holder => {
+                Some((item.as_str(), slot.as_str()))
+            }
+            _ => None,
+        })
+        .collect()
+}
+
+/// Every tube in `holder`'s slots has its cap on (a run shakes or spins them).
+pub(super) fn require_capped(w: &World, holder: &str, what: &str) -> Result<(), Violation> {
+    for (item, _) in loaded(w, holder) {
+        if let Some(cap) = w.part(item, "cap")
+            && cap != "on"
+        {
+            return Err(precondition(
+                format!("`{what}` would run `{item}` in `{holder}` with its cap {cap}"),
+                &format!("screw the cap back on `{item}` before this step"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The tubes in a ring rotor balance (E0037): their masses times their slots' directions sum
+/// to under [`IMBALANCE_G`].
+pub(super) fn require_balanced(
+    w: &World,
+    holder: &str,
+    kind: &LabwareKind,
+) -> Result<(), Violation> {
+    let Some(labware::Slots {
+        layout: layout @ labware::SlotLayout::Ring { n },
+        ..
+    }) = kind.slots
+    else {
+        return Ok(());
+    };
+    let load = loaded(w, holder);
+    let (mut x, mut y) = (0.0, 0.0);
+    let mut masses = Vec::new();
+    for (item, slot) in &load {
+        let Ok(i) = slot.parse::<u32>() else { continue };
+        let angle = std::f64::consts::TAU * f64::from(i - 1) / f64::from(n);
+        let grams = TUBE_G + w.volumes.get(*item).copied().unwrap_or(0.0) / 1000.0;
+        x += grams * angle.cos();
+        y += grams * angle.sin();
+        masses.push(format!("`{item}` in {slot} ({grams:.2} g)"));
+    }
+    let off = x.hypot(y);
+    if off <= IMBALANCE_G {
+        return Ok(());
+    }
+    let hint = match load.as_slice() {
+        [(_, slot)] => format!(
+            "add a tube with the same volume in the opposite slot, `{holder}.{}`",
+            layout.opposite(slot).unwrap_or_default()
+        ),
+        _ => "put tubes of equal volume in opposite slots (or three 120° apart)".to_string(),
+    };
+    Err(Violation {
+        code: Code::E0037,
+        arg: Some("on"),
+        message: format!(
+            "`{holder}`'s rotor is unbalanced by {off:.2} g: {}",
+            masses.join(", ")
+        ),
+        hint: Some(hint),
+    })
+}
+
+/// The run done: its state, and its least duration on the world's clock.
+pub(super) fn ran(w: &mut World, lw: &str, programme: &Programme) {
+    w.set_part(lw, RUN, "done");
+    w.clock_s += programme.least_duration();
+}
+
+/// How long the expert waits for a run at most beyond its own length (s).
+const RUN_SLACK_S: f64 = 120.0;
+
+/// Keep still until the instrument's run (of primitive `primitive`) is done.
+pub(super) fn await_run(step: &MotionStep, primitive: &str) -> Motion {
+    let timeout_s = programme(primitive, step.args)
+        .and_then(Result::ok)
+        .map_or(RUN_SLACK_S, |p| {
+            p.duration(labware::run::ROOM_C) + RUN_SLACK_S
+        });
+    Motion::AwaitRun {
+        labware: step.arg("on"),
+        timeout_s,
+    }
+}
