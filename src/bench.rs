@@ -22,7 +22,7 @@
 //! - leaderboard (`crate::bench_leaderboard`): verification's episodes/s with one worker and two,
 //!   and the site's build time from 50 submissions x 16 tasks x 100 episodes.
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use mujoco_rs::prelude::*;
 use std::sync::Arc;
 use std::time::Instant;
@@ -53,6 +53,9 @@ pub enum Section {
     Leaderboard,
     /// The Python package against the Rust environment (on the first scene).
     Python,
+    /// Hours of lab time: a 30-cycle PCR episode and a 10-minute spin, with the event-driven
+    /// clock against stepping every control step.
+    LabTime,
 }
 
 #[derive(Clone, Debug, clap::Args)]
@@ -125,6 +128,47 @@ pub fn run(tasks: &[compiler::Task], only: &[Section]) -> Result<()> {
     let first_step_s = pipetting_step_s.or(first_step_s);
     if wants(Section::Physics) {
         physics_figures(first_step_s)?;
+    }
+    if wants(Section::LabTime) {
+        lab_time_figures()?;
+    }
+    Ok(())
+}
+
+/// The shipped protocols whose lab time the bench measures: a 30-cycle PCR and a 10-minute spin.
+const LAB_TIME_PROTOCOLS: [&str; 2] = ["protocols/lab/pcr_run.toml", "protocols/lab/spin.toml"];
+
+/// Wall time of one expert episode (seed 0) of each lab-time protocol, against the same lab time
+/// stepped control step by control step: the baseline is the episode's own wall time per
+/// control step times the control steps its simulated time holds, measured in the same run.
+fn lab_time_figures() -> Result<()> {
+    for path in LAB_TIME_PROTOCOLS {
+        let text = std::fs::read_to_string(path).with_context(|| format!("reading {path}"))?;
+        let (task, diags) = compiler::compile_source(&text, path);
+        let task = task.with_context(|| format!("{path} does not compile: {diags:?}"))?;
+        let opts = scoring::eval::EvalOptions {
+            episodes: 1,
+            workers: 1,
+            ..Default::default()
+        };
+        let report = scoring::eval::evaluate(&task, &opts, |_| {})?;
+        let e = report
+            .episodes
+            .first()
+            .with_context(|| format!("{path}: no episode ran"))?;
+        let period = task.physics.timestep_s * task.physics.substeps as f64;
+        let stepped = e.sim_time_s / period;
+        let per_step = e.wall_time_s / e.control_steps.max(1) as f64;
+        let baseline = stepped * per_step;
+        outln!(
+            "labtime  {:<22} {:>8.2} s wall for {:.0} s of lab time ({}) in {} control steps; stepping all {stepped:.0} would take ~{baseline:.0} s: {:.0}x",
+            task.id,
+            e.wall_time_s,
+            e.sim_time_s,
+            if e.success { "success" } else { "failure" },
+            e.control_steps,
+            baseline / e.wall_time_s.max(1e-9),
+        );
     }
     Ok(())
 }

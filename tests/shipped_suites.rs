@@ -84,6 +84,7 @@ fn every_shipped_suite_compiles_and_none_is_trivial() {
             "all.toml",
             "baseline.toml",
             "demo.toml",
+            "lab.toml",
             "learned-smoke.toml",
             "paper.toml",
             "smoke.toml"

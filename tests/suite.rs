@@ -23,6 +23,7 @@ mod golden;
 mod hold_control;
 mod instruments_act;
 mod kinematics;
+mod lab_runs;
 mod labware_models;
 mod leaderboard;
 mod learned_policy;

@@ -146,6 +146,7 @@ fn compile_stages(
                     &loaded.text,
                     load,
                 ));
+                crate::loops::expand(&mut cx, &mut p);
                 Document::Protocol(p)
             }
             other => other,

@@ -264,6 +264,61 @@ pub fn example(task: &Task, seed: u64) -> String {
     out
 }
 
+/// Examples of the lab vocabulary, each a passage of a shipped protocol that compiles (the test
+/// below finds each in its file; the goldens compile the files): primitive or language word, the
+/// protocol, the passage.
+pub const EXAMPLES: &[(&str, &str, &str)] = &[
+    (
+        "spin",
+        "protocols/lab/spin.toml",
+        "do = \"spin\"\non = \"centrifuge\"\nspeed = \"12000 rpm\"\nduration = \"10 min\"\nwith = \"arm\"",
+    ),
+    (
+        "thermocycle",
+        "protocols/lab/pcr_run.toml",
+        "do = \"thermocycle\"\non = \"cycler\"\nprofile = \"95 °C 30 s, 30 x [95 °C 15 s, 55 °C 30 s, 68 °C 1 min], 68 °C 5 min, 4 °C 1 min\"\nwith = \"arm\"",
+    ),
+    (
+        "incubate",
+        "protocols/lab/incubation_series.toml",
+        "do = \"incubate\"\non = \"mixer\"\ntemperature = \"56 °C\"\nspeed = \"1400 rpm\"\nduration = \"10 min\"\nwith = \"arm\"",
+    ),
+    (
+        "wait",
+        "protocols/lab/heat_shock.toml",
+        "do = \"wait\"\nduration = \"30 s\"\nwith = \"arm\"",
+    ),
+    (
+        "for_each",
+        "protocols/lab/miniprep_spins.toml",
+        "[[steps]]\nfor_each = { tube = [\"lysate\", \"counterweight\"], slot = [\"{first}\", \"{balance}\"] }\n\n[[steps.body]]\ndo = \"pick\"\non = \"{tube}\"\nwith = \"arm\"",
+    ),
+    (
+        "repeat",
+        "protocols/lab/miniprep_spins.toml",
+        "[[steps]]\nrepeat = 2\n\n[[steps.body]]\ndo = \"spin\"",
+    ),
+    (
+        "time constraint",
+        "protocols/lab/heat_shock.toml",
+        "\"cells in mixer.{well} for 30 s to 45 s\"",
+    ),
+    (
+        "run state",
+        "protocols/lab/pcr_run.toml",
+        "\"cycler.run is done\"",
+    ),
+];
+
+fn write_example(w: &mut String, word: &str) {
+    for (_, file, text) in EXAMPLES.iter().filter(|(name, ..)| *name == word) {
+        let _ = writeln!(w, "      example ({file}):");
+        for line in text.lines() {
+            let _ = writeln!(w, "        {line}");
+        }
+    }
+}
+
 /// The catalogues: every labware kind and lab primitive.
 pub fn catalogue() -> String {
     let mut out = String::new();
@@ -286,6 +341,26 @@ pub fn catalogue() -> String {
         let _ = writeln!(w, "      {}", p.description);
         let _ = writeln!(w, "      needs:  {}", p.requires);
         let _ = writeln!(w, "      leaves: {}", p.leaves);
+        write_example(w, p.name);
+    }
+    let _ = writeln!(w, "\nlanguage (docs/protocol-language.md)");
+    for (word, what) in [
+        (
+            "for_each",
+            "a step running its `[[steps.body]]` once per value of a list or a holder's slots",
+        ),
+        ("repeat", "a step running its `[[steps.body]]` N times"),
+        (
+            "time constraint",
+            "a predicate ending `for <t> to <t>`, `for at most <t>` or `for at least <t>`: held that long in total",
+        ),
+        (
+            "run state",
+            "`<instrument>.run is idle | running | done` (or `was`)",
+        ),
+    ] {
+        let _ = writeln!(w, "  {word}: {what}");
+        write_example(w, word);
     }
     let _ = writeln!(w, "\nlabware kinds");
     for k in labware::KINDS {
@@ -396,5 +471,30 @@ mod tests {
         assert!(!line("set_parameter(").contains("no expert motions"));
         assert!(!line("vortex_mixer").contains("[no simulation model yet]"));
         assert!(!line("pipette").contains("[no simulation model yet]"));
+    }
+
+    /// Every example the catalogue shows is a passage of the shipped protocol it names, which
+    /// compiles (the goldens hold every shipped protocol to it).
+    #[test]
+    fn every_example_is_in_its_shipped_protocol() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        for (word, file, text) in super::EXAMPLES {
+            let source = std::fs::read_to_string(root.join(file)).unwrap();
+            assert!(source.contains(text), "{word}: not in {file}:\n{text}");
+            let (task, diags) = crate::compile_source(&source, file);
+            assert!(task.is_some(), "{file}: {diags:?}");
+        }
+        let text = super::catalogue();
+        for word in [
+            "spin(",
+            "thermocycle(",
+            "incubate(",
+            "wait(",
+            "for_each:",
+            "repeat:",
+        ] {
+            let at = text.find(word).unwrap_or_else(|| panic!("no {word}"));
+            assert!(text[at..].contains("example ("), "{word}");
+        }
     }
 }

@@ -18,6 +18,7 @@ pub mod bench;
 mod chain;
 mod check;
 pub mod describe;
+mod loops;
 pub mod motion;
 pub mod params;
 pub mod predicates;
@@ -55,6 +56,15 @@ pub fn compile(p: &Protocol, file: &str) -> (Option<Task>, Vec<Diagnostic>) {
         );
         return (None, cx.diags);
     }
+    let expanded;
+    let p = if p.steps.iter().any(dsl::ast::Step::is_loop) {
+        let mut copy = p.clone();
+        loops::expand(&mut cx, &mut copy);
+        expanded = copy;
+        &expanded
+    } else {
+        p
+    };
     let task = check::lower(&mut cx, p, file).and_then(|low| {
         if cx.has_errors() {
             return None;

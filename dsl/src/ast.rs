@@ -200,6 +200,33 @@ pub struct Step {
     /// Every other key of the step (`on`, `to`, `volume`, ...), as written.
     pub args: Vec<(Spanned<String>, Spanned<Scalar>)>,
     pub span: Span,
+    /// A loop (no `do` of its own): run `body` this many times.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub repeat: Option<Spanned<i64>>,
+    /// A loop (no `do` of its own): run `body` once per value, the loop variables (`{tube}`)
+    /// standing for their values in its steps' arguments; several variables step together.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub for_each: Vec<(Spanned<String>, Spanned<LoopValues>)>,
+    /// A loop's steps (`[[steps.body]]`), loops among them.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub body: Vec<Step>,
+}
+
+/// What a `for_each` variable runs over.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LoopValues {
+    /// The values listed, in order.
+    List(Vec<Spanned<Scalar>>),
+    /// Every slot of a holder (`"rack.slots"`), in the holder's order.
+    Slots(String),
+}
+
+impl Step {
+    /// Whether the step is a loop (`repeat` or `for_each` over a `body`).
+    pub fn is_loop(&self) -> bool {
+        self.repeat.is_some() || !self.for_each.is_empty() || !self.body.is_empty()
+    }
 }
 
 impl Step {

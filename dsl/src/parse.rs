@@ -880,11 +880,17 @@ impl Parser {
                 together: None,
                 args: Vec::new(),
                 span,
+                repeat: None,
+                for_each: Vec::new(),
+                body: Vec::new(),
             };
             for (key, value) in self.settings(t) {
                 let k = key.get_ref().as_ref();
                 match k {
                     "do" => s.primitive = self.string(value, "do"),
+                    "repeat" => s.repeat = self.integer(value, "repeat"),
+                    "for_each" => s.for_each = self.for_each(value),
+                    "body" => s.body = self.steps(value),
                     "with" => s.with = self.string(value, "with"),
                     "together" => {
                         s.together = self
@@ -899,7 +905,9 @@ impl Parser {
                     }
                 }
             }
-            if s.primitive.is_none() {
+            if s.is_loop() {
+                self.check_loop(&s);
+            } else if s.primitive.is_none() {
                 // A key another tool names the action with (`action = "close_lid"`) is named at
                 // its place, with the key this language uses.
                 let mut hint = "e.g. do = \"close_lid\"".to_string();
@@ -920,6 +928,84 @@ impl Parser {
             out.push(s);
         }
         out
+    }
+
+    /// `for_each = { var = [..], other = [..] }` or `{ var = "<holder>.slots" }`.
+    fn for_each(&mut self, v: &Value<'_>) -> Vec<(Spanned<String>, Spanned<LoopValues>)> {
+        let Some(t) = self.table(v, "`for_each`") else {
+            return Vec::new();
+        };
+        let mut out = Vec::new();
+        for (key, value) in self.settings(t) {
+            let name = Spanned::new(key.get_ref().to_string(), span_of(key));
+            let values = match value.get_ref() {
+                DeValue::String(s) => match s.strip_suffix(".slots") {
+                    Some(holder) if !holder.is_empty() && !holder.contains('.') => {
+                        LoopValues::Slots(holder.to_string())
+                    }
+                    _ => {
+                        self.err(
+                            Code::E0004,
+                            span_of(value),
+                            format!("`for_each.{}` must be a list of values or `\"<holder>.slots\"`, found `\"{s}\"`", name.value),
+                            Some(format!("e.g. {} = [\"a\", \"b\"] or {} = \"rack.slots\"", name.value, name.value)),
+                        );
+                        continue;
+                    }
+                },
+                _ => LoopValues::List(self.scalars(value, &format!("for_each.{}", name.value))),
+            };
+            out.push((name, Spanned::new(values, span_of(value))));
+        }
+        out
+    }
+
+    /// A loop step: a body, a count of at least one or a `for_each` (not both), no `do`, `with`
+    /// or arguments of its own (they belong in its body's steps).
+    fn check_loop(&mut self, s: &Step) {
+        if s.body.is_empty() {
+            self.err(
+                Code::E0002,
+                s.span,
+                "a loop step has no `[[steps.body]]`".into(),
+                Some("put the steps it repeats under `[[steps.body]]` after it".into()),
+            );
+        }
+        match (&s.repeat, s.for_each.is_empty()) {
+            (Some(r), false) => self.err(
+                Code::E0021,
+                r.span,
+                "a loop step has both `repeat` and `for_each`".into(),
+                Some("nest one loop in the other's body".into()),
+            ),
+            (Some(r), true) if r.value < 1 || r.value > 1000 => self.err(
+                Code::E0021,
+                r.span,
+                format!("`repeat = {}` is outside 1..1000", r.value),
+                None,
+            ),
+            (None, true) => self.err(
+                Code::E0002,
+                s.span,
+                "a step with a `body` needs `repeat` or `for_each`".into(),
+                Some("e.g. repeat = 3, or for_each = { tube = [\"a\", \"b\"] }".into()),
+            ),
+            _ => {}
+        }
+        let own = s
+            .primitive
+            .as_ref()
+            .map(|p| p.span)
+            .or(s.with.as_ref().map(|w| w.span))
+            .or(s.args.first().map(|(k, _)| k.span));
+        if let Some(span) = own {
+            self.err(
+                Code::E0003,
+                span,
+                "a loop step takes no `do`, `with` or arguments of its own".into(),
+                Some("move them into the steps of its `[[steps.body]]`".into()),
+            );
+        }
     }
 
     /// A string, integer, float or boolean, kept as written.

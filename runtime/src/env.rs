@@ -362,7 +362,7 @@ impl Env {
             self.over = true;
             return Err(e.into());
         }
-        self.clock.note(action);
+        self.clock.note(action, &self.episode);
         self.over = self
             .judge
             .update(self.time(), &self.episode.labware_state());

@@ -336,8 +336,25 @@ impl Episode {
             .min_by(f64::total_cmp)
     }
 
+    /// The coordinates whose stillness lets the clock jump (`crate::clock`): every joint's
+    /// position, a loose item's position but not its orientation (a tube in a sleeve chatters
+    /// about its axis forever in MuJoCo's soft contacts; one that topples moves).
+    pub fn still_coordinates(&self) -> Vec<f64> {
+        let qpos = self.data.qpos();
+        let mut keep = vec![true; qpos.len()];
+        for item in &self.scene.labware {
+            for f in &item.free {
+                keep[(f.qpos + 3).min(qpos.len())..(f.qpos + 7).min(qpos.len())].fill(false);
+            }
+        }
+        qpos.iter()
+            .zip(keep)
+            .filter_map(|(v, k)| k.then_some(*v))
+            .collect()
+    }
+
     /// Whether every robot's arm is still: each arm joint's velocity under `speed` (rad/s).
-    pub fn at_rest(&self, speed: f64) -> bool {
+    pub fn arms_at_rest(&self, speed: f64) -> bool {
         let qvel = self.data.qvel();
         self.scene
             .robots

@@ -82,9 +82,12 @@ fn lower_item(
         xy_jitter_m: 0.0,
         yaw_jitter_rad: 0.0,
         joint_jitter: BTreeMap::new(),
+        // A run starts idle without saying so: the world reads a missing run as idle, and a
+        // task that runs nothing compiles as it did before instruments ran.
         initial: k
             .parts
             .iter()
+            .filter(|ps| ps.part != labware::run::RUN)
             .map(|ps| (ps.part.to_string(), ps.initial[0].to_string()))
             .collect(),
         parts: BTreeMap::new(),

@@ -26,7 +26,7 @@ fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
     let (lw, _) = step.on_empty_handed(w, env)?;
     let programme = run::step_programme(step)?;
     run::require_shut(w, &lw, PRIMITIVE.name)?;
-    if w.part(&lw, labware::run::RUN) != Some("idle") {
+    if w.part(&lw, labware::run::RUN).is_some_and(|s| s != "idle") {
         return Err(precondition(
             format!("`{lw}` has run a profile already; a cycler runs one profile per protocol"),
             "put every hold and cycle in one profile (cycles and holds interleave), or chain a second protocol",
