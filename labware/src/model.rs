@@ -376,7 +376,13 @@ pub trait Instrument {
         s: &LabwareState,
     ) -> Option<Measure> {
         if part == crate::run::RUN && !self.programmes().is_empty() {
-            return self.run().measure(state, &s.logic);
+            let (now, wanted) = self.run().measure(state, &s.logic)?;
+            return Some(Measure {
+                value: now,
+                target: wanted,
+                tolerance: 0.0,
+                holds: now == wanted,
+            });
         }
         let (_, judged) = self.part().filter(|(name, _)| *name == part)?;
         judged.state(state, tolerance, s)
