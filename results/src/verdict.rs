@@ -392,6 +392,14 @@ fn evaluate(
     }
 }
 
+/// What the judge remembers of the stage's predicates: which `was` states it has seen, and how
+/// long each time-constrained form has held (s).
+#[derive(Clone, Copy)]
+struct Memory<'a> {
+    seen: &'a [bool],
+    held_s: &'a [f64],
+}
+
 /// Stage `index`'s verdict; `resolved` is its predicates with the parameters filled in.
 fn stage_verdict(
     task: &Task,
@@ -400,9 +408,9 @@ fn stage_verdict(
     states: &[LabwareState],
     start: &[LabwareState],
     completed_at_s: Option<f64>,
-    seen: &[bool],
-    held_s: &[f64],
+    memory: Memory,
 ) -> StageVerdict {
+    let Memory { seen, held_s } = memory;
     let stage = &task.stages[index];
     let predicates: Vec<PredicateValue> = stage
         .success
@@ -559,8 +567,10 @@ impl Judge {
                 states,
                 &self.stage_start,
                 Some(time),
-                &self.seen,
-                &self.held_s,
+                Memory {
+                    seen: &self.seen,
+                    held_s: &self.held_s,
+                },
             );
             let settle = self.task.stages[self.stage].settle_s;
             let settled = v.success && {
