@@ -279,6 +279,9 @@ fn slow_panel(
 /// has held so far.
 struct Dwelling {
     ever: Vec<bool>,
+    /// The world could not tell, at some point, whether the form held (a run under way): the
+    /// judge measures it.
+    unknown: Vec<bool>,
     since: Vec<Option<f64>>,
     least: Vec<f64>,
 }
@@ -287,6 +290,7 @@ impl Dwelling {
     fn new(holds: &[Option<bool>]) -> Dwelling {
         Dwelling {
             ever: holds.iter().map(|h| *h == Some(true)).collect(),
+            unknown: holds.iter().map(Option::is_none).collect(),
             since: holds
                 .iter()
                 .map(|h| (*h == Some(true)).then_some(0.0))
@@ -297,6 +301,7 @@ impl Dwelling {
 
     /// After a step that left the clock at `clock` and the form of predicate `k` at `now`.
     fn step(&mut self, k: usize, now: Option<bool>, clock: f64) {
+        self.unknown[k] |= now.is_none();
         match (now, self.since[k]) {
             (Some(true), None) => {
                 self.ever[k] = true;
@@ -492,7 +497,7 @@ pub(crate) fn prove(cx: &mut Cx, scene: &ProofScene, stages: &[ProofStage], para
                     // Never held: no time at all, which breaks a least time; else the judge's
                     // to measure.
                     let needs_time = constraint.at_least_s.is_some_and(|lo| lo > 0.0);
-                    (needs_time && !dwell.ever[k]).then_some(false)
+                    (needs_time && !dwell.ever[k] && !dwell.unknown[k]).then_some(false)
                 } else if p.predicate.check.is_history() {
                     Some(seen[k])
                 } else {

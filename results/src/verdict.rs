@@ -398,6 +398,7 @@ fn evaluate(
 struct Memory<'a> {
     seen: &'a [bool],
     held_s: &'a [f64],
+    starts: &'a [u32],
 }
 
 /// Stage `index`'s verdict; `resolved` is its predicates with the parameters filled in.
@@ -410,7 +411,11 @@ fn stage_verdict(
     completed_at_s: Option<f64>,
     memory: Memory,
 ) -> StageVerdict {
-    let Memory { seen, held_s } = memory;
+    let Memory {
+        seen,
+        held_s,
+        starts,
+    } = memory;
     let stage = &task.stages[index];
     let predicates: Vec<PredicateValue> = stage
         .success
@@ -428,7 +433,9 @@ fn stage_verdict(
             // is that time (s), its target the least (else the most) time.
             if let Some(dwell) = &p.dwell {
                 let held = held_s.get(k).copied().unwrap_or(0.0);
-                v.holds = dwell.kept(held);
+                let step = task.physics.timestep_s * task.physics.substeps as f64;
+                let started = starts.get(k).copied().unwrap_or(0).max(1);
+                v.holds = dwell.kept(held, step * f64::from(started));
                 v.value = held;
                 v.target = dwell.at_least_s.or(dwell.at_most_s).unwrap_or(0.0);
                 v.tolerance = 0.0;
@@ -492,8 +499,13 @@ pub struct Judge {
     /// Per predicate of the current stage: a `was` check's state has been seen.
     seen: Vec<bool>,
     /// Per predicate of the current stage with a time constraint: the seconds its form has
-    /// held (each update's interval counted when the form holds at its end).
+    /// held, and whether it held at the last update. An update's interval counts when the form
+    /// held at its start: what holds at a step holds until the next (a jump of the clock ends
+    /// where a run's phase ends, and the run was running all through it).
     held_s: Vec<f64>,
+    held_then: Vec<bool>,
+    /// How many times each form started holding (each start is seen up to a step late).
+    starts: Vec<u32>,
     /// The time of the last update (s).
     last_s: f64,
     done: Vec<StageVerdict>,
@@ -521,6 +533,8 @@ impl Judge {
             holding_since: None,
             seen: Vec::new(),
             held_s: Vec::new(),
+            held_then: Vec::new(),
+            starts: Vec::new(),
             last_s: 0.0,
             done: Vec::new(),
             last: None,
@@ -542,14 +556,22 @@ impl Judge {
             let stage = &self.task.stages[self.stage];
             self.seen.resize(stage.success.len(), false);
             self.held_s.resize(stage.success.len(), 0.0);
+            self.held_then.resize(stage.success.len(), false);
+            self.starts.resize(stage.success.len(), 0);
             let interval = time - self.last_s;
             for (k, p) in stage.success.iter().enumerate() {
-                if p.dwell.is_some()
-                    && measure(&self.task, &self.resolved[self.stage][k], &p.check, states)
-                        .is_some_and(|m| m.holds)
-                {
+                if p.dwell.is_none() {
+                    continue;
+                }
+                if self.held_then[k] {
                     self.held_s[k] += interval;
                 }
+                let now = measure(&self.task, &self.resolved[self.stage][k], &p.check, states)
+                    .is_some_and(|m| m.holds);
+                if now && !self.held_then[k] {
+                    self.starts[k] += 1;
+                }
+                self.held_then[k] = now;
             }
             self.last_s = time;
             for (k, p) in stage.success.iter().enumerate() {
@@ -570,6 +592,7 @@ impl Judge {
                 Memory {
                     seen: &self.seen,
                     held_s: &self.held_s,
+                    starts: &self.starts,
                 },
             );
             let settle = self.task.stages[self.stage].settle_s;
@@ -588,6 +611,8 @@ impl Judge {
             self.holding_since = None;
             self.seen.clear();
             self.held_s.clear();
+            self.held_then.clear();
+            self.starts.clear();
             self.done.push(v);
             self.last = None;
             self.stage += 1;

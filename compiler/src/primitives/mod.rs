@@ -48,7 +48,7 @@ impl ArgKind {
             ArgKind::PanelParam => "panel value name",
             ArgKind::PanelValue => "quantity in the panel value's unit",
             ArgKind::Duration => "time, e.g. \"45 s\"",
-            ArgKind::Speed => "speed, e.g. \"12000 rpm\"",
+            ArgKind::Speed => "rotational speed in rpm",
             ArgKind::Temperature => "temperature, e.g. \"42 °C\"",
             ArgKind::Profile => {
                 "profile, e.g. \"95 °C 3 min, 30 x [95 °C 15 s, 55 °C 15 s, 72 °C 30 s]\""

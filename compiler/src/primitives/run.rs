@@ -114,18 +114,37 @@ pub(super) fn step_programme(step: &BoundStep) -> Result<Programme, Violation> {
 }
 
 /// The instrument's lid is closed and latched (E0038).
-pub(super) fn require_shut(w: &World, lw: &str, what: &str) -> Result<(), Violation> {
+pub(super) fn require_shut(
+    w: &World,
+    lw: &str,
+    kind: &LabwareKind,
+    what: &str,
+) -> Result<(), Violation> {
     let state = w.part(lw, "lid").unwrap_or("locked");
-    if state == "locked" {
-        return Ok(());
-    }
+    let (now, hint) = match state {
+        "locked" => return Ok(()),
+        "closed" if kind.supports("lock") => (
+            "closed but not latched".to_string(),
+            format!("add a `lock` step on `{lw}` before this one"),
+        ),
+        "closed" => (
+            "closed but not latched".to_string(),
+            format!(
+                "`close_lid` latches it as it shuts: open the lid (`open_lid` on `{lw}`) and close it again before this step, or let `{lw}` start `locked`"
+            ),
+        ),
+        other => (
+            other.to_string(),
+            format!(
+                "add a `close_lid` step on `{lw}` before this one (it latches the lid as it shuts)"
+            ),
+        ),
+    };
     Err(Violation {
         code: Code::E0038,
         arg: None,
-        message: format!("`{what}` needs `{lw}`'s lid closed and latched, but it is {state}"),
-        hint: Some(format!(
-            "add a `close_lid` step on `{lw}` before this one (it latches the lid as it shuts)"
-        )),
+        message: format!("`{what}` needs `{lw}`'s lid closed and latched, but it is {now}"),
+        hint: Some(hint),
     })
 }
 

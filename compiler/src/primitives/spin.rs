@@ -26,7 +26,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
 fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
     let (lw, kind) = step.on_empty_handed(w, env)?;
     let programme = run::step_programme(step)?;
-    run::require_shut(w, &lw, PRIMITIVE.name)?;
+    run::require_shut(w, &lw, kind, PRIMITIVE.name)?;
     run::require_capped(w, &lw, PRIMITIVE.name)?;
     run::require_balanced(w, &lw, kind)?;
     run::ran(w, &lw, &programme);

@@ -23,9 +23,9 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
 };
 
 fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
-    let (lw, _) = step.on_empty_handed(w, env)?;
+    let (lw, kind) = step.on_empty_handed(w, env)?;
     let programme = run::step_programme(step)?;
-    run::require_shut(w, &lw, PRIMITIVE.name)?;
+    run::require_shut(w, &lw, kind, PRIMITIVE.name)?;
     if w.part(&lw, labware::run::RUN).is_some_and(|s| s != "idle") {
         return Err(precondition(
             format!("`{lw}` has run a profile already; a cycler runs one profile per protocol"),
