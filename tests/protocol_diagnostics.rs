@@ -178,7 +178,7 @@ fn a_key_latched_lid_is_released_by_its_key_before_it_opens() {
         compile(&pressed).0.is_some(),
         "press the key, then open_lid"
     );
-    let unkeyed = shipped.replacen("do = \"unlock\"", "do = \"press\"\nbutton = \"start\"", 1);
+    let unkeyed = shipped.replacen("do = \"unlock\"", "do = \"press\"\nbutton = \"stop\"", 1);
     let (task, diags) = compile(&unkeyed);
     assert!(task.is_none() && diags.iter().any(|d| d.code.to_string() == "E0013"));
     for (file, says) in [
