@@ -393,20 +393,24 @@ impl BoundStep<'_> {
     }
 
     fn quantity(&self, name: &'static str, dim: Dimension) -> Result<f64, Violation> {
-        let v = self.text(name)?;
-        match parse_quantity(v) {
-            Ok(q) if q.dimension == dim => Ok(q.si),
-            Ok(q) => Err(violation(
-                Code::E0020,
-                Some(name),
-                format!(
-                    "`{v}` is a {}, but `{name}` is a {}",
-                    q.dimension.name(),
-                    dim.name()
-                ),
-            )),
-            Err(e) => Err(violation(Code::E0020, Some(name), e.to_string())),
-        }
+        quantity_arg(self.text(name)?, name, dim)
+    }
+}
+
+/// Argument `name`'s text `v` read as a quantity of `dim` (E0020 otherwise).
+pub(super) fn quantity_arg(v: &str, name: &'static str, dim: Dimension) -> Result<f64, Violation> {
+    match parse_quantity(v) {
+        Ok(q) if q.dimension == dim => Ok(q.si),
+        Ok(q) => Err(violation(
+            Code::E0020,
+            Some(name),
+            format!(
+                "`{v}` is a {}, but `{name}` is a {}",
+                q.dimension.name(),
+                dim.name()
+            ),
+        )),
+        Err(e) => Err(violation(Code::E0020, Some(name), e.to_string())),
     }
 }
 

@@ -82,19 +82,7 @@ fn quantity(
     dim: Dimension,
 ) -> Result<f64, Violation> {
     let text = args.get(name).map(String::as_str).unwrap_or_default();
-    match dsl::parse_quantity(text) {
-        Ok(q) if q.dimension == dim => Ok(q.si),
-        Ok(q) => Err(violation(
-            Code::E0020,
-            Some(name),
-            format!(
-                "`{text}` is a {}, but `{name}` is a {}",
-                q.dimension.name(),
-                dim.name()
-            ),
-        )),
-        Err(e) => Err(violation(Code::E0020, Some(name), e.to_string())),
-    }
+    super::quantity_arg(text, name, dim)
 }
 
 fn in_range(name: &'static str, v: f64, lo: f64, hi: f64, unit: &str) -> Result<(), Violation> {
