@@ -2,8 +2,9 @@
 //! the robot's own motions (a locked lid starts the cycler's profile, a start key the
 //! centrifuge's spin and the mixer's incubation), the event-driven clock jumps hours of lab time
 //! in a few control steps, a recording re-simulates those jumps bit for bit, a motionless robot
-//! fails, and a time constraint the robot breaks fails the task (the judge measures it; the proof
-//! cannot see it). The proof's side (E0037-E0039) is in tests/corpus/faulty.
+//! fails, a time constraint the robot breaks fails the task (the judge measures it; the proof
+//! cannot see it), a step's `within` is timed between two steps' outcomes, and a run that never
+//! starts fails its step at once. The proof's side (E0037-E0039) is in tests/corpus/faulty.
 
 use crate::common;
 
@@ -111,4 +112,86 @@ fn a_time_constraint_is_measured_on_the_episode_clock() {
     let v = in_block(&r);
     assert!(v.text.ends_with("for 30 s to 33 s"), "{}", v.text);
     assert!(!v.holds && v.value > 33.0, "{v:?}");
+}
+
+/// A step's `within` is the judge's too: the expert puts the cells back on the ice about 42 s
+/// after they went into the block, inside "within 60 s"; under "within 40 s" (which the proof
+/// accepts: the wait between takes 30 s) the same plan fails with the measured gap as the value.
+#[test]
+fn a_step_timed_from_an_earlier_one_is_measured_between_their_outcomes() {
+    let timed = |r: &results::episode::EpisodeResult| {
+        r.verdict
+            .predicates()
+            .iter()
+            .find(|p| p.text.starts_with("cells in ice.A1 within"))
+            .cloned()
+            .unwrap_or_else(|| panic!("{:#?}", r.verdict))
+    };
+    let task = common::compile("protocols/lab/heat_shock.toml");
+    let r = common::run(&task, 0, "expert");
+    assert!(r.success, "{:#?}", r.verdict);
+    let v = timed(&r);
+    assert!(
+        v.text.contains("within 60 s of cells in mixer."),
+        "{}",
+        v.text
+    );
+    assert!(v.holds && (30.0..60.0).contains(&v.value), "{v:?}");
+    let strict = common::compile_edited("protocols/lab/heat_shock.toml", |s| {
+        s.replace("within = \"60 s\"", "within = \"40 s\"")
+    });
+    let r = common::run(&strict, 0, "expert");
+    assert!(!r.success, "{:#?}", r.verdict);
+    let v = timed(&r);
+    assert!(!v.holds && v.value > 40.0 && v.target == 40.0, "{v:?}");
+}
+
+/// The expert's press on the start key that never lands (its arm frozen where the spin step
+/// began, as if the key were stuck): the expert gives the step up 2 s into its wait with the
+/// reason, instead of holding still to the task's 14-minute limit.
+#[test]
+fn a_run_that_never_starts_fails_its_step_at_once() {
+    struct Stuck {
+        expert: Box<dyn policy::Policy>,
+        events: Vec<policy::StageEvent>,
+        last: Vec<Vec<f64>>,
+        frozen: Option<Vec<Vec<f64>>>,
+    }
+    impl policy::Policy for Stuck {
+        fn name(&self) -> String {
+            "stuck".into()
+        }
+        fn act(&mut self, obs: &policy::Observation) -> Result<Vec<Vec<f64>>, policy::PolicyError> {
+            let action = self.expert.act(obs)?;
+            let events = self.expert.drain_events();
+            if self.frozen.is_none() && events.iter().any(|e| e.label.starts_with("step 4: spin")) {
+                self.frozen = Some(self.last.clone());
+            }
+            self.events.extend(events);
+            self.last = action.clone();
+            Ok(self.frozen.clone().unwrap_or(action))
+        }
+        fn drain_events(&mut self) -> Vec<policy::StageEvent> {
+            std::mem::take(&mut self.events)
+        }
+    }
+    let task = common::compile("protocols/lab/spin.toml");
+    let opts = scoring::episode::EpisodeOptions::default();
+    let r = common::run_with(&task, 0, &opts, |t, s, i| {
+        Box::new(Stuck {
+            expert: scoring::policies::make("expert", t, s, i).unwrap(),
+            events: Vec::new(),
+            last: Vec::new(),
+            frozen: None,
+        })
+    });
+    assert!(!r.success);
+    assert_eq!(r.outcome, results::episode::Outcome::PolicyError, "{r:#?}");
+    let why = r.error.as_deref().unwrap_or_default();
+    assert!(
+        why.contains("spin centrifuge") && why.contains("`centrifuge`'s run had not started"),
+        "{why}"
+    );
+    assert!(r.sim_time_s < 120.0, "gave up after {} s", r.sim_time_s);
+    assert_eq!(common::predicate(&r, "centrifuge.run is done").value, 0.0);
 }

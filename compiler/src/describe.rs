@@ -304,6 +304,16 @@ pub const EXAMPLES: &[(&str, &str, &str)] = &[
         "\"cells in mixer.{well} for 30 s to 45 s\"",
     ),
     (
+        "within",
+        "protocols/lab/heat_shock.toml",
+        "to = \"ice.A1\"\nwithin = \"60 s\"\nafter = \"shock\"",
+    ),
+    (
+        "x g",
+        "protocols/lab/miniprep_spins.toml",
+        "speed = \"17900 x g\"",
+    ),
+    (
         "run state",
         "protocols/lab/pcr_run.toml",
         "\"cycler.run is done\"",
@@ -353,6 +363,14 @@ pub fn catalogue() -> String {
         (
             "time constraint",
             "a predicate ending `for <t> to <t>`, `for at most <t>` or `for at least <t>`: held that long in total",
+        ),
+        (
+            "within",
+            "a step's `within = <t>` (with `after = <step id>`, else of the step before): its outcome at most that long after the other step's",
+        ),
+        (
+            "x g",
+            "a spin's `speed` as a force (`16000 x g`), turned into rpm at the rotor's radius",
         ),
         (
             "run state",
@@ -492,6 +510,8 @@ mod tests {
             "wait(",
             "for_each:",
             "repeat:",
+            "within:",
+            "x g:",
         ] {
             let at = text.find(word).unwrap_or_else(|| panic!("no {word}"));
             assert!(text[at..].contains("example ("), "{word}");

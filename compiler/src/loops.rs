@@ -165,8 +165,8 @@ impl Scope<'_> {
     }
 }
 
-/// The step with each `{var}` in its string arguments and `with` replaced by the variable's
-/// value (other placeholders left for the parameters).
+/// The step with each `{var}` in its string arguments, `with`, `id`, `after` and `within`
+/// replaced by the variable's value (other placeholders left for the parameters).
 fn substitute(s: &Step, vars: &BTreeMap<String, String>) -> Step {
     if vars.is_empty() {
         return s.clone();
@@ -182,8 +182,11 @@ fn substitute(s: &Step, vars: &BTreeMap<String, String>) -> Step {
             v.value = Scalar::Str(fill(text));
         }
     }
-    if let Some(w) = &mut out.with {
-        w.value = fill(&w.value);
+    for key in [&mut out.with, &mut out.id, &mut out.after, &mut out.within]
+        .into_iter()
+        .flatten()
+    {
+        key.value = fill(&key.value);
     }
     out
 }

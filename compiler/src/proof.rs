@@ -337,6 +337,52 @@ impl Dwelling {
 }
 
 /// Runs the proof and reports into `cx`. Stops tracing a combination at its first failure.
+/// E0039 for the first timed step (`within`) whose waits and runs since the step it is timed
+/// from already take longer than its time, on the stage's clock after each step.
+fn late_step(steps: &[CheckedStep], clock_after: &[f64]) -> Option<Diagnostic> {
+    let ids: BTreeMap<&str, usize> = steps
+        .iter()
+        .enumerate()
+        .filter_map(|(i, s)| s.ast.id.as_ref().map(|id| (id.value.as_str(), i)))
+        .collect();
+    for (i, s) in steps.iter().enumerate() {
+        let Some(within) = &s.ast.within else {
+            continue;
+        };
+        let Ok(q) = dsl::parse_quantity(&within.value) else {
+            continue;
+        };
+        let from = match &s.ast.after {
+            Some(a) => ids.get(a.value.as_str()).copied(),
+            None => i.checked_sub(1),
+        };
+        let Some(from) = from else { continue };
+        let (Some(a), Some(b)) = (clock_after.get(from), clock_after.get(i)) else {
+            continue;
+        };
+        if b - a > q.si + 1e-9 {
+            return Some(
+                Diagnostic::new(
+                    Code::E0039,
+                    within.span,
+                    format!(
+                        "the waits and runs from step {} to this `{}` take at least {:.0} s, more than `within = \"{}\"`",
+                        from + 1,
+                        s.primitive.name,
+                        b - a,
+                        within.value
+                    ),
+                )
+                .with_hint(format!(
+                    "allow at least {:.0} s (and time for the motions), or time this step from a later one",
+                    (b - a).ceil()
+                )),
+            );
+        }
+    }
+    None
+}
+
 pub(crate) fn prove(cx: &mut Cx, scene: &ProofScene, stages: &[ProofStage], params: &[ParamSpec]) {
     let (assignments, complete) = proof_assignments(params);
     if !complete {
@@ -427,6 +473,8 @@ pub(crate) fn prove(cx: &mut Cx, scene: &ProofScene, stages: &[ProofStage], para
                 d.notes.extend(origin.clone());
                 cx.push(d);
             }
+            // The stage's clock after each step: what a step's `within` is proved against.
+            let mut clock_after: Vec<f64> = Vec::with_capacity(stage.steps.len());
             for step in stage.steps {
                 let mut args = BTreeMap::new();
                 for (k, v) in &step.planned.args {
@@ -485,6 +533,12 @@ pub(crate) fn prove(cx: &mut Cx, scene: &ProofScene, stages: &[ProofStage], para
                     }
                     dwell.step(k, now, w.clock_s);
                 }
+                clock_after.push(w.clock_s);
+            }
+            if let Some(mut d) = late_step(stage.steps, &clock_after) {
+                d.notes.extend(describe(bound));
+                cx.push(d);
+                continue 'combination;
             }
             if let Some(d) = dwell.broken(stage.predicates, w.clock_s) {
                 let mut d = d;
@@ -493,6 +547,11 @@ pub(crate) fn prove(cx: &mut Cx, scene: &ProofScene, stages: &[ProofStage], para
                 continue 'combination;
             }
             for (k, p) in stage.predicates.iter().enumerate() {
+                if p.predicate.since.is_some() {
+                    // A timed step's outcome is the judge's to time; the plan's share is
+                    // `late_step`'s.
+                    continue;
+                }
                 let now = if let Some(constraint) = &p.predicate.dwell {
                     // Never held: no time at all, which breaks a least time; else the judge's
                     // to measure.

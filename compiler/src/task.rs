@@ -183,6 +183,33 @@ pub struct Predicate {
     /// the episode's clock.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dwell: Option<crate::predicates::Dwell>,
+    /// A step's timing (`within` on a step): the check holds once it first holds no later than
+    /// [`Since::within_s`] after the earlier step's outcome first held, on the episode's clock,
+    /// and goes on holding whatever happens next (the judge keeps the two times).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub since: Option<Since>,
+}
+
+/// What a timed step's outcome is timed from: the earlier step's outcome as a check.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Since {
+    /// The earlier step's outcome as a predicate ("cells in mixer.{well}").
+    pub text: String,
+    pub check: Check,
+    pub within_s: f64,
+}
+
+impl Since {
+    /// The earlier step's outcome as a predicate of its own (what the judge resolves).
+    pub fn predicate(&self) -> Predicate {
+        Predicate {
+            text: self.text.clone(),
+            check: self.check.clone(),
+            weight: 0.0,
+            dwell: None,
+            since: None,
+        }
+    }
 }
 
 /// One concrete episode's scene, drawn from a task and a seed.
@@ -219,10 +246,14 @@ impl Task {
     pub fn with_programmes(mut self) -> Task {
         let mut runs: BTreeMap<String, Vec<labware::run::Programme>> = BTreeMap::new();
         for step in self.stages.iter().flat_map(|s| &s.plan) {
-            let (Some(on), Some(Ok(p))) = (
-                &step.labware,
-                crate::primitives::run::programme(&step.primitive, &step.args),
-            ) else {
+            let Some(on) = &step.labware else { continue };
+            let kind = self
+                .labware
+                .iter()
+                .find(|l| &l.name == on)
+                .map(|l| l.kind.as_str());
+            let Some(Ok(p)) = crate::primitives::run::programme(&step.primitive, &step.args, kind)
+            else {
                 continue;
             };
             runs.entry(on.clone()).or_default().push(p);

@@ -210,6 +210,15 @@ pub struct Step {
     /// A loop's steps (`[[steps.body]]`), loops among them.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub body: Vec<Step>,
+    /// `id = "into_block"`: a name later steps time themselves from (`after`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub id: Option<Spanned<String>>,
+    /// `within = "45 s"`: the step's outcome must come at most this long after the outcome of
+    /// the step `after` names (the step before, without `after`), on the episode's clock.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub within: Option<Spanned<String>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub after: Option<Spanned<String>>,
 }
 
 /// What a `for_each` variable runs over.

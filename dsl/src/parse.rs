@@ -883,6 +883,9 @@ impl Parser {
                 repeat: None,
                 for_each: Vec::new(),
                 body: Vec::new(),
+                id: None,
+                within: None,
+                after: None,
             };
             for (key, value) in self.settings(t) {
                 let k = key.get_ref().as_ref();
@@ -891,6 +894,9 @@ impl Parser {
                     "repeat" => s.repeat = self.integer(value, "repeat"),
                     "for_each" => s.for_each = self.for_each(value),
                     "body" => s.body = self.steps(value),
+                    "id" => s.id = self.string(value, "id"),
+                    "within" => s.within = self.string(value, "within"),
+                    "after" => s.after = self.string(value, "after"),
                     "with" => s.with = self.string(value, "with"),
                     "together" => {
                         s.together = self
@@ -963,6 +969,14 @@ impl Parser {
     /// A loop step: a body, a count of at least one or a `for_each` (not both), no `do`, `with`
     /// or arguments of its own (they belong in its body's steps).
     fn check_loop(&mut self, s: &Step) {
+        for key in [&s.id, &s.within, &s.after].into_iter().flatten() {
+            self.err(
+                Code::E0003,
+                key.span,
+                "a loop step has no outcome of its own to name or time".into(),
+                Some("put `id`, `within` and `after` on a step of its body".into()),
+            );
+        }
         if s.body.is_empty() {
             self.err(
                 Code::E0002,
@@ -1542,6 +1556,7 @@ fn example(dim: Dimension) -> &'static str {
         Dimension::Volume => "200 µL",
         Dimension::Temperature => "37 °C",
         Dimension::Speed => "1200 rpm",
+        Dimension::Acceleration => "16000 x g",
     }
 }
 
@@ -1553,6 +1568,7 @@ fn unit_of(dim: Dimension) -> &'static str {
         Dimension::Volume => "ul",
         Dimension::Temperature => "degc",
         Dimension::Speed => "rpm",
+        Dimension::Acceleration => "xg",
     }
 }
 

@@ -14,6 +14,8 @@ pub enum Dimension {
     Volume,
     Temperature,
     Speed,
+    /// A centrifuge's relative centrifugal force, in multiples of g (`× g`).
+    Acceleration,
 }
 
 impl Dimension {
@@ -26,6 +28,7 @@ impl Dimension {
             Dimension::Volume => "volume",
             Dimension::Temperature => "temperature",
             Dimension::Speed => "rotational speed",
+            Dimension::Acceleration => "relative centrifugal force",
         }
     }
 
@@ -37,6 +40,7 @@ impl Dimension {
             Dimension::Volume => "µL, uL, mL, L",
             Dimension::Temperature => "°C, degC",
             Dimension::Speed => "rpm",
+            Dimension::Acceleration => "x g, × g",
         }
     }
 
@@ -49,6 +53,7 @@ impl Dimension {
             Dimension::Volume => "µL",
             Dimension::Temperature => "°C",
             Dimension::Speed => "rpm",
+            Dimension::Acceleration => "× g",
         }
     }
 }
@@ -83,6 +88,10 @@ const UNITS: &[(&str, Dimension, f64)] = &[
     ("degC", Dimension::Temperature, 1.0),
     ("degc", Dimension::Temperature, 1.0),
     ("rpm", Dimension::Speed, 1.0),
+    ("× g", Dimension::Acceleration, 1.0),
+    ("×g", Dimension::Acceleration, 1.0),
+    ("x g", Dimension::Acceleration, 1.0),
+    ("xg", Dimension::Acceleration, 1.0),
 ];
 
 /// Looks up a unit symbol (also used for unit-suffixed keys such as `yaw_deg`).
@@ -104,6 +113,7 @@ pub fn suggest_unit(symbol: &str) -> Option<&'static str> {
     let spelled = match folded.as_str() {
         "c" | "degc" | "degreesc" | "degreec" | "celsius" | "ºc" | "°c" => Some("°C"),
         "rpm" | "rpms" | "r/min" => Some("rpm"),
+        "g" | "*g" | "rcf" | "xgravity" => Some("x g"),
         "sec" | "secs" | "second" | "seconds" => Some("s"),
         "mins" | "minute" | "minutes" => Some("min"),
         "hr" | "hrs" | "hour" | "hours" => Some("h"),
@@ -120,7 +130,14 @@ pub fn suggest_unit(symbol: &str) -> Option<&'static str> {
                 .map(|(s, _, _)| *s)
                 .find(|s| s.to_lowercase() == folded)
         })
-        .or_else(|| crate::did_you_mean(symbol, UNITS.iter().map(|(s, _, _)| *s)))
+        // By spelling, but never to a force: `kg` is one letter from `xg` and means nothing like it.
+        .or_else(|| {
+            let spelled = UNITS
+                .iter()
+                .filter(|(_, d, _)| *d != Dimension::Acceleration)
+                .map(|(s, _, _)| *s);
+            crate::did_you_mean(symbol, spelled)
+        })
 }
 
 /// Why a text is not a quantity. Its messages are lowercase and quote the text.
@@ -188,6 +205,8 @@ mod tests {
             ("mins", "min"),
             ("ML", "mL"),
             ("Mm", "mm"),
+            ("g", "x g"),
+            ("rcf", "x g"),
         ] {
             assert_eq!(super::suggest_unit(typed), Some(meant), "{typed}");
             let e = super::parse_quantity(&format!("37 {typed}"))

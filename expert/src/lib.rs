@@ -31,7 +31,7 @@ use primitives::{Lab, StepFrame};
 use runtime::Scene;
 use runtime::clearance::Clearance;
 use runtime::kinematics::ArmKinematics;
-use std::collections::VecDeque;
+use std::collections::{BTreeMap, VecDeque};
 
 /// Pause after each path so the arm settles on its last waypoint (s).
 const SETTLE_S: f64 = 0.2;
@@ -44,6 +44,12 @@ const PRESS_RATE: f64 = 0.15;
 /// A pressed joint has reached its goal when what is left of its way there is at most this share
 /// of the way (a plunger 0.2 mm short of its first stop).
 const PRESS_SHORT: f64 = 0.03;
+
+/// How long after its step's last motion an instrument's run may take to start (s): the latch
+/// catching a lid that settles shut, a key's press counted. Past it, with the arm still, the run
+/// never will, and the expert gives the step up at once rather than wait out the task's time
+/// limit (a failed spin would otherwise hold the arm still for minutes of simulated time).
+const RUN_START_GRACE_S: f64 = 2.0;
 
 struct Queued {
     /// Index into the plan, the group it runs in, and the stage it belongs to.
@@ -96,6 +102,9 @@ pub struct ExpertPolicy {
     /// The episode's seed, and the free-space motions routed so far: each route's planner seed.
     seed: u64,
     routed: u64,
+    /// Per item that runs, the runs it had started when the expert last finished waiting for
+    /// one (or when the episode began): a wait for a run is over only once a newer one started.
+    runs_awaited: BTreeMap<String, f64>,
 }
 
 /// Why the expert cannot plan.
@@ -114,6 +123,10 @@ pub enum PlanFailure {
         of: usize,
         ik: primitives::ik::IkError,
     },
+    /// An instrument's run did not start when its step had done what starts it (a key not
+    /// counted as pressed, a lid not latched).
+    #[error("`{labware}`'s run had not started {waited_s} s after its step")]
+    RunNotStarted { labware: String, waited_s: f64 },
     /// A free-space motion's straight path collides and RRTConnect found no way around.
     #[error("the straight path hits {hits}, and {error}")]
     Blocked {
@@ -195,6 +208,7 @@ impl ExpertPolicy {
             events: Vec::new(),
             seed: instance.seed,
             routed: 0,
+            runs_awaited: BTreeMap::new(),
         })
     }
 
@@ -262,9 +276,32 @@ impl ExpertPolicy {
                             arm.gripper = from + (arm.model.gripper.open - from) * t;
                             t >= 1.0
                         }
-                        Active::Run { labware, deadline } => {
+                        Active::Run {
+                            labware,
+                            deadline,
+                            since,
+                            context,
+                        } => {
                             let lab = Lab::new(&self.task, &obs.privileged.labware, &self.params);
-                            lab.run_done(labware) || obs.time >= *deadline
+                            let started = lab.runs_started(labware);
+                            let awaited = self.runs_awaited.get(labware).copied().unwrap_or(0.0);
+                            if started <= awaited {
+                                if obs.time >= since + RUN_START_GRACE_S {
+                                    return Err(planning(
+                                        context.clone(),
+                                        PlanFailure::RunNotStarted {
+                                            labware: labware.clone(),
+                                            waited_s: RUN_START_GRACE_S,
+                                        },
+                                    ));
+                                }
+                                false
+                            } else if lab.run_done(labware) || obs.time >= *deadline {
+                                self.runs_awaited.insert(labware.clone(), started);
+                                true
+                            } else {
+                                false
+                            }
                         }
                         Active::Until {
                             labware,
@@ -321,6 +358,11 @@ impl Policy for ExpertPolicy {
                 arm.gripper = live.ctrl.last().copied().unwrap_or(arm.model.gripper.open);
             }
             self.started = true;
+            let lab = Lab::new(&self.task, &obs.privileged.labware, &self.params);
+            for item in &obs.privileged.labware {
+                let runs = lab.runs_started(&item.name);
+                self.runs_awaited.insert(item.name.clone(), runs);
+            }
         }
         // Until no lane moves on: a lane that finishes its group's last motion lets the next
         // group start in this same control step, whichever robot it is on.

@@ -43,10 +43,14 @@ pub(super) enum Active {
         t0: f64,
         seconds: f64,
     },
-    /// Still until an instrument's run is done (or the deadline passes).
+    /// Still until an instrument's run is done (or the deadline passes). A run that has not
+    /// started [`RUN_START_GRACE_S`] after `since` never will (the arm is still): the step
+    /// failed, named by `context`.
     Run {
         labware: String,
         deadline: f64,
+        since: f64,
+        context: String,
     },
     /// Still until a panel shows a value (or the deadline passes: the judge tells what came of it).
     Until {
@@ -130,7 +134,9 @@ impl ExpertPolicy {
             return Ok(active);
         }
         let comply_at = &obs.privileged.robots[r].arm_q;
-        if let Some(active) = in_place(arm, &q.motion, comply_at, &lab, obs.time).map_err(&plan)? {
+        if let Some(active) =
+            in_place(arm, &q.motion, comply_at, &lab, obs.time, &context).map_err(&plan)?
+        {
             return Ok(active);
         }
         let route_seed = || {
@@ -230,6 +236,7 @@ fn in_place(
     arm_q: &[f64],
     lab: &Lab,
     time: f64,
+    context: &str,
 ) -> Result<Option<Active>, PlanFailure> {
     let gripper = arm.model.gripper;
     Ok(Some(match motion {
@@ -275,6 +282,8 @@ fn in_place(
         Motion::AwaitRun { labware, timeout_s } => Active::Run {
             labware: labware.clone(),
             deadline: time + timeout_s,
+            since: time,
+            context: context.to_string(),
         },
         Motion::HoldUntil {
             labware,

@@ -820,6 +820,23 @@ impl Instrument for Params {
         self.programmes = programmes;
     }
 
+    /// A fixed-angle rotor's tube bottoms (the slot's radius at its mouth plus its depth along
+    /// the lean); a swing-bucket rotor's buckets swung out level, at the arm's end.
+    fn rcf_radius_m(&self) -> Option<f64> {
+        Some(match self.rotor {
+            Rotor::FixedAngle {
+                radius,
+                tilt,
+                depth,
+                ..
+            } => radius + depth * tilt.sin(),
+            Rotor::SwingBucket {
+                arm_radius,
+                bucket_radius,
+            } => arm_radius + bucket_radius,
+        })
+    }
+
     /// `lid_close`: the lid is pushed shut (a touch on its face); `lid_open`: it is lifted by its
     /// grip bar; `open`: the lid key.
     fn affordance(&self, name: &str, s: &LabwareState) -> Option<Affordance> {

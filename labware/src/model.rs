@@ -403,6 +403,13 @@ pub trait Instrument {
         &[]
     }
 
+    /// The radius (m) at which a centrifuge's relative centrifugal force is given (its load's
+    /// outermost point, as manuals state a rotor's × g), so a spin written in `× g` converts
+    /// to rotor speed; `None` for anything that does not spin.
+    fn rcf_radius_m(&self) -> Option<f64> {
+        None
+    }
+
     /// Gives a model that runs programmes the protocol's (the compiler, once per item); a model
     /// that runs none ignores them (the compiler refuses run steps on its kind first).
     fn set_programmes(&mut self, _programmes: Vec<crate::run::Programme>) {}

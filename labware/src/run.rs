@@ -48,7 +48,7 @@ pub const STATES: [&str; 3] = ["idle", "running", "done"];
 /// Logic keys: the run's state (0 idle, 1 running, 2 done), programmes started so far, the phase
 /// now running and the seconds spent in it, the block's temperature at the phase's start.
 const STATE: &str = "run";
-const STARTED: &str = "runs_started";
+pub const STARTED: &str = "runs_started";
 const PHASE: &str = "run_phase";
 const PHASE_T: &str = "run_phase_s";
 const PHASE_FROM: &str = "run_phase_from_c";

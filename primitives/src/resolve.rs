@@ -193,6 +193,18 @@ impl<'a> Lab<'a> {
         })
     }
 
+    /// How many runs an item has started since the episode began (0 for an item that runs
+    /// nothing).
+    pub fn runs_started(&self, labware: &str) -> f64 {
+        self.item(labware).map_or(0.0, |(_, state)| {
+            state
+                .logic
+                .get(labware::run::STARTED)
+                .copied()
+                .unwrap_or(0.0)
+        })
+    }
+
     /// The live pose of an item's root body.
     pub fn pose_of(&self, labware: &str) -> Result<Pose, PlanError> {
         Ok(self.item(labware)?.1.pose)

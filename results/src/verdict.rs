@@ -399,6 +399,16 @@ struct Memory<'a> {
     seen: &'a [bool],
     held_s: &'a [f64],
     starts: &'a [u32],
+    /// Per timed step's predicate: when the earlier step's outcome first held, and when its own
+    /// first held after that.
+    timing: &'a [Timing],
+}
+
+/// A timed step's two times on the episode's clock (s), as the judge saw them.
+#[derive(Clone, Copy, Debug, Default)]
+struct Timing {
+    since: Option<f64>,
+    reached: Option<f64>,
 }
 
 /// Stage `index`'s verdict; `resolved` is its predicates with the parameters filled in.
@@ -415,6 +425,7 @@ fn stage_verdict(
         seen,
         held_s,
         starts,
+        timing,
     } = memory;
     let stage = &task.stages[index];
     let predicates: Vec<PredicateValue> = stage
@@ -438,6 +449,27 @@ fn stage_verdict(
                 v.holds = dwell.kept(held, step * f64::from(started));
                 v.value = held;
                 v.target = dwell.at_least_s.or(dwell.at_most_s).unwrap_or(0.0);
+                v.tolerance = 0.0;
+                v.progress = f64::from(u8::from(v.holds));
+                if v.holds {
+                    v.parts.clear();
+                }
+            }
+            // A timed step holds once its outcome came within its time of the earlier step's:
+            // its value is the time between them (so far, while it has not come), its target
+            // the time allowed.
+            if let Some(since) = &p.since {
+                let t = timing.get(k).copied().unwrap_or_default();
+                let step = task.physics.timestep_s * task.physics.substeps as f64;
+                let now = completed_at_s.unwrap_or(0.0);
+                let gap = match (t.since, t.reached) {
+                    (Some(a), Some(b)) => b - a,
+                    (Some(a), None) => now - a,
+                    (None, _) => 0.0,
+                };
+                v.holds = t.reached.is_some() && gap <= since.within_s + step + 1e-9;
+                v.value = gap;
+                v.target = since.within_s;
                 v.tolerance = 0.0;
                 v.progress = f64::from(u8::from(v.holds));
                 if v.holds {
@@ -506,6 +538,10 @@ pub struct Judge {
     held_then: Vec<bool>,
     /// How many times each form started holding (each start is seen up to a step late).
     starts: Vec<u32>,
+    /// Per predicate of the current stage that times a step: its two times so far.
+    timing: Vec<Timing>,
+    /// Each stage's timed steps' earlier outcomes, resolved once (by predicate index).
+    resolved_since: Vec<Vec<Option<ResolvedPredicate>>>,
     /// The time of the last update (s).
     last_s: f64,
     done: Vec<StageVerdict>,
@@ -527,6 +563,21 @@ impl Judge {
                         .collect()
                 })
                 .collect(),
+            resolved_since: task
+                .stages
+                .iter()
+                .map(|s| {
+                    s.success
+                        .iter()
+                        .map(|p| {
+                            p.since
+                                .as_ref()
+                                .map(|x| ResolvedPredicate::of(task, &x.predicate(), params))
+                        })
+                        .collect()
+                })
+                .collect(),
+            timing: Vec::new(),
             stage: 0,
             stage_start_s: 0.0,
             stage_start: initial.to_vec(),
@@ -558,6 +609,7 @@ impl Judge {
             self.held_s.resize(stage.success.len(), 0.0);
             self.held_then.resize(stage.success.len(), false);
             self.starts.resize(stage.success.len(), 0);
+            self.timing.resize(stage.success.len(), Timing::default());
             let interval = time - self.last_s;
             for (k, p) in stage.success.iter().enumerate() {
                 if p.dwell.is_none() {
@@ -574,6 +626,25 @@ impl Judge {
                 self.held_then[k] = now;
             }
             self.last_s = time;
+            for (k, p) in stage.success.iter().enumerate() {
+                let (Some(since), Some(from)) = (&p.since, &self.resolved_since[self.stage][k])
+                else {
+                    continue;
+                };
+                let holds = |r: &ResolvedPredicate, c: &compiler::predicates::Check| {
+                    measure(&self.task, r, c, states).is_some_and(|m| m.holds)
+                };
+                let t = &mut self.timing[k];
+                if t.since.is_none() && holds(from, &since.check) {
+                    t.since = Some(time);
+                }
+                if t.since.is_some()
+                    && t.reached.is_none()
+                    && holds(&self.resolved[self.stage][k], &p.check)
+                {
+                    t.reached = Some(time);
+                }
+            }
             for (k, p) in stage.success.iter().enumerate() {
                 if p.check.is_history()
                     && measure(&self.task, &self.resolved[self.stage][k], &p.check, states)
@@ -593,6 +664,7 @@ impl Judge {
                     seen: &self.seen,
                     held_s: &self.held_s,
                     starts: &self.starts,
+                    timing: &self.timing,
                 },
             );
             let settle = self.task.stages[self.stage].settle_s;
@@ -613,6 +685,7 @@ impl Judge {
             self.held_s.clear();
             self.held_then.clear();
             self.starts.clear();
+            self.timing.clear();
             self.done.push(v);
             self.last = None;
             self.stage += 1;

@@ -4,6 +4,7 @@
 //! of them on a scene file alone. The passes: [`scene`] (one namespace, implausible values),
 //! [`items`] (robots, labware and their start states), [`randomise`], [`parameters`] (domains and
 //! placeholders), [`steps`], [`success`] with [`resolve`] (predicates and tolerances),
+//! [`timing`] (steps' `within`, lowered to predicates),
 //! [`sweep_uses`] (what the slot and quantity sweep reads) and [`cameras`]. This module holds
 //! what the passes share and decides no diagnostic of its own. The state proof over the stages
 //! lives in [`crate::proof`]; chains in [`crate::chain`].
@@ -17,6 +18,7 @@ mod scene;
 mod steps;
 mod success;
 mod sweep_uses;
+mod timing;
 
 pub(crate) use cameras::default_cameras;
 pub(crate) use scene::time_limit_warning;
@@ -83,8 +85,15 @@ pub(crate) fn lower<'a>(cx: &mut Cx, p: &'a Protocol, file: &str) -> Option<Lowe
     let robot_names: Vec<String> = p.robots.iter().map(|r| r.name.value.clone()).collect();
     let steps = steps::check_steps(cx, p, &robot_names, &param_names);
     let declared: Vec<&str> = p.labware.iter().map(|l| l.name.value.as_str()).collect();
-    let predicates =
+    let mut predicates =
         success::lower_predicates(cx, p, &kinds, &robot_names, &param_names, &declared);
+    predicates.extend(timing::lower_timing(
+        cx,
+        &steps,
+        &kinds,
+        &robot_names,
+        &declared,
+    ));
     crate::sweep::check(
         cx,
         &sweep_uses::sweep_uses(p, &kinds, &predicates),

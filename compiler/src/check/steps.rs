@@ -182,7 +182,7 @@ fn check_required_args(
 /// A run step's programme is fixed when the task compiles (the instrument's model carries it):
 /// no placeholder in its arguments but `on`.
 fn check_fixed_programme(cx: &mut Cx, step: &Step, prim: &LabPrimitive) -> bool {
-    if primitives::run::programme(prim.name, &BTreeMap::new()).is_none() {
+    if primitives::run::programme(prim.name, &BTreeMap::new(), None).is_none() {
         return true;
     }
     let mut ok = true;

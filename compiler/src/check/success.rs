@@ -16,7 +16,7 @@ use dsl::{Code, Dimension, parse_quantity};
 use std::collections::BTreeMap;
 
 /// `[tolerances]` overrides by name: the name as written and its value.
-type Overrides<'a> = BTreeMap<&'a str, (&'a Spanned<String>, &'a Spanned<String>)>;
+pub(super) type Overrides<'a> = BTreeMap<&'a str, (&'a Spanned<String>, &'a Spanned<String>)>;
 
 /// Each predicate of `all` that parses and resolves, in order, with its tolerance and weight.
 pub(super) fn lower_predicates(
@@ -83,6 +83,7 @@ pub(super) fn lower_predicates(
                 check,
                 weight,
                 dwell,
+                since: None,
             },
         });
     }
@@ -147,7 +148,7 @@ fn check_overrides(cx: &mut Cx, overrides: &Overrides, used: &BTreeMap<String, D
 }
 
 /// Fills in the tolerance: inline `within`, else a `[tolerances]` override, else the kind's default.
-fn apply_tolerance(
+pub(super) fn apply_tolerance(
     cx: &mut Cx,
     text: &Spanned<String>,
     mut check: Check,

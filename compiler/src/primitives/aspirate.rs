@@ -11,6 +11,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     requires: "the robot carries a pipette with room for `volume`; `on` is open and holds at least `volume`",
     leaves: "`volume` moved from `on` into the pipette",
     phrase: "aspirate the {on}",
+    outcome: None,
     effect: liquid::effect,
     motions: Some(motions),
 };

@@ -11,6 +11,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     requires: "the hand is empty; the lid is open",
     leaves: "the lid locked (closed, for lids without a latch)",
     phrase: "close the lid of the {on}",
+    outcome: Some("{on}.lid is closed"),
     effect: lid::effect,
     motions: Some(motions),
 };

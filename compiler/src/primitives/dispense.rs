@@ -11,6 +11,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     requires: "the robot carries a pipette holding at least `volume`; `on` is open and has room for it",
     leaves: "`volume` moved from the pipette into `on`",
     phrase: "dispense the {on}",
+    outcome: None,
     effect: liquid::effect,
     motions: Some(motions),
 };

@@ -16,6 +16,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     requires: "the robot carries `on`; `to` is another robot whose hand is empty or steadies `on`",
     leaves: "`on` carried by `to`; the giving hand empty",
     phrase: "hand the {on} to the {to} arm",
+    outcome: None,
     effect,
     motions: None,
 };

@@ -10,6 +10,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     requires: "the hand is empty; `on` is movable",
     leaves: "the robot holding `on` steady; `on` stays where it is",
     phrase: "hold the {on} steady",
+    outcome: None,
     effect,
     motions: Some(motions),
 };

@@ -25,13 +25,14 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     requires: "the hand is empty; every tube in the block capped",
     leaves: "the run done (`<mixer>.run is done`), the tubes where they were",
     phrase: "incubate in the {on} at {temperature}, shaking at {speed}, for {duration}",
+    outcome: Some("{on}.run is done"),
     effect,
     motions: Some(motions),
 };
 
 fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
-    let (lw, _) = step.on_empty_handed(w, env)?;
-    let programme = run::step_programme(step)?;
+    let (lw, kind) = step.on_empty_handed(w, env)?;
+    let programme = run::step_programme(step, kind)?;
     run::require_capped(w, &lw, PRIMITIVE.name)?;
     run::ran(w, &lw, &programme);
     Ok(())

@@ -11,6 +11,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     requires: "the hand is empty; the lid is closed and has a latch",
     leaves: "the lid locked",
     phrase: "lock the lid of the {on}",
+    outcome: Some("{on}.lid is locked"),
     effect: lid::effect,
     motions: Some(motions),
 };

@@ -77,6 +77,10 @@ pub struct LabPrimitive {
     /// `{<arg>}` an argument's value, and for a location `{<arg>.holder}` and `{<arg>.slot}` its
     /// two halves ([`LabPrimitive::phrase_for`]).
     pub phrase: &'static str,
+    /// What the step leaves that the judge can see, as a success predicate over its arguments
+    /// (`"{on} in {to}"`): where a later step's `within` times from, and what it times to.
+    /// `None`: nothing a predicate reads (a wait, a press whose effect depends on the button).
+    pub outcome: Option<&'static str>,
     pub effect: fn(&mut World, &Env, &BoundStep) -> Result<(), Violation>,
     /// The scripted expert's motions for one rendered step; `None`: no expert motions yet.
     pub motions: Option<fn(&MotionStep) -> Vec<Motion>>,

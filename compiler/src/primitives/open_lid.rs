@@ -11,6 +11,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     requires: "the hand is empty; the lid is closed or locked",
     leaves: "the lid open (and unlocked)",
     phrase: "open the lid of the {on}",
+    outcome: Some("{on}.lid is open"),
     effect: lid::effect,
     motions: Some(motions),
 };

@@ -10,6 +10,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     requires: "the hand is empty; `on` is movable and nobody carries it",
     leaves: "`on` carried by the robot",
     phrase: "pick up the {on}",
+    outcome: Some("{with} touches {on}"),
     effect,
     motions: Some(motions),
 };

@@ -10,6 +10,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     requires: "the hand is empty; `on`'s cap lies apart (`state = { cap = \"apart\" }`)",
     leaves: "the cap in the robot's hand over the tube's mouth, ready for `screw_cap`",
     phrase: "pick up the cap of the {on}",
+    outcome: None,
     effect,
     motions: Some(motions),
 };

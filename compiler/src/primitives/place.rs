@@ -17,6 +17,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     requires: "the robot carries `on`; the slot exists, accepts `on`'s kind and is empty",
     leaves: "`on` in the slot; the hand empty",
     phrase: "put the {on} in slot {to.slot} of the {to.holder}",
+    outcome: Some("{on} in {to}"),
     effect,
     motions: Some(motions),
 };

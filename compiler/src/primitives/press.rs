@@ -17,6 +17,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     requires: "the hand is empty; the button exists; a stepped value stays within its range",
     leaves: "the button's effect: a switch toggled, a panel value stepped once or a latch released",
     phrase: "press the {button} button of the {on}",
+    outcome: None,
     effect,
     motions: Some(motions),
 };

@@ -9,6 +9,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     requires: "the robot holds something steady",
     leaves: "the hand empty",
     phrase: "let go of what the {robot} arm holds",
+    outcome: None,
     effect,
     motions: None,
 };

@@ -12,6 +12,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     requires: "the hand is empty",
     leaves: "the arm at its home pose; the lab as it was",
     phrase: "bring the {robot} arm back to its rest pose",
+    outcome: None,
     effect,
     motions: Some(motions),
 };

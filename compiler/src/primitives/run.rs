@@ -25,18 +25,21 @@ pub const LID_C: f64 = 105.0;
 const TUBE_G: f64 = 1.0;
 const IMBALANCE_G: f64 = 0.1;
 
-/// The programme a run step carries, from its arguments (rendered): `None` for a step that runs
-/// nothing.
+/// Standard gravity (m/s²): a relative centrifugal force is the rotor's r ω² in these.
+const STANDARD_G: f64 = 9.806_65;
+
+/// The programme a run step carries, from its arguments (rendered) and the kind of the item it
+/// runs on (`kind`: what a spin's `× g` converts with): `None` for a step that runs nothing.
 pub fn programme(
     primitive: &str,
     args: &BTreeMap<String, String>,
+    kind: Option<&str>,
 ) -> Option<Result<Programme, Violation>> {
     let q = |name: &'static str, dim: Dimension| quantity(args, name, dim);
     Some(match primitive {
         "spin" => (|| {
-            let rpm = q("speed", Dimension::Speed)?;
+            let rpm = spin_rpm(args, kind)?;
             let seconds = q("duration", Dimension::Time)?;
-            in_range("speed", rpm, SPIN_MIN_RPM, SPIN_MAX_RPM, "rpm")?;
             in_range("duration", seconds, 1.0, INCUBATE_MAX_S, "s")?;
             Ok(Programme::Spin {
                 rpm,
@@ -76,6 +79,49 @@ pub fn programme(
     })
 }
 
+/// The rotor speed (rpm) a spin's `speed` asks for, in the instrument's range: as written in
+/// rpm, or from a relative centrifugal force (`× g`, as kits write spins) at the radius the
+/// instrument's model gives its rotor's load (RCF = r ω² / g, so ω = √(RCF g / r)).
+fn spin_rpm(args: &BTreeMap<String, String>, kind: Option<&str>) -> Result<f64, Violation> {
+    let text = args.get("speed").map(String::as_str).unwrap_or_default();
+    let rcf = dsl::parse_quantity(text)
+        .ok()
+        .filter(|q| q.dimension == Dimension::Acceleration);
+    let Some(rcf) = rcf else {
+        let rpm = quantity(args, "speed", Dimension::Speed)?;
+        in_range("speed", rpm, SPIN_MIN_RPM, SPIN_MAX_RPM, "rpm")?;
+        return Ok(rpm);
+    };
+    let model = kind.and_then(labware::Model::for_kind);
+    let radius = model
+        .as_ref()
+        .and_then(labware::Model::instrument)
+        .and_then(|m| m.rcf_radius_m())
+        .ok_or_else(|| {
+            violation(
+                Code::E0021,
+                Some("speed"),
+                format!(
+                    "`{text}` is a force, but `{}` has no rotor radius to turn it into a speed",
+                    kind.unwrap_or("the item")
+                ),
+            )
+        })?;
+    let omega = (rcf.si * STANDARD_G / radius).sqrt();
+    let rpm = omega * 60.0 / std::f64::consts::TAU;
+    if (SPIN_MIN_RPM..=SPIN_MAX_RPM).contains(&rpm) {
+        return Ok(rpm);
+    }
+    Err(violation(
+        Code::E0021,
+        Some("speed"),
+        format!(
+            "`{text}` needs {rpm:.0} rpm at this rotor's {:.1} cm, outside the instrument's {SPIN_MIN_RPM}..{SPIN_MAX_RPM} rpm",
+            radius * 100.0
+        ),
+    ))
+}
+
 fn quantity(
     args: &BTreeMap<String, String>,
     name: &'static str,
@@ -96,9 +142,10 @@ fn in_range(name: &'static str, v: f64, lo: f64, hi: f64, unit: &str) -> Result<
     ))
 }
 
-/// The step's programme, its violations as the proof reports them.
-pub(super) fn step_programme(step: &BoundStep) -> Result<Programme, Violation> {
-    programme(step.primitive.name, step.args).expect("a run primitive carries a programme")
+/// The step's programme on an item of `kind`, its violations as the proof reports them.
+pub(super) fn step_programme(step: &BoundStep, kind: &LabwareKind) -> Result<Programme, Violation> {
+    programme(step.primitive.name, step.args, Some(kind.name))
+        .expect("a run primitive carries a programme")
 }
 
 /// The instrument's lid is closed and latched (E0038).
@@ -222,7 +269,7 @@ const RUN_SLACK_S: f64 = 120.0;
 
 /// Keep still until the instrument's run (of primitive `primitive`) is done.
 pub(super) fn await_run(step: &MotionStep, primitive: &str) -> Motion {
-    let timeout_s = programme(primitive, step.args)
+    let timeout_s = programme(primitive, step.args, step.kind.map(|k| k.name))
         .and_then(Result::ok)
         .map_or(RUN_SLACK_S, |p| {
             p.duration(labware::run::ROOM_C) + RUN_SLACK_S
@@ -230,5 +277,62 @@ pub(super) fn await_run(step: &MotionStep, primitive: &str) -> Motion {
     Motion::AwaitRun {
         labware: step.arg("on"),
         timeout_s,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spin(speed: &str) -> BTreeMap<String, String> {
+        BTreeMap::from([
+            ("speed".to_string(), speed.to_string()),
+            ("duration".to_string(), "1 min".to_string()),
+        ])
+    }
+
+    fn rpm(p: Programme) -> f64 {
+        match p {
+            Programme::Spin { rpm, .. } => rpm,
+            other => panic!("{other:?}"),
+        }
+    }
+
+    /// A force converts at the model's rotor radius, both ways round: RCF = r ω² / g.
+    #[test]
+    fn a_spin_in_x_g_runs_at_the_speed_that_gives_that_force_at_the_rotor() {
+        let kind = Some("centrifuge_5430");
+        let model = labware::Model::for_kind("centrifuge_5430").unwrap();
+        let r = model.instrument().unwrap().rcf_radius_m().unwrap();
+        for text in ["16000 x g", "16000 × g", "16000xg"] {
+            let v = rpm(programme("spin", &spin(text), kind).unwrap().unwrap());
+            let omega = v * std::f64::consts::TAU / 60.0;
+            let force = r * omega * omega / STANDARD_G;
+            assert!((force - 16000.0).abs() < 1e-6, "{text}: {force}");
+        }
+        assert_eq!(
+            rpm(programme("spin", &spin("12000 rpm"), kind)
+                .unwrap()
+                .unwrap()),
+            12000.0
+        );
+        // Past the rotor's top speed, with the speed it would need.
+        let e = programme("spin", &spin("40000 x g"), kind)
+            .unwrap()
+            .unwrap_err();
+        assert_eq!(e.code, Code::E0021);
+        assert!(e.message.contains("rpm at this rotor's"), "{}", e.message);
+        // An item with no rotor cannot turn a force into a speed.
+        let e = programme("spin", &spin("1000 x g"), Some("thermal_mixer"))
+            .unwrap()
+            .unwrap_err();
+        assert!(e.message.contains("no rotor radius"), "{}", e.message);
+        // A force where a speed is asked for elsewhere is the wrong dimension.
+        let mut shake = spin("1000 x g");
+        shake.insert("temperature".into(), "37 °C".into());
+        let e = programme("incubate", &shake, Some("thermal_mixer"))
+            .unwrap()
+            .unwrap_err();
+        assert_eq!(e.code, Code::E0020);
     }
 }

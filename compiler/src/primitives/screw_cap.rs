@@ -10,6 +10,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     requires: "the robot holds `on`'s cap; the tube is in a slot or gripped by another robot",
     leaves: "the cap on; the hand empty",
     phrase: "screw the cap onto the {on}",
+    outcome: Some("{on}.cap is on"),
     effect,
     motions: Some(motions),
 };

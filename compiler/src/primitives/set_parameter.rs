@@ -23,6 +23,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     requires: "the hand is empty; the target is within the panel's range and on its button grid (a dial takes any target in range, to its nearest notch)",
     leaves: "the panel value at the target (a dial's at the notch nearest it)",
     phrase: "set the {on}'s {param} to {value}",
+    outcome: Some("{on}.{param} = {value}"),
     effect,
     motions: Some(motions),
 };

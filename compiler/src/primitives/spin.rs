@@ -12,20 +12,21 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
         Arg {
             name: "speed",
             kind: ArgKind::Speed,
-            doc: "the rotor's speed, e.g. \"12000 rpm\"",
+            doc: "the rotor's speed, e.g. \"12000 rpm\", or the force a kit asks for, e.g. \"16000 x g\" (converted at the rotor's radius)",
         },
         DURATION,
     ],
     requires: "the hand is empty; the lid closed and latched; the rotor balanced; every tube in it capped",
     leaves: "the run done (`<centrifuge>.run is done`), the tubes where they were",
     phrase: "spin the {on} at {speed} for {duration}",
+    outcome: Some("{on}.run is done"),
     effect,
     motions: Some(motions),
 };
 
 fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
     let (lw, kind) = step.on_empty_handed(w, env)?;
-    let programme = run::step_programme(step)?;
+    let programme = run::step_programme(step, kind)?;
     run::require_shut(w, &lw, kind, PRIMITIVE.name)?;
     run::require_capped(w, &lw, PRIMITIVE.name)?;
     run::require_balanced(w, &lw, kind)?;

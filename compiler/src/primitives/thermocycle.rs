@@ -18,13 +18,14 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     requires: "the hand is empty; the lid closed and locked; no profile run on this cycler yet (one profile per protocol: put every hold and cycle in it)",
     leaves: "the run done (`<cycler>.run is done`)",
     phrase: "run the profile {profile} on the {on}",
+    outcome: Some("{on}.run is done"),
     effect,
     motions: Some(motions),
 };
 
 fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
     let (lw, kind) = step.on_empty_handed(w, env)?;
-    let programme = run::step_programme(step)?;
+    let programme = run::step_programme(step, kind)?;
     run::require_shut(w, &lw, kind, PRIMITIVE.name)?;
     if w.part(&lw, labware::run::RUN).is_some_and(|s| s != "idle") {
         return Err(precondition(

@@ -11,6 +11,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     requires: "the hand is empty; the lid is locked",
     leaves: "the lid closed, unlocked",
     phrase: "release the lid of the {on}",
+    outcome: Some("{on}.lid is unlocked"),
     effect: lid::effect,
     motions: Some(motions),
 };

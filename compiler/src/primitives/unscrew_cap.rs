@@ -10,6 +10,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     requires: "the hand is empty; the cap is on; the tube is in a slot or gripped by another robot",
     leaves: "the cap off, in the robot's hand",
     phrase: "unscrew the cap of the {on}",
+    outcome: Some("{on}.cap is off"),
     effect,
     motions: Some(motions),
 };

@@ -10,6 +10,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     requires: "a duration of more than 0 s",
     leaves: "everything as it was, the time later",
     phrase: "wait for {duration}",
+    outcome: None,
     effect,
     motions: Some(motions),
 };
