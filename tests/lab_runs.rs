@@ -164,7 +164,11 @@ fn a_run_that_never_starts_fails_its_step_at_once() {
         fn act(&mut self, obs: &policy::Observation) -> Result<Vec<Vec<f64>>, policy::PolicyError> {
             let action = self.expert.act(obs)?;
             let events = self.expert.drain_events();
-            if self.frozen.is_none() && events.iter().any(|e| e.label.starts_with("step 4: spin")) {
+            if self.frozen.is_none()
+                && events
+                    .iter()
+                    .any(|e| e.label.starts_with("step ") && e.label.contains(": spin centrifuge"))
+            {
                 self.frozen = Some(self.last.clone());
             }
             self.events.extend(events);

@@ -135,9 +135,12 @@ pub fn describe(task: &Task) -> String {
             Domain::Slot { holder, slots } => {
                 format!("a slot of {holder} ({} candidates)", slots.len())
             }
-            Domain::Opposite { holder, of, .. } => {
-                format!("the slot of {holder} opposite {{{of}}}")
-            }
+            Domain::Opposite {
+                holder, of, tubes, ..
+            } => match tubes {
+                2 => format!("the slot of {holder} opposite {{{of}}}"),
+                k => format!("the slot of {holder} after {{{of}}} in a balanced load of {k}"),
+            },
         };
         let excl = if p.exclude.is_empty() {
             String::new()
@@ -304,6 +307,11 @@ pub const EXAMPLES: &[(&str, &str, &str)] = &[
         "\"cells in mixer.{well} for 30 s to 45 s\"",
     ),
     (
+        "balances",
+        "protocols/lab/miniprep_spins.toml",
+        "[params.balance]\nslot = \"centrifuge\"\nbalances = \"first\"",
+    ),
+    (
         "within",
         "protocols/lab/heat_shock.toml",
         "to = \"ice.A1\"\nwithin = \"60 s\"\nafter = \"shock\"",
@@ -363,6 +371,10 @@ pub fn catalogue() -> String {
         (
             "time constraint",
             "a predicate ending `for <t> to <t>`, `for at most <t>` or `for at least <t>`: held that long in total",
+        ),
+        (
+            "balances",
+            "a slot parameter completing an evenly spaced rotor load after an earlier one (`tubes = N`, default 2: the slot across)",
         ),
         (
             "within",
@@ -512,6 +524,7 @@ mod tests {
             "repeat:",
             "within:",
             "x g:",
+            "balances:",
         ] {
             let at = text.find(word).unwrap_or_else(|| panic!("no {word}"));
             assert!(text[at..].contains("example ("), "{word}");

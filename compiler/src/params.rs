@@ -47,6 +47,10 @@ pub enum Domain {
         holder: String,
         of: String,
         ring: u32,
+        /// The load's tubes, evenly spaced round the ring: the slot is `ring / tubes` on from
+        /// `of`'s (2: the slot across).
+        #[serde(default = "two", skip_serializing_if = "is_two")]
+        tubes: u32,
     },
 }
 
@@ -84,9 +88,11 @@ impl ParamSpec {
                 .map(|v| format_number(*v))
                 .collect(),
             Domain::Slot { slots, .. } => slots.clone(),
-            Domain::Opposite { of, ring, .. } => bound
+            Domain::Opposite {
+                of, ring, tubes, ..
+            } => bound
                 .get(of)
-                .and_then(|s| opposite(s, *ring))
+                .and_then(|s| spaced(s, *ring, *tubes))
                 .into_iter()
                 .collect(),
         };
@@ -145,8 +151,21 @@ impl ParamSpec {
 
 /// Slot `i` of a ring of `n` and the one across from it (`1..=n`).
 pub fn opposite(slot: &str, n: u32) -> Option<String> {
+    spaced(slot, n, 2)
+}
+
+/// The slot after `slot` in a load of `tubes` evenly spaced round a ring of `n` (`n / tubes` on).
+pub fn spaced(slot: &str, n: u32, tubes: u32) -> Option<String> {
     let i: u32 = slot.parse().ok().filter(|i| (1..=n).contains(i))?;
-    Some(((i - 1 + n / 2) % n + 1).to_string())
+    Some(((i - 1 + n / tubes.max(1)) % n + 1).to_string())
+}
+
+fn two() -> u32 {
+    2
+}
+
+fn is_two(n: &u32) -> bool {
+    *n == 2
 }
 
 /// Shortest text that reads back as the same f64 (integers without a fraction).
@@ -473,6 +492,7 @@ mod tests {
                     holder: "rotor".into(),
                     of: "first".into(),
                     ring: 30,
+                    tubes: 2,
                 },
                 &[],
             ),

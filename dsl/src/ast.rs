@@ -158,6 +158,11 @@ pub enum ParamDomain {
         of: Spanned<String>,
         free: bool,
         opposite: Option<Spanned<String>>,
+        /// With `opposite` (or its spelling `balances`): the rotor load it balances has this
+        /// many tubes, evenly spaced; the slot is the next of them after `opposite`'s (2, the
+        /// default: the slot across).
+        #[serde(skip_serializing_if = "Option::is_none")]
+        tubes: Option<Spanned<i64>>,
     },
 }
 

@@ -115,7 +115,7 @@ const SCENE_KEYS: &[&str] = &["description"];
 const CHAIN_KEYS: &[&str] = &["id", "version", "level", "instruction"];
 const STAGE_KEYS: &[&str] = &["protocol", "instruction", "time_limit"];
 const PARAM_KEYS: &[&str] = &[
-    "choice", "int", "step", "real", "slot", "free", "opposite", "exclude",
+    "choice", "int", "step", "real", "slot", "free", "opposite", "balances", "tubes", "exclude",
 ];
 const PROTOCOL_KEYS: &[&str] = &["id", "version", "level", "instruction", "time_limit"];
 const ROBOT_KEYS: &[&str] = &["model", "base"];
@@ -1070,6 +1070,8 @@ impl Parser {
         let mut domains: Vec<(Span, ParamDomain)> = Vec::new();
         let mut exclude = Vec::new();
         let (mut step, mut free, mut opposite) = (None, None, None);
+        let mut tubes = None;
+        let mut opposite_key: Option<(&str, Span)> = None;
         let mut extras: Vec<(&str, Span)> = Vec::new();
         for (key, value) in self.settings(t) {
             let k = key.get_ref().as_ref();
@@ -1163,6 +1165,7 @@ impl Parser {
                                 of,
                                 free: false,
                                 opposite: None,
+                                tubes: None,
                             },
                         ));
                     }
@@ -1175,9 +1178,27 @@ impl Parser {
                     free = self.boolean(value, "free");
                     extras.push(("free", span_of(key)));
                 }
-                "opposite" => {
-                    opposite = self.string(value, "opposite");
+                "opposite" | "balances" => {
+                    let k = if k == "opposite" {
+                        "opposite"
+                    } else {
+                        "balances"
+                    };
+                    if let Some((first, _)) = opposite_key {
+                        self.err(
+                            Code::E0007,
+                            span_of(key),
+                            format!("`{k}` given beside `{first}`: they are one setting"),
+                            Some("keep one: `balances` reads better with `tubes`".into()),
+                        );
+                    }
+                    opposite_key = Some((k, span_of(key)));
+                    opposite = self.string(value, k);
                     extras.push(("opposite", span_of(key)));
+                }
+                "tubes" => {
+                    tubes = self.integer(value, "tubes");
+                    extras.push(("tubes", span_of(key)));
                 }
                 "exclude" => exclude = self.scalars(value, "exclude"),
                 _ => self.unknown_key(key, PARAM_KEYS, "a parameter"),
@@ -1197,18 +1218,32 @@ impl Parser {
             Some(ParamDomain::Slot {
                 free: f,
                 opposite: o,
+                tubes: t,
                 ..
             }) => {
                 *f = free.unwrap_or(false);
                 *o = opposite.clone();
+                *t = tubes.clone();
             }
             _ => {}
+        }
+        if let (Some(t), None) = (&tubes, &opposite) {
+            self.err(
+                Code::E0002,
+                t.span,
+                "`tubes` is the size of the load `balances` completes, and there is no `balances`"
+                    .into(),
+                Some("add `balances = \"<an earlier slot parameter of the rotor>\"`".into()),
+            );
         }
         for (extra, span) in extras {
             let fits = matches!(
                 (&domain, extra),
                 (Some(ParamDomain::Int { .. }), "step")
-                    | (Some(ParamDomain::Slot { .. }), "free" | "opposite")
+                    | (
+                        Some(ParamDomain::Slot { .. }),
+                        "free" | "opposite" | "tubes"
+                    )
             );
             if !fits && domain.is_some() {
                 let needs = if extra == "step" { "int" } else { "slot" };

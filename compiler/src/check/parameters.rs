@@ -33,8 +33,13 @@ pub(super) fn lower_params(
             ParamDomain::Choice(values) => choice_domain(cx, param, values),
             ParamDomain::Int { low, high, step } => int_domain(cx, param, low, high, step.as_ref()),
             ParamDomain::Real { low, high } => real_domain(cx, param, low, high),
-            ParamDomain::Slot { of, free, opposite } => match opposite {
-                Some(o) => opposite_domain(cx, kinds, &out, &earlier, of, o),
+            ParamDomain::Slot {
+                of,
+                free,
+                opposite,
+                tubes,
+            } => match opposite {
+                Some(o) => opposite_domain(cx, kinds, &out, &earlier, of, o, tubes.as_ref()),
                 None => slot_domain(cx, kinds, labware, of, *free),
             },
         };
@@ -263,6 +268,7 @@ fn opposite_domain(
     earlier: &[&str],
     of: &Spanned<String>,
     o: &Spanned<String>,
+    tubes: Option<&Spanned<i64>>,
 ) -> Option<Domain> {
     let slots = holder_slots(cx, kinds, of)?;
     let labware::SlotLayout::Ring { n } = slots.layout else {
@@ -293,10 +299,36 @@ fn opposite_domain(
         );
         return None;
     }
+    let spaced = match tubes {
+        None => 2,
+        Some(t) => match u32::try_from(t.value) {
+            Ok(k) if k >= 2 && k <= n && n % k == 0 => k,
+            _ => {
+                let fits: Vec<String> = (2..=n)
+                    .filter(|k| n % k == 0)
+                    .map(|k| k.to_string())
+                    .collect();
+                cx.err(
+                    Code::E0021,
+                    t.span,
+                    format!(
+                        "{} tubes cannot stand evenly spaced in `{}`'s {n} slots",
+                        t.value, of.value
+                    ),
+                    Some(format!(
+                        "evenly spaced loads there have {} tubes; make others of these (4 as two opposite pairs: two `balances` with `tubes = 2`)",
+                        fits.join(", ")
+                    )),
+                );
+                return None;
+            }
+        },
+    };
     Some(Domain::Opposite {
         holder: of.value.clone(),
         of: o.value.clone(),
         ring: n,
+        tubes: spaced,
     })
 }
 
@@ -455,10 +487,46 @@ mod tests {
                 Domain::Opposite {
                     holder: "centrifuge".into(),
                     of: "first".into(),
-                    ring: 30
+                    ring: 30,
+                    tubes: 2,
                 }
             );
         });
+        // `balances` with `tubes`: the next slot of an evenly spaced load of that many.
+        let src = with(&format!(
+            "{centrifuge}\n[params.first]\nslot = \"centrifuge\"\n\n[params.second]\nslot = \"centrifuge\"\nbalances = \"first\"\ntubes = 3\n"
+        ));
+        lowered(&src, |low, diags| {
+            assert!(diags.is_empty(), "{diags:#?}");
+            let Domain::Opposite { tubes, ring, .. } = &low.unwrap().params[2].domain else {
+                panic!("a balancing domain");
+            };
+            assert_eq!((*tubes, *ring), (3, 30));
+        });
+        assert_eq!(crate::params::spaced("1", 30, 3).as_deref(), Some("11"));
+        assert_eq!(crate::params::spaced("25", 30, 3).as_deref(), Some("5"));
+        // Four tubes do not stand evenly spaced in 30 slots; `tubes` alone; two spellings.
+        for (extra, code) in [
+            ("balances = \"first\"\ntubes = 4", Code::E0021),
+            ("tubes = 3", Code::E0002),
+            ("balances = \"first\"\nopposite = \"first\"", Code::E0007),
+        ] {
+            let src = with(&format!(
+                "{centrifuge}\n[params.first]\nslot = \"centrifuge\"\n\n[params.second]\nslot = \"centrifuge\"\n{extra}\n"
+            ));
+            lowered(&src, |_, diags| {
+                let d = one(diags, code);
+                if code == Code::E0021 {
+                    assert!(
+                        d.hint
+                            .as_deref()
+                            .unwrap_or_default()
+                            .contains("2, 3, 5, 6, 10, 15, 30"),
+                        "{d:?}"
+                    );
+                }
+            });
+        }
         let src = with(&format!(
             "{centrifuge}\n[params.across]\nslot = \"centrifuge\"\nopposite = \"row\"\n"
         ));

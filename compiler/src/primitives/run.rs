@@ -245,7 +245,7 @@ pub(super) fn require_balanced(
             "add a tube with the same volume in the opposite slot, `{holder}.{}`",
             layout.opposite(slot).unwrap_or_default()
         ),
-        _ => "put tubes of equal volume in opposite slots (or three 120° apart)".to_string(),
+        _ => "put tubes of equal volume in evenly spaced slots: opposite pairs, or three 120° apart (a slot parameter with `balances` and `tubes` draws them)".to_string(),
     };
     Err(Violation {
         code: Code::E0037,
