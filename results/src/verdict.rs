@@ -404,11 +404,15 @@ struct Memory<'a> {
     timing: &'a [Timing],
 }
 
-/// A timed step's two times on the episode's clock (s), as the judge saw them.
+/// A timed step's two times on the episode's clock (s), as the judge saw them: the first update
+/// at which the earlier outcome held, and the first at or after it at which the later outcome
+/// came about (held, not having held at the update before: a tube still in the gripper as it is
+/// set down is not yet picked up again); and whether the later outcome held at the last update.
 #[derive(Clone, Copy, Debug, Default)]
 struct Timing {
     since: Option<f64>,
     reached: Option<f64>,
+    held: bool,
 }
 
 /// Stage `index`'s verdict; `resolved` is its predicates with the parameters filled in.
@@ -638,12 +642,11 @@ impl Judge {
                 if t.since.is_none() && holds(from, &since.check) {
                     t.since = Some(time);
                 }
-                if t.since.is_some()
-                    && t.reached.is_none()
-                    && holds(&self.resolved[self.stage][k], &p.check)
-                {
+                let now = holds(&self.resolved[self.stage][k], &p.check);
+                if t.since.is_some() && t.reached.is_none() && now && !t.held {
                     t.reached = Some(time);
                 }
+                t.held = now;
             }
             for (k, p) in stage.success.iter().enumerate() {
                 if p.check.is_history()

@@ -10,7 +10,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
     requires: "the hand is empty; `on` is movable and nobody carries it",
     leaves: "`on` carried by the robot",
     phrase: "pick up the {on}",
-    outcome: Some("{with} touches {on}"),
+    outcome: Some("{with} holds {on}"),
     effect,
     motions: Some(motions),
 };
