@@ -8,6 +8,19 @@
 
 use crate::common;
 
+/// The verdict's predicate whose rendered text starts with `prefix` (its parameters filled in).
+fn predicate_starting(
+    r: &results::episode::EpisodeResult,
+    prefix: &str,
+) -> results::verdict::PredicateValue {
+    r.verdict
+        .predicates()
+        .iter()
+        .find(|p| p.text.starts_with(prefix))
+        .cloned()
+        .unwrap_or_else(|| panic!("no `{prefix}..`: {:#?}", r.verdict))
+}
+
 fn journal_recording(dir: &std::path::Path, task: &str, seed: u64) -> std::path::PathBuf {
     dir.join(format!("{task}_seed{seed}.mcap"))
 }
@@ -94,14 +107,7 @@ fn a_time_constraint_is_measured_on_the_episode_clock() {
     let r = common::run(&task, 0, "expert");
     assert!(r.success, "{:#?}", r.verdict);
     // The verdict names a predicate with the episode's well filled in.
-    let in_block = |r: &results::episode::EpisodeResult| {
-        r.verdict
-            .predicates()
-            .iter()
-            .find(|p| p.text.starts_with("cells in mixer."))
-            .cloned()
-            .unwrap_or_else(|| panic!("{:#?}", r.verdict))
-    };
+    let in_block = |r: &results::episode::EpisodeResult| predicate_starting(r, "cells in mixer.");
     let held = in_block(&r).value;
     assert!((30.0..45.0).contains(&held), "{held}");
     let strict = common::compile_edited("protocols/lab/heat_shock.toml", |s| {
@@ -119,14 +125,8 @@ fn a_time_constraint_is_measured_on_the_episode_clock() {
 /// accepts: the wait between takes 30 s) the same plan fails with the measured gap as the value.
 #[test]
 fn a_step_timed_from_an_earlier_one_is_measured_between_their_outcomes() {
-    let timed = |r: &results::episode::EpisodeResult| {
-        r.verdict
-            .predicates()
-            .iter()
-            .find(|p| p.text.starts_with("cells in ice.A1 within"))
-            .cloned()
-            .unwrap_or_else(|| panic!("{:#?}", r.verdict))
-    };
+    let timed =
+        |r: &results::episode::EpisodeResult| predicate_starting(r, "cells in ice.A1 within");
     let task = common::compile("protocols/lab/heat_shock.toml");
     let r = common::run(&task, 0, "expert");
     assert!(r.success, "{:#?}", r.verdict);
