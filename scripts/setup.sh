@@ -13,6 +13,9 @@ ALOHA_PKG=gym-aloha==0.1.5
 HAND_PKG=robosuite==1.5.2
 # Foxglove's official MCAP reader, used by the tests to check recordings with a reader not ours.
 MCAP_PY="mcap==1.6.0"
+# Opentrons' published labware definitions (schema 2 JSON, Apache-2.0): our definition-backed racks
+# take their well positions and depths from them (labware/src/definition.rs); none is committed.
+OPENTRONS_DATA=opentrons-shared-data==10.1.0
 
 apt_pkgs=(libegl1 libegl-mesa0 libgl1-mesa-dri libgbm1 ffmpeg libompl-dev chromium)
 missing=()
@@ -45,6 +48,24 @@ lib = sorted(glob.glob(f"{out}/libmujoco.so.*"))[0]
 os.symlink(os.path.basename(lib), f"{out}/libmujoco.so")
 PY
   rm -rf "$DEPS/mujoco" && mv "$DEPS/mujoco.tmp" "$DEPS/mujoco"
+fi
+
+LABWARE_DIR="$DEPS/opentrons-shared-data"
+if [ ! -e "$LABWARE_DIR/.ok-$OPENTRONS_DATA" ]; then
+  echo "setup: fetching labware definitions ($OPENTRONS_DATA)"
+  python3 -m pip download -q --no-deps "$OPENTRONS_DATA" -d "$DEPS/wheels"
+  rm -rf "$LABWARE_DIR.tmp" && mkdir -p "$LABWARE_DIR.tmp"
+  python3 - "$DEPS" "${OPENTRONS_DATA#*==}" <<'PY'
+import glob, sys, zipfile
+deps, ver = sys.argv[1], sys.argv[2]
+whl = glob.glob(f"{deps}/wheels/opentrons_shared_data-{ver}-*.whl")[0]
+with zipfile.ZipFile(whl) as z:
+    for n in z.namelist():
+        if n.startswith("opentrons_shared_data/data/labware/") or (n.endswith("LICENSE") and "dist-info" in n):
+            z.extract(n, f"{deps}/opentrons-shared-data.tmp")
+PY
+  touch "$LABWARE_DIR.tmp/.ok-$OPENTRONS_DATA"
+  rm -rf "$LABWARE_DIR" && mv "$LABWARE_DIR.tmp" "$LABWARE_DIR"
 fi
 
 if [ ! -e "$DEPS/robots/universal_robots_ur5e/ur5e.xml" ] || [ ! -e "$DEPS/robots/robotiq_2f85/2f85.xml" ]; then

@@ -45,6 +45,7 @@ fn the_simulated_tasks_are_the_tables_and_a_motionless_robot_fails_one() {
             "centrifuge_mini.close_lid",
             "centrifuge_mini.open_lid",
             "centrifuge_mini.open_then_close",
+            "lab.dilution",
             "lab.heat_shock",
             "lab.incubation_series",
             "lab.miniprep_spins",

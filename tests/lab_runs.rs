@@ -90,6 +90,7 @@ fn lab_protocols_are_deterministic_and_fail_without_motion() {
         "protocols/lab/heat_shock.toml",
         "protocols/lab/incubation_series.toml",
         "protocols/lab/miniprep_spins.toml",
+        "protocols/lab/dilution.toml",
     ] {
         let task = common::compile(path);
         let r = common::run(&task, 0, "hold");

@@ -29,6 +29,7 @@ mod leaderboard;
 mod learned_policy;
 mod level_of_detail;
 mod liquid_scene;
+mod liquids_and_definitions;
 mod merge;
 mod model_faults;
 mod model_servers;

@@ -42,7 +42,10 @@ pub fn describe(task: &Task) -> String {
         let kind = labware::kind(&l.kind);
         let mut state: Vec<String> = l.initial.iter().map(|(k, v)| format!("{k} {v}")).collect();
         if let Some(v) = &l.volume {
-            state.push(format!("volume {v}"));
+            match &l.liquid {
+                Some(liquid) => state.push(format!("volume {v} of {liquid}")),
+                None => state.push(format!("volume {v}")),
+            }
         }
         state.extend(l.panel.iter().map(|(k, v)| format!("{k} {v}")));
         let place = match (&l.at, &l.held_by) {
@@ -326,6 +329,16 @@ pub const EXAMPLES: &[(&str, &str, &str)] = &[
         "protocols/lab/pcr_run.toml",
         "\"cycler.run is done\"",
     ),
+    (
+        "liquid",
+        "protocols/lab/dilution.toml",
+        "state = { cap = \"off\", volume = \"20 mL\", liquid = \"pbs_10x\" }",
+    ),
+    (
+        "volume of",
+        "protocols/lab/dilution.toml",
+        "\"diluted.volume of pbs_10x = 500 µL\"",
+    ),
 ];
 
 fn write_example(w: &mut String, word: &str) {
@@ -388,6 +401,14 @@ pub fn catalogue() -> String {
             "run state",
             "`<instrument>.run is idle | running | done` (or `was`)",
         ),
+        (
+            "liquid",
+            "a container's start `state = { volume = <v>, liquid = <name> }`: a named liquid loaded (Opentrons' `loadLiquid`)",
+        ),
+        (
+            "volume of",
+            "`<container>.volume of <liquid> >= <v>`: how much of a named liquid it holds (moved in proportion)",
+        ),
     ] {
         let _ = writeln!(w, "  {word}: {what}");
         write_example(w, word);
@@ -401,6 +422,12 @@ pub fn catalogue() -> String {
         };
         let _ = writeln!(w, "  {}{sim}", k.name);
         let _ = writeln!(w, "      {}", k.description);
+        if let Some(uri) = k.definition {
+            let _ = writeln!(
+                w,
+                "      geometry from the published definition {uri} (opentrons-shared-data)"
+            );
+        }
         let model = labware::Model::for_kind(k.name);
         for p in k.parts {
             // The start states the simulation model cannot set up yet (W0007).

@@ -10,6 +10,7 @@
 //! - `<labware>.<joint> in [<lo>, <hi>] <unit>`    joint range (rad, deg or m)
 //! - `<item> in <holder>.<slot>`                   object in slot
 //! - `<container>.volume <op> <quantity>`          volume, op one of `=`, `>=`, `<=`
+//! - `<container>.volume of <liquid> <op> <q>`      how much of a named liquid it holds
 //! - `<instrument>.<panel value> = <quantity>`     display value
 //! - `<robot> touches <item>`                      contact (any of the robot's bodies)
 //! - `<robot> holds <item>[.<part>]`               a finger of the robot's gripper or hand
@@ -153,6 +154,9 @@ pub enum Check {
     },
     Volume {
         container: String,
+        /// The named liquid whose share is compared; `None`: the whole volume.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        liquid: Option<String>,
         cmp: Cmp,
         /// Template quantity text.
         value: String,
@@ -228,6 +232,8 @@ pub enum Form {
     Compare {
         labware: String,
         field: String,
+        /// `<lw>.volume of <liquid>`: the named liquid's share of the volume.
+        liquid: Option<String>,
         cmp: Cmp,
         value: String,
     },
@@ -305,6 +311,8 @@ pub enum PredicateError {
     NotLabwareValue { lhs: String },
     #[error("a comparison needs a value with a unit")]
     NoValue,
+    #[error("`{name}` is not a liquid's name: write `<container>.volume of <liquid> >= 5 µL`")]
+    NotLiquidName { name: String },
     #[error(
         "`for {text}` is not a time constraint: write `for 30 s to 40 s`, `for at most 40 s` or `for at least 30 s`"
     )]
@@ -493,6 +501,18 @@ pub fn parse(text: &str) -> Result<Parsed, PredicateError> {
             .iter()
             .find_map(|(op, c)| body.split_once(op).map(|(l, r)| (l, *c, r)))
             .ok_or(PredicateError::NoForm)?;
+        let (lhs, liquid) = match lhs.trim().split_once(" of ") {
+            Some((value, liquid)) => {
+                let liquid = liquid.trim();
+                if liquid.is_empty() || liquid.contains(' ') {
+                    return Err(PredicateError::NotLiquidName {
+                        name: liquid.to_string(),
+                    });
+                }
+                (value, Some(liquid.to_string()))
+            }
+            None => (lhs, None),
+        };
         let (labware, field) =
             split_dot(lhs.trim()).ok_or_else(|| PredicateError::NotLabwareValue {
                 lhs: lhs.trim().to_string(),
@@ -504,6 +524,7 @@ pub fn parse(text: &str) -> Result<Parsed, PredicateError> {
         Form::Compare {
             labware,
             field,
+            liquid,
             cmp,
             value: value.to_string(),
         }
@@ -594,12 +615,16 @@ impl Check {
             }
             Check::Volume {
                 container,
+                liquid,
                 cmp,
                 value,
                 tolerance,
             } => {
                 let target = quantity(value, bound, Dimension::Volume).ok()?;
-                let v = w.volumes.get(container).copied().unwrap_or(0.0);
+                let v = match liquid {
+                    Some(liquid) => w.liquid_ul(container, liquid),
+                    None => w.volumes.get(container).copied().unwrap_or(0.0),
+                };
                 Some(compare(v, *cmp, target, tolerance.value))
             }
             Check::Panel {
@@ -736,8 +761,19 @@ mod tests {
             Form::Compare {
                 labware: s("tube"),
                 field: s("volume"),
+                liquid: None,
                 cmp: Cmp::Ge,
                 value: s("1.5 mL")
+            }
+        );
+        assert_eq!(
+            form("diluted.volume of pbs_10x <= 500 µL"),
+            Form::Compare {
+                labware: s("diluted"),
+                field: s("volume"),
+                liquid: Some(s("pbs_10x")),
+                cmp: Cmp::Le,
+                value: s("500 µL")
             }
         );
         // A compared value is kept as text and read in its unit later: 1.5 mL is 1,500 µL.
@@ -811,6 +847,10 @@ mod tests {
                 "`tube.cap.top` is not an item name",
             ),
             ("tube.volume = ", "a comparison needs a value with a unit"),
+            (
+                "tube.volume of 10x pbs >= 5 µL",
+                "`10x pbs` is not a liquid's name",
+            ),
             (
                 "cycler.lid is closed within 3 parsecs",
                 "unknown unit `parsecs` in `3 parsecs`",

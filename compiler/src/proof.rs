@@ -135,6 +135,12 @@ fn initial_world(cx: &mut Cx, scene: &ProofScene, bound: &Bindings) -> Option<Wo
             match predicates::quantity(v, bound, Dimension::Volume) {
                 Ok(x) if x <= kind.capacity_ul.unwrap_or(0.0) && x >= 0.0 => {
                     w.volumes.insert(spec.name.clone(), x);
+                    if let Some(liquid) = &spec.liquid {
+                        w.contents
+                            .entry(spec.name.clone())
+                            .or_default()
+                            .insert(liquid.clone(), x);
+                    }
                 }
                 Ok(x) => {
                     let mut d = Diagnostic::new(

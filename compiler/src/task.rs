@@ -130,6 +130,10 @@ pub struct LabwareSpec {
     pub held_by: Option<String>,
     /// Initial liquid volume (template quantity), for containers.
     pub volume: Option<String>,
+    /// The named liquid the start volume is (`state = { liquid = "water" }`, Opentrons'
+    /// `loadLiquid`): predicates may ask how much of it a container holds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub liquid: Option<String>,
     /// Initial panel values (template quantities) that differ from the kind's defaults.
     pub panel: BTreeMap<String, String>,
     /// The kind's simulation model and its parameters (`Model::Unmodelled` when it has none).

@@ -57,6 +57,9 @@ pub struct World {
     pub locations: BTreeMap<String, Location>,
     /// Containers -> volume (µL).
     pub volumes: BTreeMap<String, f64>,
+    /// Containers -> named liquid -> how much of it they hold (µL; a share of `volumes`, the
+    /// rest is unnamed liquid). Moved in proportion to a container's contents.
+    pub contents: BTreeMap<String, BTreeMap<String, f64>>,
     /// (instrument, panel parameter) -> displayed value (its canonical unit).
     pub panel: BTreeMap<(String, String), f64>,
     pub hands: BTreeMap<String, Hand>,
@@ -70,6 +73,42 @@ pub struct World {
 }
 
 impl World {
+    /// How much of the named liquid a container holds (µL; none kept: 0).
+    pub fn liquid_ul(&self, container: &str, liquid: &str) -> f64 {
+        self.contents
+            .get(container)
+            .and_then(|c| c.get(liquid))
+            .copied()
+            .unwrap_or(0.0)
+    }
+
+    /// Moves `volume` µL of a container's liquid to another, its named liquids in proportion to
+    /// what the first holds (the volumes themselves are the caller's).
+    pub fn move_contents(&mut self, from: &str, to: &str, volume: f64) {
+        let have = self.volumes.get(from).copied().unwrap_or(0.0);
+        if have <= 0.0 {
+            return;
+        }
+        let share = (volume / have).min(1.0);
+        let moved: Vec<(String, f64)> = self
+            .contents
+            .get_mut(from)
+            .map(|c| {
+                c.iter_mut()
+                    .map(|(liquid, ul)| {
+                        let m = *ul * share;
+                        *ul -= m;
+                        (liquid.clone(), m)
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
+        let into = self.contents.entry(to.to_string()).or_default();
+        for (liquid, m) in moved {
+            *into.entry(liquid).or_default() += m;
+        }
+    }
+
     pub fn part(&self, labware: &str, part: &str) -> Option<&str> {
         self.parts
             .get(&(labware.to_string(), part.to_string()))

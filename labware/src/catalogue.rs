@@ -164,6 +164,11 @@ pub struct LabwareKind {
     /// A liquid-handling tool a robot carries (a pipette): what `aspirate` and `dispense` draw
     /// into and expel from.
     pub liquid_tool: bool,
+    /// The published labware definition (`namespace/loadName/version`, embedded from
+    /// `embedded-definitions.txt`) the kind's geometry comes from: its footprint, where its wells
+    /// stand and how deep they are ([`crate::definition`]); `None`: the kind is drawn from our own
+    /// parameters.
+    pub definition: Option<&'static str>,
 }
 
 impl LabwareKind {
@@ -302,6 +307,7 @@ const fn tube(
         tolerances,
         primitives: TUBE_PRIMITIVES,
         liquid_tool: false,
+        definition: None,
     }
 }
 
@@ -324,6 +330,22 @@ const fn rack(
         tolerances: SLOT_TOLERANCES,
         primitives: &[],
         liquid_tool: false,
+        definition: None,
+    }
+}
+
+/// A rack whose footprint and places come from a published definition; the places must be its
+/// wells' grid (a test compares them).
+const fn defined_rack(
+    name: &'static str,
+    description: &'static str,
+    layout: SlotLayout,
+    accepts: &'static [&'static str],
+    definition: &'static str,
+) -> LabwareKind {
+    LabwareKind {
+        definition: Some(definition),
+        ..rack(name, description, layout, accepts)
     }
 }
 
@@ -400,6 +422,7 @@ const fn lidded(
             PLAIN_LID_PRIMITIVES
         },
         liquid_tool: false,
+        definition: None,
     }
 }
 
@@ -422,6 +445,7 @@ pub const KINDS: &[LabwareKind] = &[
         ],
         primitives: &["open_lid", "close_lid", "thermocycle"],
         liquid_tool: false,
+        definition: None,
     },
     LabwareKind {
         // The rotor turns freely: its start angle can be drawn (`[randomise.x] joints`).
@@ -543,6 +567,7 @@ pub const KINDS: &[LabwareKind] = &[
         tolerances: &[("display", 1e-6)],
         primitives: &["press", "set_parameter", "incubate"],
         liquid_tool: false,
+        definition: None,
     },
     LabwareKind {
         name: "vortex_mixer",
@@ -581,6 +606,7 @@ pub const KINDS: &[LabwareKind] = &[
         tolerances: VORTEX_TOLERANCES,
         primitives: &["press", "set_parameter"],
         liquid_tool: false,
+        definition: None,
     },
     rack(
         "tube_rack",
@@ -593,6 +619,20 @@ pub const KINDS: &[LabwareKind] = &[
         "rack of 6x10 places for 1.5 mL tubes and cryovials",
         SlotLayout::Grid { rows: 6, cols: 10 },
         &["tube_1_5ml", "cryovial"],
+    ),
+    defined_rack(
+        "tuberack_24_1_5ml",
+        "Opentrons 4-in-1 rack's 24-place insert for 1.5 mL tubes (4x6, 19.3 mm pitch)",
+        SlotLayout::Grid { rows: 4, cols: 6 },
+        &["tube_1_5ml"],
+        "opentrons/opentrons_24_tuberack_eppendorf_1.5ml_safelock_snapcap/3",
+    ),
+    defined_rack(
+        "tuberack_6_50ml",
+        "Opentrons 4-in-1 rack's 6-place insert for 50 mL conical tubes (2x3, 35 mm pitch)",
+        SlotLayout::Grid { rows: 2, cols: 3 },
+        &["tube_50ml"],
+        "opentrons/opentrons_6_tuberack_falcon_50ml_conical/2",
     ),
     tube(
         "tube_1_5ml",
@@ -646,6 +686,7 @@ pub const KINDS: &[LabwareKind] = &[
         tolerances: &[("volume", 1.0), ("position", 0.005)],
         primitives: &["pick", "place", "hand_over"],
         liquid_tool: true,
+        definition: None,
     },
 ];
 

@@ -13,6 +13,7 @@
 //! tests/labware_models.rs and tests/processes.rs, which simulate the models.
 
 pub mod catalogue;
+pub mod definition;
 pub mod display;
 pub mod frame;
 pub mod lid;
@@ -20,6 +21,7 @@ pub mod liquid_view;
 pub mod mjcf;
 pub mod model;
 pub mod process;
+pub mod published;
 pub mod registry;
 pub mod run;
 
@@ -46,6 +48,8 @@ registry::registry! {
     rack::Rack {
         "tube_rack" => rack::Params::tube_rack(),
         "microtube_rack" => rack::Params::microtube_rack(),
+        "tuberack_24_1_5ml" => rack::Params::defined("tuberack_24_1_5ml"),
+        "tuberack_6_50ml" => rack::Params::defined("tuberack_6_50ml"),
     },
     tube::Tube {
         "tube_50ml" => tube::Params::conical_50ml(),

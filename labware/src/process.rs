@@ -8,7 +8,8 @@
 //! [`Pipetting`] is the one there is: an air-displacement pipette's tip takes in or pushes out the
 //! volume its plunger displaces. It moves liquid through `physics::liquid`, whose bookkeeping in
 //! whole nanolitres conserves the total exactly: every vessel's volume, the tip's and what was
-//! spilt on the bench always add up to what the scene started with. The items' logic holds the
+//! spilt on the bench always add up to what the scene started with; each named liquid
+//! ([`LIQUID_UL`]) moves with it in proportion and is conserved the same way. The items' logic holds the
 //! volumes between steps (so a replay that restores the logic restores them); what a process keeps
 //! of its own (each liquid's surface) follows from them. Pure: no MuJoCo here.
 
@@ -23,6 +24,20 @@ pub const VOLUME_UL: &str = "volume_ul";
 /// The pipette's logic: the volume its plunger displaces from rest now (µL), kept by the
 /// pipette's own logic from the plunger's travel.
 pub const STROKE_UL: &str = "stroke_ul";
+
+/// An item's logic: how much of a named liquid (`state = { liquid = "water" }`) its liquid holds,
+/// under `liquid_ul.<name>` (µL, whole nanolitres; the rest of `volume_ul` is unnamed). Each
+/// move takes the named liquids in proportion to what the giver holds, in whole nanolitres, so
+/// every liquid is conserved exactly, as the volume is.
+pub const LIQUID_UL: &str = "liquid_ul.";
+
+/// The pipette's logic: a named liquid pushed out over no vessel, under `spilt_ul.<name>`.
+pub const SPILT_LIQUID_UL: &str = "spilt_ul.";
+
+/// The logic key of a named liquid's share of an item's volume.
+pub fn liquid_key(liquid: &str) -> String {
+    format!("{LIQUID_UL}{liquid}")
+}
 
 /// The pipette's logic: volume the tip has still to take in (positive) or push out (negative),
 /// µL. The pipette's logic adds each change of the stroke; [`Pipetting`] moves it.
@@ -229,8 +244,10 @@ impl Pipetting {
         let mut air = nl;
         if let Some(v) = under.map(|i| &mut self.vessels[i]) {
             let liquid = nl.min(v.liquid.volume.0).min(room);
+            let had = v.liquid.volume.0;
             if liquid > 0 && transfer(&mut v.liquid, &mut self.tip, Nanolitres(liquid)).is_ok() {
                 air -= liquid;
+                move_named(logic, v.item, (self.pipette, LIQUID_UL), had, liquid);
             }
         }
         add(
@@ -247,8 +264,10 @@ impl Pipetting {
         let mut spilt = liquid;
         if let Some(v) = at.catching.map(|i| &mut self.vessels[i]) {
             let fits = liquid.min(v.liquid.room().0);
+            let had = self.tip.volume.0;
             if fits > 0 && transfer(&mut self.tip, &mut v.liquid, Nanolitres(fits)).is_ok() {
                 spilt -= fits;
+                move_named(logic, self.pipette, (v.item, LIQUID_UL), had, fits);
             }
             if air > 0 && at.under.is_some() {
                 add(
@@ -259,6 +278,14 @@ impl Pipetting {
             }
         }
         if spilt > 0 {
+            let had = self.tip.volume.0;
+            move_named(
+                logic,
+                self.pipette,
+                (self.pipette, SPILT_LIQUID_UL),
+                had,
+                spilt,
+            );
             self.tip.volume = Nanolitres(self.tip.volume.0 - spilt);
             add(
                 &mut logic[self.pipette],
@@ -272,6 +299,67 @@ impl Pipetting {
             &mut logic[self.pipette],
             AIR_UL,
             Nanolitres(had.0.saturating_sub(air)).microlitres(),
+        );
+    }
+}
+
+/// Moves the named liquids' share of `nl` nanolitres out of item `from`'s liquid (which held
+/// `total` nL before the move) into item `to`'s logic under `prefix` (`liquid_ul.` into a
+/// vessel or tip, `spilt_ul.` onto the bench): each liquid, and the unnamed rest, gets its
+/// proportion rounded down, and the nanolitres left over go one each to the largest remainders
+/// (ties in name order, the unnamed rest last), never more than a liquid has. Exact: what leaves
+/// one item arrives in the other, nanolitre for nanolitre.
+fn move_named(logic: &mut [Logic], from: usize, (to, prefix): (usize, &str), total: u64, nl: u64) {
+    let parts: Vec<(String, u64)> = logic[from]
+        .range(LIQUID_UL.to_string()..)
+        .take_while(|(k, _)| k.starts_with(LIQUID_UL))
+        .map(|(k, v)| {
+            (
+                k[LIQUID_UL.len()..].to_string(),
+                Nanolitres::from_microlitres(*v).0,
+            )
+        })
+        .collect();
+    if parts.is_empty() || total == 0 || nl == 0 {
+        return;
+    }
+    let named: u64 = parts.iter().map(|(_, v)| v).sum();
+    let held: Vec<u64> = parts
+        .iter()
+        .map(|(_, v)| *v)
+        .chain([total.saturating_sub(named)])
+        .collect();
+    let (nl, total) = (u128::from(nl.min(total)), u128::from(total));
+    let mut share: Vec<u64> = held
+        .iter()
+        .map(|&h| (u128::from(h) * nl / total) as u64)
+        .collect();
+    let mut left = nl as u64 - share.iter().sum::<u64>();
+    let mut order: Vec<usize> = (0..held.len()).collect();
+    order.sort_by_key(|&i| std::cmp::Reverse(u128::from(held[i]) * nl % total));
+    for i in order {
+        if left == 0 {
+            break;
+        }
+        if share[i] < held[i] {
+            share[i] += 1;
+            left -= 1;
+        }
+    }
+    for ((liquid, had), moved) in parts.iter().zip(share) {
+        if moved == 0 {
+            continue;
+        }
+        let key = liquid_key(liquid);
+        set(
+            &mut logic[from],
+            &key,
+            Nanolitres(had - moved).microlitres(),
+        );
+        add(
+            &mut logic[to],
+            &format!("{prefix}{liquid}"),
+            Nanolitres(moved).microlitres(),
         );
     }
 }
@@ -519,8 +607,42 @@ mod tests {
         assert_eq!(total_nl(&logic), 20_000_000);
     }
 
+    fn named_nl(logic: &[Logic], liquid: &str) -> u64 {
+        let key = liquid_key(liquid);
+        let spilt = format!("{SPILT_LIQUID_UL}{liquid}");
+        [(0, &key), (1, &key), (2, &key), (2, &spilt)]
+            .iter()
+            .map(|(i, k)| Nanolitres::from_microlitres(ul(logic, *i, k)).0)
+            .sum()
+    }
+
+    /// A source of 15 mL of `buffer` in 20 mL: a draw takes three quarters of it as buffer, the
+    /// rest unnamed; what lands in the target and on the bench carries its share along.
+    #[test]
+    fn named_liquids_move_in_proportion_and_are_conserved() {
+        let (mut p, mut logic) = scene();
+        logic[0].insert(liquid_key("buffer"), 15_000.0);
+        // Each step's share is rounded to whole nanolitres (the flow's last steps move one at a
+        // time): proportions hold to within 0.05 µL of 400 µL, totals exactly.
+        let near = |a: f64, b: f64| (a - b).abs() < 0.05;
+        stroke(&mut p, &mut logic, 400.0, UNDER, 2.0);
+        assert_eq!(ul(&logic, 2, VOLUME_UL), 400.0);
+        assert!(near(ul(&logic, 2, &liquid_key("buffer")), 300.0));
+        assert!(near(ul(&logic, 0, &liquid_key("buffer")), 14_700.0));
+        stroke(&mut p, &mut logic, -200.0, [0.1, 0.0, 0.132], 2.0);
+        assert!(near(ul(&logic, 1, &liquid_key("buffer")), 150.0));
+        stroke(&mut p, &mut logic, -200.0, [0.05, 0.0, 0.05], 2.0);
+        assert!(near(
+            ul(&logic, 2, &format!("{SPILT_LIQUID_UL}buffer")),
+            150.0
+        ));
+        assert_eq!(ul(&logic, 2, &liquid_key("buffer")), 0.0);
+        assert_eq!(named_nl(&logic, "buffer"), 15_000_000);
+    }
+
     /// Random strokes at random places: the vessels, the tip and the bench always hold the
-    /// starting volume, to the nanolitre (1e-9 of it is 0.02 nL here).
+    /// starting volume, to the nanolitre (1e-9 of it is 0.02 nL here), and so does each named
+    /// liquid, the target's own included.
     #[test]
     fn the_total_is_conserved_over_random_strokes() {
         use rand_core::{RngCore, SeedableRng};
@@ -528,6 +650,9 @@ mod tests {
         let mut uniform =
             |lo: f64, hi: f64| lo + (hi - lo) * (rng.next_u64() as f64 / u64::MAX as f64);
         let (mut p, mut logic) = scene();
+        logic[0].insert(liquid_key("dye"), 7_333.333);
+        logic[1].insert(VOLUME_UL.into(), 1_000.0);
+        logic[1].insert(liquid_key("water"), 1_000.0);
         for _ in 0..400 {
             if uniform(0.0, 1.0) < 0.2 {
                 let ul = uniform(-400.0, 400.0);
@@ -540,8 +665,17 @@ mod tests {
                 uniform(0.0, 0.15),
             ];
             run(&mut p, &poses(tip), &mut logic, 0.02);
-            assert_eq!(total_nl(&logic), 20_000_000);
+            assert_eq!(total_nl(&logic), 21_000_000);
+            assert_eq!(named_nl(&logic, "dye"), 7_333_333);
+            assert_eq!(named_nl(&logic, "water"), 1_000_000);
+            for i in 0..logic.len() {
+                let nl = |key: &str| Nanolitres::from_microlitres(ul(&logic, i, key)).0;
+                let named = nl(&liquid_key("dye")) + nl(&liquid_key("water"));
+                let here = nl(VOLUME_UL);
+                assert!(named <= here, "item {i}: {named} nL named in {here}");
+            }
         }
+        assert!(ul(&logic, 2, &liquid_key("dye")) > 0.0 || ul(&logic, 1, &liquid_key("dye")) > 0.0);
         assert!(ul(&logic, 1, VOLUME_UL) > 0.0 || ul(&logic, 2, SPILT_UL) > 0.0);
     }
 }

@@ -126,6 +126,9 @@ impl Default for Params {
                 hole: 0.0112,
                 plate: 0.003,
                 rgba: BLOCK,
+                grid_offset: [0.0, 0.0],
+                base: None,
+                definition: None,
             },
             programmes: Vec::new(),
         }

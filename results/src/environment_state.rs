@@ -6,7 +6,8 @@
 //! orientation quaternion `<item>.qw/.qx/.qy/.qz`, sign chosen with `qw >= 0`), its joints by role
 //! (`<item>.<role>`, rad or m, roles sorted), its loose parts' poses (`<item>.<part>.x` ...
 //! `.qz`), its panel values (`<item>.<param>`, the panel's unit) and, for a container, the
-//! liquid it holds (`<item>.volume_ul`); then every drawn parameter (`param.<name>`: a number's
+//! liquid it holds (`<item>.volume_ul`) and of each named liquid a check reads in it
+//! (`<item>.liquid_ul.<liquid>`); then every drawn parameter (`param.<name>`: a number's
 //! value in its canonical unit, or a choice's or slot's index in its domain). The same task
 //! always has the same names, whatever the seed.
 //!
@@ -42,6 +43,11 @@ enum Source {
     },
     Volume {
         item: usize,
+    },
+    /// A named liquid's share of the item's volume (µL).
+    Liquid {
+        item: usize,
+        key: String,
     },
     Param {
         name: String,
@@ -82,6 +88,22 @@ fn checked_items(task: &Task) -> Vec<String> {
         }
     }
     out
+}
+
+/// The named liquids the task's checks read in a container, sorted.
+fn checked_liquids(task: &Task, container: &str) -> std::collections::BTreeSet<String> {
+    task.stages
+        .iter()
+        .flat_map(|s| &s.success)
+        .filter_map(|p| match &p.check {
+            Check::Volume {
+                container: c,
+                liquid: Some(liquid),
+                ..
+            } if c == container => Some(liquid.clone()),
+            _ => None,
+        })
+        .collect()
 }
 
 impl EnvironmentState {
@@ -139,6 +161,11 @@ impl EnvironmentState {
             if model.liquid().and_then(|l| l.interior()).is_some() {
                 names.push(format!("{name}.volume_ul"));
                 sources.push(Source::Volume { item });
+                for liquid in checked_liquids(task, name) {
+                    let key = labware::process::liquid_key(&liquid);
+                    names.push(format!("{name}.{key}"));
+                    sources.push(Source::Liquid { item, key });
+                }
             }
         }
         for p in &task.params {
@@ -200,6 +227,9 @@ impl EnvironmentState {
                 .instrument()?
                 .panel()?
                 .panel_value(param, labware.get(*item)?),
+            Source::Liquid { item, key } => {
+                Some(labware.get(*item)?.logic.get(key).copied().unwrap_or(0.0))
+            }
             Source::Volume { item } => Some(
                 labware
                     .get(*item)?

@@ -266,10 +266,11 @@ fn measure(
                 holds: (shown - target).abs() <= tolerance.value,
             })
         }
-        // The liquid the container holds now (its logic's volume; none kept: empty) against
-        // the target, compared as the predicate says.
+        // The liquid the container holds now (its logic's volume, or a named liquid's share of
+        // it; none kept: empty) against the target, compared as the predicate says.
         Check::Volume {
             container,
+            liquid,
             cmp,
             value: _,
             tolerance,
@@ -280,11 +281,11 @@ fn measure(
                 .instrument()?
                 .liquid()?
                 .interior()?;
-            let held = state_of(container)?
-                .logic
-                .get(labware::process::VOLUME_UL)
-                .copied()
-                .unwrap_or(0.0);
+            let key = match liquid {
+                Some(liquid) => labware::process::liquid_key(liquid),
+                None => labware::process::VOLUME_UL.to_string(),
+            };
+            let held = state_of(container)?.logic.get(&key).copied().unwrap_or(0.0);
             Some(Measure {
                 value: held,
                 target,

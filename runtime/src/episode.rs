@@ -253,10 +253,15 @@ impl Episode {
 
     /// The liquid each container starts with (`[labware.x] volume`, resolved for this instance)
     /// in its logic; a container without a declared volume starts empty (no key: read as 0).
+    /// A named liquid (`state = { liquid = ".." }`) is the whole start volume.
     fn start_volumes(&mut self, quantities: &Quantities) {
         for (i, ul) in quantities.start_volumes_ul.iter().enumerate() {
             if let Some(ul) = ul {
                 labware::model::set(&mut self.logic[i], labware::process::VOLUME_UL, *ul);
+                if let Some(liquid) = &self.task.labware[i].liquid {
+                    let key = labware::process::liquid_key(liquid);
+                    labware::model::set(&mut self.logic[i], &key, *ul);
+                }
             }
         }
     }

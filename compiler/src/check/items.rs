@@ -95,6 +95,7 @@ fn lower_item(
         at: l.at.as_ref().map(|a| a.value.clone()),
         held_by: None,
         volume: None,
+        liquid: None,
         panel: BTreeMap::new(),
         params: Model::for_kind(k.name).unwrap_or(Model::Unmodelled),
     };
@@ -113,6 +114,21 @@ fn lower_item(
     }
     for (key, value) in &l.state {
         initial_state(cx, k, &mut spec, key, value);
+    }
+    if spec.liquid.is_some()
+        && spec.volume.is_none()
+        && let Some((key, _)) = l.state.iter().find(|(k, _)| k.value == "liquid")
+    {
+        cx.err(
+            Code::E0002,
+            key.span,
+            format!("`{}` names its liquid but no `volume` of it", l.name.value),
+            Some(
+                "load a volume with it: `state = { volume = \"200 µL\", liquid = \"water\" }`"
+                    .into(),
+            ),
+        );
+        spec.liquid = None;
     }
     parts_apart(cx, l, k, &mut spec);
     spec.params = spec.params.for_start(&spec.initial);
@@ -263,6 +279,21 @@ fn initial_state(
         }
         return;
     }
+    if key.value == "liquid" && k.capacity_ul.is_some() {
+        match &value.value {
+            Scalar::Str(name) if is_liquid_name(name) => spec.liquid = Some(name.clone()),
+            _ => cx.err(
+                Code::E0021,
+                value.span,
+                format!("`{text}` is not a liquid's name"),
+                Some(
+                    "name it with letters, digits, `_` and `-`, starting with a letter: \"pbs_10x\""
+                        .into(),
+                ),
+            ),
+        }
+        return;
+    }
     let dim = if key.value == "volume" && k.capacity_ul.is_some() {
         Some(Dimension::Volume)
     } else {
@@ -272,7 +303,7 @@ fn initial_state(
     let Some(dim) = dim else {
         let mut keys: Vec<&str> = k.parts.iter().map(|p| p.part).collect();
         if k.capacity_ul.is_some() {
-            keys.push("volume");
+            keys.extend(["volume", "liquid"]);
         }
         keys.extend(k.panel.iter().map(|p| p.name));
         cx.err(
@@ -304,6 +335,16 @@ fn initial_state(
     } else {
         spec.panel.insert(key.value.clone(), s.clone());
     }
+}
+
+/// A liquid's name as a predicate can read it back (`tube.volume of <name> >= 5 µL`): a letter,
+/// then letters, digits, `_` or `-`, at most 40 in all.
+pub(crate) fn is_liquid_name(name: &str) -> bool {
+    name.len() <= 40
+        && name.chars().next().is_some_and(|c| c.is_ascii_alphabetic())
+        && name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-'))
 }
 
 /// Whether a start volume or panel value `s` (no placeholders) is a quantity of `dim` (E0020)

@@ -26,12 +26,14 @@ pub(super) fn resolve_check(
     kinds: &KindMap,
     robots: &[String],
     declared: &[&str],
+    liquids: &[&str],
 ) -> Resolved {
     let names = Names {
         text,
         kinds,
         robots,
         declared,
+        liquids,
         labware_names: kinds.keys().map(String::as_str).collect(),
     };
     match form {
@@ -51,12 +53,29 @@ pub(super) fn resolve_check(
         Form::Compare {
             labware: lw,
             field,
+            liquid,
             cmp,
             value,
         } => {
             let kind = names.labware(cx, lw)?;
+            if let Some(liquid) = liquid {
+                if field != "volume" || kind.capacity_ul.is_none() {
+                    cx.err(
+                        Code::E0030,
+                        text.span,
+                        format!(
+                            "`{lw}.{field} of {liquid}`: only a container's `volume` is of a liquid"
+                        ),
+                        Some(format!(
+                            "write `{lw}.volume of {liquid} >= 5 µL` on a container"
+                        )),
+                    );
+                    return None;
+                }
+                names.liquid(cx, liquid)?;
+            }
             if field == "volume" && kind.capacity_ul.is_some() {
-                names.volume(cx, kind, lw, *cmp, value)
+                names.volume(cx, kind, lw, liquid.clone(), *cmp, value)
             } else {
                 names.panel(cx, kind, lw, field, *cmp, value)
             }
@@ -101,6 +120,8 @@ struct Names<'a> {
     kinds: &'a KindMap,
     robots: &'a [String],
     declared: &'a [&'a str],
+    /// The liquids the protocol loads (`state = { liquid = ".." }`).
+    liquids: &'a [&'a str],
     labware_names: Vec<&'a str>,
 }
 
@@ -249,7 +270,34 @@ impl Names<'_> {
 
     /// `<lw>.volume <cmp> <q>` on a container: a volume (checked here unless it has
     /// placeholders; the proof reads those per parameter combination).
-    fn volume(&self, cx: &mut Cx, kind: &LabwareKind, lw: &str, cmp: Cmp, value: &str) -> Resolved {
+    /// A liquid a predicate names: one the protocol loads somewhere (E0013 otherwise).
+    fn liquid(&self, cx: &mut Cx, liquid: &str) -> Option<()> {
+        if self.liquids.contains(&liquid) {
+            return Some(());
+        }
+        let hint = if self.liquids.is_empty() {
+            "load it into a container: `state = { volume = \"200 µL\", liquid = \"water\" }`".into()
+        } else {
+            hint_for(liquid, self.liquids, "liquids loaded")
+        };
+        cx.err(
+            Code::E0013,
+            self.text.span,
+            format!("no container starts with a liquid named `{liquid}`"),
+            Some(hint),
+        );
+        None
+    }
+
+    fn volume(
+        &self,
+        cx: &mut Cx,
+        kind: &LabwareKind,
+        lw: &str,
+        liquid: Option<String>,
+        cmp: Cmp,
+        value: &str,
+    ) -> Resolved {
         if placeholders(value).is_empty()
             && let Err(e) = predicates::quantity(value, &Default::default(), Dimension::Volume)
         {
@@ -265,6 +313,7 @@ impl Names<'_> {
         Some((
             Check::Volume {
                 container: lw.to_string(),
+                liquid,
                 cmp,
                 value: value.to_string(),
                 tolerance: Tolerance {

@@ -35,6 +35,17 @@ pub(super) fn lower_predicates(
     check_weights(cx, p);
     let weights = p.success.weights.as_ref();
     let mut used_tolerances: BTreeMap<String, Dimension> = BTreeMap::new();
+    // The liquids loaded anywhere in the scene, which `<lw>.volume of <liquid>` may name.
+    let liquids: Vec<&str> = p
+        .labware
+        .iter()
+        .flat_map(|l| &l.state)
+        .filter(|(key, _)| key.value == "liquid")
+        .filter_map(|(_, v)| match &v.value {
+            dsl::ast::Scalar::Str(s) => Some(s.as_str()),
+            _ => None,
+        })
+        .collect();
     let mut out = Vec::new();
     for (i, text) in p.success.all.iter().enumerate() {
         check_placeholders(cx, text, params);
@@ -62,7 +73,8 @@ pub(super) fn lower_predicates(
                 continue;
             }
         };
-        let Some((check, dim)) = resolve_check(cx, text, &parsed.form, kinds, robots, declared)
+        let Some((check, dim)) =
+            resolve_check(cx, text, &parsed.form, kinds, robots, declared, &liquids)
         else {
             continue;
         };

@@ -210,7 +210,7 @@ fn check_of(
             return None;
         }
     };
-    let (check, dim) = resolve_check(cx, &spanned, &parsed.form, kinds, robots, declared)?;
+    let (check, dim) = resolve_check(cx, &spanned, &parsed.form, kinds, robots, declared, &[])?;
     let overrides = Overrides::new();
     let mut used = BTreeMap::new();
     Some(apply_tolerance(

@@ -76,6 +76,7 @@ pub(super) fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), V
             "lower the volume or empty it first",
         ));
     }
+    w.move_contents(&from, &to, volume);
     *w.volumes.entry(from).or_default() -= volume;
     *w.volumes.entry(to).or_default() += volume;
     Ok(())
