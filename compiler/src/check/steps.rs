@@ -157,7 +157,8 @@ fn check_args(cx: &mut Cx, step: &Step, prim: &LabPrimitive, params: &[&str]) ->
     ok
 }
 
-/// Every argument of the primitive is given (E0032, at the primitive's name).
+/// Every argument of the primitive but its optional ones is given (E0032, at the primitive's
+/// name).
 fn check_required_args(
     cx: &mut Cx,
     step: &Step,
@@ -165,7 +166,7 @@ fn check_required_args(
     prim_name: &Spanned<String>,
 ) -> bool {
     let mut ok = true;
-    for a in prim.args {
+    for a in prim.args.iter().filter(|a| !a.optional) {
         if step.arg(a.name).is_none() {
             cx.err(
                 Code::E0032,

@@ -11,6 +11,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
             name: "to",
             kind: ArgKind::Robot,
             doc: "the robot that takes it",
+            optional: false,
         },
     ],
     requires: "the robot carries `on`; `to` is another robot whose hand is empty or steadies `on`",

@@ -14,11 +14,13 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
             name: "temperature",
             kind: ArgKind::Temperature,
             doc: "the block's temperature, e.g. \"37 °C\"",
+            optional: false,
         },
         Arg {
             name: "speed",
             kind: ArgKind::Speed,
             doc: "the shaking speed, e.g. \"800 rpm\"",
+            optional: false,
         },
         DURATION,
     ],

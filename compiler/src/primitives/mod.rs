@@ -62,13 +62,15 @@ pub struct Arg {
     pub name: &'static str,
     pub kind: ArgKind,
     pub doc: &'static str,
+    /// May be left out (the primitive then uses the default its `doc` names).
+    pub optional: bool,
 }
 
 #[derive(Clone, Copy, Debug)]
 pub struct LabPrimitive {
     pub name: &'static str,
     pub description: &'static str,
-    /// Arguments besides `with` (the robot that does it), all required.
+    /// Arguments besides `with` (the robot that does it), required unless `optional`.
     pub args: &'static [Arg],
     pub requires: &'static str,
     pub leaves: &'static str,
@@ -135,7 +137,10 @@ impl LabPrimitive {
         let args: Vec<String> = self
             .args
             .iter()
-            .map(|a| format!("{} = <{}>", a.name, a.kind.describe()))
+            .map(|a| match a.optional {
+                false => format!("{} = <{}>", a.name, a.kind.describe()),
+                true => format!("[{} = <{}>]", a.name, a.kind.describe()),
+            })
             .chain(std::iter::once("with = <robot name>".to_string()))
             .collect();
         format!("{}({})", self.name, args.join(", "))
@@ -230,16 +235,19 @@ pub(super) const ON: Arg = Arg {
     name: "on",
     kind: ArgKind::Labware,
     doc: "the labware acted on",
+    optional: false,
 };
 pub(super) const DURATION: Arg = Arg {
     name: "duration",
     kind: ArgKind::Duration,
     doc: "how long",
+    optional: false,
 };
 pub(super) const VOLUME: Arg = Arg {
     name: "volume",
     kind: ArgKind::Volume,
     doc: "how much liquid",
+    optional: false,
 };
 
 /// Every lab primitive, in the order the docs list them: one line each.

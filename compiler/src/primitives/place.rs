@@ -12,6 +12,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
             name: "to",
             kind: ArgKind::Location,
             doc: "the slot, e.g. \"rack.B3\" or \"rotor.{slot}\"",
+            optional: false,
         },
     ],
     requires: "the robot carries `on`; the slot exists, accepts `on`'s kind and is empty",

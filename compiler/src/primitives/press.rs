@@ -12,6 +12,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
             name: "button",
             kind: ArgKind::Button,
             doc: "which button",
+            optional: false,
         },
     ],
     requires: "the hand is empty; the button exists; a stepped value stays within its range",

@@ -9,8 +9,11 @@ use crate::motion::{Motion, MotionStep};
 use labware::run::{Programme, RUN};
 use std::collections::BTreeMap;
 
-/// How long a centrifuge takes to come up to speed and back down (s): the 5430's ramps.
+/// How long a centrifuge takes to come up to speed and back down (s): the 5430's ramps, and the
+/// range a spin's `ramp` may set (a soft ramp for pellets that must not stir up is minutes).
 pub const SPIN_RAMP_S: f64 = 10.0;
+pub const SPIN_RAMP_MIN_S: f64 = 1.0;
+pub const SPIN_RAMP_MAX_S: f64 = 120.0;
 /// The 5430's fastest spin with its 30-place rotor (rpm), and the slowest it offers.
 pub const SPIN_MAX_RPM: f64 = 17_500.0;
 pub const SPIN_MIN_RPM: f64 = 100.0;
@@ -41,10 +44,15 @@ pub fn programme(
             let rpm = spin_rpm(args, kind)?;
             let seconds = q("duration", Dimension::Time)?;
             in_range("duration", seconds, 1.0, INCUBATE_MAX_S, "s")?;
+            let ramp_s = match args.contains_key("ramp") {
+                true => q("ramp", Dimension::Time)?,
+                false => SPIN_RAMP_S,
+            };
+            in_range("ramp", ramp_s, SPIN_RAMP_MIN_S, SPIN_RAMP_MAX_S, "s")?;
             Ok(Programme::Spin {
                 rpm,
                 seconds,
-                ramp_s: SPIN_RAMP_S,
+                ramp_s,
             })
         })(),
         "thermocycle" => (|| {
@@ -334,5 +342,25 @@ mod tests {
             .unwrap()
             .unwrap_err();
         assert_eq!(e.code, Code::E0020);
+    }
+
+    /// A spin's optional `ramp` sets how long the rotor takes up and down (the default where
+    /// left out); out of range or not a time, it is refused.
+    #[test]
+    fn a_spin_ramps_over_its_ramp_or_the_default() {
+        let kind = Some("centrifuge_5430");
+        let ramp = |args: &BTreeMap<String, String>| match programme("spin", args, kind) {
+            Some(Ok(Programme::Spin { ramp_s, .. })) => Ok(ramp_s),
+            Some(Err(e)) => Err(e.code),
+            other => panic!("{other:?}"),
+        };
+        assert_eq!(ramp(&spin("12000 rpm")), Ok(SPIN_RAMP_S));
+        let mut soft = spin("12000 rpm");
+        soft.insert("ramp".into(), "45 s".into());
+        assert_eq!(ramp(&soft), Ok(45.0));
+        soft.insert("ramp".into(), "5 min".into());
+        assert_eq!(ramp(&soft), Err(Code::E0021));
+        soft.insert("ramp".into(), "45 rpm".into());
+        assert_eq!(ramp(&soft), Err(Code::E0020));
     }
 }

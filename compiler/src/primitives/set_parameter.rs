@@ -13,11 +13,13 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
             name: "param",
             kind: ArgKind::PanelParam,
             doc: "which panel value",
+            optional: false,
         },
         Arg {
             name: "value",
             kind: ArgKind::PanelValue,
             doc: "the target, e.g. \"{rpm} rpm\"",
+            optional: false,
         },
     ],
     requires: "the hand is empty; the target is within the panel's range and on its button grid (a dial takes any target in range, to its nearest notch)",

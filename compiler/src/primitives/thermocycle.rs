@@ -13,6 +13,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
             name: "profile",
             kind: ArgKind::Profile,
             doc: "holds and cycles, e.g. \"95 °C 3 min, 30 x [95 °C 15 s, 55 °C 15 s, 72 °C 30 s], 72 °C 5 min\"",
+            optional: false,
         },
     ],
     requires: "the hand is empty; the lid closed and locked; no profile run on this cycler yet (one profile per protocol: put every hold and cycle in it)",
