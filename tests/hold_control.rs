@@ -49,6 +49,7 @@ fn the_simulated_tasks_are_the_tables_and_a_motionless_robot_fails_one() {
             "lab.heat_shock",
             "lab.incubation_series",
             "lab.miniprep_spins",
+            "lab.mix_by_inversion",
             "lab.pcr_run",
             "lab.spin",
             "pipette.aspirate",

@@ -22,6 +22,7 @@ mod forgeries;
 mod golden;
 mod hold_control;
 mod instruments_act;
+mod inversion;
 mod kinematics;
 mod lab_runs;
 mod labware_models;

@@ -330,6 +330,16 @@ pub const EXAMPLES: &[(&str, &str, &str)] = &[
         "\"cycler.run is done\"",
     ),
     (
+        "invert",
+        "protocols/lab/mix_by_inversion.toml",
+        "do = \"invert\"\non = \"lysate\"\ntimes = 5\nwith = \"arm\"",
+    ),
+    (
+        "inverted",
+        "protocols/lab/mix_by_inversion.toml",
+        "\"lysate inverted 5 times\"",
+    ),
+    (
         "liquid",
         "protocols/lab/dilution.toml",
         "state = { cap = \"off\", volume = \"20 mL\", liquid = \"pbs_10x\" }",
@@ -400,6 +410,10 @@ pub fn catalogue() -> String {
         (
             "run state",
             "`<instrument>.run is idle | running | done` (or `was`)",
+        ),
+        (
+            "inverted",
+            "`<item> inverted <n> times`: turned upside down and back at least n times in the stage (the judge counts)",
         ),
         (
             "liquid",

@@ -135,6 +135,13 @@ pub enum Motion {
     /// Turn the tool back in place by what the step's last `Turn` or `TurnDial` turned (an open
     /// hand returning to where it gripped, to grip again).
     TurnBack,
+    /// Tilt the tool in place by `angle` rad through the tool centre, about the level axis across
+    /// the robot's reach (square to the line from its base to the tool: the axis its shoulder,
+    /// elbow and wrist bend about), turning it first about its approach axis, where needed, so
+    /// that the fingers close across the tilt: a body pinched between two pads then turns with
+    /// them instead of swinging about the pinch. A held tube turned upside down (π) and back
+    /// (-π).
+    Tilt { angle: f64 },
     /// Turn the gripped dial of `labware` that sets panel value `param` in place, from its live
     /// angle toward the notch nearest `value` (a quantity as the step renders it), in as few
     /// equal grips of at most `per_grip` rad as it takes: the tool turns about its approach axis, which lies along the dial's. Where
@@ -157,6 +164,7 @@ impl Motion {
             Motion::Enclose { .. } => "enclose",
             Motion::Transit { .. } => "transit",
             Motion::Follow { .. } => "follow",
+            Motion::Tilt { .. } => "tilt",
             Motion::Press { .. } => "press",
             Motion::HoldUntil { .. } => "hold until",
             Motion::AwaitRun { .. } => "await run",

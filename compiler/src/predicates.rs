@@ -20,6 +20,8 @@
 //!   started (its start slot's seat, else its placement): held clear, not resting
 //! - `<item>.<part> lifted <quantity>`             a loose part raised at least this far above
 //!   its seat on the item, along the item's axis (a cap off its tube's thread)
+//! - `<item> inverted <n> times`                    turned upside down and back upright at least
+//!   n times during the stage (stateful: the judge counts each turn over and back)
 //!
 //! Any form but contact, joint range and `lifted` may end in `within <quantity>` to give its
 //! tolerance inline.
@@ -196,7 +198,18 @@ pub enum Check {
         #[serde(default, skip_serializing_if = "Option::is_none")]
         part: Option<String>,
     },
+    /// The item has been turned upside down (tilted past [`INVERTED_RAD`]) and back upright
+    /// (within [`UPRIGHT_RAD`]) at least `times` times in the stage: the judge counts.
+    Inverted {
+        item: String,
+        times: u32,
+    },
 }
+
+/// An item's tilt from upright (rad) past which it counts as upside down (150°), and within which
+/// it counts as upright again (30°): an inversion is a turn from one to the other and back.
+pub const INVERTED_RAD: f64 = 150.0 * std::f64::consts::PI / 180.0;
+pub const UPRIGHT_RAD: f64 = 30.0 * std::f64::consts::PI / 180.0;
 
 fn default_slot_height() -> f64 {
     0.005
@@ -255,6 +268,10 @@ pub enum Form {
         height: f64,
         part: Option<String>,
     },
+    Inverted {
+        item: String,
+        times: u32,
+    },
 }
 
 /// A parsed predicate: its form and an inline `within` tolerance (value and dimension).
@@ -311,6 +328,8 @@ pub enum PredicateError {
     NotLabwareValue { lhs: String },
     #[error("a comparison needs a value with a unit")]
     NoValue,
+    #[error("`{text}` is not a count: write `<item> inverted 5 times`")]
+    NotCount { text: String },
     #[error("`{name}` is not a liquid's name: write `<container>.volume of <liquid> >= 5 µL`")]
     NotLiquidName { name: String },
     #[error(
@@ -463,6 +482,26 @@ pub fn parse(text: &str) -> Result<Parsed, PredicateError> {
             robot: robot.into(),
             item,
             part,
+        }
+    } else if let Some((item, rest)) = body.split_once(" inverted ") {
+        let item = item.trim();
+        if item.contains(' ') || item.contains('.') || item.is_empty() {
+            return Err(PredicateError::NotItemName {
+                name: item.to_string(),
+            });
+        }
+        let rest = rest.trim();
+        let count = rest
+            .strip_suffix(" times")
+            .or_else(|| rest.strip_suffix(" time"))
+            .and_then(|n| n.trim().parse::<u32>().ok())
+            .filter(|n| *n >= 1)
+            .ok_or_else(|| PredicateError::NotCount {
+                text: rest.to_string(),
+            })?;
+        Form::Inverted {
+            item: item.to_string(),
+            times: count,
         }
     } else if let Some((item, rest)) = body.split_once(" near ") {
         let (v, unit) = bracketed(rest, 3)?;
@@ -676,6 +715,9 @@ impl Check {
                 Location::Held { .. } => Some(true),
                 Location::Slot { .. } | Location::Bench => Some(false),
             },
+            Check::Inverted { item, times } => {
+                Some(w.inversions.get(item).copied().unwrap_or(0) >= *times)
+            }
             Check::JointRange { .. } | Check::Position { .. } => None,
         }
     }

@@ -57,6 +57,8 @@ pub struct World {
     pub locations: BTreeMap<String, Location>,
     /// Containers -> volume (µL).
     pub volumes: BTreeMap<String, f64>,
+    /// Items -> how many times they have been turned over and back (`invert`).
+    pub inversions: BTreeMap<String, u32>,
     /// Containers -> named liquid -> how much of it they hold (µL; a share of `volumes`, the
     /// rest is unnamed liquid). Moved in proportion to a container's contents.
     pub contents: BTreeMap<String, BTreeMap<String, f64>>,

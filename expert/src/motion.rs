@@ -103,7 +103,10 @@ impl ExpertPolicy {
         let lane = &mut lanes[r];
         let tcp_now = arm.kin.tcp(&arm.target);
         if lane.frame.as_ref().map(|(s, _)| *s) != Some(q.step) {
-            let frame = step_frame(arm, step, &lab, &tcp_now).map_err(&plan)?;
+            let base = task.robots[r].base.translation.vector.into();
+            let frame = step_frame(arm, step, &lab, &tcp_now)
+                .map_err(&plan)?
+                .with_base(base);
             lane.frame = Some((q.step, frame));
             lane.step_moved = false;
             lane.dial_grips = 0;

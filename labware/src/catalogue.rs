@@ -253,6 +253,7 @@ const OPEN_KEY: Button = Button {
 };
 const LID_KEY: &[Button] = &[OPEN_KEY];
 const TUBE_PRIMITIVES: &[&str] = &[
+    "invert",
     "pick",
     "place",
     "hold",

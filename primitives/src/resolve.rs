@@ -258,9 +258,18 @@ pub struct StepFrame {
     /// the motion that brings it over its seat (see [`Self::seat_turned`]); likewise about a
     /// round opening's axis for the motion that brings a held tool onto it.
     seat_turn: f64,
+    /// Where the robot's base stands (world), which a [`Motion::Tilt`] tilts across from; none
+    /// known: the tilt is about the tool's own y axis.
+    base: Option<[f64; 3]>,
 }
 
 impl StepFrame {
+    /// The frame with the robot's base position known (what a tilt needs).
+    pub fn with_base(mut self, base: [f64; 3]) -> StepFrame {
+        self.base = Some(base);
+        self
+    }
+
     /// Chooses, for the step's first affordance target, the symmetric grasp closest to the current
     /// tool orientation, and measures how `carried` (if any) sits in the hand. `finger_reach`: the
     /// robot's closed fingertips past its TCP (for presses); `enclose`: how deep its side grip
@@ -287,6 +296,7 @@ impl StepFrame {
             carried_round: false,
             brings_round: false,
             seat_turn: 0.0,
+            base: None,
         };
         match first_target(motions) {
             Some(Target::Affordance {
@@ -696,6 +706,7 @@ impl StepFrame {
             Motion::TurnBack => {
                 turn_path(tcp_now, -self.turned.ok_or(PlanError::NoTurnToUndo)?, 0.0)
             }
+            Motion::Tilt { angle } => tilt_path(tcp_now, *angle, self.base),
             Motion::Press { target, depth } => {
                 let at = self.target(target, lab)?;
                 line(tcp_now, &translated_local(&at, [0.0, 0.0, *depth]), 6)
@@ -769,6 +780,57 @@ fn turn_path(tcp: &Pose, angle: f64, lead: f64) -> Vec<Pose> {
             p
         })
         .collect()
+}
+
+/// The tool tilted in place by `angle` ([`Motion::Tilt`]): about the level axis square to the
+/// line from `base` to the tool (about the tool's own y where no base is known or the tool is
+/// over it), after a turn about the tool's approach axis that brings its y onto that axis (the
+/// fingers, closing along x, then close across the tilt), the shorter of the two turns that do.
+/// In steps of at most 0.1 rad, so that the IK's nearest solution follows.
+fn tilt_path(tcp: &Pose, angle: f64, base: Option<[f64; 3]>) -> Vec<Pose> {
+    let steps = |a: f64| ((a.abs() / 0.1).ceil() as usize).max(1);
+    let reach = base.map(|b| {
+        let t = tcp.translation.vector;
+        nalgebra::Vector3::new(t.x - b[0], t.y - b[1], 0.0)
+    });
+    let across = reach
+        .filter(|r| r.norm() > 1e-3)
+        .map(|r| nalgebra::Vector3::new(-r.y, r.x, 0.0).normalize());
+    let Some(axis) = across else {
+        let n = steps(angle);
+        return (0..=n)
+            .map(|i| {
+                let mut p = *tcp;
+                p.rotation *= axis_angle([0.0, 1.0, 0.0], angle * i as f64 / n as f64);
+                p
+            })
+            .collect();
+    };
+    // The turn about the approach axis (tool z) that lays the tool's y along the axis: in the
+    // tool frame the axis has components (ax, ay, az); a turn by ψ moves y to (-sin ψ, cos ψ).
+    let local = tcp.rotation.inverse() * axis;
+    let psi = f64::atan2(-local.x, local.y);
+    // y and -y tilt alike (the sign of the tilt flips): take the smaller turn.
+    let (psi, sign) = if psi.abs() > std::f64::consts::FRAC_PI_2 {
+        (psi - std::f64::consts::PI.copysign(psi), -1.0)
+    } else {
+        (psi, 1.0)
+    };
+    let mut out = Vec::new();
+    let n = steps(psi);
+    for i in 0..=n {
+        let mut p = *tcp;
+        p.rotation *= axis_angle([0.0, 0.0, 1.0], psi * i as f64 / n as f64);
+        out.push(p);
+    }
+    let turned = *out.last().unwrap_or(tcp);
+    let n = steps(angle);
+    for i in 1..=n {
+        let mut p = turned;
+        p.rotation *= axis_angle([0.0, 1.0, 0.0], sign * angle * i as f64 / n as f64);
+        out.push(p);
+    }
+    out
 }
 
 /// The step's first target that the tool goes to.

@@ -84,7 +84,8 @@ fn checked_items(task: &Task) -> Vec<String> {
             Check::Contact { item, .. }
             | Check::Holds { item, .. }
             | Check::Position { item, .. }
-            | Check::Lifted { item, .. } => out.push(item.clone()),
+            | Check::Lifted { item, .. }
+            | Check::Inverted { item, .. } => out.push(item.clone()),
         }
     }
     out

@@ -200,6 +200,19 @@ fn measure(
                 holds: value >= *height,
             })
         }
+        // How far the item is tilted from upright now (rad); it "holds" upside down. What the
+        // predicate's verdict shows is the judge's count of turns over and back
+        // ([`Judge::update`]).
+        Check::Inverted { item, .. } => {
+            let up = state_of(item)?.pose.rotation * nalgebra::Vector3::z();
+            let tilt = up.z.clamp(-1.0, 1.0).acos();
+            Some(Measure {
+                value: tilt,
+                target: std::f64::consts::PI,
+                tolerance: std::f64::consts::PI - compiler::predicates::INVERTED_RAD,
+                holds: tilt >= compiler::predicates::INVERTED_RAD,
+            })
+        }
         // The item's distance from the point (m).
         Check::Position {
             item,
@@ -403,6 +416,17 @@ struct Memory<'a> {
     /// Per timed step's predicate: when the earlier step's outcome first held, and when its own
     /// first held after that.
     timing: &'a [Timing],
+    /// Per `inverted` predicate: the turns over and back counted so far.
+    inversions: &'a [Inversions],
+}
+
+/// An `inverted` predicate's count: turns upside down and back upright seen so far, and whether
+/// the item is upside down now (past [`compiler::predicates::INVERTED_RAD`], until it is back
+/// within [`compiler::predicates::UPRIGHT_RAD`] of upright).
+#[derive(Clone, Copy, Debug, Default)]
+struct Inversions {
+    count: u32,
+    upside_down: bool,
 }
 
 /// A timed step's two times on the episode's clock (s), as the judge saw them: the first update
@@ -431,6 +455,7 @@ fn stage_verdict(
         held_s,
         starts,
         timing,
+        inversions,
     } = memory;
     let stage = &task.stages[index];
     let predicates: Vec<PredicateValue> = stage
@@ -459,6 +484,17 @@ fn stage_verdict(
                 if v.holds {
                     v.parts.clear();
                 }
+            }
+            // An inversion count holds once the judge has counted enough turns over and back:
+            // its value is the count, its target the number asked for.
+            if let Check::Inverted { times, .. } = &p.check {
+                let count = inversions.get(k).map_or(0, |i| i.count);
+                v.holds = count >= *times;
+                v.value = f64::from(count);
+                v.target = f64::from(*times);
+                v.tolerance = 0.0;
+                v.progress = (f64::from(count) / f64::from(*times)).min(1.0);
+                v.parts.clear();
             }
             // A timed step holds once its outcome came within its time of the earlier step's:
             // its value is the time between them (so far, while it has not come), its target
@@ -545,6 +581,8 @@ pub struct Judge {
     starts: Vec<u32>,
     /// Per predicate of the current stage that times a step: its two times so far.
     timing: Vec<Timing>,
+    /// Per `inverted` predicate of the current stage: its count so far.
+    inversions: Vec<Inversions>,
     /// Each stage's timed steps' earlier outcomes, resolved once (by predicate index).
     resolved_since: Vec<Vec<Option<ResolvedPredicate>>>,
     /// The time of the last update (s).
@@ -583,6 +621,7 @@ impl Judge {
                 })
                 .collect(),
             timing: Vec::new(),
+            inversions: Vec::new(),
             stage: 0,
             stage_start_s: 0.0,
             stage_start: initial.to_vec(),
@@ -615,6 +654,8 @@ impl Judge {
             self.held_then.resize(stage.success.len(), false);
             self.starts.resize(stage.success.len(), 0);
             self.timing.resize(stage.success.len(), Timing::default());
+            self.inversions
+                .resize(stage.success.len(), Inversions::default());
             let interval = time - self.last_s;
             for (k, p) in stage.success.iter().enumerate() {
                 if p.dwell.is_none() {
@@ -650,6 +691,24 @@ impl Judge {
                 t.held = now;
             }
             for (k, p) in stage.success.iter().enumerate() {
+                if !matches!(p.check, Check::Inverted { .. }) {
+                    continue;
+                }
+                let Some(tilt) =
+                    measure(&self.task, &self.resolved[self.stage][k], &p.check, states)
+                        .map(|m| m.value)
+                else {
+                    continue;
+                };
+                let i = &mut self.inversions[k];
+                if tilt >= compiler::predicates::INVERTED_RAD {
+                    i.upside_down = true;
+                } else if i.upside_down && tilt <= compiler::predicates::UPRIGHT_RAD {
+                    i.upside_down = false;
+                    i.count += 1;
+                }
+            }
+            for (k, p) in stage.success.iter().enumerate() {
                 if p.check.is_history()
                     && measure(&self.task, &self.resolved[self.stage][k], &p.check, states)
                         .is_some_and(|m| m.holds)
@@ -669,6 +728,7 @@ impl Judge {
                     held_s: &self.held_s,
                     starts: &self.starts,
                     timing: &self.timing,
+                    inversions: &self.inversions,
                 },
             );
             let settle = self.task.stages[self.stage].settle_s;
@@ -690,6 +750,7 @@ impl Judge {
             self.held_then.clear();
             self.starts.clear();
             self.timing.clear();
+            self.inversions.clear();
             self.done.push(v);
             self.last = None;
             self.stage += 1;

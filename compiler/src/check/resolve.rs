@@ -97,6 +97,28 @@ pub(super) fn resolve_check(
             ))
         }
         Form::Holds { robot, item, part } => names.holds(cx, robot, item, part.as_deref()),
+        Form::Inverted { item, times } => {
+            let kind = names.labware(cx, item)?;
+            if !kind.movable {
+                cx.err(
+                    Code::E0030,
+                    text.span,
+                    format!(
+                        "`{item}` (a {}) is not turned over: it does not move",
+                        kind.name
+                    ),
+                    Some("count the inversions of a tube a robot carries".into()),
+                );
+                return None;
+            }
+            Some((
+                Check::Inverted {
+                    item: item.clone(),
+                    times: *times,
+                },
+                None,
+            ))
+        }
         Form::Lifted { item, height, part } => {
             let kind = names.labware(cx, item)?;
             if let Some(part) = part {

@@ -214,7 +214,8 @@ pub(super) fn apply_tolerance(
         Check::JointRange { .. }
         | Check::Contact { .. }
         | Check::Holds { .. }
-        | Check::Lifted { .. } => {}
+        | Check::Lifted { .. }
+        | Check::Inverted { .. } => {}
     }
     check
 }

@@ -35,6 +35,8 @@ pub enum ArgKind {
     Temperature,
     /// A thermal profile ([`crate::profile`]).
     Profile,
+    /// A whole number of times, e.g. "5".
+    Count,
 }
 
 impl ArgKind {
@@ -50,6 +52,7 @@ impl ArgKind {
             ArgKind::Duration => "time, e.g. \"45 s\"",
             ArgKind::Speed => "rotational speed in rpm",
             ArgKind::Temperature => "temperature, e.g. \"42 °C\"",
+            ArgKind::Count => "whole number, e.g. 5",
             ArgKind::Profile => {
                 "profile, e.g. \"95 °C 3 min, 30 x [95 °C 15 s, 55 °C 15 s, 72 °C 30 s]\""
             }
@@ -212,6 +215,7 @@ mod dispense;
 mod hand_over;
 mod hold;
 mod incubate;
+mod invert;
 mod lid;
 mod liquid;
 mod lock;
@@ -273,6 +277,7 @@ pub const CATALOGUE: &[&LabPrimitive] = &[
     &thermocycle::PRIMITIVE,
     &incubate::PRIMITIVE,
     &wait::PRIMITIVE,
+    &invert::PRIMITIVE,
 ];
 
 /// What every primitive's file imports.
