@@ -1,5 +1,5 @@
 //! Issue 49, part 4: `invert` (mixing by inversion) on real MuJoCo. The expert takes the capped
-//! tube out of the rack, turns it upside down and back five times and puts it back; the judge
+//! tube out of the rack, turns it upside down and back four times and puts it back; the judge
 //! counts each turn over and back from the tube's measured tilt, so a robot that turns it fewer
 //! times, or lifts it and sets it back unturned, fails with the count as the predicate's value,
 //! and a motionless one counts none.
@@ -13,7 +13,7 @@ const PATH: &str = "protocols/lab/mix_by_inversion.toml";
 fn acted_by(seed: u64, edit: impl FnOnce(String) -> String) -> results::episode::EpisodeResult {
     let judged = common::compile(PATH);
     let acting = common::compile_edited(PATH, |s| {
-        edit(s).replace("\"lysate inverted 5 times\", ", "")
+        edit(s).replace("\"lysate inverted 4 times\", ", "")
     });
     common::run_with(&judged, seed, &Default::default(), |_, s, i| {
         Box::new(ExpertPolicy::new(&acting, s, i).unwrap())
@@ -21,34 +21,34 @@ fn acted_by(seed: u64, edit: impl FnOnce(String) -> String) -> results::episode:
 }
 
 #[test]
-fn five_inversions_are_counted_and_fewer_fail() {
+fn four_inversions_are_counted_and_fewer_fail() {
     let task = common::compile(PATH);
     let r = common::run(&task, 0, "expert");
     assert!(r.success, "{:#?}", r.verdict);
-    assert_eq!(common::predicate(&r, "lysate inverted 5 times").value, 5.0);
+    assert_eq!(common::predicate(&r, "lysate inverted 4 times").value, 4.0);
 
     let hold = common::run(&task, 0, "hold");
     assert!(!hold.success);
     assert_eq!(
-        common::predicate(&hold, "lysate inverted 5 times").value,
+        common::predicate(&hold, "lysate inverted 4 times").value,
         0.0
     );
 
     // Turned over twice, put back where it belongs: the place holds, the count does not.
-    let r = acted_by(1, |s| s.replace("times = 5", "times = 2"));
+    let r = acted_by(1, |s| s.replace("times = 4", "times = 2"));
     assert!(!r.success);
-    let count = common::predicate(&r, "lysate inverted 5 times");
+    let count = common::predicate(&r, "lysate inverted 4 times");
     assert_eq!((count.value, count.holds), (2.0, false), "{count:?}");
 
     // Lifted and set back without turning it: nothing counted.
     let r = acted_by(2, |s| {
         s.replace(
-            "[[steps]]\ndo = \"invert\"\non = \"lysate\"\ntimes = 5\nwith = \"arm\"\n\n",
+            "[[steps]]\ndo = \"invert\"\non = \"lysate\"\ntimes = 4\nwith = \"arm\"\n\n",
             "",
         )
     });
     assert!(!r.success);
-    assert_eq!(common::predicate(&r, "lysate inverted 5 times").value, 0.0);
+    assert_eq!(common::predicate(&r, "lysate inverted 4 times").value, 0.0);
     let placed = r
         .verdict
         .predicates()

@@ -332,12 +332,12 @@ pub const EXAMPLES: &[(&str, &str, &str)] = &[
     (
         "invert",
         "protocols/lab/mix_by_inversion.toml",
-        "do = \"invert\"\non = \"lysate\"\ntimes = 5\nwith = \"arm\"",
+        "do = \"invert\"\non = \"lysate\"\ntimes = 4\nwith = \"arm\"",
     ),
     (
         "inverted",
         "protocols/lab/mix_by_inversion.toml",
-        "\"lysate inverted 5 times\"",
+        "\"lysate inverted 4 times\"",
     ),
     (
         "liquid",
