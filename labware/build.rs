@@ -14,7 +14,9 @@ fn main() {
     println!("cargo:rerun-if-changed=embedded-definitions.txt");
     println!("cargo:rerun-if-changed=src/definition.rs");
     println!("cargo:rerun-if-env-changed=AUTOBIO_DEPS");
+    // `include_str!` resolves a relative path against the generated file: make it absolute.
     let deps = PathBuf::from(std::env::var("AUTOBIO_DEPS").unwrap_or_else(|_| "../.deps".into()));
+    let deps = std::fs::canonicalize(&deps).unwrap_or(deps);
     let installed = definition::Installed::under(&deps);
     let list = std::fs::read_to_string("embedded-definitions.txt")
         .expect("labware/embedded-definitions.txt is part of the crate");

@@ -23,7 +23,7 @@
 //! - `<item> inverted <n> times`                    turned upside down and back upright at least
 //!   n times during the stage (stateful: the judge counts each turn over and back)
 //!
-//! Any form but contact, joint range and `lifted` may end in `within <quantity>` to give its
+//! Any form but contact, holds, joint range, `lifted` and `inverted` may end in `within <quantity>` to give its
 //! tolerance inline.
 //!
 //! A time constraint: any form followed by `for <q> to <q>`, `for at most <q>` or `for at least

@@ -440,6 +440,8 @@ pub(crate) fn prove(cx: &mut Cx, scene: &ProofScene, stages: &[ProofStage], para
             }
             w.panel_hold_s = 0.0;
             w.clock_s = 0.0;
+            // The judge counts a stage's inversions from its start, and so does the proof.
+            w.inversions.clear();
             for p in stage.predicates {
                 if let Some(e) = p.predicate.check.target_error(bound) {
                     let mut d = Diagnostic::new(Code::E0020, p.span, e.to_string())

@@ -1,6 +1,8 @@
 //! The abstract world the compiler traces a plan through: part states, where each movable item
-//! is, liquid volumes, instrument panel values and what each robot's hand holds. No geometry and
-//! no physics: just the facts the primitives' preconditions and effects talk about.
+//! is, liquid volumes and the named liquids in them, instrument panel values, what each robot's
+//! hand holds, how many times each item has been turned over in the stage, and the stage's lab
+//! time. No geometry and no physics: just the facts the primitives' preconditions and effects
+//! talk about.
 
 use std::collections::BTreeMap;
 use std::fmt;

@@ -623,7 +623,7 @@ pub const KINDS: &[LabwareKind] = &[
     ),
     defined_rack(
         "tuberack_24_1_5ml",
-        "Opentrons 4-in-1 rack's 24-place insert for 1.5 mL tubes (4x6, 19.3 mm pitch)",
+        "Opentrons 4-in-1 rack's 24-place insert for 1.5 mL tubes (4x6, 19.9 mm by 19.3 mm pitch)",
         SlotLayout::Grid { rows: 4, cols: 6 },
         &["tube_1_5ml"],
         "opentrons/opentrons_24_tuberack_eppendorf_1.5ml_safelock_snapcap/3",

@@ -33,7 +33,8 @@ pub struct Definition {
     pub metadata: Metadata,
     pub parameters: Parameters,
     pub dimensions: Dimensions,
-    /// Wells by column, each column front to back as the definition lists it (A1, B1, ...).
+    /// Wells by column, each column from row A (at the back) forward, as the definition lists
+    /// it (A1, B1, ...).
     pub ordering: Vec<Vec<String>>,
     pub wells: BTreeMap<String, Well>,
 }
@@ -100,8 +101,8 @@ impl WellShape {
     }
 }
 
-/// Wells on a regular grid: rows `A..` front to back in the definition's listing, columns `1..`
-/// left to right, all wells alike and standing at one height (metres from here on).
+/// Wells on a regular grid: rows `A..` from the back forward, columns `1..` left to right, all
+/// wells alike and standing at one height (metres from here on).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Grid {
     pub rows: u32,
@@ -142,6 +143,14 @@ pub enum DefinitionError {
     UndefinedWell { uri: String, well: String },
     #[error("labware definition {uri} is not a regular grid: {reason}")]
     NotAGrid { uri: String, reason: String },
+    #[error(
+        "labware definition {uri} places its wells {pitch_mm:.1} mm apart, too close for tubes {tube_mm:.1} mm across"
+    )]
+    TooClose {
+        uri: String,
+        pitch_mm: f64,
+        tube_mm: f64,
+    },
 }
 
 impl Definition {
@@ -218,6 +227,16 @@ impl Definition {
         let col_pitch = pitch(cols, &|c| well(0, c).x);
         // Rows are listed back to front in y (A at the back): the pitch is positive going A->B.
         let row_pitch = pitch(rows, &|r| first.y - well(r, 0).y);
+        for (n, p, what) in [
+            (cols, col_pitch, "columns 1, 2, .. left to right"),
+            (rows, row_pitch, "rows A, B, .. back to front"),
+        ] {
+            if n > 1 && p <= GRID_SLACK_MM {
+                return Err(not(format!(
+                    "its {what} are not in order ({p:.2} mm apart)"
+                )));
+            }
+        }
         for (c, column) in self.ordering.iter().enumerate() {
             for (r, name) in column.iter().enumerate() {
                 let w = &self.wells[name];
@@ -368,6 +387,18 @@ mod tests {
             err.contains("`B2`") && err.contains("off the grid"),
             "{err}"
         );
+    }
+
+    /// Columns listed right to left (a pitch that is not positive) are no grid we can place.
+    #[test]
+    fn columns_out_of_order_are_refused() {
+        let text = rack_json(50.0).replace(
+            r#"[["A1", "B1"], ["A2", "B2"], ["A3", "B3"]]"#,
+            r#"[["A3", "B3"], ["A2", "B2"], ["A1", "B1"]]"#,
+        );
+        let def = Definition::parse(&text, "test").unwrap();
+        let err = def.grid().unwrap_err().to_string();
+        assert!(err.contains("not in order"), "{err}");
     }
 
     #[test]

@@ -97,15 +97,17 @@ impl Params {
     pub fn from_definition(def: &Definition, tube_radius: f64) -> Result<Params, DefinitionError> {
         let grid = def.grid()?;
         let hole = 2.0 * tube_radius + HOLE_CLEARANCE;
-        let pitch = grid.col_pitch.min(grid.row_pitch);
-        if (grid.cols > 1 || grid.rows > 1) && hole >= pitch {
-            return Err(DefinitionError::NotAGrid {
+        // The pitch between neighbours, along whichever of rows and columns has more than one.
+        let pitch = [(grid.cols, grid.col_pitch), (grid.rows, grid.row_pitch)]
+            .iter()
+            .filter(|(n, _)| *n > 1)
+            .map(|(_, p)| *p)
+            .fold(f64::INFINITY, f64::min);
+        if hole >= pitch {
+            return Err(DefinitionError::TooClose {
                 uri: def.uri(),
-                reason: format!(
-                    "places {:.1} mm apart are too close for tubes {:.1} mm across",
-                    pitch * 1e3,
-                    2e3 * tube_radius
-                ),
+                pitch_mm: pitch * 1e3,
+                tube_mm: 2e3 * tube_radius,
             });
         }
         let mm = 1e-3;
@@ -331,5 +333,43 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A definition with one row of three wells `pitch_mm` apart, for tubes to be sized against.
+    fn one_row(pitch_mm: f64) -> Definition {
+        let well = |x: f64| {
+            format!(
+                r#"{{"depth": 40, "totalLiquidVolume": 1500, "shape": "circular", "diameter": 10, "x": {x}, "y": 40, "z": 10}}"#
+            )
+        };
+        let text = format!(
+            r#"{{"schemaVersion": 2, "namespace": "test", "version": 1,
+               "metadata": {{"displayName": "t", "displayCategory": "tubeRack"}},
+               "parameters": {{"loadName": "row", "format": "irregular", "isTiprack": false}},
+               "dimensions": {{"xDimension": 100, "yDimension": 80, "zDimension": 50}},
+               "ordering": [["A1"], ["A2"], ["A3"]],
+               "wells": {{"A1": {}, "A2": {}, "A3": {}}}}}"#,
+            well(50.0 - pitch_mm),
+            well(50.0),
+            well(50.0 + pitch_mm)
+        );
+        Definition::parse(&text, "row").unwrap()
+    }
+
+    /// A single row is sized by its column pitch alone (its row pitch is none), and places too
+    /// close for the tubes are refused with the pitch and the tube's width.
+    #[test]
+    fn a_row_of_places_is_sized_by_its_one_pitch() {
+        let p = Params::from_definition(&one_row(20.0), 0.00535).unwrap();
+        assert_eq!((p.rows, p.cols), (1, 3));
+        let (x1, _) = p.slot_xy("A1").unwrap();
+        let (x3, _) = p.slot_xy("A3").unwrap();
+        assert!((x1 - x3 - 0.040).abs() < 1e-9, "A1 at +x, 40 mm from A3");
+        let err = Params::from_definition(&one_row(11.0), 0.00535).unwrap_err();
+        assert!(
+            matches!(err, DefinitionError::TooClose { .. }),
+            "{err}"
+        );
+        assert!(err.to_string().contains("11.0 mm apart"), "{err}");
     }
 }

@@ -5,7 +5,8 @@
 //! hand) are made once, at the step's start, in a [`StepFrame`]. A carry target (a held part's
 //! affordance brought onto another's) is resolved from where the tool is, and a turn follows a
 //! thread's lead up to its stop; a dial is turned from its live angle to a value's notch; a turn
-//! back undoes the step's last turn.
+//! back undoes the step's last turn; a tilt turns the tool over about the level axis across the
+//! robot's reach (the frame knows the robot's base: [`StepFrame::with_base`]).
 
 use compiler::motion::{Goals, Motion, Target};
 use compiler::params::{Bindings, render};

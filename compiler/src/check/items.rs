@@ -287,7 +287,7 @@ fn initial_state(
                 value.span,
                 format!("`{text}` is not a liquid's name"),
                 Some(
-                    "name it with letters, digits, `_` and `-`, starting with a letter: \"pbs_10x\""
+                    "name it with letters, digits, `_` and `-`, starting with a letter, not a word predicates use: \"pbs_10x\""
                         .into(),
                 ),
             ),
@@ -338,9 +338,13 @@ fn initial_state(
 }
 
 /// A liquid's name as a predicate can read it back (`tube.volume of <name> >= 5 µL`): a letter,
-/// then letters, digits, `_` or `-`, at most 40 in all.
+/// then letters, digits, `_` or `-`, at most 40 in all, and not a word of the predicate grammar.
 pub(crate) fn is_liquid_name(name: &str) -> bool {
-    name.len() <= 40
+    const RESERVED: &[&str] = &[
+        "in", "is", "was", "of", "near", "holds", "touches", "lifted", "inverted", "within", "for",
+    ];
+    !RESERVED.contains(&name)
+        && name.len() <= 40
         && name.chars().next().is_some_and(|c| c.is_ascii_alphabetic())
         && name
             .chars()

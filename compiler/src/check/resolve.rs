@@ -290,8 +290,6 @@ impl Names<'_> {
         ))
     }
 
-    /// `<lw>.volume <cmp> <q>` on a container: a volume (checked here unless it has
-    /// placeholders; the proof reads those per parameter combination).
     /// A liquid a predicate names: one the protocol loads somewhere (E0013 otherwise).
     fn liquid(&self, cx: &mut Cx, liquid: &str) -> Option<()> {
         if self.liquids.contains(&liquid) {
@@ -311,6 +309,9 @@ impl Names<'_> {
         None
     }
 
+    /// `<lw>.volume <cmp> <q>` on a container (`of <liquid>`: that liquid's share): a volume
+    /// (checked here unless it has placeholders; the proof reads those per parameter
+    /// combination).
     fn volume(
         &self,
         cx: &mut Cx,

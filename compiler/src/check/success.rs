@@ -68,11 +68,24 @@ pub(super) fn lower_predicates(
                     Code::E0030,
                     text.span,
                     format!("cannot read predicate `{}`: {e}", text.value),
-                    Some("forms: `<lw>.<part> is <state>`, `<lw>.<part> was <state>` (at some step), `<item> in <holder>.<slot>`, `<lw>.volume = <q>`, `<lw>.<value> = <q>`, `<robot> touches <item>`, `<lw>.<joint> in [lo, hi] <unit>`, `<item> near [x, y, z] m`".into()),
+                    Some("forms: `<lw>.<part> is <state>`, `<lw>.<part> was <state>` (at some step), `<item> in <holder>.<slot>`, `<lw>.volume = <q>`, `<lw>.volume of <liquid> = <q>`, `<lw>.<value> = <q>`, `<robot> touches <item>`, `<robot> holds <item>`, `<lw>.<joint> in [lo, hi] <unit>`, `<item> near [x, y, z] m`, `<item> lifted <length>`, `<item> inverted <n> times`".into()),
                 );
                 continue;
             }
         };
+        // A count of turns is the stage's memory, not a state that holds for a while.
+        if dwell.is_some() && matches!(parsed.form, predicates::Form::Inverted { .. }) {
+            cx.err(
+                Code::E0030,
+                text.span,
+                format!(
+                    "`{}`: a count of inversions takes no time constraint",
+                    text.value
+                ),
+                Some("write `<item> inverted <n> times` alone".into()),
+            );
+            continue;
+        }
         let Some((check, dim)) =
             resolve_check(cx, text, &parsed.form, kinds, robots, declared, &liquids)
         else {

@@ -25,9 +25,11 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
         },
     ],
     requires: "the robot carries `on`; its cap is on",
-    leaves: "`on` carried upright again, inverted that many more times (`<on> inverted <n> times`)",
+    leaves: "`on` carried upright again, inverted that many more times in the stage (`<on> inverted <n> times`)",
     phrase: "mix the {on} by inverting it {times} times",
-    outcome: Some("{on} inverted {times} times"),
+    // Not timed by `within`: the judge's count of turns is a stage's memory, not a state a
+    // moment shows (what an outcome must be).
+    outcome: None,
     effect,
     motions: Some(motions),
 };
