@@ -40,15 +40,7 @@ fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
             format!("`{robot}` cannot hand over to itself"),
         ));
     }
-    if w.hand(robot) != &Hand::Item(lw.clone()) {
-        return Err(precondition(
-            format!(
-                "`hand_over` needs `{robot}` to carry `{lw}`, but its hand is {}",
-                w.hand(robot)
-            ),
-            "add a `pick` step for it before this one",
-        ));
-    }
+    require_carrying(w, robot, &lw, PRIMITIVE.name)?;
     match w.hand(&to) {
         Hand::Empty => {}
         Hand::Stabilising(i) if *i == lw => {}

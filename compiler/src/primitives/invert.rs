@@ -57,15 +57,7 @@ fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
     let robot = step.robot;
     let (lw, _) = step.on(env)?;
     let n = times(step.text("times")?)?;
-    if w.hand(robot) != &Hand::Item(lw.clone()) {
-        return Err(precondition(
-            format!(
-                "`invert` needs `{robot}` to carry `{lw}`, but its hand is {}",
-                w.hand(robot)
-            ),
-            "add a `pick` step for it before this one",
-        ));
-    }
+    require_carrying(w, robot, &lw, PRIMITIVE.name)?;
     if w.part(&lw, "cap") != Some("on") {
         return Err(precondition(
             format!("`invert` needs `{lw}` capped, but its cap is not on"),

@@ -284,7 +284,8 @@ pub const CATALOGUE: &[&LabPrimitive] = &[
 mod prelude {
     pub(super) use super::{
         Arg, ArgKind, BoundStep, DURATION, Env, LabPrimitive, ON, VOLUME, Violation,
-        panel_dimension, precondition, resolve_location, stabilised, unknown_name, violation,
+        panel_dimension, precondition, require_carrying, resolve_location, stabilised,
+        unknown_name, violation,
     };
     pub(super) use crate::world::{Hand, Location, World};
     pub(super) use dsl::{Code, Dimension};
@@ -488,6 +489,25 @@ pub(super) fn require_empty_hand(w: &World, robot: &str, what: &str) -> Result<(
             "add a `place`, `release` or `screw_cap` step before this one",
         )),
     }
+}
+
+/// The robot carries `item` (E0031 otherwise, with the step that picks it up as the hint).
+pub(super) fn require_carrying(
+    w: &World,
+    robot: &str,
+    item: &str,
+    what: &str,
+) -> Result<(), Violation> {
+    if w.hand(robot) == &Hand::Item(item.to_string()) {
+        return Ok(());
+    }
+    Err(precondition(
+        format!(
+            "`{what}` needs `{robot}` to carry `{item}`, but its hand is {}",
+            w.hand(robot)
+        ),
+        "add a `pick` step for it before this one",
+    ))
 }
 
 pub(super) fn stabilised(w: &World, tube: &str, robot: &str) -> bool {

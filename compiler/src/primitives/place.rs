@@ -41,15 +41,7 @@ fn effect(w: &mut World, env: &Env, step: &BoundStep) -> Result<(), Violation> {
             hint: Some(format!("it takes: {}", accepts.join(", "))),
         });
     }
-    if w.hand(robot) != &Hand::Item(lw.clone()) {
-        return Err(precondition(
-            format!(
-                "`place` needs `{robot}` to carry `{lw}`, but its hand is {}",
-                w.hand(robot)
-            ),
-            "add a `pick` step for it before this one",
-        ));
-    }
+    require_carrying(w, robot, &lw, PRIMITIVE.name)?;
     if let Some(other) = w.occupant(&holder, &slot) {
         return Err(precondition(
             format!("`place` needs `{to}` empty, but `{other}` is in it"),
