@@ -5,7 +5,7 @@ use super::prelude::*;
 use crate::motion::{Motion, MotionStep};
 
 /// The most inversions one step asks for.
-pub const MAX_TIMES: u32 = 20;
+const MAX_TIMES: u32 = 20;
 
 /// How high the hand lifts the tube before it turns it (m): turned about the fingers, the hand's
 /// own wrist swings down past them (the 2F-85's tool centre is 16 cm out), so it rises clear of
@@ -35,7 +35,7 @@ pub const PRIMITIVE: LabPrimitive = LabPrimitive {
 };
 
 /// The count a `times` argument gives (E0020 not a whole number, E0021 out of range).
-pub fn times(text: &str) -> Result<u32, Violation> {
+fn times(text: &str) -> Result<u32, Violation> {
     let n: u32 = text.trim().parse().map_err(|_| {
         violation(
             Code::E0020,
