@@ -51,6 +51,7 @@ fn the_simulated_tasks_are_the_tables_and_a_motionless_robot_fails_one() {
             "lab.miniprep_spins",
             "lab.mix_by_inversion",
             "lab.pcr_run",
+            "lab.pcr_setup",
             "lab.spin",
             "pipette.aspirate",
             "pipette.transfer",

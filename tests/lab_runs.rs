@@ -92,6 +92,7 @@ fn lab_protocols_are_deterministic_and_fail_without_motion() {
         "protocols/lab/miniprep_spins.toml",
         "protocols/lab/dilution.toml",
         "protocols/lab/mix_by_inversion.toml",
+        "protocols/lab/pcr_setup.toml",
     ] {
         let task = common::compile(path);
         let r = common::run(&task, 0, "hold");

@@ -7,7 +7,8 @@
 use crate::common;
 use expert::ExpertPolicy;
 
-/// A scene of tubes standing in the corner places of both definition racks from the start.
+/// A scene of tubes standing in the corner places of the definition racks from the start (the
+/// two tube racks and the aluminium block's PCR tubes).
 const RACKS: &str = r#"format = 1
 [protocol]
 id = "test.definition_racks"
@@ -35,6 +36,18 @@ at = "small.A1"
 kind = "tube_1_5ml"
 at = "small.D6"
 
+[labware.block]
+kind = "aluminium_block_96_pcr"
+pose = { pos_m = [0.05, -0.2, 0.83173], yaw_deg = -15 }
+
+[labware.p1]
+kind = "tube_0_2ml"
+at = "block.A1"
+
+[labware.p2]
+kind = "tube_0_2ml"
+at = "block.H12"
+
 [labware.l1]
 kind = "tube_50ml"
 at = "large.A1"
@@ -49,7 +62,10 @@ duration = "1 s"
 with = "arm"
 
 [success]
-all = ["s1 in small.A1", "s2 in small.D6", "l1 in large.A1", "l2 in large.B3"]
+all = [
+  "s1 in small.A1", "s2 in small.D6", "l1 in large.A1", "l2 in large.B3", "p1 in block.A1",
+  "p2 in block.H12",
+]
 "#;
 
 /// Tubes set in a definition rack's places settle there: after a second of physics each is

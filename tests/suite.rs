@@ -37,6 +37,7 @@ mod model_servers;
 mod no_simulator;
 mod observation_history;
 mod paper_fidelity;
+mod pcr_setup;
 mod pictures;
 mod pipette;
 mod planning;

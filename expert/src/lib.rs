@@ -57,6 +57,9 @@ struct Queued {
     group: usize,
     stage: usize,
     motion: Motion,
+    /// How many times this motion has been made already: a path into a narrow opening is
+    /// looked at once it ends and made again while it misses (`motion::aim_again`).
+    aims: u8,
 }
 
 /// One planned step, routed and expanded.
@@ -171,6 +174,7 @@ impl ExpertPolicy {
                     group,
                     stage,
                     motion: motion.clone(),
+                    aims: 0,
                 }));
             steps.push(Step {
                 on: args.get("on").cloned(),

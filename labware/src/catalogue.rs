@@ -287,6 +287,14 @@ const MICROTUBE_TOLERANCES: &[(&str, f64)] = &[
     ("volume", 1.0),
     ("position", 0.005),
 ];
+/// A PCR tube's: a microtube's, in places 9 mm apart (`slot_xy` under half the pitch).
+const PCR_TUBE_TOLERANCES: &[(&str, f64)] = &[
+    ("cap_on", 0.002),
+    ("slot_xy", 0.003),
+    ("slot_z", 0.003),
+    ("volume", 1.0),
+    ("position", 0.005),
+];
 const TUBE_ACCEPTING_RACK: &[&str] = &["tube_50ml", "tube_15ml"];
 
 const fn tube(
@@ -347,6 +355,52 @@ const fn defined_rack(
     LabwareKind {
         definition: Some(definition),
         ..rack(name, description, layout, accepts)
+    }
+}
+
+/// A pipette's set volume (µL): the volume its plunger's first stop displaces, set for the
+/// episode between `min` and `max` (no knob to turn).
+const fn set_volume(min: f64, max: f64) -> PanelParam {
+    PanelParam {
+        name: "set_volume",
+        unit: "µL",
+        min,
+        max,
+        step: 1.0,
+        initial: max,
+        repeat_s: 0.0,
+        dial: None,
+    }
+}
+const P1000_PANEL: &[PanelParam] = &[set_volume(100.0, 1000.0)];
+const P200_PANEL: &[PanelParam] = &[set_volume(20.0, 200.0)];
+
+/// A single-channel pipette whose tip holds `capacity_ul`, set through `panel`.
+const fn pipette(
+    name: &'static str,
+    description: &'static str,
+    capacity_ul: f64,
+    panel: &'static [PanelParam],
+) -> LabwareKind {
+    LabwareKind {
+        name,
+        description,
+        // Where its tip is: out of every container, in one, or under a liquid's surface.
+        parts: &[PartState {
+            part: "tip",
+            states: &["out", "in", "immersed"],
+            initial: &["out"],
+        }],
+        slots: None,
+        capacity_ul: Some(capacity_ul),
+        movable: true,
+        panel,
+        buttons: &[],
+        joints: &[("plunger", "m"), ("blow_out", "m"), ("ejector", "m")],
+        tolerances: &[("volume", 1.0), ("position", 0.005)],
+        primitives: &["pick", "place", "hand_over"],
+        liquid_tool: true,
+        definition: None,
     }
 }
 
@@ -635,6 +689,19 @@ pub const KINDS: &[LabwareKind] = &[
         &["tube_50ml"],
         "opentrons/opentrons_6_tuberack_falcon_50ml_conical/2",
     ),
+    defined_rack(
+        "aluminium_block_96_pcr",
+        "Opentrons 96-well aluminium block for 0.2 mL PCR tubes and strips (8x12, 9 mm pitch)",
+        SlotLayout::Grid { rows: 8, cols: 12 },
+        &["tube_0_2ml"],
+        "opentrons/opentrons_96_aluminumblock_generic_pcr_strip_200ul/2",
+    ),
+    tube(
+        "tube_0_2ml",
+        "0.2 mL PCR tube (one of a strip's), modelled with a screw cap",
+        200.0,
+        PCR_TUBE_TOLERANCES,
+    ),
     tube(
         "tube_1_5ml",
         "1.5 mL snap-cap microcentrifuge tube, modelled with a screw cap",
@@ -659,36 +726,18 @@ pub const KINDS: &[LabwareKind] = &[
         2000.0,
         MICROTUBE_TOLERANCES,
     ),
-    LabwareKind {
-        name: "pipette",
-        description: "single-channel air-displacement pipette with a 1000 µL tip",
-        // Where its tip is: out of every container, in one, or under a liquid's surface.
-        parts: &[PartState {
-            part: "tip",
-            states: &["out", "in", "immersed"],
-            initial: &["out"],
-        }],
-        slots: None,
-        capacity_ul: Some(1000.0),
-        movable: true,
-        // The volume the plunger's first stop displaces, set for the episode (no knob to turn).
-        panel: &[PanelParam {
-            name: "set_volume",
-            unit: "µL",
-            min: 100.0,
-            max: 1000.0,
-            step: 1.0,
-            initial: 1000.0,
-            repeat_s: 0.0,
-            dial: None,
-        }],
-        buttons: &[],
-        joints: &[("plunger", "m"), ("blow_out", "m"), ("ejector", "m")],
-        tolerances: &[("volume", 1.0), ("position", 0.005)],
-        primitives: &["pick", "place", "hand_over"],
-        liquid_tool: true,
-        definition: None,
-    },
+    pipette(
+        "pipette",
+        "single-channel air-displacement pipette with a 1000 µL tip (a P1000: 100-1000 µL)",
+        1000.0,
+        P1000_PANEL,
+    ),
+    pipette(
+        "pipette_p200",
+        "single-channel air-displacement pipette with a 200 µL tip (a P200: 20-200 µL)",
+        200.0,
+        P200_PANEL,
+    ),
 ];
 
 pub fn kind(name: &str) -> Option<&'static LabwareKind> {

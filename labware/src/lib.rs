@@ -31,7 +31,7 @@ pub use catalogue::{
 pub use frame::{Pose, Rot, Vec3};
 pub use model::{
     Affordance, Display, Effects, Instrument, Joints, LabwareState, Liquid, Logic, Measure,
-    Mechanism, Panel, Part, Symmetry,
+    Mechanism, Opening, Panel, Part, Symmetry,
 };
 
 // The registry: one line per simulation model (its module, its variant of `Model`, the kinds it
@@ -50,12 +50,17 @@ registry::registry! {
         "microtube_rack" => rack::Params::microtube_rack(),
         "tuberack_24_1_5ml" => rack::Params::defined("tuberack_24_1_5ml"),
         "tuberack_6_50ml" => rack::Params::defined("tuberack_6_50ml"),
+        "aluminium_block_96_pcr" => rack::Params::defined("aluminium_block_96_pcr"),
     },
     tube::Tube {
         "tube_50ml" => tube::Params::conical_50ml(),
         "tube_15ml" => tube::Params::conical_15ml(),
         "tube_1_5ml" => tube::Params::microtube(),
         "cryovial" => tube::Params::cryovial(),
+        "tube_0_2ml" => tube::Params::pcr_tube(),
     },
-    pipette::Pipette { "pipette" => pipette::Params::p1000() },
+    pipette::Pipette {
+        "pipette" => pipette::Params::p1000(),
+        "pipette_p200" => pipette::Params::p200(),
+    },
 }

@@ -13,6 +13,9 @@ pub struct Fragment {
     pub contact: String,
     /// The item's own actuators (a mixer's motor): `<actuator>` children.
     pub actuator: String,
+    /// MuJoCo's arena (contacts, constraints, the solver's stack) the item needs at the least
+    /// (MB); 0: the default (about 15 MB) suffices.
+    pub arena_mb: usize,
 }
 
 impl Fragment {
@@ -22,6 +25,8 @@ impl Fragment {
         self.equality += &other.equality;
         self.contact += &other.contact;
         self.actuator += &other.actuator;
+        // The scene's items touch at once: their needs add up.
+        self.arena_mb += other.arena_mb;
     }
 }
 

@@ -219,6 +219,14 @@ pub struct Affordance {
     pub lead: f64,
 }
 
+/// A narrow opening ([`Instrument::opening`]): how far past its affordance, along the axis, a
+/// carried tool may be brought, and how far off the affordance's axis it may end (m).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Opening {
+    pub depth: f64,
+    pub aim: f64,
+}
+
 /// A display an instrument draws: the MuJoCo texture (declared in the model's fragment, 8-bit RGB)
 /// that [`Panel::draw_display`] fills.
 #[derive(Clone, Debug, PartialEq)]
@@ -435,6 +443,13 @@ pub trait Instrument {
 
     /// A named affordance in the world frame, from live (or planned) state.
     fn affordance(&self, _name: &str, _s: &LabwareState) -> Option<Affordance> {
+        None
+    }
+
+    /// A narrow opening a carried tool is brought into at affordance `affordance` (a shallow
+    /// tube's mouth): how deep the tool may go and how closely it must be aimed. `None`: the
+    /// affordance takes a tool as deep as a motion asks, aimed as a path ends.
+    fn opening(&self, _affordance: &str) -> Option<Opening> {
         None
     }
 

@@ -94,6 +94,19 @@ impl Params {
         }
     }
 
+    /// A P200 with its 200 µL tip: the P1000's body on a tip 52 mm long below the nose (59.3 mm
+    /// of Opentrons' 200 µL tip less its 7.5 mm overlap), 5.2 mm across at its top; set 20-200 µL.
+    pub fn p200() -> Params {
+        Params {
+            tip_length: 0.052,
+            tip_radius: 0.0026,
+            opening_radius: 0.0004,
+            min_ul: 20.0,
+            max_ul: 200.0,
+            ..Params::p1000()
+        }
+    }
+
     /// Where the nose cone starts (the tip's top sits 5 mm up it) and the handle's bottom (m).
     fn nose_z(&self) -> f64 {
         self.tip_length - 0.005

@@ -52,6 +52,12 @@ fn is_zero(v: &[f64; 2]) -> bool {
 const HOLE_CLEARANCE: f64 = 0.001;
 /// The top plate of a definition rack (m).
 const DEFINED_PLATE: f64 = 0.003;
+/// A rack with more places than this is crowded: its small tubes' walls touch its bars at many
+/// points at once (a 96-place block's three PCR tubes, with a pipette's tip in one, made 433
+/// contacts and 1,308 constraint rows, past MuJoCo's default 15 MB arena), so its scene asks for
+/// [`CROWDED_ARENA_MB`].
+const CROWDED_PLACES: u32 = 60;
+const CROWDED_ARENA_MB: usize = 64;
 /// A definition rack's colour: Opentrons' grey polymer.
 const DEFINED_RGBA: [f64; 4] = [0.78, 0.8, 0.82, 1.0];
 
@@ -259,6 +265,11 @@ impl Instrument for Params {
                 "<body name=\"{name}/base\" {}>\n{geoms}</body>\n",
                 pose_attrs(placement)
             ),
+            arena_mb: if self.rows * self.cols > CROWDED_PLACES {
+                CROWDED_ARENA_MB
+            } else {
+                0
+            },
             ..Fragment::default()
         }
     }

@@ -11,7 +11,9 @@
 use crate::frame::{Pose, translation};
 use crate::mjcf::{Fragment, cylinder_inertia, pose_attrs};
 use crate::model::Liquid;
-use crate::model::{Affordance, Instrument, LabwareState, Measure, Mechanism, Part, Symmetry};
+use crate::model::{
+    Affordance, Instrument, LabwareState, Measure, Mechanism, Opening, Part, Symmetry,
+};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -21,6 +23,10 @@ const DRAW_DEPTH: f64 = 0.008;
 
 /// How far off the bore's bottom a tip stays (m).
 const DRAW_CLEARANCE: f64 = 0.005;
+
+/// A bore shallower than this is a narrow opening ([`Instrument::opening`]): twice the 20 mm a
+/// pipette's tip dispenses from under a mouth (m).
+const NARROW_BORE: f64 = 0.04;
 
 /// How opaque an open tube's walls are drawn.
 const OPEN_ALPHA: f64 = 0.3;
@@ -97,6 +103,25 @@ impl Params {
             thread_radius: 0.00599,
             cap_off_rise: 0.005,
             cap_rgba: [0.85, 0.2, 0.25, 1.0],
+            ..Params::conical_50ml()
+        }
+    }
+
+    /// A 0.2 mL PCR tube, one of a strip's: 6 mm across, 21.2 mm tall (its bore 5 mm across,
+    /// close to the 5.46 mm wells of Opentrons' aluminium block definition). Its mass is five
+    /// times a real tube's 0.2 g: lighter bodies chatter in their holes at our 2 ms step. Its
+    /// cap is a screw cap like the others' (a strip's hinged caps are not modelled).
+    pub fn pcr_tube() -> Params {
+        Params {
+            radius: 0.003,
+            height: 0.0212,
+            mass: 0.001,
+            cap_radius: 0.0035,
+            cap_height: 0.004,
+            cap_mass: 0.0002,
+            thread_radius: 0.0031,
+            cap_off_rise: 0.003,
+            cap_rgba: [0.95, 0.95, 0.9, 1.0],
             ..Params::conical_50ml()
         }
     }
@@ -421,6 +446,18 @@ impl Instrument for Params {
         BTreeMap::from([("cap".into(), if on { "on" } else { "off" }.into())])
     }
 
+    /// A bore shallower than [`NARROW_BORE`] is a narrow opening: a pipette's tip goes at most
+    /// half way down it (the tip's narrow end fits; its wide part would catch on the rim), aimed
+    /// within a fifth of the bore's radius of its axis.
+    fn opening(&self, affordance: &str) -> Option<Opening> {
+        let (radius, base, _) = self.bore();
+        let depth = self.height - base;
+        (affordance == "mouth" && depth < NARROW_BORE).then_some(Opening {
+            depth: 0.5 * depth,
+            aim: 0.2 * radius,
+        })
+    }
+
     /// `grasp`: the cap from above (approach straight down, fingers closing across the cap at its
     /// mid-height); any turn about the tube's axis grasps it the same.
     /// `cap_start`: the grasp of a cap set coaxially on the mouth, ready to be screwed on.
@@ -630,6 +667,22 @@ mod tests {
                 "{kind}: {lo} {hi}"
             );
             assert!(!bore.contains([p.radius * 0.99, 0.0, p.height / 2.0]));
+        }
+    }
+
+    /// A PCR tube's mouth is a narrow opening: a tip goes 10 mm down its 20 mm bore (the narrow
+    /// end of a tip, not its wide part) and ends within half a millimetre of its axis; a cryovial's
+    /// 34 mm bore is one too; the 1.5 mL tube's and the conical tubes' are not (a dispense goes
+    /// the 20 mm it always has).
+    #[test]
+    fn shallow_bores_are_narrow_openings() {
+        let pcr = Params::pcr_tube().opening("mouth").expect("a PCR tube is narrow");
+        assert!((pcr.depth - 0.0101).abs() < 1e-9, "{pcr:?}");
+        assert!((pcr.aim - 0.0005).abs() < 1e-9, "{pcr:?}");
+        assert!(Params::pcr_tube().opening("draw").is_none());
+        assert!(Params::cryovial().opening("mouth").is_some());
+        for deep in [Params::microtube(), Params::conical_15ml(), Params::conical_50ml()] {
+            assert!(deep.opening("mouth").is_none(), "{deep:?}");
         }
     }
 

@@ -17,7 +17,7 @@ mod resolve;
 pub mod spline;
 pub mod topp;
 
-pub use resolve::{Lab, PlanError, StepFrame, first_target};
+pub use resolve::{Lab, PlanError, StepFrame, bring_miss, first_target};
 
 use labware::Pose;
 

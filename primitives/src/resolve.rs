@@ -406,11 +406,12 @@ impl StepFrame {
         {
             let (_, live) = lab.item(carried)?;
             let held = lab.affordance(carried, from, live)?;
-            let (_, other) = lab.item(labware)?;
+            let (model, other) = lab.item(labware)?;
             let goal = lab.affordance(labware, to, other)?;
             let heading =
                 closest_turn(&goal, &held.pose) * axis_angle([0.0, 0.0, 1.0], self.seat_turn);
-            let goal = translated_local(&(goal.pose * heading), [0.0, 0.0, -above]);
+            let goal =
+                translated_local(&(goal.pose * heading), [0.0, 0.0, -into(model, to, *above)]);
             return Ok(goal * held.pose.inverse() * tcp_now);
         }
         let Target::Carry {
@@ -844,6 +845,40 @@ pub fn first_target(motions: &[Motion]) -> Option<&Target> {
         | Motion::Press { target, .. } => Some(target),
         _ => None,
     })
+}
+
+/// How far along its affordance's axis a [`Target::Bring`] brings its tool (`above` back from
+/// the affordance, negative: past it), no deeper than a narrow opening lets a tool go.
+fn into(model: &dyn Instrument, to: &str, above: f64) -> f64 {
+    model
+        .opening(to)
+        .map_or(above, |opening| above.max(-opening.depth))
+}
+
+/// How far a [`Target::Bring`]'s carried affordance is from its goal now (m), where the goal is
+/// a narrow opening, with how closely the opening asks to be aimed: what the expert checks once a
+/// path into it has ended, and moves again while it misses. `None` for every other target.
+pub fn bring_miss(target: &Target, lab: &Lab) -> Result<Option<(f64, f64)>, PlanError> {
+    let Target::Bring {
+        carried,
+        from,
+        labware,
+        to,
+        above,
+    } = target
+    else {
+        return Ok(None);
+    };
+    let (model, other) = lab.item(labware)?;
+    let Some(opening) = model.opening(to) else {
+        return Ok(None);
+    };
+    let (_, live) = lab.item(carried)?;
+    let held = lab.affordance(carried, from, live)?;
+    let goal = lab.affordance(labware, to, other)?;
+    let goal = translated_local(&goal.pose, [0.0, 0.0, -into(model, to, *above)]);
+    let miss = (goal.translation.vector - held.pose.translation.vector).norm();
+    Ok(Some((miss, opening.aim)))
 }
 
 /// The turn allowed by the affordance's symmetry (about its z axis; for `AboutY`, about its y

@@ -254,7 +254,7 @@ pub fn scene_xml(task: &Task, placements: &[Pose], detail: Detail) -> Result<Str
     Ok(format!(
         r#"<mujoco model="autobio:{id}">
   <compiler angle="radian" autolimits="true"/>
-  <option timestep="{dt}" integrator="implicitfast" cone="elliptic" impratio="10" noslip_iterations="2" sdf_iterations="3" sdf_initpoints="8">
+{size}  <option timestep="{dt}" integrator="implicitfast" cone="elliptic" impratio="10" noslip_iterations="2" sdf_iterations="3" sdf_initpoints="8">
     <flag multiccd="enable" autoreset="disable"/>
   </option>
   <visual>
@@ -287,6 +287,13 @@ pub fn scene_xml(task: &Task, placements: &[Pose], detail: Detail) -> Result<Str
         labware_world = labware.worldbody,
         equality = labware.equality,
         contact = labware.contact,
+        // Only a scene whose items ask for more arena than the default says so: the others stay
+        // as they were.
+        size = if labware.arena_mb > 0 {
+            format!("  <size memory=\"{}M\"/>\n", labware.arena_mb)
+        } else {
+            String::new()
+        },
         // Only items with their own motors add the section: other scenes stay as they were.
         actuator = if labware.actuator.is_empty() {
             String::new()

@@ -1,0 +1,61 @@
+//! Issue 49: the PCR set-up, 0.2 mL tubes standing in Opentrons' 96-well aluminium block (made
+//! from its published definition) filled from a master mix by a P200, on real MuJoCo. Each tube
+//! is judged by how much of the named mix it holds: the expert fills all three, a motionless
+//! robot none, and a plan that serves one tube twice fails at the tube it missed and at the one
+//! it filled twice. The PCR tube's 20 mm bore is a narrow opening: the tip goes only half way
+//! down it, and the expert aims it there again until it is within half a millimetre of the axis.
+
+use crate::common;
+use expert::ExpertPolicy;
+
+const PATH: &str = "protocols/lab/pcr_setup.toml";
+const TUBES: [&str; 3] = ["pcr1", "pcr2", "pcr3"];
+
+fn check(tube: &str) -> String {
+    format!("{tube}.volume of master_mix = 25 µL")
+}
+
+#[test]
+fn the_expert_fills_each_pcr_tube_and_hold_fills_none() {
+    let task = common::compile(PATH);
+    let r = common::run(&task, 0, "expert");
+    assert!(r.success, "{:#?}", r.verdict);
+    for tube in TUBES {
+        let p = common::predicate(&r, &check(tube));
+        assert!((p.value - 25.0).abs() <= 1.0, "{tube}: {p:?}");
+    }
+    let mix = common::predicate(&r, "mix.volume = 925 µL");
+    assert!(mix.holds, "{mix:?}");
+    let hold = common::run(&task, 0, "hold");
+    assert!(!hold.success);
+    for tube in TUBES {
+        assert_eq!(common::predicate(&hold, &check(tube)).value, 0.0, "{tube}");
+    }
+}
+
+#[test]
+fn a_tube_served_twice_and_one_missed_fail_their_checks() {
+    let judged = common::compile(PATH);
+    // The same plan with the loop's list wrong: the first tube twice, the second never (its
+    // success lines dropped so that the plan proves).
+    let acting = common::compile_edited(PATH, |s| {
+        s.replace(
+            "tube = [\"pcr1\", \"pcr2\", \"pcr3\"]",
+            "tube = [\"pcr1\", \"pcr1\", \"pcr3\"]",
+        )
+        .replace("  \"pcr1.volume of master_mix = 25 µL\",\n", "")
+        .replace("  \"pcr2.volume of master_mix = 25 µL\",\n", "")
+    });
+    let r = common::run_with(&judged, 0, &Default::default(), |_, s, i| {
+        Box::new(ExpertPolicy::new(&acting, s, i).unwrap())
+    });
+    assert!(!r.success, "a tube filled twice passed");
+    let twice = common::predicate(&r, &check("pcr1"));
+    assert!(
+        !twice.holds && (twice.value - 50.0).abs() <= 2.0,
+        "{twice:?}"
+    );
+    let missed = common::predicate(&r, &check("pcr2"));
+    assert!(!missed.holds && missed.value == 0.0, "{missed:?}");
+    assert!(common::predicate(&r, &check("pcr3")).holds);
+}
