@@ -11,7 +11,7 @@
 
 use crate::route::{Route, route};
 use crate::{ExpertPolicy, Lane, PlanFailure, Queued, planning};
-use compiler::motion::Motion;
+use compiler::motion::{Motion, Target};
 use policy::{Observation, PolicyError, StageEvent};
 use primitives::alternatives::Scope;
 use primitives::ik::{solutions, solve_with};
@@ -142,14 +142,18 @@ impl ExpertPolicy {
         {
             return Ok(active);
         }
-        let again = match aim_again(&q, &lab).map_err(&plan)? {
-            Aim::Hit => return Ok(Active::Hold { until: obs.time }),
-            Aim::Again(aims) => Some(Queued {
-                motion: q.motion.clone(),
-                aims,
-                ..q
-            }),
-            Aim::Once => None,
+        let (q, look) = match aim_again(&q, &lab).map_err(&plan)? {
+            Aim::Once => (q, None),
+            Aim::Over(over, aims) => {
+                let look = Queued {
+                    motion: q.motion.clone(),
+                    aims,
+                    step: q.step,
+                    group: q.group,
+                    stage: q.stage,
+                };
+                (Queued { motion: over, ..q }, Some(look))
+            }
         };
         let route_seed = || {
             let s = planner::mix(*seed, *routed);
@@ -167,44 +171,67 @@ impl ExpertPolicy {
         }
         .start(q, obs, route_seed)
         .map_err(&plan)?;
-        if let Some(again) = again {
-            lanes[r].queue.push_front(again);
+        if let Some(look) = look {
+            lanes[r].queue.push_front(look);
         }
         Ok(active)
     }
 }
 
-/// How many times a path into a narrow opening is made at most: the first, and corrections.
+/// How many times a tool is brought over a narrow opening at most: the first, and corrections.
 const MAX_AIMS: u8 = 4;
 
-/// What a motion into a narrow opening does now ([`aim_again`]).
+/// How far over a narrow opening's mouth a tool is aimed before it goes in (m).
+const OVER: f64 = 0.005;
+
+/// What a motion into a narrow opening makes now ([`aim_again`]).
 enum Aim {
-    /// Not a motion into a narrow opening: made once, as every other.
+    /// The motion as it is, once: every motion but one into a narrow opening, and that one's way
+    /// in once the tool is aimed.
     Once,
-    /// Made (again), then looked at again: how many times it will have been made.
-    Again(u8),
-    /// A look once a path ended: the carried tool is within the opening's aim (or the
-    /// corrections are spent), nothing more to do.
-    Hit,
+    /// The tool brought (again) to [`OVER`] the opening instead, then looked at: the motion to
+    /// make now, and how many times it will have been made.
+    Over(Motion, u8),
 }
 
 /// A motion that brings a carried tool into a narrow opening (a pipette's tip into a PCR tube's
-/// mouth, `labware::Opening`) is looked at once its path ends, and made again from where the arm
-/// then is while the tool misses the opening's aim: each path is aimed from the tool's measured
-/// pose and the arm's commanded one, so an arm that sags differently at the path's end than at
-/// its start ends off by that difference, more than a narrow mouth allows (3-5 mm at a PCR tube
-/// in the block, where its bore is 2.5 mm across), and the correction takes it out.
+/// mouth, `labware::Opening`) first brings it [`OVER`] the mouth, looks once that path ends, and
+/// brings it there again from where the arm then is while the tool misses the opening's aim; only
+/// then does it go in, straight down. Each path is aimed from the tool's measured pose and the
+/// arm's commanded one, so an arm that sags differently at a path's end than at its start ends
+/// off by that difference (3-5 mm at a PCR tube in the block, from 12 cm above it, where the bore
+/// is 5 mm across); corrected over the mouth, the tip never drags across the bore's wall.
 fn aim_again(q: &Queued, lab: &Lab) -> Result<Aim, PlanFailure> {
-    let Motion::Reach { target } = &q.motion else {
+    let Motion::Reach {
+        target:
+            Target::Bring {
+                carried,
+                from,
+                labware,
+                to,
+                above,
+            },
+    } = &q.motion
+    else {
         return Ok(Aim::Once);
     };
-    let Some((miss, aim)) = primitives::bring_miss(target, lab)? else {
+    if *above >= OVER {
+        return Ok(Aim::Once);
+    }
+    let over = Target::Bring {
+        carried: carried.clone(),
+        from: from.clone(),
+        labware: labware.clone(),
+        to: to.clone(),
+        above: OVER,
+    };
+    let Some((miss, aim)) = primitives::bring_miss(&over, lab)? else {
         return Ok(Aim::Once);
     };
     if q.aims > 0 && (miss <= aim || q.aims >= MAX_AIMS) {
-        return Ok(Aim::Hit);
+        return Ok(Aim::Once);
     }
-    Ok(Aim::Again(q.aims + 1))
+    Ok(Aim::Over(Motion::Reach { target: over }, q.aims + 1))
 }
 
 /// A new step's frame: its motions resolved against the lab with the tool where it is, and for a
