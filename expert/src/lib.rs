@@ -58,7 +58,7 @@ struct Queued {
     stage: usize,
     motion: Motion,
     /// How many times this motion has been made already: a path into a narrow opening is
-    /// looked at once it ends and made again while it misses (`motion::aim_again`).
+    /// looked at once it ends and made again while it misses (`motion::aim_over`).
     aims: u8,
 }
 

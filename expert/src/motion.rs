@@ -142,9 +142,9 @@ impl ExpertPolicy {
         {
             return Ok(active);
         }
-        let (q, look) = match aim_again(&q, &lab).map_err(&plan)? {
-            Aim::Once => (q, None),
-            Aim::Over(over, aims) => {
+        let (q, look) = match aim_over(&q, &lab).map_err(&plan)? {
+            None => (q, None),
+            Some((over, aims)) => {
                 let look = Queued {
                     motion: q.motion.clone(),
                     aims,
@@ -184,16 +184,6 @@ const MAX_AIMS: u8 = 4;
 /// How far over a narrow opening's mouth a tool is aimed before it goes in (m).
 const OVER: f64 = 0.005;
 
-/// What a motion into a narrow opening makes now ([`aim_again`]).
-enum Aim {
-    /// The motion as it is, once: every motion but one into a narrow opening, and that one's way
-    /// in once the tool is aimed.
-    Once,
-    /// The tool brought (again) to [`OVER`] the opening instead, then looked at: the motion to
-    /// make now, and how many times it will have been made.
-    Over(Motion, u8),
-}
-
 /// A motion that brings a carried tool into a narrow opening (a pipette's tip into a PCR tube's
 /// mouth, `labware::Opening`) first brings it [`OVER`] the mouth, looks once that path ends, and
 /// brings it there again from where the arm then is while the tool misses the opening's aim; only
@@ -201,7 +191,11 @@ enum Aim {
 /// arm's commanded one, so an arm that sags differently at a path's end than at its start ends
 /// off by that difference (3-5 mm at a PCR tube in the block, from 12 cm above it, where the bore
 /// is 5 mm across); corrected over the mouth, the tip never drags across the bore's wall.
-fn aim_again(q: &Queued, lab: &Lab) -> Result<Aim, PlanFailure> {
+///
+/// `None`: make the motion as it is, once (every motion but one into a narrow opening, and that
+/// one's way in once the tool is aimed). Else the motion that brings the tool (again) [`OVER`] the
+/// opening instead, and how many times it will then have been made: the look that follows it.
+fn aim_over(q: &Queued, lab: &Lab) -> Result<Option<(Motion, u8)>, PlanFailure> {
     let Motion::Reach {
         target:
             Target::Bring {
@@ -213,10 +207,10 @@ fn aim_again(q: &Queued, lab: &Lab) -> Result<Aim, PlanFailure> {
             },
     } = &q.motion
     else {
-        return Ok(Aim::Once);
+        return Ok(None);
     };
     if *above >= OVER {
-        return Ok(Aim::Once);
+        return Ok(None);
     }
     let over = Target::Bring {
         carried: carried.clone(),
@@ -226,12 +220,12 @@ fn aim_again(q: &Queued, lab: &Lab) -> Result<Aim, PlanFailure> {
         above: OVER,
     };
     let Some((miss, aim)) = primitives::bring_miss(&over, lab)? else {
-        return Ok(Aim::Once);
+        return Ok(None);
     };
     if q.aims > 0 && (miss <= aim || q.aims >= MAX_AIMS) {
-        return Ok(Aim::Once);
+        return Ok(None);
     }
-    Ok(Aim::Over(Motion::Reach { target: over }, q.aims + 1))
+    Ok(Some((Motion::Reach { target: over }, q.aims + 1)))
 }
 
 /// A new step's frame: its motions resolved against the lab with the tool where it is, and for a
