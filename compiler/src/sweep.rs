@@ -213,10 +213,49 @@ fn summary(
     kinds: &BTreeMap<String, &'static LabwareKind>,
 ) -> Diagnostic {
     let names: Vec<&String> = bad[0].0.keys().collect();
+    let holder = u.template.split_once('.').map_or("", |(h, _)| h);
+    let (code, names_what) = match u.what {
+        What::Slot { .. } => (Code::E0016, "no slot it can use"),
+        What::Quantity(_) => (Code::E0020, "no quantity it can use"),
+    };
+    // No value works: the template is wrong, not a domain (PCR tubes named into a rack that
+    // takes none): say so rather than list every value.
+    let when = if good.is_empty() {
+        let all: Vec<String> = names.iter().map(|n| format!("`{n}`")).collect();
+        format!("for any value of {}", all.join(", "))
+    } else {
+        format!("when {}", failing_values(&names, bad, good))
+    };
+    let mut d = Diagnostic::new(
+        code,
+        u.span,
+        format!("`{}` names {names_what} {when}", u.template),
+    );
+    d.hint = match (&u.what, kinds.get(holder).and_then(|k| k.slots)) {
+        (What::Slot { .. }, Some(slots)) => Some(format!(
+            "`{holder}`'s slots: {}; narrow the parameters' domains to them",
+            slots.layout.describe()
+        )),
+        _ => bad[0].1.hint.clone(),
+    };
+    if bad.iter().any(|(_, m)| m.independent) {
+        d.notes.push(bad[0].1.message.clone());
+    }
+    d
+}
+
+/// Each value that fails whatever the others are (`row = C`, for any `col`; in the values' order,
+/// numbers by value), then the combinations left over.
+fn failing_values(names: &[&String], bad: &[(Bindings, Misfit)], good: &[Bindings]) -> String {
     let mut phrases = Vec::new();
     let mut covered: BTreeSet<&Bindings> = BTreeSet::new();
-    for name in &names {
+    for name in names {
         let values: BTreeSet<&String> = bad.iter().map(|(b, _)| &b[*name]).collect();
+        let mut values: Vec<&String> = values.into_iter().collect();
+        values.sort_by(|a, b| match (a.parse::<f64>(), b.parse::<f64>()) {
+            (Ok(x), Ok(y)) => x.total_cmp(&y),
+            _ => a.cmp(b),
+        });
         for v in values {
             if good.iter().any(|b| &b[*name] == v) {
                 continue;
@@ -246,29 +285,5 @@ fn summary(
     if rest.len() > 3 {
         phrases.push(format!("{} more combinations", rest.len() - 3));
     }
-    let holder = u.template.split_once('.').map_or("", |(h, _)| h);
-    let (code, names_what) = match u.what {
-        What::Slot { .. } => (Code::E0016, "no slot it can use"),
-        What::Quantity(_) => (Code::E0020, "no quantity it can use"),
-    };
-    let mut d = Diagnostic::new(
-        code,
-        u.span,
-        format!(
-            "`{}` names {names_what} when {}",
-            u.template,
-            phrases.join(" or ")
-        ),
-    );
-    d.hint = match (&u.what, kinds.get(holder).and_then(|k| k.slots)) {
-        (What::Slot { .. }, Some(slots)) => Some(format!(
-            "`{holder}`'s slots: {}; narrow the parameters' domains to them",
-            slots.layout.describe()
-        )),
-        _ => bad[0].1.hint.clone(),
-    };
-    if bad.iter().any(|(_, m)| m.independent) {
-        d.notes.push(bad[0].1.message.clone());
-    }
-    d
+    phrases.join(" or ")
 }
