@@ -3,7 +3,8 @@
 //! is judged by how much of the named mix it holds: the expert fills all three, a motionless
 //! robot none, and a plan that serves one tube twice fails at the tube it missed and at the one
 //! it filled twice. The PCR tube's 20 mm bore is a narrow opening: the tip goes only half way
-//! down it, aimed over the mouth to within half a millimetre of the axis before it goes in.
+//! down it, brought over the mouth again while it misses that point by more than half a
+//! millimetre (at most four tries) before it goes in.
 
 use crate::common;
 use expert::ExpertPolicy;

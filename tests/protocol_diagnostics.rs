@@ -258,30 +258,38 @@ fn opening_the_lid_first_makes_the_rotor_reachable() {
     );
 }
 
-/// A place template no value of its parameter can fill says so once; one that only some values
-/// fail lists those, numbers in their order (13 before 100).
+/// A place template no value of its parameter can fill says so once, with why (the rack takes no
+/// PCR tube) as its note and what the rack takes as its hint; one that only some values fail lists
+/// those, numbers in their order (13 before 100).
 #[test]
 fn a_place_no_value_fills_says_so_and_failing_values_are_listed_in_order() {
     let source = std::fs::read_to_string(
         Path::new(env!("CARGO_MANIFEST_DIR")).join("protocols/lab/pcr_setup.toml"),
     )
     .unwrap();
-    let message = |text: &str| {
+    let e0016 = |text: &str| {
         let (task, diags) = compiler::compile_source(text, "pcr_setup.toml");
         assert!(task.is_none(), "{text}");
         diags
-            .iter()
+            .into_iter()
             .find(|d| d.code == dsl::Code::E0016)
-            .unwrap_or_else(|| panic!("{diags:#?}"))
-            .message
-            .clone()
+            .expect("an E0016")
     };
-    let in_rack = message(&source.replace("at = \"block.A{column}\"", "at = \"rack.A{column}\""));
+    let in_rack = e0016(&source.replace("at = \"block.A{column}\"", "at = \"rack.A{column}\""));
     assert_eq!(
-        in_rack,
+        in_rack.message,
         "`rack.A{column}` names no slot it can use for any value of `column`"
     );
-    let some = message(&source.replace("int = [1, 12]", "choice = [100, 9, 13]"));
+    assert_eq!(in_rack.hint.as_deref(), Some("it takes: tube_1_5ml"));
+    assert!(
+        in_rack
+            .notes
+            .iter()
+            .any(|n| n.contains("does not take a tube_0_2ml")),
+        "{:?}",
+        in_rack.notes
+    );
+    let some = e0016(&source.replace("int = [1, 12]", "choice = [100, 9, 13]")).message;
     assert!(
         some.ends_with("when `column = 13` or `column = 100`"),
         "{some}"

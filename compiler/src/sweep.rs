@@ -47,7 +47,8 @@ pub(crate) fn check(
 ) {
     let env = Env { kinds, robots };
     let known: BTreeSet<&str> = params.iter().map(|p| p.name.as_str()).collect();
-    let mut combinations: Option<Vec<Bindings>> = None;
+    // Every combination the proof traces, and whether that is every combination there is.
+    let mut combinations: Option<(Vec<Bindings>, bool)> = None;
     let mut starts: BTreeMap<String, &str> = BTreeMap::new();
     for u in uses {
         let names: BTreeSet<String> = placeholders(&u.template)
@@ -98,7 +99,8 @@ pub(crate) fn check(
             continue;
         }
         // The values of the placeholders this use names, in every combination the proof traces.
-        let all = combinations.get_or_insert_with(|| proof_assignments(params).0);
+        let (all, exhaustive) = combinations.get_or_insert_with(|| proof_assignments(params));
+        let exhaustive = *exhaustive;
         let projections: BTreeSet<Bindings> = all
             .iter()
             .map(|b| {
@@ -140,7 +142,7 @@ pub(crate) fn check(
             cx.push(m.at(u.span));
             continue;
         }
-        cx.push(summary(u, &bad, &good, kinds));
+        cx.push(summary(u, &bad, &good, exhaustive, kinds));
     }
 }
 
@@ -205,11 +207,14 @@ fn fits(env: &Env, place: &str, what: &What) -> Result<(), Misfit> {
 }
 
 /// One diagnostic for a parameter-driven place: each value that fails whatever the others are
-/// (`row = C`, for any `col`), then the combinations left over, with the holder's slots.
+/// (`row = C`, for any `col`), then the combinations left over, with the holder's slots; or,
+/// where every combination was traced (`exhaustive`) and none fits, that no value fills it, with
+/// the misfit that holds whatever the values are (the holder never takes the item) as its note.
 fn summary(
     u: &Use,
     bad: &[(Bindings, Misfit)],
     good: &[Bindings],
+    exhaustive: bool,
     kinds: &BTreeMap<String, &'static LabwareKind>,
 ) -> Diagnostic {
     let names: Vec<&String> = bad[0].0.keys().collect();
@@ -219,8 +224,11 @@ fn summary(
         What::Quantity(_) => (Code::E0020, "no quantity it can use"),
     };
     // No value works: the template is wrong, not a domain (PCR tubes named into a rack that
-    // takes none): say so rather than list every value.
-    let when = if good.is_empty() {
+    // takes none): say so rather than list every value. Said only of a proof that traced every
+    // combination: a sample's misses are no proof that nothing fits.
+    let none_fits = good.is_empty() && exhaustive;
+    let independent = bad.iter().map(|(_, m)| m).find(|m| m.independent);
+    let when = if none_fits {
         let all: Vec<String> = names.iter().map(|n| format!("`{n}`")).collect();
         format!("for any value of {}", all.join(", "))
     } else {
@@ -232,14 +240,18 @@ fn summary(
         format!("`{}` names {names_what} {when}", u.template),
     );
     d.hint = match (&u.what, kinds.get(holder).and_then(|k| k.slots)) {
+        // Narrowing a domain cannot help where nothing fits: the misfit's own hint, if any.
+        _ if none_fits && independent.is_some_and(|m| m.hint.is_some()) => {
+            independent.and_then(|m| m.hint.clone())
+        }
         (What::Slot { .. }, Some(slots)) => Some(format!(
             "`{holder}`'s slots: {}; narrow the parameters' domains to them",
             slots.layout.describe()
         )),
         _ => bad[0].1.hint.clone(),
     };
-    if bad.iter().any(|(_, m)| m.independent) {
-        d.notes.push(bad[0].1.message.clone());
+    if let Some(m) = independent {
+        d.notes.push(m.message.clone());
     }
     d
 }
@@ -252,9 +264,12 @@ fn failing_values(names: &[&String], bad: &[(Bindings, Misfit)], good: &[Binding
     for name in names {
         let values: BTreeSet<&String> = bad.iter().map(|(b, _)| &b[*name]).collect();
         let mut values: Vec<&String> = values.into_iter().collect();
+        // Numbers first, by value; then the rest as text (a total order, so the sort is sound).
         values.sort_by(|a, b| match (a.parse::<f64>(), b.parse::<f64>()) {
             (Ok(x), Ok(y)) => x.total_cmp(&y),
-            _ => a.cmp(b),
+            (Ok(_), Err(_)) => std::cmp::Ordering::Less,
+            (Err(_), Ok(_)) => std::cmp::Ordering::Greater,
+            (Err(_), Err(_)) => a.cmp(b),
         });
         for v in values {
             if good.iter().any(|b| &b[*name] == v) {

@@ -57,8 +57,8 @@ struct Queued {
     group: usize,
     stage: usize,
     motion: Motion,
-    /// How many times this motion has been made already: a path into a narrow opening is
-    /// looked at once it ends and made again while it misses (`motion::aim_over`).
+    /// How many times the tool has been brought over the narrow opening this motion goes into
+    /// (`motion::aim_over`): 0 before the first, and for every other motion.
     aims: u8,
 }
 

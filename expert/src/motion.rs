@@ -171,6 +171,7 @@ impl ExpertPolicy {
         }
         .start(q, obs, route_seed)
         .map_err(&plan)?;
+        // Queued once the path is planned: that path (a straight Reach) looks ahead to nothing.
         if let Some(look) = look {
             lanes[r].queue.push_front(look);
         }
@@ -189,8 +190,10 @@ const OVER: f64 = 0.005;
 /// brings it there again from where the arm then is while the tool misses the opening's aim; only
 /// then does it go in, straight down. Each path is aimed from the tool's measured pose and the
 /// arm's commanded one, so an arm that sags differently at a path's end than at its start ends
-/// off by that difference (3-5 mm at a PCR tube in the block, from 12 cm above it, where the bore
-/// is 5 mm across); corrected over the mouth, the tip never drags across the bore's wall.
+/// off by that difference (2.7-5 mm at a PCR tube in the block, from 12 cm above it, where the
+/// bore is 5 mm across); corrected over the mouth, the tip never drags across the bore's wall.
+/// The miss is the tool's distance from the point over the mouth (a tip too high or low counts
+/// too: it then goes straight down, so that costs a try, not the aim).
 ///
 /// `None`: make the motion as it is, once (every motion but one into a narrow opening, and that
 /// one's way in once the tool is aimed). Else the motion that brings the tool (again) [`OVER`] the

@@ -220,7 +220,8 @@ pub struct Affordance {
 }
 
 /// A narrow opening ([`Instrument::opening`]): how far past its affordance, along the axis, a
-/// carried tool may be brought, and how far off the affordance's axis it may end (m).
+/// carried tool may be brought, and how far from its aiming point over the mouth it may stop
+/// before it goes in (m).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Opening {
     pub depth: f64,

@@ -55,7 +55,8 @@ const DEFINED_PLATE: f64 = 0.003;
 /// A rack with more places than this is crowded: its small tubes' walls touch its bars at many
 /// points at once (a 96-place block's three PCR tubes, with a pipette's tip in one, made 433
 /// contacts and 1,308 constraint rows, past MuJoCo's default 15 MB arena), so its scene asks for
-/// [`CROWDED_ARENA_MB`].
+/// [`CROWDED_ARENA_MB`]. The `microtube_rack`'s 60 places are not crowded (its scenes stay as
+/// they were); the 96-place block is.
 const CROWDED_PLACES: u32 = 60;
 const CROWDED_ARENA_MB: usize = 64;
 /// A definition rack's colour: Opentrons' grey polymer.

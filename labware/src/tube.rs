@@ -448,7 +448,8 @@ impl Instrument for Params {
 
     /// A bore shallower than [`NARROW_BORE`] is a narrow opening: a pipette's tip goes at most
     /// half way down it (the tip's narrow end fits; its wide part would catch on the rim), aimed
-    /// within a fifth of the bore's radius of its axis.
+    /// over the mouth to within a fifth of the bore's radius. Only the mouth: a draw goes under
+    /// the liquid's surface as in any tube.
     fn opening(&self, affordance: &str) -> Option<Opening> {
         let (radius, base, _) = self.bore();
         let depth = self.height - base;
