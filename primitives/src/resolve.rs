@@ -404,10 +404,7 @@ impl StepFrame {
             above,
         } = target
         {
-            let (_, live) = lab.item(carried)?;
-            let held = lab.affordance(carried, from, live)?;
-            let (model, other) = lab.item(labware)?;
-            let goal = lab.affordance(labware, to, other)?;
+            let (held, goal, model) = bring_ends(lab, carried, from, labware, to)?;
             let heading =
                 closest_turn(&goal, &held.pose) * axis_angle([0.0, 0.0, 1.0], self.seat_turn);
             let goal =
@@ -855,6 +852,22 @@ fn into(model: &dyn Instrument, to: &str, above: f64) -> f64 {
         .map_or(above, |opening| above.max(-opening.depth))
 }
 
+/// A [`Target::Bring`]'s two ends as they are now: the carried item's affordance `from`, the
+/// other item's affordance `to`, and that item's model.
+fn bring_ends<'a>(
+    lab: &Lab<'a>,
+    carried: &str,
+    from: &str,
+    labware: &str,
+    to: &str,
+) -> Result<(Affordance, Affordance, &'a dyn Instrument), PlanError> {
+    let (_, live) = lab.item(carried)?;
+    let held = lab.affordance(carried, from, live)?;
+    let (model, other) = lab.item(labware)?;
+    let goal = lab.affordance(labware, to, other)?;
+    Ok((held, goal, model))
+}
+
 /// How far a [`Target::Bring`]'s carried affordance is from its goal now (m), where the goal is
 /// a narrow opening, with how closely the opening asks to be aimed: what the expert checks once a
 /// path into it has ended, and moves again while it misses. `None` for every other target.
@@ -869,13 +882,10 @@ pub fn bring_miss(target: &Target, lab: &Lab) -> Result<Option<(f64, f64)>, Plan
     else {
         return Ok(None);
     };
-    let (model, other) = lab.item(labware)?;
+    let (held, goal, model) = bring_ends(lab, carried, from, labware, to)?;
     let Some(opening) = model.opening(to) else {
         return Ok(None);
     };
-    let (_, live) = lab.item(carried)?;
-    let held = lab.affordance(carried, from, live)?;
-    let goal = lab.affordance(labware, to, other)?;
     let goal = translated_local(&goal.pose, [0.0, 0.0, -into(model, to, *above)]);
     let miss = (goal.translation.vector - held.pose.translation.vector).norm();
     Ok(Some((miss, opening.aim)))
