@@ -50,6 +50,7 @@ fn the_simulated_tasks_are_the_tables_and_a_motionless_robot_fails_one() {
             "lab.incubation_series",
             "lab.miniprep_spins",
             "lab.mix_by_inversion",
+            "lab.pcr",
             "lab.pcr_run",
             "lab.pcr_setup",
             "lab.spin",

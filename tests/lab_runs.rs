@@ -93,6 +93,7 @@ fn lab_protocols_are_deterministic_and_fail_without_motion() {
         "protocols/lab/dilution.toml",
         "protocols/lab/mix_by_inversion.toml",
         "protocols/lab/pcr_setup.toml",
+        "protocols/lab/pcr.toml",
     ] {
         let task = common::compile(path);
         let r = common::run(&task, 0, "hold");

@@ -481,26 +481,39 @@ const fn lidded(
     }
 }
 
+/// The paper's thermal cycler: its block holds nothing.
+const THERMAL_CYCLER: LabwareKind = LabwareKind {
+    name: "thermal_cycler",
+    description: "thermal cycler with a hinged lid and a two-notch lock lever (Bio-Rad C1000 proportions); it runs a thermal profile, started as its lid locks",
+    parts: &[LID_LOCKING, RUN_PART],
+    slots: None,
+    capacity_ul: None,
+    movable: false,
+    panel: &[],
+    buttons: &[],
+    joints: &[("lid", "rad"), ("lever", "rad")],
+    tolerances: &[
+        ("lid_closed", 0.01),
+        ("lid_locked", 0.01),
+        ("lid_open", 0.003),
+        ("lid_unlocked", 0.003),
+    ],
+    primitives: &["open_lid", "close_lid", "thermocycle"],
+    liquid_tool: false,
+    definition: None,
+};
+
 pub const KINDS: &[LabwareKind] = &[
+    THERMAL_CYCLER,
     LabwareKind {
-        name: "thermal_cycler",
-        description: "thermal cycler with a hinged lid and a two-notch lock lever (Bio-Rad C1000 proportions); it runs a thermal profile, started as its lid locks",
-        parts: &[LID_LOCKING, RUN_PART],
-        slots: None,
-        capacity_ul: None,
-        movable: false,
-        panel: &[],
-        buttons: &[],
-        joints: &[("lid", "rad"), ("lever", "rad")],
-        tolerances: &[
-            ("lid_closed", 0.01),
-            ("lid_locked", 0.01),
-            ("lid_open", 0.003),
-            ("lid_unlocked", 0.003),
-        ],
-        primitives: &["open_lid", "close_lid", "thermocycle"],
-        liquid_tool: false,
-        definition: None,
+        name: "thermal_cycler_96",
+        description: "the thermal cycler with a 96-well block for 0.2 mL PCR tubes sunk under its lid (wells where Opentrons' 96-well aluminium block has them, 8x12 at 9 mm); it runs a thermal profile, started as its lid locks",
+        slots: Some(Slots {
+            layout: SlotLayout::Grid { rows: 8, cols: 12 },
+            accepts: &["tube_0_2ml"],
+        }),
+        definition: Some("opentrons/opentrons_96_aluminumblock_generic_pcr_strip_200ul/2"),
+        ..THERMAL_CYCLER
     },
     LabwareKind {
         // The rotor turns freely: its start angle can be drawn (`[randomise.x] joints`).

@@ -37,7 +37,10 @@ pub use model::{
 // The registry: one line per simulation model (its module, its variant of `Model`, the kinds it
 // simulates and the parameters each starts from).
 registry::registry! {
-    thermal_cycler::ThermalCycler { "thermal_cycler" => thermal_cycler::Params::default() },
+    thermal_cycler::ThermalCycler {
+        "thermal_cycler" => thermal_cycler::Params::default(),
+        "thermal_cycler_96" => thermal_cycler::Params::with_96_wells(),
+    },
     centrifuge_mini::CentrifugeMini { "centrifuge_mini" => centrifuge_mini::Params::default() },
     centrifuge::Centrifuge {
         "centrifuge_5430" => centrifuge::Params::eppendorf_5430(),

@@ -170,6 +170,20 @@ impl Params {
         Some((x + self.grid_offset[0], y + self.grid_offset[1]))
     }
 
+    /// Height of the base plate's top (where tubes stand) over the rack's bottom.
+    pub fn seat_z_from_bottom(&self) -> f64 {
+        self.base_plate()
+    }
+
+    /// The arena a scene with this rack asks MuJoCo for (MB; 0: the default).
+    pub fn arena_mb(&self) -> usize {
+        if self.rows * self.cols > CROWDED_PLACES {
+            CROWDED_ARENA_MB
+        } else {
+            0
+        }
+    }
+
     /// Height of the base plate's top (where tubes stand), rack frame.
     fn seat_z(&self) -> f64 {
         -self.size[2] / 2.0 + self.base_plate()
@@ -266,11 +280,7 @@ impl Instrument for Params {
                 "<body name=\"{name}/base\" {}>\n{geoms}</body>\n",
                 pose_attrs(placement)
             ),
-            arena_mb: if self.rows * self.cols > CROWDED_PLACES {
-                CROWDED_ARENA_MB
-            } else {
-                0
-            },
+            arena_mb: self.arena_mb(),
             ..Fragment::default()
         }
     }

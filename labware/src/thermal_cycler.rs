@@ -51,7 +51,27 @@ pub struct Params {
     /// only opens and closes.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub programmes: Vec<Programme>,
+    /// The 96-well block 0.2 mL tubes stand in (`thermal_cycler_96`), sunk into the base's top
+    /// under where the lid closes, so that capped tubes clear the shut lid; none: the paper's
+    /// cycler, whose block is a plate drawn on the base and holds nothing.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wells: Option<Wells>,
 }
+
+/// A block of wells sunk into the base: the block (a rack's plates and bars) in a pocket cut into
+/// the base's top, the pocket's floor as deep as the tallest tube the block takes stands.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Wells {
+    pub block: crate::rack::Params,
+    /// The block's centre along y in the instrument's frame (m): under the closed lid.
+    pub centre_y: f64,
+    /// The tallest item the block holds, from its bottom to its top (a capped PCR tube, m).
+    pub tallest: f64,
+}
+
+/// Room between the block and the pocket's walls, and below the base's top over the tallest
+/// item (m).
+const POCKET_CLEARANCE: f64 = 0.001;
 
 impl Default for Params {
     fn default() -> Self {
@@ -80,6 +100,7 @@ impl Default for Params {
             open_tolerance: 0.003,
             unlocked_tolerance: 0.003,
             programmes: Vec::new(),
+            wells: None,
         }
     }
 }
@@ -118,6 +139,57 @@ impl Part for Params {
 }
 
 impl Params {
+    /// The cycler with a 96-well block for 0.2 mL tubes (`thermal_cycler_96`): the wells of the
+    /// catalogue kind's published definition (a 96-well block's 9 mm grid), centred under the
+    /// closed lid, deep enough that a capped PCR tube clears it.
+    pub fn with_96_wells() -> Params {
+        let tube = crate::tube::Params::pcr_tube();
+        Params {
+            wells: Some(Wells {
+                block: crate::rack::Params::defined("thermal_cycler_96"),
+                centre_y: 0.1,
+                tallest: tube.height + tube.cap_height,
+            }),
+            ..Params::default()
+        }
+    }
+
+    /// The pocket's floor (m, instrument frame): the tallest item's top
+    /// [`POCKET_CLEARANCE`] under the base's top.
+    fn pocket_floor(&self, w: &Wells) -> f64 {
+        2.0 * self.base_half[2] - POCKET_CLEARANCE - w.tallest - w.block.seat_z_from_bottom()
+    }
+
+    /// The block's centre in the instrument's frame.
+    fn block_centre(&self, w: &Wells) -> Vec3 {
+        [0.0, w.centre_y, self.pocket_floor(w) + w.block.size[2] / 2.0]
+    }
+
+    /// The base's collision boxes (centre, half size): one box, or with a block of wells, a
+    /// slab under the pocket and four walls around it.
+    fn base_boxes(&self) -> Vec<(Vec3, Vec3)> {
+        let b = self.base_half;
+        let Some(w) = &self.wells else {
+            return vec![([0.0, 0.0, b[2]], b)];
+        };
+        let floor = self.pocket_floor(w);
+        let top = 2.0 * b[2];
+        let px = w.block.size[0] / 2.0 + POCKET_CLEARANCE;
+        let (y0, y1) = (
+            w.centre_y - w.block.size[1] / 2.0 - POCKET_CLEARANCE,
+            w.centre_y + w.block.size[1] / 2.0 + POCKET_CLEARANCE,
+        );
+        let (hz, cz) = ((top - floor) / 2.0, (top + floor) / 2.0);
+        let side = (b[0] - px) / 2.0;
+        vec![
+            ([0.0, 0.0, floor / 2.0], [b[0], b[1], floor / 2.0]),
+            ([-(px + side), 0.0, cz], [side, b[1], hz]),
+            ([px + side, 0.0, cz], [side, b[1], hz]),
+            ([0.0, (y0 - b[1]) / 2.0, cz], [px, (y0 + b[1]) / 2.0, hz]),
+            ([0.0, (y1 + b[1]) / 2.0, cz], [px, (b[1] - y1) / 2.0, hz]),
+        ]
+    }
+
     /// Pose of the grip bar's centre for given joint angles, in the frame `placement` is given in.
     /// Axes: x along the bar, y pointing away from the lever pivot, z = x × y.
     pub fn grip_pose(&self, placement: &Pose, lid: f64, lever: f64) -> Pose {
@@ -196,17 +268,32 @@ impl Instrument for Params {
             self.lever_pressed.min(self.lever_raised),
             self.lever_pressed.max(self.lever_raised),
         );
-        let geoms = format!(
-            r#"  <geom name="{base}/body" type="box" size="{bh}" pos="0 0 {bz}" rgba="0.82 0.83 0.85 1"/>
-  <geom name="{base}/block" type="box" size="0.075 0.065 0.004" pos="0 {blocky} {blockz}" rgba="0.55 0.57 0.6 1" contype="0" conaffinity="0"/>
-  <geom name="{base}/panel" type="box" size="0.12 0.004 0.04" pos="0 {panely} 0.1" rgba="0.15 0.2 0.3 1" contype="0" conaffinity="0"/>
-"#,
-            base = n.base,
-            bh = v3(b),
-            bz = b[2],
-            blocky = 0.02,
-            blockz = 2.0 * b[2] + 0.004,
-            panely = b[1] + 0.002,
+        let mut geoms = String::new();
+        for (i, (c, h)) in self.base_boxes().into_iter().enumerate() {
+            // The paper's cycler keeps its one box's name.
+            let suffix = if i == 0 { String::new() } else { i.to_string() };
+            geoms += &format!(
+                "  <geom name=\"{base}/body{suffix}\" type=\"box\" size=\"{}\" pos=\"{}\" rgba=\"0.82 0.83 0.85 1\"/>\n",
+                v3(h),
+                v3(c),
+                base = n.base,
+            );
+        }
+        match &self.wells {
+            // The block's wells, collided with as a rack's plates and bars.
+            Some(w) => geoms += &w.block.geoms(&format!("{}/block", n.base), self.block_centre(w)),
+            None => {
+                geoms += &format!(
+                    "  <geom name=\"{}/block\" type=\"box\" size=\"0.075 0.065 0.004\" pos=\"0 0.02 {}\" rgba=\"0.55 0.57 0.6 1\" contype=\"0\" conaffinity=\"0\"/>\n",
+                    n.base,
+                    2.0 * b[2] + 0.004
+                )
+            }
+        }
+        geoms += &format!(
+            "  <geom name=\"{}/panel\" type=\"box\" size=\"0.12 0.004 0.04\" pos=\"0 {} 0.1\" rgba=\"0.15 0.2 0.3 1\" contype=\"0\" conaffinity=\"0\"/>\n",
+            n.base,
+            b[1] + 0.002
         );
         // The lid's shell and badge, and the lever on its front edge.
         let lid_geoms = format!(
@@ -245,8 +332,17 @@ impl Instrument for Params {
             worldbody: n.instrument_xml(placement, &geoms, &lid_xml),
             equality: self.lid().lock_xml(&n),
             contact: format!("<exclude body1=\"{}\" body2=\"{lever_body}\"/>\n", n.base),
+            arena_mb: self.wells.as_ref().map_or(0, |w| w.block.arena_mb()),
             ..Default::default()
         }
+    }
+
+    /// Where a tube stands in one of the block's wells.
+    fn slot_seat(&self, slot: &str, s: &LabwareState) -> Option<Pose> {
+        let w = self.wells.as_ref()?;
+        let [x, y, z] = w.block.seat_in_rack(slot)?;
+        let [cx, cy, cz] = self.block_centre(w);
+        Some(s.pose * translation([x + cx, y + cy, z + cz]))
     }
 
     /// The lever's two notches.
@@ -382,6 +478,41 @@ mod tests {
             .sqrt()
         };
         assert!((r(&open) - r(&closed)).abs() < 1e-9);
+    }
+
+    /// The 96-well block: every well's seat is the block's place moved to the block's centre in
+    /// the pocket; a capped PCR tube standing in any well is under the shut lid's underside and
+    /// its base on the block's floor, above the pocket's; no box of the base is where a tube
+    /// stands; the paper's cycler keeps its one box.
+    #[test]
+    fn capped_pcr_tubes_in_the_96_well_block_clear_the_shut_lid() {
+        let p = Params::with_96_wells();
+        let w = p.wells.as_ref().unwrap();
+        let tube = crate::tube::Params::pcr_tube();
+        let lid_underside = p.hinge[2] - p.lid_body.half_thickness;
+        let s = LabwareState::probe("cycler");
+        let floor = p.pocket_floor(w);
+        let kind = crate::kind("thermal_cycler_96").unwrap();
+        for slot in kind.slots.unwrap().layout.names() {
+            let seat = crate::frame::position(&p.slot_seat(&slot, &s).unwrap());
+            let [x, y, z] = w.block.seat_in_rack(&slot).unwrap();
+            let c = p.block_centre(w);
+            assert!((seat[0] - x - c[0]).abs() < 1e-12 && (seat[1] - y - c[1]).abs() < 1e-12);
+            assert!((seat[2] - z - c[2]).abs() < 1e-12);
+            let top = seat[2] + tube.height + tube.cap_height;
+            assert!(top < lid_underside && top < 2.0 * p.base_half[2], "{slot}: top at {top}");
+            assert!(seat[2] > floor, "{slot}");
+            for (centre, half) in p.base_boxes() {
+                let inside = (0..3).all(|i| {
+                    let mid = [seat[0], seat[1], seat[2] + tube.height / 2.0][i];
+                    (mid - centre[i]).abs() < half[i]
+                });
+                assert!(!inside, "{slot}: a base box at {centre:?} fills the well");
+            }
+        }
+        assert_eq!(Params::default().base_boxes().len(), 1);
+        assert_eq!(p.base_boxes().len(), 5);
+        assert!(!Params::default().fragment("c", &Pose::identity()).worldbody.contains("c/body1"));
     }
 
     #[test]
