@@ -14,6 +14,7 @@ mod describe;
 mod diagnostics;
 mod eval;
 mod front;
+mod import;
 mod picture;
 mod progress;
 mod replay;
@@ -47,6 +48,9 @@ struct Cli {
 enum Command {
     /// Check protocol or chain files and report every problem with file:line:col (exit 1 on errors)
     Check(check::CheckArgs),
+    /// Write an Opentrons analysis or Protocol Designer file (schema 8) as a protocol file and
+    /// check it (exit 1 when refused or when the protocol does not check)
+    Import(import::ImportArgs),
     /// Print the documentation of a diagnostic code (e.g. E0010); `autobio explain --all` lists them
     Explain(check::ExplainArgs),
     /// Print a task sheet: instruction, parameters, randomisation, plan, checks, time limits
@@ -115,6 +119,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
     match &cli.command {
         Command::Check(a) => check::check(&front, a),
         Command::Explain(a) => check::explain(a),
+        Command::Import(a) => import::run(&front, a),
         Command::Describe(a) => describe::describe(&front, a),
         Command::Compile(a) => describe::compile(&front, a),
         Command::Demo(a) => demo::run(&front, a),

@@ -6,9 +6,10 @@
 use std::path::{Path, PathBuf};
 
 /// Every crate's sources: the CLI's and each workspace member's.
-const CRATES: [&str; 18] = [
+const CRATES: [&str; 19] = [
     "src",
     "dsl/src",
+    "interchange/src",
     "compiler/src",
     "primitives/src",
     "planner/src",

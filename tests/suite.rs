@@ -21,6 +21,7 @@ mod faulty_corpus;
 mod forgeries;
 mod golden;
 mod hold_control;
+mod import;
 mod instruments_act;
 mod inversion;
 mod kinematics;

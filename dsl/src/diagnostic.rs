@@ -96,6 +96,16 @@ pub enum Code {
     E0038,
     /// A time the plan cannot keep: a time constraint, or runs and waits past the time limit.
     E0039,
+    /// An import source that cannot be read.
+    E0040,
+    /// A reference in the import source that names nothing, or names two things.
+    E0041,
+    /// An imported command with no robot realisation here.
+    E0042,
+    /// Imported labware with no kind here.
+    E0043,
+    /// An imported value that is out of range.
+    E0044,
     /// The success condition already holds at the start.
     W0001,
     /// The state proof sampled parameter combinations.
@@ -116,6 +126,8 @@ pub enum Code {
     W0009,
     /// A step its robot reaches in some sampled layouts only.
     W0010,
+    /// An imported command dropped.
+    W0011,
 }
 
 impl Code {
@@ -153,6 +165,11 @@ impl Code {
             Code::E0037 => "E0037",
             Code::E0038 => "E0038",
             Code::E0039 => "E0039",
+            Code::E0040 => "E0040",
+            Code::E0041 => "E0041",
+            Code::E0042 => "E0042",
+            Code::E0043 => "E0043",
+            Code::E0044 => "E0044",
             Code::W0001 => "W0001",
             Code::W0002 => "W0002",
             Code::W0003 => "W0003",
@@ -163,10 +180,11 @@ impl Code {
             Code::W0008 => "W0008",
             Code::W0009 => "W0009",
             Code::W0010 => "W0010",
+            Code::W0011 => "W0011",
         }
     }
 
-    pub const ALL: [Code; 42] = [
+    pub const ALL: [Code; 48] = [
         Code::E0001,
         Code::E0002,
         Code::E0003,
@@ -199,6 +217,11 @@ impl Code {
         Code::E0037,
         Code::E0038,
         Code::E0039,
+        Code::E0040,
+        Code::E0041,
+        Code::E0042,
+        Code::E0043,
+        Code::E0044,
         Code::W0001,
         Code::W0002,
         Code::W0003,
@@ -209,6 +232,7 @@ impl Code {
         Code::W0008,
         Code::W0009,
         Code::W0010,
+        Code::W0011,
     ];
 
     pub fn from_name(name: &str) -> Option<Code> {
@@ -252,6 +276,13 @@ impl Code {
             Code::E0037 => "a centrifuge run with an unbalanced rotor",
             Code::E0038 => "an instrument run started with its lid not shut and latched",
             Code::E0039 => "a time the plan cannot keep",
+            Code::E0040 => "the import source cannot be read",
+            Code::E0041 => {
+                "a reference in the import source that resolves to nothing or to several things"
+            }
+            Code::E0042 => "an imported command with no robot realisation here",
+            Code::E0043 => "imported labware with no kind here",
+            Code::E0044 => "an imported value out of range",
             Code::W0001 => "the success condition already holds at the start",
             Code::W0002 => "the state proof sampled parameter combinations",
             Code::W0003 => "a position far outside any bench",
@@ -262,6 +293,7 @@ impl Code {
             Code::W0008 => "a later chain stage's declaration that the chain ignores",
             Code::W0009 => "a panel value the instrument cannot reach within the time limit",
             Code::W0010 => "a step its robot reaches in some sampled layouts only",
+            Code::W0011 => "an imported command dropped",
         }
     }
 
@@ -362,6 +394,21 @@ impl Code {
             Code::E0039 => {
                 "The plan's own waits and instrument runs take at least the time shown, so no execution can\nkeep the time: a `within` constraint between two steps is broken by what lies between them, or\nthe stage's `time_limit` is shorter than its runs and waits (motions need time on top).\nShorten the waits or runs between the steps, move the constraint, or raise `time_limit`."
             }
+            Code::E0040 => {
+                "`autobio import` could not read the file as one of the formats it imports: it is not JSON (the\nparser's line and column are shown), or it is JSON of another shape, a protocol schema other than\n8, or a file whose `commands` are missing, or an analysis whose run failed. Import an\nOpentrons analysis (`opentrons analyze --json-output`) or a Protocol Designer file saved as schema 8."
+            }
+            Code::E0041 => {
+                "A command of the imported file refers to an id no earlier `load*` command gave (a labware,\npipette, module or liquid), to a well its labware does not have, to labware standing on itself,\nor an id two load commands both give (an analysis snapshot whose ids were all replaced by\n`UUID` cannot be imported). Its parameters may also not fit the command's schema: the message\nquotes what serde found."
+            }
+            Code::E0042 => {
+                "The command has no step on our bench: a module we have no model of (magnetic, temperature,\nheater-shaker, plate reader, stacker), moving labware with a gripper, pipetting without a well,\na multi-channel or second pipette, volumes that change between steps (the hand-held pipette has\nno knob), an aspirate not followed by its dispense. Remove it from the source, or write that part\nin our language by hand. docs/import.md lists what maps to what."
+            }
+            Code::E0043 => {
+                "The `loadLabware`'s definition is neither a kind made from the same published definition (any\nversion), a 96-well PCR plate (realised as PCR tubes in a block), a tip rack nor a trash; or its\ndefinition is neither in the file nor installed by `make setup`. `autobio describe --catalogue`\nlists the kinds made from published definitions."
+            }
+            Code::E0044 => {
+                "A number in the imported file cannot be used: a volume larger than the tube a well becomes holds,\na negative or non-finite volume or time, a volume no hand-held pipette here sets (the P200 sets\n20-200 µL, the P1000 100-1000 µL)."
+            }
             Code::W0001 => {
                 "Every success predicate is already true in the initial state, so an episode succeeds before the\nrobot moves. Usually an initial `state` or a predicate is wrong. A round trip (open a lid, then\nclose it) is written with `was` (`cycler.lid was open` beside `cycler.lid is closed`) or as a chain. `eval` and `demo` refuse the task unless `--allow-trivial`."
             }
@@ -392,11 +439,23 @@ impl Code {
             Code::W0010 => {
                 "The step's robot reaches its targets (as E0036 checks them) in the layout the task's first\nseed draws, but not in some of the next seven: another slot drawn, labware placed elsewhere\nwithin its randomisation. The task checks and runs; those seeds' episodes will fail at\nplanning. The note gives what the first such seed draws; the hint names a base from which\nevery sampled layout is reached, where one is found (as E0036's); or narrow the draws."
             }
+            Code::W0011 => {
+                "A command of the imported file does what our steps do themselves or what a hand-held pipette\nhas no step for: tips picked up and dropped (the pipette's tip is its own here), homing and moves\nbetween wells (each step moves there), blow-out and touch-tip (our dispense does both), comments\nand pauses for a person. It is dropped; the warning counts them, per type, at the first."
+            }
         }
     }
 
     pub fn is_warning(self) -> bool {
         self.as_str().starts_with('W')
+    }
+
+    /// A finding of `autobio import` about the file it reads (E0040..E0044, W0011), not about a
+    /// protocol file.
+    pub fn is_import(self) -> bool {
+        matches!(
+            self,
+            Code::E0040 | Code::E0041 | Code::E0042 | Code::E0043 | Code::E0044 | Code::W0011
+        )
     }
 }
 

@@ -1,0 +1,187 @@
+//! Protocols from the languages labs already write: `autobio import` reads an Opentrons analysis
+//! (`opentrons analyze --json-output`) or Protocol Designer file (schema 8) and writes a protocol
+//! file in our language, realising on our bench what a liquid handler's deck did: its labware as
+//! racks, blocks and tubes, its single-channel pipette as the hand-held one, its pipetting as
+//! `aspirate` and `dispense`, its thermocycler as the `thermal_cycler_96` with its lid worked by an
+//! arm. What has no robot realisation here is refused with a diagnostic at the command's index and
+//! type (and its line and column in the file); what a gantry does that our steps do themselves
+//! (tips, homing, moves, blow-out) is dropped and said once per type.
+//!
+//! Flow: JSON text → `serde_json::Value` (E0040 at the parser's line and column) → the format's
+//! reader (`opentrons::source`) → realisation into a [`Draft`] (`opentrons::realise`) → the
+//! protocol's text ([`Draft::to_toml`]). The written file is checked like any protocol by the
+//! caller (`autobio import` runs the check). No Python runs at import time; labware definitions
+//! come from the file or from the installed `opentrons-shared-data`
+//! ([`labware::definition::Installed`]).
+//!
+//! Not here: Autoprotocol (import and export), keeping refused instrument steps as
+//! instrument-only steps. Its tests are beside the code and in tests/import.rs.
+
+pub mod draft;
+pub mod json_span;
+pub mod opentrons;
+
+pub use draft::Draft;
+use dsl::{Code, Diagnostic};
+use json_span::Key;
+use sha2::{Digest, Sha256};
+use std::path::PathBuf;
+
+/// How to import.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// The protocol's id (default: `imported.<the file's stem>`).
+    pub id: Option<String>,
+    /// Its instruction, the language prompt (default: from the file's protocol name).
+    pub instruction: Option<String>,
+    /// The robots, by name and model: the first pipettes, the second works the cycler's lid.
+    /// Empty: `left` (ur5e_inspire) and `arm` (ur5e_2f85).
+    pub robots: Vec<(String, String)>,
+    /// Where `make setup` installed the dependencies (for labware definitions by URI).
+    pub deps: PathBuf,
+    /// The source file's name, for the written file's header.
+    pub file_name: String,
+}
+
+/// A finding about the source: a code, where in the file (a path of keys), a message and a hint.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Finding {
+    pub code: Code,
+    pub at: Vec<Key>,
+    pub message: String,
+    pub hint: Option<String>,
+}
+
+/// What an import gives.
+#[derive(Clone, Debug)]
+pub struct Imported {
+    /// The format read (`Opentrons analysis JSON`, `Opentrons protocol JSON, schema 8`).
+    pub format: Option<String>,
+    /// SHA-256 of the source's bytes, hex.
+    pub source_sha256: String,
+    /// The protocol file's text; none when an error refused the import.
+    pub protocol: Option<String>,
+    /// Every finding, as diagnostics whose spans point into the source text.
+    pub diagnostics: Vec<Diagnostic>,
+    /// Each written step's source command, as `commands[12] aspirate` (in step order).
+    pub step_sources: Vec<Option<String>>,
+}
+
+/// Imports a source text.
+pub fn import(text: &str, options: &Options) -> Imported {
+    let source_sha256 = hex::encode(Sha256::digest(text.as_bytes()));
+    let mut out = Imported {
+        format: None,
+        source_sha256,
+        protocol: None,
+        diagnostics: Vec::new(),
+        step_sources: Vec::new(),
+    };
+    let doc: serde_json::Value = match serde_json::from_str(text) {
+        Ok(v) => v,
+        Err(e) => {
+            let at = offset(text, e.line(), e.column());
+            out.diagnostics.push(
+                Diagnostic::error(
+                    Code::E0040,
+                    dsl::Span::new(at, (at + 1).min(text.len()).max(at)),
+                    format!("the file is not JSON: {e}"),
+                )
+                .with_hint("an Opentrons analysis or protocol file is one JSON document"),
+            );
+            return out;
+        }
+    };
+    if !opentrons::source::is_opentrons(&doc) {
+        out.diagnostics.push(
+            Diagnostic::error(
+                Code::E0040,
+                json_span::nearest(text, &[]),
+                "neither an Opentrons analysis nor an Opentrons protocol (schema 8)",
+            )
+            .with_hint(
+                "an analysis has `robotType` and `commands`; a protocol has `$otSharedSchema` `#/protocol/schemas/8`",
+            ),
+        );
+        return out;
+    }
+    let src = match opentrons::source::read(&doc) {
+        Ok(s) => s,
+        Err(u) => {
+            let mut d = Diagnostic::error(Code::E0040, json_span::nearest(text, &u.at), u.message);
+            if let Some(h) = u.hint {
+                d = d.with_hint(h);
+            }
+            out.diagnostics.push(d);
+            return out;
+        }
+    };
+    let format = src.flavour.describe();
+    out.format = Some(format.clone());
+    let names = opentrons::realise::Names {
+        id: options
+            .id
+            .clone()
+            .unwrap_or_else(|| default_id(&options.file_name)),
+        instruction: options.instruction.clone().unwrap_or_else(|| {
+            match doc
+                .pointer("/metadata/protocolName")
+                .and_then(serde_json::Value::as_str)
+                .map(str::trim)
+                .filter(|n| !n.is_empty())
+            {
+                Some(name) => format!("carry out the protocol \"{name}\""),
+                None => "carry out the imported protocol".into(),
+            }
+        }),
+    };
+    let (draft, findings) = opentrons::realise::realise(&src, options, &names);
+    for f in findings {
+        let mut d = Diagnostic::error(f.code, json_span::nearest(text, &f.at), f.message);
+        if let Some(h) = f.hint {
+            d = d.with_hint(h);
+        }
+        d.notes.push(format!("at {}", json_span::pointer(&f.at)));
+        out.diagnostics.push(d);
+    }
+    if let Some(mut draft) = draft {
+        draft.header = vec![
+            format!("Imported by `autobio import` from {} ({format}, {}).", options.file_name, src.robot_type),
+            format!("source sha256 {}", out.source_sha256),
+            "Each step's comment names the source command it realises; see docs/import.md for what maps to what.".into(),
+        ];
+        out.step_sources = draft.steps.iter().map(|s| s.from.clone()).collect();
+        out.protocol = Some(draft.to_toml());
+    }
+    out
+}
+
+/// `imported.<stem>`: the file's stem in the characters an id may hold.
+fn default_id(file_name: &str) -> String {
+    let stem = std::path::Path::new(file_name)
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("protocol");
+    let slug: String = stem
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.') {
+                c
+            } else {
+                '_'
+            }
+        })
+        .take(100)
+        .collect();
+    format!("imported.{slug}")
+}
+
+/// The byte offset of a 1-based line and column.
+fn offset(text: &str, line: usize, column: usize) -> usize {
+    let start: usize = text
+        .split_inclusive('\n')
+        .take(line.saturating_sub(1))
+        .map(str::len)
+        .sum();
+    (start + column.saturating_sub(1)).min(text.len())
+}

@@ -1,0 +1,403 @@
+//! Issue 50: `autobio import` of Opentrons files. A PCR set-up on the thermocycler written as a
+//! Protocol Designer file (schema 8) and as an analysis, each carrying the published labware
+//! definitions installed by `make setup` (as the files Opentrons' tools save carry them), imports
+//! through the real CLI to the same protocol, which checks and which the expert runs; a faulty
+//! file of each kind gives its code, a message naming the command, and the file's line and
+//! column, and writes nothing.
+
+use crate::common;
+use serde_json::{Value, json};
+use std::path::Path;
+
+/// An installed labware definition, as a file would carry it.
+fn definition(uri: &str) -> Value {
+    let installed = labware::definition::Installed::under(&runtime::deps::deps_dir());
+    let path = installed.path(uri).unwrap();
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+const PLATE: &str = "opentrons/nest_96_wellplate_100ul_pcr_full_skirt/2";
+const RACK: &str = "opentrons/opentrons_24_tuberack_eppendorf_1.5ml_safelock_snapcap/1";
+const TIPS: &str = "opentrons/opentrons_96_tiprack_300ul/1";
+
+fn load_labware(id: &str, uri: &str, location: Value) -> Value {
+    let parts: Vec<&str> = uri.split('/').collect();
+    json!({"commandType": "loadLabware", "key": format!("k-{id}"), "params": {
+        "labwareId": id, "loadName": parts[1], "namespace": parts[0],
+        "version": parts[2].parse::<u32>().unwrap(), "location": location}})
+}
+
+/// The commands of a PCR set-up on the thermocycler: the lid opened, 25 µL of master mix from a
+/// 1.5 mL tube into three wells of a PCR plate in the cycler (a fresh tip each), the lid shut, a
+/// profile run (NEB's Taq routine, shortened to 3 cycles), the lid opened.
+fn commands() -> Vec<Value> {
+    let mut c = vec![
+        json!({"commandType": "loadPipette", "key": "k-p", "params": {
+            "pipetteId": "p300", "pipetteName": "p300_single_gen2", "mount": "left"}}),
+        json!({"commandType": "loadModule", "key": "k-tc", "params": {
+            "moduleId": "tc:thermocyclerModuleType", "model": "thermocyclerModuleV1",
+            "location": {"slotName": "7"}}}),
+        load_labware("tips", TIPS, json!({"slotName": "1"})),
+        load_labware(
+            "plate",
+            PLATE,
+            json!({"moduleId": "tc:thermocyclerModuleType"}),
+        ),
+        load_labware("rack", RACK, json!({"slotName": "2"})),
+        json!({"commandType": "loadLiquid", "key": "k-l", "params": {
+            "liquidId": "mm", "labwareId": "rack", "volumeByWell": {"B2": 1000}}}),
+        json!({"commandType": "thermocycler/openLid", "key": "k-o", "params": {
+            "moduleId": "tc:thermocyclerModuleType"}}),
+    ];
+    for (i, well) in ["A5", "B5", "C5"].iter().enumerate() {
+        let tip = ["A1", "B1", "C1"][i];
+        c.push(
+            json!({"commandType": "pickUpTip", "key": format!("k-t{i}"), "params": {
+            "pipetteId": "p300", "labwareId": "tips", "wellName": tip}}),
+        );
+        c.push(
+            json!({"commandType": "aspirate", "key": format!("k-a{i}"), "params": {
+            "pipetteId": "p300", "labwareId": "rack", "wellName": "B2", "volume": 25,
+            "flowRate": 46.43, "wellLocation": {"origin": "bottom", "offset": {"z": 1}}}}),
+        );
+        c.push(
+            json!({"commandType": "dispense", "key": format!("k-d{i}"), "params": {
+            "pipetteId": "p300", "labwareId": "plate", "wellName": well, "volume": 25,
+            "flowRate": 46.43, "wellLocation": {"origin": "bottom", "offset": {"z": 1}}}}),
+        );
+        c.push(
+            json!({"commandType": "dropTip", "key": format!("k-x{i}"), "params": {
+            "pipetteId": "p300", "labwareId": "fixedTrash", "wellName": "A1"}}),
+        );
+    }
+    c.extend([
+        json!({"commandType": "thermocycler/closeLid", "key": "k-c", "params": {
+            "moduleId": "tc:thermocyclerModuleType"}}),
+        json!({"commandType": "thermocycler/setTargetLidTemperature", "key": "k-lt", "params": {
+            "moduleId": "tc:thermocyclerModuleType", "celsius": 105}}),
+        json!({"commandType": "thermocycler/runProfile", "key": "k-r", "params": {
+            "moduleId": "tc:thermocyclerModuleType", "blockMaxVolumeUl": 25, "profile": [
+                {"celsius": 95, "holdSeconds": 30}, {"celsius": 95, "holdSeconds": 15},
+                {"celsius": 55, "holdSeconds": 30}, {"celsius": 68, "holdSeconds": 60},
+                {"celsius": 95, "holdSeconds": 15}, {"celsius": 55, "holdSeconds": 30},
+                {"celsius": 68, "holdSeconds": 60}, {"celsius": 68, "holdSeconds": 300},
+                {"celsius": 4, "holdSeconds": 60}]}}),
+        json!({"commandType": "thermocycler/openLid", "key": "k-o2", "params": {
+            "moduleId": "tc:thermocyclerModuleType"}}),
+    ]);
+    c
+}
+
+/// The set-up as Protocol Designer saves it (schema 8).
+fn protocol_file() -> Value {
+    json!({
+        "$otSharedSchema": "#/protocol/schemas/8",
+        "schemaVersion": 8,
+        "metadata": {"protocolName": "PCR set-up on the thermocycler", "author": "autobio tests"},
+        "robot": {"model": "OT-2 Standard", "deckId": "ot2_standard"},
+        "labwareDefinitionSchemaId": "opentronsLabwareSchemaV2",
+        "labwareDefinitions": {PLATE: definition(PLATE), RACK: definition(RACK), TIPS: definition(TIPS)},
+        "liquidSchemaId": "opentronsLiquidSchemaV1",
+        "liquids": {"mm": {"displayName": "Master Mix", "description": "2X Taq", "displayColor": "#b925ff"}},
+        "commandSchemaId": "opentronsCommandSchemaV8",
+        "commands": commands(),
+        "commandAnnotationSchemaId": "opentronsCommandAnnotationSchemaV1",
+        "commandAnnotations": []
+    })
+}
+
+/// The same run as `opentrons analyze --json-output` writes it: ids in each load's result, the
+/// definitions in the loads' results, liquids as a list, every command succeeded.
+fn analysis_file() -> Value {
+    let commands: Vec<Value> = commands()
+        .into_iter()
+        .enumerate()
+        .map(|(i, mut c)| {
+            let mut result = json!({});
+            if c["commandType"] == "loadLabware" {
+                let p = &c["params"];
+                let uri = format!(
+                    "{}/{}/{}",
+                    p["namespace"].as_str().unwrap(),
+                    p["loadName"].as_str().unwrap(),
+                    p["version"]
+                );
+                result = json!({"labwareId": p["labwareId"], "definition": definition(&uri)});
+                c["params"].as_object_mut().unwrap().remove("labwareId");
+            }
+            json!({"id": format!("cmd-{i}"), "createdAt": "2026-11-29T12:00:00Z",
+                   "commandType": c["commandType"], "key": c["key"], "status": "succeeded",
+                   "params": c["params"], "result": result, "notes": []})
+        })
+        .collect();
+    json!({
+        "createdAt": "2026-11-29T12:00:00Z",
+        "files": [{"name": "pcr.json", "role": "main"}],
+        "config": {"protocolType": "json", "schemaVersion": 8},
+        "metadata": {"protocolName": "PCR set-up on the thermocycler"},
+        "robotType": "OT-2 Standard",
+        "commands": commands,
+        "labware": [], "pipettes": [], "modules": [],
+        "liquids": [{"id": "mm", "displayName": "Master Mix", "description": "2X Taq", "displayColor": "#b925ff"}],
+        "errors": [], "result": "ok"
+    })
+}
+
+fn write(dir: &Path, name: &str, v: &Value) -> String {
+    let path = dir.join(name);
+    std::fs::write(&path, serde_json::to_string_pretty(v).unwrap()).unwrap();
+    path.display().to_string()
+}
+
+/// The protocol's body: the file less its header comments.
+fn body(text: &str) -> String {
+    text.lines()
+        .skip_while(|l| l.starts_with('#'))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+#[test]
+fn an_opentrons_pcr_set_up_imports_from_either_file_checks_and_the_expert_runs_it() {
+    let dir = common::scratch("import");
+    let pd = write(&dir, "pcr.json", &protocol_file());
+    let out = dir.join("pcr.toml");
+    let out_s = out.display().to_string();
+    let o = common::autobio(&[
+        "--color",
+        "never",
+        "import",
+        &pd,
+        "--out",
+        &out_s,
+        "--id",
+        "imported.pcr",
+    ]);
+    let (said, warned) = (common::text(&o.stdout), common::text(&o.stderr));
+    assert!(o.status.success(), "{said}{warned}");
+    assert!(
+        said.contains("Opentrons protocol JSON, schema 8") && said.contains("ok"),
+        "{said}"
+    );
+    // The tips are dropped, said once for the three pick-ups, at the first.
+    assert!(
+        warned.contains("warning[W0011]: 3 `pickUpTip` dropped") && warned.contains("pcr.json:"),
+        "{warned}"
+    );
+    let text = std::fs::read_to_string(&out).unwrap();
+    // The plate in the cycler is three PCR tubes in its block; the rack's tube holds the mix.
+    for line in [
+        "kind = \"thermal_cycler_96\"",
+        "at = \"cycler.A5\"",
+        "at = \"rack.B2\"",
+        "state = { cap = \"off\", volume = \"1000 µL\", liquid = \"master_mix\" }",
+        "kind = \"pipette_p200\"",
+        "state = { set_volume = \"25 µL\" }",
+        "do = \"retract\"",
+        "profile = \"95 °C 30 s, 95 °C 15 s, 55 °C 30 s, 68 °C 60 s, 95 °C 15 s, 55 °C 30 s, 68 °C 60 s, 68 °C 300 s, 4 °C 60 s\"",
+        "\"plate_a5.volume of master_mix = 25 µL\",",
+        "\"rack_b2.volume = 925 µL\",",
+        "\"cycler.run is done\",",
+        "\"cycler.lid is open\",",
+        "# commands[8] aspirate",
+    ] {
+        assert!(text.contains(line), "{line} not in:\n{text}");
+    }
+    assert!(text.contains("source sha256 "), "{text}");
+
+    // The analysis of the same run gives the same protocol.
+    let analysis = write(&dir, "pcr.analysis.json", &analysis_file());
+    let out2 = dir.join("pcr2.toml");
+    let said = common::autobio_ok(&[
+        "import",
+        &analysis,
+        "--out",
+        &out2.display().to_string(),
+        "--id",
+        "imported.pcr",
+    ]);
+    assert!(said.contains("Opentrons analysis JSON"), "{said}");
+    assert_eq!(body(&std::fs::read_to_string(&out2).unwrap()), body(&text));
+
+    // The expert carries it out: the mix in each tube, the profile run, the lid open again.
+    let task = common::compile(&out_s);
+    let r = common::run(&task, 0, "expert");
+    assert!(r.success, "{:#?}", r.verdict);
+    let hold = common::run(&task, 0, "hold");
+    assert!(!hold.success);
+}
+
+/// A faulty file: the code, a message naming what is wrong, the place in the file (its line as
+/// the CLI prints it) and nothing written.
+fn refused(dir: &Path, name: &str, v: &str, code: &str, says: &str, line: &str) -> String {
+    let path = dir.join(name);
+    std::fs::write(&path, v).unwrap();
+    let out = dir.join(format!("{name}.toml"));
+    let o = common::autobio(&[
+        "--color",
+        "never",
+        "import",
+        &path.display().to_string(),
+        "--out",
+        &out.display().to_string(),
+    ]);
+    let err = common::text(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{name}: {err}");
+    assert!(err.contains(&format!("error[{code}]")), "{name}: {err}");
+    assert!(err.contains(says), "{name}: `{says}` not in {err}");
+    assert!(err.contains(line), "{name}: `{line}` not in {err}");
+    assert!(!out.exists(), "{name}: a refused import wrote its protocol");
+    code.to_string()
+}
+
+#[test]
+fn faulty_opentrons_files_are_refused_with_the_command_and_its_place() {
+    let dir = common::scratch("import-faults");
+    let mut codes = std::collections::BTreeSet::new();
+    let good = serde_json::to_string_pretty(&protocol_file()).unwrap();
+    // Truncated: the parser's line and column.
+    let cut = &good[..good.len() / 2];
+    let last_line = cut.lines().count();
+    codes.insert(refused(
+        &dir,
+        "truncated.json",
+        cut,
+        "E0040",
+        "not JSON",
+        &format!(":{last_line}:"),
+    ));
+    // Not an Opentrons file at all.
+    codes.insert(refused(
+        &dir,
+        "other.json",
+        r#"{"refs": {}, "instructions": []}"#,
+        "E0040",
+        "neither an Opentrons analysis",
+        "other.json:1:1",
+    ));
+    // Another schema version.
+    let v6 = good.replace("#/protocol/schemas/8", "#/protocol/schemas/6");
+    codes.insert(refused(
+        &dir,
+        "v6.json",
+        &v6,
+        "E0040",
+        "schemas/6",
+        "v6.json:2:",
+    ));
+
+    let edit = |f: &dyn Fn(&mut Value)| {
+        let mut v = protocol_file();
+        f(&mut v);
+        serde_json::to_string_pretty(&v).unwrap()
+    };
+    let index = |v: &Value, key: &str| {
+        v["commands"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .position(|c| c["key"] == key)
+            .unwrap()
+    };
+    // An unknown command type, named with its index.
+    let unknown = edit(&|v| v["commands"][6]["commandType"] = json!("thermocycler/frobnicate"));
+    codes.insert(refused(
+        &dir,
+        "unknown.json",
+        &unknown,
+        "E0042",
+        "commands[6] thermocycler/frobnicate",
+        "unknown.json:",
+    ));
+    // A magnet: no realisation here.
+    let magnet = edit(&|v| {
+        v["commands"].as_array_mut().unwrap().insert(
+            1,
+            json!({"commandType": "loadModule", "params": {"moduleId": "mag", "model": "magneticModuleV2", "location": {"slotName": "4"}}}),
+        )
+    });
+    codes.insert(refused(
+        &dir,
+        "magnet.json",
+        &magnet,
+        "E0042",
+        "module `magneticModuleV2`",
+        "magnet.json:",
+    ));
+    // Labware nobody has a definition of.
+    let nowhere = edit(&|v| {
+        let i = index(v, "k-rack");
+        v["commands"][i]["params"]["loadName"] = json!("acme_7_wellplate_12ml");
+    });
+    codes.insert(refused(
+        &dir,
+        "nowhere.json",
+        &nowhere,
+        "E0043",
+        "opentrons/acme_7_wellplate_12ml/1",
+        "nowhere.json:",
+    ));
+    // More liquid than the well's tube holds, pointed at in `volumeByWell`.
+    let flood = edit(&|v| v["commands"][5]["params"]["volumeByWell"]["B2"] = json!(5000));
+    codes.insert(refused(
+        &dir,
+        "flood.json",
+        &flood,
+        "E0044",
+        "5000 µL in well `B2`",
+        "flood.json:",
+    ));
+    // Labware standing on itself (a cycle of references).
+    let cycle = edit(&|v| {
+        let i = index(v, "k-rack");
+        v["commands"][i]["params"]["location"] = json!({"labwareId": "rack"});
+    });
+    codes.insert(refused(
+        &dir,
+        "cycle.json",
+        &cycle,
+        "E0041",
+        "stands on itself",
+        "cycle.json:",
+    ));
+    // Two loads giving one id.
+    let twice = edit(&|v| {
+        let i = index(v, "k-tips");
+        v["commands"][i]["params"]["labwareId"] = json!("rack");
+    });
+    codes.insert(refused(
+        &dir,
+        "twice.json",
+        &twice,
+        "E0041",
+        "`labwareId` `rack` is already",
+        "twice.json:",
+    ));
+    // A volume that is not a number.
+    let words = edit(&|v| v["commands"][8]["params"]["volume"] = json!("25 uL"));
+    codes.insert(refused(
+        &dir,
+        "words.json",
+        &words,
+        "E0041",
+        "commands[8] aspirate: its parameters cannot be read",
+        "words.json:",
+    ));
+    // Volumes no hand-held pipette sets.
+    let tiny = good.replace("\"volume\": 25,", "\"volume\": 2,");
+    codes.insert(refused(
+        &dir,
+        "tiny.json",
+        &tiny,
+        "E0044",
+        "2 µL",
+        "tiny.json:",
+    ));
+    // Every error code of the importer has a case here.
+    let want: std::collections::BTreeSet<String> = dsl::Code::ALL
+        .into_iter()
+        .filter(|c| c.is_import() && !c.is_warning())
+        .map(|c| c.to_string())
+        .collect();
+    assert_eq!(codes, want);
+}
