@@ -401,3 +401,118 @@ fn faulty_opentrons_files_are_refused_with_the_command_and_its_place() {
         .collect();
     assert_eq!(codes, want);
 }
+
+/// Seeded mutations of the good file (bytes flipped, ranges cut or doubled, numbers made huge,
+/// negative or strings, command types swapped, the file truncated anywhere), each imported in
+/// process: nothing panics, every finding points inside the file, and whatever is written is a
+/// protocol file that parses. CI's bounded fuzzing of the importer (`fuzz/` has the unbounded
+/// `cargo fuzz` target).
+#[test]
+fn mutated_opentrons_files_never_panic_and_point_inside_themselves() {
+    use rand_chacha::ChaCha8Rng;
+    use rand_core::{RngCore, SeedableRng};
+    let good = serde_json::to_string_pretty(&protocol_file()).unwrap();
+    let options = interchange::Options {
+        id: Some("fuzz.case".into()),
+        instruction: None,
+        robots: vec![],
+        deps: runtime::deps::deps_dir(),
+        file_name: "case.json".into(),
+    };
+    let types = [
+        "\"aspirate\"",
+        "\"dispense\"",
+        "\"loadLabware\"",
+        "\"thermocycler/runExtendedProfile\"",
+        "\"moveLabware\"",
+        "\"loadLiquid\"",
+        "\"nope\"",
+    ];
+    let numbers = [
+        "1e308",
+        "-25",
+        "0",
+        "\"25\"",
+        "null",
+        "[]",
+        "{}",
+        "4294967296",
+    ];
+    let mut rng = ChaCha8Rng::seed_from_u64(50);
+    let mut below = |n: usize| (rng.next_u64() % n.max(1) as u64) as usize;
+    let (mut written, mut refused) = (0, 0);
+    for case in 0..4000 {
+        let mut text = good.clone().into_bytes();
+        for _ in 0..1 + below(3) {
+            let len = text.len();
+            let at = below(len);
+            match below(6) {
+                0 => text[at] = b"{}[]\",:0a \\"[below(11)],
+                1 => {
+                    let end = (at + below(200)).min(len);
+                    text.drain(at..end);
+                }
+                2 => {
+                    let end = (at + below(200)).min(len);
+                    let piece = text[at..end].to_vec();
+                    text.splice(at..at, piece);
+                }
+                3 => text.truncate(at),
+                4 => {
+                    // A command type swapped for another.
+                    let s = String::from_utf8_lossy(&text).into_owned();
+                    let from = types[below(types.len())];
+                    let to = types[below(types.len())];
+                    text = s.replacen(from, to, 1 + below(3)).into_bytes();
+                }
+                _ => {
+                    // A number made something else.
+                    let s = String::from_utf8_lossy(&text).into_owned();
+                    let with = numbers[below(numbers.len())];
+                    text = s
+                        .replacen("\"volume\": 25", &format!("\"volume\": {with}"), 1)
+                        .replacen(
+                            "\"holdSeconds\": 30",
+                            &format!("\"holdSeconds\": {with}"),
+                            1,
+                        )
+                        .into_bytes();
+                }
+            }
+        }
+        let Ok(text) = String::from_utf8(text) else {
+            continue;
+        };
+        let imported = std::panic::catch_unwind(|| interchange::import(&text, &options))
+            .unwrap_or_else(|_| panic!("case {case} panicked on:\n{text}"));
+        for d in &imported.diagnostics {
+            assert!(
+                d.span.start <= d.span.end && d.span.end <= text.len(),
+                "case {case}: {d:?} outside {} bytes",
+                text.len()
+            );
+        }
+        match &imported.protocol {
+            Some(p) => {
+                written += 1;
+                let (_, diags) = dsl::parse(p);
+                assert!(
+                    !diags.iter().any(|d| d.code == dsl::Code::E0001),
+                    "case {case}: the written file is not TOML:\n{p}"
+                );
+            }
+            None => {
+                refused += 1;
+                assert!(
+                    imported.diagnostics.iter().any(|d| d.is_error()),
+                    "case {case}"
+                );
+            }
+        }
+    }
+    // The mutations reach both ends: some still import, most are refused.
+    assert!(
+        written > 50 && refused > 1500,
+        "{written} written, {refused} refused"
+    );
+}
