@@ -12,6 +12,7 @@
 //!   proof and its reach pass solved afresh and answered from the reach store (the authoring
 //!   loop); checking a protocol whose parameter has 50,000 values and 50,000 exclusions,
 //!   against the same domain with none (the proof must stay near-linear in the domain);
+//!   `autobio import` of an Opentrons file of 680 commands (`crate::bench_import`);
 //! - harness, on the first scene: expert episodes/s with two workers against one; and with a
 //!   model in the loop (the reference openpi server on loopback answering the expert's recorded
 //!   actions), the harness's time per control step beyond the same episodes run in-process:
@@ -593,6 +594,7 @@ fn reach_seconds(path: &str, store: &expert::reach::Store) -> Result<f64> {
 
 fn front_end_figures() -> Result<()> {
     authoring_figures()?;
+    crate::bench_import::figures()?;
     let n = 50_000;
     let in_slot = check_seconds(&slot_domain(n))?;
     let small = check_seconds(include_str!("../protocols/tube/transfer.toml"))?;

@@ -5,6 +5,7 @@
 #[macro_use]
 mod output;
 mod bench;
+mod bench_import;
 mod bench_leaderboard;
 mod bench_python;
 mod check;
