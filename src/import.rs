@@ -38,6 +38,11 @@ pub fn run(front: &Front, a: &ImportArgs) -> Result<ExitCode> {
         let Some((name, model)) = r.split_once('=') else {
             bail!("--robots {r}: write each robot as name=model (left=ur5e_inspire)");
         };
+        if !interchange::draft::bare_key(name.trim()) || model.trim().is_empty() {
+            bail!(
+                "--robots {r}: a robot's name is letters, digits, `_` and `-`, and it needs a model"
+            );
+        }
         robots.push((name.trim().to_string(), model.trim().to_string()));
     }
     let options = interchange::Options {
@@ -71,12 +76,15 @@ pub fn run(front: &Front, a: &ImportArgs) -> Result<ExitCode> {
     std::fs::write(&a.out, protocol).with_context(|| format!("writing {}", a.out.display()))?;
     let mut checked = compiler::check_file(&a.out, front.root.as_deref())?;
     expert::reach::check(&mut checked, &expert::reach::Store::from_env());
+    // Each step's block, from its header line to the next step's (or `[success]`): quoted values
+    // hold no line break, so a header at a line's start is a table header.
     let starts: Vec<usize> = protocol
-        .match_indices("[[steps]]")
-        .map(|(i, _)| i)
+        .match_indices("\n[[steps]]\n")
+        .map(|(i, _)| i + 1)
         .collect();
+    let end = protocol.find("\n[success]").unwrap_or(protocol.len());
     for d in &mut checked.diagnostics {
-        if d.file.is_some() {
+        if d.file.is_some() || d.span.start >= end {
             continue;
         }
         let step = starts.iter().rposition(|s| *s <= d.span.start);

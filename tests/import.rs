@@ -6,6 +6,7 @@
 //! column, and writes nothing.
 
 use crate::common;
+use interchange::json_span::Key;
 use serde_json::{Value, json};
 use std::path::Path;
 
@@ -149,12 +150,17 @@ fn write(dir: &Path, name: &str, v: &Value) -> String {
     path.display().to_string()
 }
 
-/// The protocol's body: the file less its header comments.
+/// The protocol's body: the file less its header comments and its source's name and hash.
 fn body(text: &str) -> String {
     text.lines()
         .skip_while(|l| l.starts_with('#'))
+        .filter(|l| !l.starts_with("imported_from = "))
         .collect::<Vec<_>>()
         .join("\n")
+}
+
+fn hex_of(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
 }
 
 #[test]
@@ -203,7 +209,16 @@ fn an_opentrons_pcr_set_up_imports_from_either_file_checks_and_the_expert_runs_i
     ] {
         assert!(text.contains(line), "{line} not in:\n{text}");
     }
-    assert!(text.contains("source sha256 "), "{text}");
+    let sha = {
+        use sha2::Digest;
+        hex_of(&sha2::Sha256::digest(std::fs::read(&pd).unwrap()))
+    };
+    assert!(
+        text.contains(&format!(
+            "imported_from = {{ file = \"pcr.json\", format = \"Opentrons protocol JSON, schema 8\", sha256 = \"{sha}\" }}"
+        )),
+        "{text}"
+    );
 
     // The analysis of the same run gives the same protocol.
     let analysis = write(&dir, "pcr.analysis.json", &analysis_file());
@@ -219,6 +234,30 @@ fn an_opentrons_pcr_set_up_imports_from_either_file_checks_and_the_expert_runs_i
     assert!(said.contains("Opentrons analysis JSON"), "{said}");
     assert_eq!(body(&std::fs::read_to_string(&out2).unwrap()), body(&text));
 
+    // A run's manifest names the source: its file, format and hash.
+    let run = dir.join("run");
+    common::autobio_ok(&[
+        "eval",
+        "--protocol",
+        &out_s,
+        "--policy",
+        "hold",
+        "--episodes",
+        "1",
+        "--out",
+        &run.display().to_string(),
+    ]);
+    let manifest: Value = serde_json::from_str(
+        &std::fs::read_to_string(run.join("imported.pcr.manifest.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(
+        manifest["imported_from"]["sha256"],
+        json!(sha),
+        "{manifest}"
+    );
+    assert_eq!(manifest["imported_from"]["file"], json!("pcr.json"));
+
     // The expert carries it out: the mix in each tube, the profile run, the lid open again.
     let task = common::compile(&out_s);
     let r = common::run(&task, 0, "expert");
@@ -227,9 +266,36 @@ fn an_opentrons_pcr_set_up_imports_from_either_file_checks_and_the_expert_runs_i
     assert!(!hold.success);
 }
 
-/// A faulty file: the code, a message naming what is wrong, the place in the file (its line as
-/// the CLI prints it) and nothing written.
-fn refused(dir: &Path, name: &str, v: &str, code: &str, says: &str, line: &str) -> String {
+/// Where a finding must point: a JSON path into the file (its line and column computed from the
+/// file's text), or text the location must hold.
+enum At {
+    Path(Vec<Key>),
+    Text(&'static str),
+}
+
+fn path(keys: &[&str]) -> At {
+    At::Path(
+        keys.iter()
+            .map(|k| match k.parse::<usize>() {
+                Ok(i) => Key::Index(i),
+                Err(_) => Key::field(k),
+            })
+            .collect(),
+    )
+}
+
+/// A faulty file: the code, a message naming what is wrong, the place in the file (`file:line:col`
+/// as the CLI prints it) and nothing written.
+fn refused(dir: &Path, name: &str, v: &str, code: &str, says: &str, at: At) -> String {
+    let line = match at {
+        At::Text(t) => t.to_string(),
+        At::Path(path) => {
+            let span = interchange::json_span::locate(v, &path)
+                .unwrap_or_else(|| panic!("{name}: no {path:?} in the file"));
+            let (l, c) = dsl::render::line_col(v, span.start);
+            format!("{name}:{l}:{c}")
+        }
+    };
     let path = dir.join(name);
     std::fs::write(&path, v).unwrap();
     let out = dir.join(format!("{name}.toml"));
@@ -245,7 +311,7 @@ fn refused(dir: &Path, name: &str, v: &str, code: &str, says: &str, line: &str) 
     assert_eq!(o.status.code(), Some(1), "{name}: {err}");
     assert!(err.contains(&format!("error[{code}]")), "{name}: {err}");
     assert!(err.contains(says), "{name}: `{says}` not in {err}");
-    assert!(err.contains(line), "{name}: `{line}` not in {err}");
+    assert!(err.contains(&line), "{name}: `{line}` not in {err}");
     assert!(!out.exists(), "{name}: a refused import wrote its protocol");
     code.to_string()
 }
@@ -264,7 +330,9 @@ fn faulty_opentrons_files_are_refused_with_the_command_and_its_place() {
         cut,
         "E0040",
         "not JSON",
-        &format!(":{last_line}:"),
+        At::Text(Box::leak(
+            format!("truncated.json:{last_line}:").into_boxed_str(),
+        )),
     ));
     // Not an Opentrons file at all.
     codes.insert(refused(
@@ -273,7 +341,7 @@ fn faulty_opentrons_files_are_refused_with_the_command_and_its_place() {
         r#"{"refs": {}, "instructions": []}"#,
         "E0040",
         "neither an Opentrons analysis",
-        "other.json:1:1",
+        At::Text("other.json:1:1"),
     ));
     // Another schema version.
     let v6 = good.replace("#/protocol/schemas/8", "#/protocol/schemas/6");
@@ -283,7 +351,7 @@ fn faulty_opentrons_files_are_refused_with_the_command_and_its_place() {
         &v6,
         "E0040",
         "schemas/6",
-        "v6.json:2:",
+        path(&["$otSharedSchema"]),
     ));
 
     let edit = |f: &dyn Fn(&mut Value)| {
@@ -307,7 +375,7 @@ fn faulty_opentrons_files_are_refused_with_the_command_and_its_place() {
         &unknown,
         "E0042",
         "commands[6] thermocycler/frobnicate",
-        "unknown.json:",
+        path(&["commands", "6"]),
     ));
     // A magnet: no realisation here.
     let magnet = edit(&|v| {
@@ -322,7 +390,7 @@ fn faulty_opentrons_files_are_refused_with_the_command_and_its_place() {
         &magnet,
         "E0042",
         "module `magneticModuleV2`",
-        "magnet.json:",
+        path(&["commands", "1", "params", "model"]),
     ));
     // Labware nobody has a definition of.
     let nowhere = edit(&|v| {
@@ -335,7 +403,7 @@ fn faulty_opentrons_files_are_refused_with_the_command_and_its_place() {
         &nowhere,
         "E0043",
         "opentrons/acme_7_wellplate_12ml/1",
-        "nowhere.json:",
+        path(&["commands", "4", "params", "loadName"]),
     ));
     // More liquid than the well's tube holds, pointed at in `volumeByWell`.
     let flood = edit(&|v| v["commands"][5]["params"]["volumeByWell"]["B2"] = json!(5000));
@@ -345,7 +413,7 @@ fn faulty_opentrons_files_are_refused_with_the_command_and_its_place() {
         &flood,
         "E0044",
         "5000 µL in well `B2`",
-        "flood.json:",
+        path(&["commands", "5", "params", "volumeByWell", "B2"]),
     ));
     // Labware standing on itself (a cycle of references).
     let cycle = edit(&|v| {
@@ -358,7 +426,7 @@ fn faulty_opentrons_files_are_refused_with_the_command_and_its_place() {
         &cycle,
         "E0041",
         "stands on itself",
-        "cycle.json:",
+        path(&["commands", "4", "params", "location"]),
     ));
     // Two loads giving one id.
     let twice = edit(&|v| {
@@ -371,7 +439,7 @@ fn faulty_opentrons_files_are_refused_with_the_command_and_its_place() {
         &twice,
         "E0041",
         "`labwareId` `rack` is already",
-        "twice.json:",
+        path(&["commands", "4", "params", "labwareId"]),
     ));
     // A volume that is not a number.
     let words = edit(&|v| v["commands"][8]["params"]["volume"] = json!("25 uL"));
@@ -381,7 +449,7 @@ fn faulty_opentrons_files_are_refused_with_the_command_and_its_place() {
         &words,
         "E0041",
         "commands[8] aspirate: its parameters cannot be read",
-        "words.json:",
+        path(&["commands", "8", "params"]),
     ));
     // Volumes no hand-held pipette sets.
     let tiny = good.replace("\"volume\": 25,", "\"volume\": 2,");
@@ -391,7 +459,30 @@ fn faulty_opentrons_files_are_refused_with_the_command_and_its_place() {
         &tiny,
         "E0044",
         "2 µL",
-        "tiny.json:",
+        path(&["commands", "8", "params", "volume"]),
+    ));
+    // Drawing more than a well holds then.
+    let dry = edit(&|v| v["commands"][5]["params"]["volumeByWell"]["B2"] = json!(40));
+    codes.insert(refused(
+        &dir,
+        "dry.json",
+        &dry,
+        "E0044",
+        "25 µL from well `B2`, which holds 15 µL then",
+        path(&["commands", "12", "params", "volume"]),
+    ));
+    // A hold the cycler cannot keep.
+    let cold = edit(&|v| {
+        let i = index(v, "k-r");
+        v["commands"][i]["params"]["profile"][2]["celsius"] = json!(-20);
+    });
+    codes.insert(refused(
+        &dir,
+        "cold.json",
+        &cold,
+        "E0044",
+        "a hold at -20 °C",
+        path(&["commands", "21", "params"]),
     ));
     // Every error code of the importer has a case here.
     let want: std::collections::BTreeSet<String> = dsl::Code::ALL
@@ -515,4 +606,48 @@ fn mutated_opentrons_files_never_panic_and_point_inside_themselves() {
         written > 50 && refused > 1500,
         "{written} written, {refused} refused"
     );
+}
+
+/// A holder loaded by its own definition is that holder (the cycler whose block has the same
+/// wells is not it), and a protocol name with braces stays text, not a placeholder.
+#[test]
+fn an_aluminium_block_is_a_block_and_a_braced_name_is_text() {
+    let mut v = protocol_file();
+    let commands = v["commands"].as_array_mut().unwrap();
+    // The plate's wells become an aluminium block's on the deck, with no cycler.
+    commands.retain(|c| {
+        let t = c["commandType"].as_str().unwrap();
+        !t.starts_with("thermocycler/") && t != "loadModule"
+    });
+    for c in commands.iter_mut() {
+        if c["key"] == "k-plate" {
+            c["params"]["loadName"] = json!("opentrons_96_aluminumblock_generic_pcr_strip_200ul");
+            c["params"]["version"] = json!(2);
+            c["params"]["location"] = json!({"slotName": "3"});
+        }
+    }
+    v["metadata"]["protocolName"] = json!("PCR {v2}");
+    let text = serde_json::to_string_pretty(&v).unwrap();
+    let imported = interchange::import(
+        &text,
+        &interchange::Options {
+            id: Some("imported.block".into()),
+            instruction: None,
+            robots: vec![],
+            deps: runtime::deps::deps_dir(),
+            file_name: "block.json".into(),
+        },
+    );
+    let protocol = imported
+        .protocol
+        .unwrap_or_else(|| panic!("{:#?}", imported.diagnostics));
+    assert!(
+        protocol.contains("kind = \"aluminium_block_96_pcr\""),
+        "{protocol}"
+    );
+    assert!(!protocol.contains("thermal_cycler"), "{protocol}");
+    assert!(protocol.contains("at = \"block.A5\""), "{protocol}");
+    let (task, diags) = compiler::compile_source(&protocol, "block.toml");
+    let task = task.unwrap_or_else(|| panic!("{diags:#?}"));
+    assert_eq!(task.instruction, "carry out the protocol \"PCR {{v2}}\"");
 }

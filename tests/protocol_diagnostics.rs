@@ -295,3 +295,57 @@ fn a_place_no_value_fills_says_so_and_failing_values_are_listed_in_order() {
         "{some}"
     );
 }
+
+/// `[protocol] imported_from` (what `autobio import` writes): the compiled task carries it; a
+/// hash that is not 64 hex digits, a missing key and an unknown one are each said.
+#[test]
+fn imported_from_is_carried_and_checked() {
+    let source = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("protocols/lab/pcr_setup.toml"),
+    )
+    .unwrap();
+    let sha = "ab".repeat(32);
+    let with = |table: &str| {
+        source.replacen(
+            "time_limit = \"120 s\"\n",
+            &format!("time_limit = \"120 s\"\nimported_from = {table}\n"),
+            1,
+        )
+    };
+    let good = with(&format!(
+        "{{ file = \"pcr.json\", format = \"Opentrons protocol JSON, schema 8\", sha256 = \"{sha}\" }}"
+    ));
+    let (task, diags) = compiler::compile_source(&good, "pcr_setup.toml");
+    let task = task.unwrap_or_else(|| panic!("{diags:#?}"));
+    let from = task.imported_from.expect("carried");
+    assert_eq!(
+        (from.file.as_str(), from.sha256.as_str()),
+        ("pcr.json", sha.as_str())
+    );
+    for (table, code, says) in [
+        (
+            "{ file = \"a.json\", format = \"f\", sha256 = \"abc\" }",
+            dsl::Code::E0021,
+            "not 64 hex digits",
+        ),
+        (
+            "{ file = \"a.json\", format = \"f\" }",
+            dsl::Code::E0002,
+            "has no `sha256`",
+        ),
+        (
+            &format!("{{ file = \"a.json\", format = \"f\", sha256 = \"{sha}\", by = \"me\" }}"),
+            dsl::Code::E0003,
+            "unknown key `by`",
+        ),
+    ] {
+        let (task, diags) = compiler::compile_source(&with(table), "pcr_setup.toml");
+        assert!(task.is_none(), "{table}");
+        assert!(
+            diags
+                .iter()
+                .any(|d| d.code == code && d.message.contains(says)),
+            "{table}: {diags:#?}"
+        );
+    }
+}

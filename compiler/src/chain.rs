@@ -535,6 +535,8 @@ fn lower_chain(
             cameras: check::default_cameras(&first.robots, first.camera.as_ref()),
             params,
             stages,
+            // A chain is written by hand; its stages' provenance stays in their files.
+            imported_from: None,
         }
         .with_programmes(),
     )

@@ -105,6 +105,11 @@ pub fn compile(p: &Protocol, file: &str) -> (Option<Task>, Vec<Diagnostic>) {
                 labware: low.labware,
                 params: low.params,
                 stages: vec![low.stage],
+                imported_from: p.meta.imported_from.as_ref().map(|i| ImportedFrom {
+                    file: i.file.clone(),
+                    format: i.format.clone(),
+                    sha256: i.sha256.clone(),
+                }),
             }
             .with_programmes(),
         )

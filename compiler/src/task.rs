@@ -33,6 +33,19 @@ pub struct Task {
     pub params: Vec<ParamSpec>,
     /// One for a protocol; one per protocol of a chain, run in order on one scene.
     pub stages: Vec<Stage>,
+    /// The file `autobio import` wrote the protocol from (`[protocol] imported_from`); part of
+    /// the task's content, so its hash covers it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub imported_from: Option<ImportedFrom>,
+}
+
+/// Where an imported protocol came from: the source file's name, its format and the SHA-256 of
+/// its bytes.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ImportedFrom {
+    pub file: String,
+    pub format: String,
+    pub sha256: String,
 }
 
 /// One stage: its own instruction, plan, checks and time limit.

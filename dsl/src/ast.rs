@@ -93,6 +93,20 @@ pub struct Meta {
     pub time_limit: Option<Spanned<f64>>,
     /// Span of the `[protocol]` (or `[chain]`) header, or of the file's start when it is missing.
     pub span: Span,
+    /// `imported_from = { file, format, sha256 }`: the file `autobio import` wrote this protocol
+    /// from (docs/import.md).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub imported_from: Option<ImportedFrom>,
+}
+
+/// Where an imported protocol came from: the source file's name, its format (as `autobio import`
+/// names it) and the SHA-256 of its bytes (64 hex digits).
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct ImportedFrom {
+    pub file: String,
+    pub format: String,
+    pub sha256: String,
+    pub span: Span,
 }
 
 /// Placement on the table: position in metres (world frame) and yaw in radians.

@@ -22,5 +22,11 @@ pub use diagnostic::{Code, Diagnostic, Severity, Span, did_you_mean};
 pub use parse::parse;
 pub use quantity::{Dimension, ParseQuantityError, Quantity, parse_quantity};
 
+/// The words success predicates are made of, which a named liquid may not be (`tube.volume of
+/// <liquid> >= 5 µL` must read back).
+pub const PREDICATE_WORDS: &[&str] = &[
+    "in", "is", "was", "of", "near", "holds", "touches", "lifted", "inverted", "within", "for",
+];
+
 /// The protocol-language version this crate reads (`format = 1` at the top of a file).
 pub const FORMAT_VERSION: i64 = 1;

@@ -117,7 +117,15 @@ const STAGE_KEYS: &[&str] = &["protocol", "instruction", "time_limit"];
 const PARAM_KEYS: &[&str] = &[
     "choice", "int", "step", "real", "slot", "free", "opposite", "balances", "tubes", "exclude",
 ];
-const PROTOCOL_KEYS: &[&str] = &["id", "version", "level", "instruction", "time_limit"];
+const PROTOCOL_KEYS: &[&str] = &[
+    "id",
+    "version",
+    "level",
+    "instruction",
+    "time_limit",
+    "imported_from",
+];
+const IMPORTED_KEYS: &[&str] = &["file", "format", "sha256"];
 const ROBOT_KEYS: &[&str] = &["model", "base"];
 const LABWARE_KEYS: &[&str] = &["kind", "pose", "at", "held_by", "state", "parts"];
 const POSE_KEYS: &[&str] = &["pos", "yaw"];
@@ -551,6 +559,7 @@ impl Parser {
                 "level" => m.level = self.level(value),
                 "instruction" => m.instruction = self.prompt(value, "protocol.instruction"),
                 "time_limit" => m.time_limit = self.time_limit(k, value),
+                "imported_from" => m.imported_from = self.imported_from(value),
                 _ => self.unknown_key(key, PROTOCOL_KEYS, "`[protocol]`"),
             }
         }
@@ -685,6 +694,56 @@ impl Parser {
             }
         }
         p
+    }
+
+    /// `imported_from = { file = "..", format = "..", sha256 = ".." }`: every key a string, the
+    /// hash 64 hex digits.
+    fn imported_from(&mut self, v: &Value<'_>) -> Option<ImportedFrom> {
+        let t = self.table(v, "`imported_from`")?;
+        let mut out = ImportedFrom {
+            span: span_of(v),
+            ..ImportedFrom::default()
+        };
+        for (key, value) in self.settings(t) {
+            let k = key.get_ref().as_ref();
+            let text = |p: &mut Self| p.string(value, &format!("imported_from.{k}"));
+            match k {
+                "file" => out.file = text(self)?.value,
+                "format" => out.format = text(self)?.value,
+                "sha256" => {
+                    let s = text(self)?;
+                    if s.value.len() != 64 || !s.value.bytes().all(|b| b.is_ascii_hexdigit()) {
+                        self.err(
+                            Code::E0021,
+                            s.span,
+                            format!("`imported_from.sha256` `{}` is not 64 hex digits", s.value),
+                            Some(
+                                "the SHA-256 of the source file, as `autobio import` writes it"
+                                    .into(),
+                            ),
+                        );
+                        return None;
+                    }
+                    out.sha256 = s.value.to_ascii_lowercase();
+                }
+                _ => self.unknown_key(key, IMPORTED_KEYS, "`imported_from`"),
+            }
+        }
+        for name in IMPORTED_KEYS {
+            if !t.iter().any(|(k, _)| k.get_ref() == *name) {
+                self.err(
+                    Code::E0002,
+                    out.span,
+                    format!("`imported_from` has no `{name}`"),
+                    Some(
+                        "`imported_from = { file = \"..\", format = \"..\", sha256 = \"..\" }`"
+                            .into(),
+                    ),
+                );
+                return None;
+            }
+        }
+        Some(out)
     }
 
     fn camera(&mut self, v: &Value<'_>) -> Option<Camera> {

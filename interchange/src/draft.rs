@@ -14,6 +14,8 @@ pub struct Draft {
     pub id: String,
     pub level: &'static str,
     pub instruction: String,
+    /// The source file's name, format and SHA-256 (`[protocol] imported_from`).
+    pub imported_from: Option<(String, String, String)>,
     pub time_limit_s: f64,
     pub robots: Vec<Robot>,
     pub labware: Vec<Item>,
@@ -59,13 +61,22 @@ impl Draft {
     pub fn to_toml(&self) -> String {
         let mut s = String::new();
         for line in &self.header {
-            let _ = writeln!(s, "# {line}");
+            let _ = writeln!(s, "# {}", comment(line));
         }
         let _ = writeln!(s, "format = 1\n\n[protocol]");
         let _ = writeln!(s, "id = {}", quoted(&self.id));
         let _ = writeln!(s, "level = {}", quoted(self.level));
         let _ = writeln!(s, "instruction = {}", quoted(&self.instruction));
         let _ = writeln!(s, "time_limit = \"{} s\"", number(self.time_limit_s));
+        if let Some((file, format, sha256)) = &self.imported_from {
+            let _ = writeln!(
+                s,
+                "imported_from = {{ file = {}, format = {}, sha256 = {} }}",
+                quoted(file),
+                quoted(format),
+                quoted(sha256)
+            );
+        }
         for r in &self.robots {
             let _ = writeln!(
                 s,
@@ -78,7 +89,7 @@ impl Draft {
         for l in &self.labware {
             s.push('\n');
             if let Some(c) = &l.comment {
-                let _ = writeln!(s, "# {c}");
+                let _ = writeln!(s, "# {}", comment(c));
             }
             let _ = writeln!(s, "[labware.{}]\nkind = {}", l.name, quoted(&l.kind));
             if let Some((pos, yaw)) = &l.pose {
@@ -122,7 +133,7 @@ impl Draft {
         for step in &self.steps {
             s.push('\n');
             if let Some(from) = &step.from {
-                let _ = writeln!(s, "# {from}");
+                let _ = writeln!(s, "# {}", comment(from));
             }
             let _ = writeln!(s, "[[steps]]\ndo = {}", quoted(&step.primitive));
             for (k, v) in &step.args {
@@ -137,6 +148,22 @@ impl Draft {
         s.push_str("]\n");
         s
     }
+}
+
+/// Text for one comment line: control characters (a line break among them) become spaces, so
+/// nothing from a source file can end the comment and start a table.
+pub fn comment(text: &str) -> String {
+    text.chars()
+        .map(|c| if c.is_control() { ' ' } else { c })
+        .collect()
+}
+
+/// Whether a name can stand as a bare TOML key (`[robots.<name>]`).
+pub fn bare_key(name: &str) -> bool {
+    !name.is_empty()
+        && name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
 }
 
 /// A TOML basic string.
@@ -187,5 +214,7 @@ mod tests {
         assert_eq!(number(0.83173), "0.83173");
         assert_eq!(number(-0.0), "0");
         assert_eq!(number(1.0 / 3.0), "0.333333");
+        assert_eq!(comment("OT-2\n[protocol]\r"), "OT-2 [protocol] ");
+        assert!(bare_key("left_2") && !bare_key("a b") && !bare_key("x]\n[y"));
     }
 }

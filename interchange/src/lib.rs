@@ -130,7 +130,11 @@ pub fn import(text: &str, options: &Options) -> Imported {
                 .map(str::trim)
                 .filter(|n| !n.is_empty())
             {
-                Some(name) => format!("carry out the protocol \"{name}\""),
+                // Braces are written doubled: a `{` would read as a placeholder.
+                Some(name) => format!(
+                    "carry out the protocol \"{}\"",
+                    name.replace('{', "{{").replace('}', "}}")
+                ),
                 None => "carry out the imported protocol".into(),
             }
         }),
@@ -145,9 +149,13 @@ pub fn import(text: &str, options: &Options) -> Imported {
         out.diagnostics.push(d);
     }
     if let Some(mut draft) = draft {
+        draft.imported_from = Some((
+            options.file_name.clone(),
+            format.clone(),
+            out.source_sha256.clone(),
+        ));
         draft.header = vec![
             format!("Imported by `autobio import` from {} ({format}, {}).", options.file_name, src.robot_type),
-            format!("source sha256 {}", out.source_sha256),
             "Each step's comment names the source command it realises; see docs/import.md for what maps to what.".into(),
         ];
         out.step_sources = draft.steps.iter().map(|s| s.from.clone()).collect();

@@ -340,10 +340,7 @@ fn initial_state(
 /// A liquid's name as a predicate can read it back (`tube.volume of <name> >= 5 µL`): a letter,
 /// then letters, digits, `_` or `-`, at most 40 in all, and not a word of the predicate grammar.
 fn is_liquid_name(name: &str) -> bool {
-    const RESERVED: &[&str] = &[
-        "in", "is", "was", "of", "near", "holds", "touches", "lifted", "inverted", "within", "for",
-    ];
-    !RESERVED.contains(&name)
+    !dsl::PREDICATE_WORDS.contains(&name)
         && name.len() <= 40
         && name.chars().next().is_some_and(|c| c.is_ascii_alphabetic())
         && name

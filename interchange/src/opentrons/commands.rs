@@ -12,7 +12,7 @@ use std::collections::BTreeMap;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Fate {
     Realised,
-    /// Dropped, with why (said once per type in the written file's header).
+    /// Dropped, with why (said once per type, as a W0011 warning at its first command).
     Dropped(&'static str),
     /// Refused, with why and what to do instead.
     Refused(&'static str, &'static str),
@@ -52,7 +52,11 @@ pub fn fate(command_type: &str) -> Fate {
         "pickUpTip" | "dropTip" | "dropTipInPlace" | "verifyTipPresence" | "getTipPresence" => {
             Fate::Dropped(TIPS)
         }
-        "touchTip" | "blowout" | "blowOutInPlace" | "airGapInPlace" => Fate::Dropped(
+        "airGapInPlace" => Fate::Refused(
+            "an air gap: the hand-held pipette draws liquid only, and its dispense would push out more than it drew",
+            ASK,
+        ),
+        "touchTip" | "blowout" | "blowOutInPlace" => Fate::Dropped(
             "done by our dispense: the tip is pressed to blow-out and drawn out along the tube's wall",
         ),
         "comment" => Fate::Dropped("a comment for the operator"),

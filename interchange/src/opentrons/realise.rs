@@ -134,6 +134,8 @@ struct Walk<'a> {
     other_volumes: std::collections::BTreeSet<u64>,
     /// Ids whose load was refused: their uses are not reported again (the load's error stands).
     refused: std::collections::BTreeSet<String>,
+    /// Our name of each source liquid, by its id.
+    liquid_names: BTreeMap<String, String>,
 }
 
 /// Realises the run; `None` with errors among the findings when it cannot be.
@@ -159,6 +161,7 @@ pub fn realise(src: &Source, options: &Options, names: &Names) -> (Option<Draft>
         dropped: BTreeMap::new(),
         other_volumes: Default::default(),
         refused: Default::default(),
+        liquid_names: BTreeMap::new(),
     };
     for c in &src.commands {
         if c.failed {
@@ -291,7 +294,12 @@ impl Walk<'_> {
                     self.profile(c, &p.module_id, &p.profile_elements);
                 }
             }
-            other => unreachable!("{other} is realised but has no arm"),
+            other => self.error(
+                Code::E0042,
+                c.path(),
+                format!("{}: `{other}` has no realisation yet", c.label()),
+                "remove the command",
+            ),
         }
     }
 
@@ -318,6 +326,20 @@ impl Walk<'_> {
         let (on_cycler, slot) = match &p.location {
             Location::Slot { slot_name } => (None, Some(slot_name.clone())),
             Location::Module { module_id } => match self.cyclers.get(module_id) {
+                Some(_) if matches!(holder, Some(Holder::Kind { .. })) => {
+                    self.error(
+                        Code::E0042,
+                        c.param_path("location"),
+                        format!(
+                            "{}: `{}` on the thermocycler: only a 96-well PCR plate stands in the cycler's block here",
+                            c.label(),
+                            p.load_name
+                        ),
+                        "load a 96-well PCR plate on the thermocycler",
+                    );
+                    self.refused.insert(id);
+                    return;
+                }
                 Some(_) => (Some(module_id.clone()), None),
                 None if self.refused.contains(module_id) => {
                     self.refused.insert(id);
@@ -412,10 +434,13 @@ impl Walk<'_> {
     /// What labware is here, from its load name and its definition (the file's, else the
     /// installed package's).
     fn holder(&mut self, c: &Command, p: &LoadLabware) -> Option<Holder> {
+        // A holder made from the same definition (an instrument whose block has the same wells,
+        // the `thermal_cycler_96`, is not that labware).
         if let Some(k) = labware::KINDS.iter().find(|k| {
-            k.definition
-                .and_then(|uri| uri.split('/').nth(1))
-                .is_some_and(|load| load == p.load_name)
+            k.primitives.is_empty()
+                && k.definition
+                    .and_then(|uri| uri.split('/').nth(1))
+                    .is_some_and(|load| load == p.load_name)
         }) {
             let tube = k.slots.and_then(|s| s.accepts.first().copied())?;
             return Some(Holder::Kind { kind: k.name, tube });
@@ -615,7 +640,7 @@ impl Walk<'_> {
             );
             return;
         };
-        let liquid = liquid_name(&info.display_name, &p.liquid_id);
+        let liquid = self.liquid(&info.display_name, &p.liquid_id);
         for (well, volume) in &p.volume_by_well {
             let Some(key) = self.tube(c, &p.labware_id, well) else {
                 continue;
@@ -623,7 +648,8 @@ impl Walk<'_> {
             let capacity = labware::kind(self.tubes[&key].kind)
                 .and_then(|k| k.capacity_ul)
                 .unwrap_or(0.0);
-            if !(volume.is_finite() && *volume >= 0.0 && *volume <= capacity) {
+            let before = self.tubes[&key].volume(&self.tubes[&key].start);
+            if !(volume.is_finite() && *volume >= 0.0 && before + *volume <= capacity) {
                 let mut at = c.param_path("volumeByWell");
                 at.push(Key::field(well));
                 self.error(
@@ -654,6 +680,30 @@ impl Walk<'_> {
             *t.start.entry(liquid.clone()).or_default() += volume;
             *t.now.entry(liquid.clone()).or_default() += volume;
         }
+    }
+
+    /// A liquid's name in our language, one per source liquid: a name two liquids would share gets
+    /// the second one's id appended.
+    fn liquid(&mut self, display: &str, id: &str) -> String {
+        if let Some(name) = self.liquid_names.get(id) {
+            return name.clone();
+        }
+        let mut name = liquid_name(display, id);
+        if self.liquid_names.values().any(|n| *n == name) {
+            let suffix: String = id.chars().filter(|c| c.is_ascii_alphanumeric()).collect();
+            name = format!(
+                "{}_{}",
+                &name[..name.len().min(30)],
+                suffix.chars().take(8).collect::<String>()
+            );
+            let mut n = 2;
+            while self.liquid_names.values().any(|x| *x == name) {
+                name = format!("{}_{n}", &name[..name.len().min(36)]);
+                n += 1;
+            }
+        }
+        self.liquid_names.insert(id.to_string(), name.clone());
+        name
     }
 
     fn pipetting(&mut self, c: &Command) {
@@ -774,6 +824,23 @@ impl Walk<'_> {
         t.touched = true;
         if aspirate {
             let have = t.volume(&t.now);
+            if have + 1e-6 < p.volume {
+                let msg = format!(
+                    "{}: {} µL from well `{}`, which holds {} µL then",
+                    c.label(),
+                    draft::number(p.volume),
+                    p.well_name,
+                    draft::number(have)
+                );
+                self.in_tip = Some((BTreeMap::new(), c.index));
+                self.error(
+                    Code::E0044,
+                    c.param_path("volume"),
+                    msg,
+                    "a well is drawn from only what a `loadLiquid` put there (or a dispense since)",
+                );
+                return;
+            }
             let share: BTreeMap<String, f64> = t
                 .now
                 .iter()
@@ -832,6 +899,13 @@ impl Walk<'_> {
             return;
         };
         let close = c.command_type.ends_with("closeLid");
+        let state = if close { "closed" } else { "open" };
+        if self.first_lid.is_none() {
+            self.first_lid = Some(if close { "open" } else { "closed" });
+        }
+        if self.lid_state == Some(state) {
+            return;
+        }
         if close && self.pipetted_since_lid {
             // The pipetting arm stands back first: the lid swings over where it worked.
             self.steps.push(Step {
@@ -845,13 +919,6 @@ impl Walk<'_> {
             });
         }
         self.pipetted_since_lid = false;
-        let state = if close { "closed" } else { "open" };
-        if self.first_lid.is_none() {
-            self.first_lid = Some(if close { "open" } else { "closed" });
-        }
-        if self.lid_state == Some(state) {
-            return;
-        }
         self.lid_state = Some(state);
         self.steps.push(Step {
             primitive: if close { "close_lid" } else { "open_lid" }.into(),
@@ -871,6 +938,38 @@ impl Walk<'_> {
                 c.path(),
                 format!("{}: a second profile on the cycler", c.label()),
                 "our cycler runs one profile per protocol: put every hold and cycle in one",
+            );
+            return;
+        }
+        let mut bad = None;
+        for e in elements {
+            let (steps, repetitions) = match e {
+                ProfileElement::Step(s) => (std::slice::from_ref(s), 1),
+                ProfileElement::Cycle { steps, repetitions } => (steps.as_slice(), *repetitions),
+            };
+            if steps.is_empty() || repetitions == 0 || repetitions > 1000 {
+                bad = Some(format!(
+                    "a cycle of {} holds repeated {repetitions} times",
+                    steps.len()
+                ));
+            }
+            for s in steps {
+                if !(s.hold_seconds.is_finite()
+                    && s.hold_seconds > 0.0
+                    && s.hold_seconds <= 86_400.0)
+                {
+                    bad = Some(format!("a hold of {} s", s.hold_seconds));
+                } else if !(s.celsius.is_finite() && (4.0..=99.0).contains(&s.celsius)) {
+                    bad = Some(format!("a hold at {} °C", s.celsius));
+                }
+            }
+        }
+        if let Some(what) = bad {
+            self.error(
+                Code::E0044,
+                c.param_path(""),
+                format!("{}: {what}", c.label()),
+                "holds last more than 0 s and up to a day, at 4 to 99 °C (the cycler's block); cycles repeat 1 to 1,000 times and hold something",
             );
             return;
         }
@@ -923,6 +1022,31 @@ impl Walk<'_> {
                 hint: None,
             });
         }
+        let places = if self.cyclers.is_empty() {
+            PLACES.len()
+        } else {
+            PLACES_BESIDE_CYCLER.len()
+        };
+        let standing: Vec<usize> = self
+            .labware
+            .values()
+            .filter(|l| !matches!(l.holder, Holder::Ignored(_)) && l.on_cycler.is_none())
+            .map(|l| l.command)
+            .collect();
+        if standing.len() > places {
+            let extra = standing.iter().copied().max().unwrap_or(0);
+            let c = &self.src.commands[extra];
+            self.findings.push(Finding {
+                code: Code::E0042,
+                at: c.path(),
+                message: format!(
+                    "{}: {} racks, blocks and plates, more than the bench's {places} places in reach",
+                    c.label(),
+                    standing.len()
+                ),
+                hint: Some("use fewer labware, or write the bench by hand".into()),
+            });
+        }
         if self.errors() {
             return (None, self.findings);
         }
@@ -971,6 +1095,7 @@ impl Walk<'_> {
             .filter(|l| !matches!(l.holder, Holder::Ignored(_)) && l.on_cycler.is_none())
             .collect();
         standing.sort_by_key(|l| l.command);
+        // More holders than places are refused in `finish`.
         for (i, l) in standing.iter().enumerate() {
             let kind = match l.holder {
                 Holder::Kind { kind, .. } => kind,
@@ -1082,12 +1207,12 @@ impl Walk<'_> {
         };
         let time_limit =
             SLACK_S + PIPETTING_S * n_pipetting + LID_S * n_lid + self.waits_s + profile;
-        let dropped: Vec<String> = Vec::new();
         Draft {
-            header: dropped,
+            header: Vec::new(),
             id: self.names.id.clone(),
             level: "hard",
             instruction: self.names.instruction.clone(),
+            imported_from: None,
             time_limit_s: (time_limit / 10.0).ceil() * 10.0,
             robots,
             labware,
@@ -1115,12 +1240,9 @@ fn liquid_name(display: &str, id: &str) -> String {
         s = s.replace("__", "_");
     }
     let s = s.trim_matches('_').to_string();
-    const WORDS: &[&str] = &[
-        "in", "is", "was", "of", "near", "holds", "touches", "lifted", "inverted", "within", "for",
-    ];
     let ok = s.chars().next().is_some_and(|c| c.is_ascii_alphabetic())
         && s.len() <= 40
-        && !WORDS.contains(&s.as_str());
+        && !dsl::PREDICATE_WORDS.contains(&s.as_str());
     if ok {
         s
     } else {

@@ -224,7 +224,7 @@ fn read_liquids(v: Option<&Value>) -> Result<BTreeMap<String, LiquidInfo>, Unrea
         }
         Some(_) => {
             return Err(bad(
-                "list that is neither an object nor a list",
+                "table that is neither an object by id nor a list",
                 vec![Key::field("liquids")],
             ));
         }

@@ -195,6 +195,9 @@ pub struct Manifest {
     /// path; null for one that could not be read.
     #[serde(default)]
     pub protocol_files: std::collections::BTreeMap<String, Option<String>>,
+    /// The file the protocol was imported from (`autobio import`): its name, format and SHA-256.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub imported_from: Option<compiler::ImportedFrom>,
     pub policy: String,
     /// Run r's episode i uses seed `seed + r * 2^20 + i`.
     pub seed: u64,

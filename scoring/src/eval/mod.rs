@@ -175,6 +175,7 @@ pub fn evaluate(
         protocol_sha256: std::fs::read(&task.source).ok().map(|b| sha256_hex(&b)),
         task_content_sha256: Some(record::task_content_sha256(task)),
         protocol_files: record::protocol_files(task),
+        imported_from: task.imported_from.clone(),
         policy: match &opts.model {
             Some(_) => "model".to_string(),
             None => opts.policy.to_string(),
