@@ -320,6 +320,27 @@ impl Walk<'_> {
             .unwrap_or_else(|| ["left", "arm"][i.min(1)].to_string())
     }
 
+    /// The bench's places for holders: beside the cycler when the run has one.
+    fn places(&self) -> &'static [[f64; 2]] {
+        if self.cyclers.is_empty() {
+            &PLACES
+        } else {
+            &PLACES_BESIDE_CYCLER
+        }
+    }
+
+    /// The holders that stand on the bench (not tip racks or trash, not the plate in the cycler),
+    /// in the order the run loads them.
+    fn standing(&self) -> Vec<&Loaded> {
+        let mut standing: Vec<&Loaded> = self
+            .labware
+            .values()
+            .filter(|l| !matches!(l.holder, Holder::Ignored(_)) && l.on_cycler.is_none())
+            .collect();
+        standing.sort_by_key(|l| l.command);
+        standing
+    }
+
     fn finish(mut self) -> (Option<Draft>, Vec<Finding>) {
         if let Some((_, at)) = &self.in_tip {
             let at = *at;
@@ -347,19 +368,10 @@ impl Walk<'_> {
                 hint: None,
             });
         }
-        let places = if self.cyclers.is_empty() {
-            PLACES.len()
-        } else {
-            PLACES_BESIDE_CYCLER.len()
-        };
-        let standing: Vec<usize> = self
-            .labware
-            .values()
-            .filter(|l| !matches!(l.holder, Holder::Ignored(_)) && l.on_cycler.is_none())
-            .map(|l| l.command)
-            .collect();
+        let places = self.places().len();
+        let standing = self.standing();
         if standing.len() > places {
-            let extra = standing.iter().copied().max().unwrap_or(0);
+            let extra = standing.last().map_or(0, |l| l.command);
             let c = &self.src.commands[extra];
             self.findings.push(Finding {
                 code: Code::E0042,

@@ -35,19 +35,9 @@ impl Walk<'_> {
                 comment: Some("the thermocycler module".into()),
             });
         }
-        let places: &[[f64; 2]] = if cycler {
-            &PLACES_BESIDE_CYCLER
-        } else {
-            &PLACES
-        };
-        let mut standing: Vec<&Loaded> = self
-            .labware
-            .values()
-            .filter(|l| !matches!(l.holder, Holder::Ignored(_)) && l.on_cycler.is_none())
-            .collect();
-        standing.sort_by_key(|l| l.command);
+        let places = self.places();
         // More holders than places are refused in `finish`.
-        for (i, l) in standing.iter().enumerate() {
+        for (i, l) in self.standing().iter().enumerate() {
             let kind = match l.holder {
                 Holder::Kind { kind, .. } => kind,
                 _ => "aluminium_block_96_pcr",
