@@ -155,6 +155,18 @@ if [ ! -e "$STAMP" ]; then
   rm -rf "$DEPS/servers" && mv "$DEPS/servers.tmp" "$DEPS/servers"
   touch "$STAMP"
 fi
+# The lab languages' tools (tests/lab_languages): autoprotocol-python and Opentrons' analyzer, which
+# the import tests run to write the Autoprotocol documents and Opentrons analyses they import.
+REQS=tests/lab_languages/requirements.txt
+STAMP="$DEPS/lab-languages/.requirements-$(sha256sum "$REQS" | cut -c1-16)"
+if [ ! -e "$STAMP" ]; then
+  echo "setup: making the lab languages' environment ($DEPS/lab-languages)"
+  rm -rf "$DEPS/lab-languages.tmp"
+  python3 -m venv "$DEPS/lab-languages.tmp"
+  "$DEPS/lab-languages.tmp/bin/pip" install -q --disable-pip-version-check -r "$REQS"
+  rm -rf "$DEPS/lab-languages" && mv "$DEPS/lab-languages.tmp" "$DEPS/lab-languages"
+  touch "$STAMP"
+fi
 # The Python package (python/, issue 25): maturin builds the wheel from the Rust core (cargo does
 # nothing when nothing changed), and a fresh virtual environment (.deps/python-env) gets it beside
 # gymnasium, vla-eval and pytest from PyPI; the wheel is reinstalled whenever it changed.
@@ -214,4 +226,4 @@ if [ ! -e "$DEPS/lerobot-env/.wheel-$WHEEL_SUM" ]; then
   "$DEPS/lerobot-env/bin/pip" install -q --disable-pip-version-check --force-reinstall --no-deps "$WHEEL"
   rm -f "$DEPS"/lerobot-env/.wheel-* && touch "$DEPS/lerobot-env/.wheel-$WHEEL_SUM"
 fi
-echo "setup: ok (mujoco $MUJOCO_VERSION, robot models, the mcap reader, the model servers' environment, the Python package and LeRobot's environment under $DEPS/)"
+echo "setup: ok (mujoco $MUJOCO_VERSION, robot models, the mcap reader, the model servers' and the lab languages' environments, the Python package and LeRobot's environment under $DEPS/)"

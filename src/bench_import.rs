@@ -2,7 +2,10 @@
 //! here, a Protocol Designer file (schema 8) filling a whole 96-well PCR plate on the
 //! thermocycler from a tube, a fresh tip each well (680 commands, the installed labware
 //! definitions inside, as Protocol Designer saves them): the import's wall time (read, realise,
-//! write) and the written protocol's check (proof and lowering).
+//! write) and the written protocol's check (proof and lowering). And the same plate as an
+//! Autoprotocol document as autoprotocol-python's default transfer writes it (each well's
+//! liquid handling with its prime, ten mixing cycles, air gaps and blow-out: 38 transports), then
+//! thermocycled: its import, and the export of the protocol it gives.
 
 use anyhow::{Context, Result};
 use serde_json::{Value, json};
@@ -63,6 +66,76 @@ fn largest_file() -> Result<String> {
     Ok(serde_json::to_string_pretty(&file)?)
 }
 
+/// A transport of `volume` µL (negative: drawn), of air when `air`.
+fn transport(volume: f64, air: bool) -> Value {
+    let mut t = json!({"volume": format!("{volume}:microliter")});
+    if air {
+        t["mode_params"] = json!({"liquid_class": "air"});
+    }
+    t
+}
+
+/// The plate as Autoprotocol: 20 µL into every well from two 1.5 mL tubes, then thermocycled.
+fn largest_autoprotocol() -> Result<String> {
+    let mut instructions = vec![
+        json!({"op": "provision", "resource_id": "master_mix", "to": [
+        {"well": "mix_1/0", "volume": "1000:microliter"}, {"well": "mix_2/0", "volume": "1000:microliter"}]}),
+    ];
+    for well in 0..96 {
+        let source = if well < 48 { "mix_1/0" } else { "mix_2/0" };
+        let mut at_source = vec![transport(-15.0, true), json!({}), transport(-5.0, false)];
+        at_source.extend([
+            transport(-20.0, false),
+            transport(5.0, false),
+            transport(-2.0, true),
+        ]);
+        let mut at_well = vec![transport(2.0, true), transport(20.0, false)];
+        for _ in 0..10 {
+            at_well.extend([transport(-20.0, false), transport(20.0, false)]);
+        }
+        at_well.push(transport(15.0, true));
+        instructions.push(json!({"op": "liquid_handle", "mode": "air_displacement",
+            "shape": {"rows": 1, "columns": 1, "format": "SBS96"},
+            "locations": [{"location": source, "transports": at_source},
+                          {"location": format!("plate/{well}"), "transports": at_well}]}));
+    }
+    instructions.push(json!({"op": "seal", "object": "plate", "type": "ultra-clear"}));
+    instructions.push(json!({"op": "thermocycle", "object": "plate", "volume": "20:microliter",
+        "groups": [{"cycles": 1, "steps": [{"temperature": "95:celsius", "duration": "30:second"}]},
+                   {"cycles": 30, "steps": [{"temperature": "95:celsius", "duration": "15:second"},
+                                            {"temperature": "55:celsius", "duration": "30:second"},
+                                            {"temperature": "68:celsius", "duration": "1:minute"}]}]}));
+    let doc = json!({"refs": {"mix_1": {"new": "micro-1.5", "discard": true},
+                              "mix_2": {"new": "micro-1.5", "discard": true},
+                              "plate": {"new": "96-pcr", "discard": true}},
+                     "instructions": instructions});
+    Ok(serde_json::to_string_pretty(&doc)?)
+}
+
+fn autoprotocol_figures(options: &interchange::Options) -> Result<()> {
+    let text = largest_autoprotocol()?;
+    let instructions = text.matches("\"op\"").count();
+    let t = Instant::now();
+    let imported = interchange::import(&text, options);
+    let import_s = t.elapsed().as_secs_f64();
+    let protocol = imported
+        .protocol
+        .context("the bench's Autoprotocol document was refused")?;
+    let (task, _) = compiler::compile_source(&protocol, "plate.toml");
+    let task = task.context("the bench's imported Autoprotocol does not compile")?;
+    let t = Instant::now();
+    let exported = interchange::autoprotocol::export::export(&task, 0)?;
+    let export_s = t.elapsed().as_secs_f64();
+    outln!(
+        "import   Autoprotocol, {instructions} instructions, {:.0} kB {:>8.1} ms   (export of its protocol {:.1} ms, {:.0} kB)",
+        text.len() as f64 / 1e3,
+        import_s * 1e3,
+        export_s * 1e3,
+        exported.json.len() as f64 / 1e3
+    );
+    Ok(())
+}
+
 pub fn figures() -> Result<()> {
     let text = largest_file()?;
     let commands = text.matches("\"commandType\"").count();
@@ -89,5 +162,5 @@ pub fn figures() -> Result<()> {
         check_s * 1e3,
         if task.is_some() { "" } else { ", with errors" }
     );
-    Ok(())
+    autoprotocol_figures(&options)
 }

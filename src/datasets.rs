@@ -66,9 +66,16 @@ impl ObservationArg {
 
 #[derive(Clone, Debug, clap::Args)]
 pub struct ExportArgs {
-    /// Recordings, or folders of them
+    /// Recordings, or folders of them; with `--to autoprotocol`, one protocol file
     #[arg(required = true)]
     recordings: Vec<PathBuf>,
+    /// Write a protocol's lab steps in another lab language instead: `autoprotocol` (the
+    /// robot's motions dropped; docs/import.md)
+    #[arg(long, value_enum)]
+    to: Option<LabLanguage>,
+    /// With `--to`: the episode whose drawn parameters are written
+    #[arg(long, default_value_t = 0, requires = "to")]
+    seed: u64,
     /// `lerobot-v21` or `lerobot-v30`
     #[arg(long, value_enum, default_value = "lerobot-v30")]
     format: DatasetFormat,
@@ -104,8 +111,20 @@ pub enum DatasetCommand {
     },
 }
 
+/// The lab languages a protocol exports to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum LabLanguage {
+    Autoprotocol,
+}
+
 /// `autobio export`.
-pub fn export_cli(a: &ExportArgs) -> Result<ExitCode> {
+pub fn export_cli(front: &crate::front::Front, a: &ExportArgs) -> Result<ExitCode> {
+    if let Some(LabLanguage::Autoprotocol) = a.to {
+        let [protocol] = a.recordings.as_slice() else {
+            anyhow::bail!("--to autoprotocol exports one protocol file");
+        };
+        return crate::export_protocol::run(front, protocol, &a.out, a.seed);
+    }
     let opts = demos::ExportOptions {
         out: a.out.clone(),
         version: a.format.version(),

@@ -1,4 +1,5 @@
-//! `autobio import`: an Opentrons analysis or Protocol Designer file written as a protocol file
+//! `autobio import`: an Opentrons analysis, a Protocol Designer file or an Autoprotocol document
+//! written as a protocol file
 //! (`interchange::import`), then checked as `autobio check` checks one. Findings about the source
 //! are shown against the source file (its line and column, and the JSON path); the written
 //! file's diagnostics against it, each inside a step with the source command the step realises.
@@ -12,8 +13,8 @@ use std::process::ExitCode;
 
 #[derive(Clone, Debug, clap::Args)]
 pub struct ImportArgs {
-    /// The file to import: an Opentrons analysis (`opentrons analyze --json-output`) or a
-    /// Protocol Designer file (schema 8)
+    /// The file to import: an Opentrons analysis (`opentrons analyze --json-output`), a
+    /// Protocol Designer file (schema 8) or an Autoprotocol document (`refs`, `instructions`)
     file: PathBuf,
     /// Where to write the protocol file (nothing is written when the import is refused)
     #[arg(long)]

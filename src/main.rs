@@ -14,6 +14,7 @@ mod demo;
 mod describe;
 mod diagnostics;
 mod eval;
+mod export_protocol;
 mod front;
 mod import;
 mod picture;
@@ -49,8 +50,8 @@ struct Cli {
 enum Command {
     /// Check protocol or chain files and report every problem with file:line:col (exit 1 on errors)
     Check(check::CheckArgs),
-    /// Write an Opentrons analysis or Protocol Designer file (schema 8) as a protocol file and
-    /// check it (exit 1 when refused or when the protocol does not check)
+    /// Write an Opentrons analysis or Protocol Designer file (schema 8), or an Autoprotocol document, as a
+    /// protocol file and check it (exit 1 when refused or when the protocol does not check)
     Import(import::ImportArgs),
     /// Print the documentation of a diagnostic code (e.g. E0010); `autobio explain --all` lists them
     Explain(check::ExplainArgs),
@@ -61,7 +62,8 @@ enum Command {
     /// Record scripted-expert demonstrations: MCAP recordings, or a LeRobot dataset (v2.1 for
     /// openpi, v3.0 for lerobot 0.4+) with every camera at 50 Hz; failed episodes are not written
     Demo(demo::DemoArgs),
-    /// Turn MCAP recordings into a LeRobot dataset (cameras redrawn from the recorded states)
+    /// Turn MCAP recordings into a LeRobot dataset (cameras redrawn from the recorded states), or a
+    /// protocol into Autoprotocol (`--to autoprotocol`)
     Export(datasets::ExportArgs),
     /// Work with datasets
     Dataset {
@@ -124,7 +126,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Describe(a) => describe::describe(&front, a),
         Command::Compile(a) => describe::compile(&front, a),
         Command::Demo(a) => demo::run(&front, a),
-        Command::Export(a) => datasets::export_cli(a),
+        Command::Export(a) => datasets::export_cli(&front, a),
         Command::Dataset { command } => datasets::dataset_cli(command),
         Command::Eval(a) => eval::eval(&front, a),
         Command::Results { command } => eval::results(command),

@@ -151,7 +151,7 @@ fn write(dir: &Path, name: &str, v: &Value) -> String {
 }
 
 /// The protocol's body: the file less its header comments and its source's name and hash.
-fn body(text: &str) -> String {
+pub(crate) fn body(text: &str) -> String {
     text.lines()
         .skip_while(|l| l.starts_with('#'))
         .filter(|l| !l.starts_with("imported_from = "))
@@ -268,12 +268,12 @@ fn an_opentrons_pcr_set_up_imports_from_either_file_checks_and_the_expert_runs_i
 
 /// Where a finding must point: a JSON path into the file (its line and column computed from the
 /// file's text), or text the location must hold.
-enum At {
+pub(crate) enum At {
     Path(Vec<Key>),
     Text(&'static str),
 }
 
-fn path(keys: &[&str]) -> At {
+pub(crate) fn path(keys: &[&str]) -> At {
     At::Path(
         keys.iter()
             .map(|k| match k.parse::<usize>() {
@@ -286,7 +286,7 @@ fn path(keys: &[&str]) -> At {
 
 /// A faulty file: the code, a message naming what is wrong, the place in the file (`file:line:col`
 /// as the CLI prints it) and nothing written.
-fn refused(dir: &Path, name: &str, v: &str, code: &str, says: &str, at: At) -> String {
+pub(crate) fn refused(dir: &Path, name: &str, v: &str, code: &str, says: &str, at: At) -> String {
     let line = match at {
         At::Text(t) => t.to_string(),
         At::Path(path) => {
@@ -334,13 +334,13 @@ fn faulty_opentrons_files_are_refused_with_the_command_and_its_place() {
             format!("truncated.json:{last_line}:").into_boxed_str(),
         )),
     ));
-    // Not an Opentrons file at all.
+    // Neither an Opentrons file nor Autoprotocol.
     codes.insert(refused(
         &dir,
         "other.json",
-        r#"{"refs": {}, "instructions": []}"#,
+        r#"{"steps": [], "labware": {}}"#,
         "E0040",
-        "neither an Opentrons analysis",
+        "neither an Opentrons analysis or protocol (schema 8) nor an Autoprotocol document",
         At::Text("other.json:1:1"),
     ));
     // Another schema version.

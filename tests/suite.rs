@@ -22,6 +22,7 @@ mod forgeries;
 mod golden;
 mod hold_control;
 mod import;
+mod import_autoprotocol;
 mod instruments_act;
 mod inversion;
 mod kinematics;

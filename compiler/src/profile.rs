@@ -47,6 +47,28 @@ pub fn parse_profile(text: &str) -> Result<Vec<Hold>, ProfileError> {
     Ok(holds)
 }
 
+/// The profile as written at its top level: each hold as a group run once, each cycle as its
+/// holds (inner cycles unrolled) and its count; what Autoprotocol's `thermocycle` groups are.
+pub fn parse_groups(text: &str) -> Result<Vec<(usize, Vec<Hold>)>, ProfileError> {
+    parse_profile(text)?;
+    let mut out = Vec::new();
+    for item in split_top(text)? {
+        let item = item.trim();
+        if item.is_empty() {
+            continue;
+        }
+        match (item.find(['[', '(']), item.rfind([']', ')'])) {
+            (Some(open), Some(close)) => {
+                let holds = parse_items(&item[open + 1..close])?;
+                let all = parse_items(item)?;
+                out.push((all.len() / holds.len().max(1), holds));
+            }
+            _ => out.push((1, vec![parse_hold(item)?])),
+        }
+    }
+    Ok(out)
+}
+
 fn parse_items(text: &str) -> Result<Vec<Hold>, ProfileError> {
     let mut out = Vec::new();
     for item in split_top(text)? {
@@ -178,6 +200,12 @@ mod tests {
         assert_eq!(h[91].seconds, 300.0);
         let nested = parse_profile("2 x [95 °C 1 s, 3 x (60 °C 1 s)]").unwrap();
         assert_eq!(nested.len(), 8);
+        let groups = parse_groups(
+            "95 °C 3 min, 30 x [95 °C 15 s, 55 °C 15 s], 2 x [95 °C 1 s, 3 x (60 °C 1 s)]",
+        )
+        .unwrap();
+        let shape: Vec<(usize, usize)> = groups.iter().map(|(n, h)| (*n, h.len())).collect();
+        assert_eq!(shape, vec![(1, 1), (30, 2), (2, 4)]);
     }
 
     #[test]

@@ -1,22 +1,27 @@
 //! Protocols from the languages labs already write: `autobio import` reads an Opentrons analysis
-//! (`opentrons analyze --json-output`) or Protocol Designer file (schema 8) and writes a protocol
-//! file in our language, realising on our bench what a liquid handler's deck did: its labware as
-//! racks, blocks and tubes, its single-channel pipette as the hand-held one, its pipetting as
-//! `aspirate` and `dispense`, its thermocycler as the `thermal_cycler_96` with its lid worked by an
-//! arm. What has no robot realisation here is refused with a diagnostic at the command's index and
-//! type (and its line and column in the file); what a gantry does that our steps do themselves
-//! (tips, homing, moves, blow-out) is dropped and said once per type.
+//! (`opentrons analyze --json-output`), a Protocol Designer file (schema 8) or an Autoprotocol
+//! document and writes a protocol file in our language, realising on our bench what a liquid
+//! handler's deck or a cloud lab did: its labware as racks, blocks and tubes, its single-channel
+//! pipette as the hand-held one, its pipetting as `aspirate` and `dispense` steps, its
+//! thermocycler as the `thermal_cycler_96` with its lid worked by an arm. What has no robot
+//! realisation here is refused with a diagnostic at the command's (instruction's) index and type,
+//! and its line and column in the file; what a gantry does that our steps do themselves (tips,
+//! homing, moves, blow-out) is dropped and said once per type. `autoprotocol::export` writes a
+//! compiled task's lab steps back as Autoprotocol.
 //!
 //! Flow: JSON text → `serde_json::Value` (E0040 at the parser's line and column) → the format's
-//! reader (`opentrons::source`) → realisation into a [`Draft`] (`opentrons::realise`) → the
-//! protocol's text ([`Draft::to_toml`]). The written file is checked like any protocol by the
-//! caller (`autobio import` runs the check). No Python runs at import time; labware definitions
-//! come from the file or from the installed `opentrons-shared-data`
-//! ([`labware::definition::Installed`]).
+//! reader (`opentrons::source`; `autoprotocol::lower`, which lowers into the same commands) →
+//! realisation into a [`Draft`] (`opentrons::realise`; Autoprotocol's time constraints then
+//! `autoprotocol::timing`) → the protocol's text ([`Draft::to_toml`]). The written file is
+//! checked like any protocol by the caller (`autobio import` runs the check). No Python runs at
+//! import time; labware definitions come from the file or from the installed
+//! `opentrons-shared-data` ([`labware::definition::Installed`]).
 //!
-//! Not here: Autoprotocol (import and export), keeping refused instrument steps as
-//! instrument-only steps. Its tests are beside the code and in tests/import.rs.
+//! Not here: keeping refused instrument steps as instrument-only steps; Autoprotocol's `spin` and
+//! `incubate` as robot steps. Its tests are beside the code and in tests/import.rs and
+//! tests/import_autoprotocol.rs.
 
+pub mod autoprotocol;
 pub mod draft;
 pub mod json_span;
 pub mod opentrons;
@@ -87,34 +92,54 @@ pub fn import(text: &str, options: &Options) -> Imported {
                     dsl::Span::new(at, (at + 1).min(text.len()).max(at)),
                     format!("the file is not JSON: {e}"),
                 )
-                .with_hint("an Opentrons analysis or protocol file is one JSON document"),
+                .with_hint("an Opentrons file or an Autoprotocol document is one JSON document"),
             );
             return out;
         }
     };
-    if !opentrons::source::is_opentrons(&doc) {
+    let mut findings = Vec::new();
+    let lowered: Option<autoprotocol::lower::Lowered>;
+    let read;
+    let src = if autoprotocol::is_autoprotocol(&doc) {
+        let (l, f) = autoprotocol::lower::lower(&doc);
+        findings = f;
+        match l {
+            Some(l) => {
+                lowered = Some(l);
+                &lowered.as_ref().expect("just set").source
+            }
+            None => {
+                out.diagnostics = findings.into_iter().map(|f| diagnostic(text, f)).collect();
+                return out;
+            }
+        }
+    } else if opentrons::source::is_opentrons(&doc) {
+        lowered = None;
+        read = match opentrons::source::read(&doc) {
+            Ok(s) => s,
+            Err(u) => {
+                let mut d =
+                    Diagnostic::error(Code::E0040, json_span::nearest(text, &u.at), u.message);
+                if let Some(h) = u.hint {
+                    d = d.with_hint(h);
+                }
+                out.diagnostics.push(d);
+                return out;
+            }
+        };
+        &read
+    } else {
         out.diagnostics.push(
             Diagnostic::error(
                 Code::E0040,
                 json_span::nearest(text, &[]),
-                "neither an Opentrons analysis nor an Opentrons protocol (schema 8)",
+                "neither an Opentrons analysis or protocol (schema 8) nor an Autoprotocol document",
             )
             .with_hint(
-                "an analysis has `robotType` and `commands`; a protocol has `$otSharedSchema` `#/protocol/schemas/8`",
+                "an analysis has `robotType` and `commands`; a protocol has `$otSharedSchema` `#/protocol/schemas/8`; Autoprotocol has `refs` and `instructions`",
             ),
         );
         return out;
-    }
-    let src = match opentrons::source::read(&doc) {
-        Ok(s) => s,
-        Err(u) => {
-            let mut d = Diagnostic::error(Code::E0040, json_span::nearest(text, &u.at), u.message);
-            if let Some(h) = u.hint {
-                d = d.with_hint(h);
-            }
-            out.diagnostics.push(d);
-            return out;
-        }
     };
     let format = src.flavour.describe();
     out.format = Some(format.clone());
@@ -139,14 +164,30 @@ pub fn import(text: &str, options: &Options) -> Imported {
             }
         }),
     };
-    let (draft, findings) = opentrons::realise::realise(&src, options, &names);
-    for f in findings {
-        let mut d = Diagnostic::error(f.code, json_span::nearest(text, &f.at), f.message);
-        if let Some(h) = f.hint {
-            d = d.with_hint(h);
+    let (mut draft, realised) = opentrons::realise::realise(src, options, &names);
+    findings.extend(realised);
+    if let (Some(draft), Some(lowered)) = (&mut draft, &lowered) {
+        findings.extend(autoprotocol::timing::apply(draft, lowered));
+    }
+    // "No step a robot does" says nothing more when something else was refused; for a
+    // lowered file it speaks of its instructions.
+    let no_steps = |f: &Finding| f.code == Code::E0042 && f.at == [Key::field("commands")];
+    if findings
+        .iter()
+        .any(|f| !f.code.is_warning() && !no_steps(f))
+    {
+        findings.retain(|f| !no_steps(f));
+    } else if lowered.is_some() {
+        for f in findings.iter_mut().filter(|f| no_steps(f)) {
+            f.at = vec![Key::field("instructions")];
+            f.hint =
+                Some("it needs pipetting (`liquid_handle`, `pipette`) or a `thermocycle`".into());
         }
-        d.notes.push(format!("at {}", json_span::pointer(&f.at)));
-        out.diagnostics.push(d);
+    }
+    let refused = findings.iter().any(|f| !f.code.is_warning());
+    out.diagnostics = findings.into_iter().map(|f| diagnostic(text, f)).collect();
+    if refused {
+        return out;
     }
     if let Some(mut draft) = draft {
         draft.imported_from = Some((
@@ -162,6 +203,17 @@ pub fn import(text: &str, options: &Options) -> Imported {
         out.protocol = Some(draft.to_toml());
     }
     out
+}
+
+/// A finding as a diagnostic whose span is the JSON value its path names (or the nearest one
+/// the text has), with the path as a note.
+fn diagnostic(text: &str, f: Finding) -> Diagnostic {
+    let mut d = Diagnostic::error(f.code, json_span::nearest(text, &f.at), f.message);
+    if let Some(h) = f.hint {
+        d = d.with_hint(h);
+    }
+    d.notes.push(format!("at {}", json_span::pointer(&f.at)));
+    d
 }
 
 /// `imported.<stem>`: the file's stem in the characters an id may hold.

@@ -257,6 +257,18 @@ impl Server {
     }
 }
 
+/// The lab languages' Python (autoprotocol-python, Opentrons' analyzer; `make setup` makes it).
+pub fn lab_python() -> std::path::PathBuf {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let python = root.join(".deps/lab-languages/bin/python");
+    assert!(
+        python.exists(),
+        "{} is missing: run `make setup`",
+        python.display()
+    );
+    python
+}
+
 /// The servers' Python (`make setup` makes it).
 pub fn python() -> std::path::PathBuf {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));

@@ -233,6 +233,24 @@ pub struct RunExtendedProfile {
     pub profile_elements: Vec<ProfileElement>,
 }
 
+/// A flat profile (`runProfile`, which an analysis writes with a cycle's holds repeated) as
+/// elements: the whole list as one cycle when it is a block of holds repeated, else its holds.
+pub fn as_cycles(holds: Vec<ProfileStep>) -> Vec<ProfileElement> {
+    let n = holds.len();
+    let same = |a: &ProfileStep, b: &ProfileStep| {
+        a.celsius == b.celsius && a.hold_seconds == b.hold_seconds
+    };
+    for period in 1..=n / 2 {
+        if n.is_multiple_of(period) && (period..n).all(|i| same(&holds[i], &holds[i - period])) {
+            let repetitions = u32::try_from(n / period).unwrap_or(u32::MAX);
+            let mut steps = holds;
+            steps.truncate(period);
+            return vec![ProfileElement::Cycle { steps, repetitions }];
+        }
+    }
+    holds.into_iter().map(ProfileElement::Step).collect()
+}
+
 /// A profile in our language's words: `95 °C 30 s, 30 x [95 °C 15 s, ...]`.
 pub fn profile_text(elements: &[ProfileElement]) -> String {
     let hold = |s: &ProfileStep| {
@@ -278,6 +296,21 @@ mod tests {
         assert_eq!(
             profile_text(&elements),
             "95 °C 30 s, 30 x [95 °C 15 s, 55.5 °C 30 s], 4 °C 60 s"
+        );
+        let hold = |celsius, hold_seconds| ProfileStep {
+            celsius,
+            hold_seconds,
+        };
+        let flat: Vec<ProfileStep> = (0..3)
+            .flat_map(|_| [hold(95.0, 15.0), hold(55.0, 30.0)])
+            .collect();
+        assert_eq!(
+            profile_text(&as_cycles(flat)),
+            "3 x [95 °C 15 s, 55 °C 30 s]"
+        );
+        assert_eq!(
+            profile_text(&as_cycles(vec![hold(95.0, 30.0), hold(68.0, 60.0)])),
+            "95 °C 30 s, 68 °C 60 s"
         );
     }
 }

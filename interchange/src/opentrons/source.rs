@@ -22,6 +22,8 @@ pub enum Flavour {
     Analysis,
     /// A Protocol Designer file of this schema version (8).
     Protocol(u32),
+    /// An Autoprotocol document lowered into these commands (`crate::autoprotocol::lower`).
+    Autoprotocol,
 }
 
 impl Flavour {
@@ -29,6 +31,7 @@ impl Flavour {
         match self {
             Flavour::Analysis => "Opentrons analysis JSON".into(),
             Flavour::Protocol(v) => format!("Opentrons protocol JSON, schema {v}"),
+            Flavour::Autoprotocol => "Autoprotocol JSON".into(),
         }
     }
 }
@@ -43,11 +46,20 @@ pub struct Command {
     pub result: Value,
     /// An analysis whose command failed (`status = "failed"`).
     pub failed: bool,
+    /// Where a command lowered from another format stands in its file, and how findings name it
+    /// (`instructions[3] liquid_handle`); none for an Opentrons file's own commands.
+    pub origin: Option<(Vec<Key>, String)>,
+    /// The name the source gives what a `loadLabware` loads (an Autoprotocol ref's), used as the
+    /// item's name where it can be one.
+    pub name_hint: Option<String>,
 }
 
 impl Command {
     /// The path of a field of this command's `params` in the file.
     pub fn param_path(&self, field: &str) -> Vec<Key> {
+        if let Some((at, _)) = &self.origin {
+            return at.clone();
+        }
         let mut p = self.path();
         p.push(Key::field("params"));
         if !field.is_empty() {
@@ -58,12 +70,18 @@ impl Command {
 
     /// The path of this command in the file.
     pub fn path(&self) -> Vec<Key> {
-        vec![Key::field("commands"), Key::Index(self.index)]
+        match &self.origin {
+            Some((at, _)) => at.clone(),
+            None => vec![Key::field("commands"), Key::Index(self.index)],
+        }
     }
 
     /// `commands[12] aspirate`: how a finding and the written step name it.
     pub fn label(&self) -> String {
-        format!("commands[{}] {}", self.index, self.command_type)
+        match &self.origin {
+            Some((_, label)) => label.clone(),
+            None => format!("commands[{}] {}", self.index, self.command_type),
+        }
     }
 }
 
@@ -86,6 +104,9 @@ pub struct Source {
     pub liquids: BTreeMap<String, LiquidInfo>,
     /// Labware definitions the file carries, by URI (`namespace/loadName/version`).
     pub definitions: BTreeMap<String, Value>,
+    /// The names the source gives single wells (an Autoprotocol tube ref's), by labware id and
+    /// well: the tube's item name in place of `<holder>_<well>`.
+    pub tube_names: BTreeMap<(String, String), String>,
 }
 
 /// Why a file is not one of the two: the message and where in the file.
@@ -138,6 +159,7 @@ pub fn read(doc: &Value) -> Result<Source, Unreadable> {
     let robot_type = match flavour {
         Flavour::Analysis => doc.get("robotType"),
         Flavour::Protocol(_) => doc.get("robot").and_then(|r| r.get("model")),
+        Flavour::Autoprotocol => None,
     }
     .and_then(Value::as_str)
     .unwrap_or("OT-2 Standard")
@@ -175,6 +197,8 @@ pub fn read(doc: &Value) -> Result<Source, Unreadable> {
             params,
             result: c.get("result").cloned().unwrap_or(Value::Null),
             failed: c.get("status").and_then(Value::as_str) == Some("failed"),
+            origin: None,
+            name_hint: None,
         });
     }
     let liquids = read_liquids(doc.get("liquids"))?;
@@ -188,6 +212,7 @@ pub fn read(doc: &Value) -> Result<Source, Unreadable> {
         commands,
         liquids,
         definitions,
+        tube_names: BTreeMap::new(),
     })
 }
 

@@ -61,12 +61,18 @@ impl Walk<'_> {
         let Some(cycler) = self.cycler(c, module_id) else {
             return;
         };
-        if self.ran_profile {
+        // Profiles run back to back (an analysis writes each `execute_profile` as its own)
+        // are one profile to our cycler: the holds of the second follow the first's.
+        let follows = self.ran_profile
+            && self.steps.last().is_some_and(|s| {
+                s.primitive == "thermocycle" && s.args.first().is_some_and(|(_, on)| *on == cycler)
+            });
+        if self.ran_profile && !follows {
             self.error(
                 Code::E0042,
                 c.path(),
                 format!("{}: a second profile on the cycler", c.label()),
-                "our cycler runs one profile per protocol: put every hold and cycle in one",
+                "our cycler runs one profile per protocol (profiles back to back are one): put every hold and cycle in one",
             );
             return;
         }
@@ -113,6 +119,17 @@ impl Walk<'_> {
             })
             .sum();
         self.profile_s += holds;
+        if follows {
+            let last = self.steps.last_mut().expect("checked above");
+            if let Some((_, text)) = last.args.iter_mut().find(|(k, _)| k == "profile") {
+                text.push_str(", ");
+                text.push_str(&commands::profile_text(elements));
+            }
+            if let Some(from) = &mut last.from {
+                from.push_str(&format!(" and {}", c.label()));
+            }
+            return;
+        }
         self.steps.push(Step {
             primitive: "thermocycle".into(),
             args: vec![

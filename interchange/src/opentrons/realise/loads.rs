@@ -108,10 +108,10 @@ impl Walk<'_> {
             .values()
             .filter(|l| l.name.starts_with(base))
             .count();
-        let name = if n == 0 {
-            base.to_string()
-        } else {
-            format!("{base}{}", n + 1)
+        let name = match &c.name_hint {
+            Some(hint) => hint.clone(),
+            None if n == 0 => base.to_string(),
+            None => format!("{base}{}", n + 1),
         };
         self.labware.insert(
             id,
@@ -308,7 +308,10 @@ impl Walk<'_> {
             return None;
         }
         let key = (labware_id.to_string(), well.to_string());
-        let name = format!("{base}_{}", well.to_ascii_lowercase());
+        let name = match self.src.tube_names.get(&key) {
+            Some(name) => name.clone(),
+            None => format!("{base}_{}", well.to_ascii_lowercase()),
+        };
         self.tubes.entry(key).or_insert_with(|| Tube {
             name: name.clone(),
             kind,
@@ -317,7 +320,10 @@ impl Walk<'_> {
             now: BTreeMap::new(),
             touched: false,
             dispensed_into: false,
-            comment: format!("well {well} of commands[{}]'s labware", lw.command),
+            comment: match &self.src.commands[lw.command].origin {
+                Some((_, label)) => format!("well {well} of {label}"),
+                None => format!("well {well} of commands[{}]'s labware", lw.command),
+            },
         });
         Some((labware_id.to_string(), well.to_string()))
     }

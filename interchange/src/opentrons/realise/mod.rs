@@ -293,8 +293,7 @@ impl Walk<'_> {
             "thermocycler/openLid" | "thermocycler/closeLid" => self.lid(c),
             "thermocycler/runProfile" => {
                 if let Some(p) = self.params::<RunProfile>(c) {
-                    let elements: Vec<ProfileElement> =
-                        p.profile.into_iter().map(ProfileElement::Step).collect();
+                    let elements = commands::as_cycles(p.profile);
                     self.profile(c, &p.module_id, &elements);
                 }
             }

@@ -51,14 +51,17 @@ impl Walk<'_> {
                 at: None,
                 held_by: None,
                 state: vec![],
-                comment: Some(format!(
-                    "commands[{}]{}",
-                    l.command,
-                    l.slot
-                        .as_ref()
-                        .map(|s| format!(", deck slot {s}"))
-                        .unwrap_or_default()
-                )),
+                comment: Some(match &self.src.commands[l.command].origin {
+                    Some((_, label)) => label.clone(),
+                    None => format!(
+                        "commands[{}]{}",
+                        l.command,
+                        l.slot
+                            .as_ref()
+                            .map(|s| format!(", deck slot {s}"))
+                            .unwrap_or_default()
+                    ),
+                }),
             });
         }
         let mut tubes: Vec<&Tube> = self.tubes.values().collect();
