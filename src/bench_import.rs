@@ -145,6 +145,7 @@ pub fn figures() -> Result<()> {
         robots: vec![],
         deps: runtime::deps::deps_dir(),
         file_name: "plate.json".into(),
+        keep_instrument_steps: false,
     };
     let t = Instant::now();
     let imported = interchange::import(&text, &options);

@@ -29,6 +29,11 @@ pub struct ImportArgs {
     /// The protocol's instruction [default: from the file's protocol name]
     #[arg(long)]
     instruction: Option<String>,
+    /// Keep a command of an instrument we have no model of (a magnet, a plate reader, a
+    /// temperature module; Autoprotocol's spin and incubate) as an instrument-only step
+    /// (`external`: the robots stand by for its duration) instead of refusing it
+    #[arg(long)]
+    keep_instrument_steps: bool,
 }
 
 pub fn run(front: &Front, a: &ImportArgs) -> Result<ExitCode> {
@@ -55,6 +60,7 @@ pub fn run(front: &Front, a: &ImportArgs) -> Result<ExitCode> {
             || a.file.display().to_string(),
             |n| n.to_string_lossy().into(),
         ),
+        keep_instrument_steps: a.keep_instrument_steps,
     };
     let imported = interchange::import(&text, &options);
     let source = Checked {

@@ -509,6 +509,7 @@ fn mutated_opentrons_files_never_panic_and_point_inside_themselves() {
         robots: vec![],
         deps: runtime::deps::deps_dir(),
         file_name: "case.json".into(),
+        keep_instrument_steps: false,
     };
     let types = [
         "\"aspirate\"",
@@ -636,6 +637,7 @@ fn an_aluminium_block_is_a_block_and_a_braced_name_is_text() {
             robots: vec![],
             deps: runtime::deps::deps_dir(),
             file_name: "block.json".into(),
+            keep_instrument_steps: false,
         },
     );
     let protocol = imported

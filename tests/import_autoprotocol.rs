@@ -33,16 +33,16 @@ fn library_documents(dir: &Path) -> PathBuf {
 }
 
 fn import(file: &Path, out: &Path, id: &str) -> (bool, String, String) {
-    let o = common::autobio(&[
-        "--color",
-        "never",
-        "import",
-        &file.display().to_string(),
-        "--out",
-        &out.display().to_string(),
-        "--id",
-        id,
-    ]);
+    import_with(file, out, id, &[])
+}
+
+fn import_with(file: &Path, out: &Path, id: &str, extra: &[&str]) -> (bool, String, String) {
+    let (file, out) = (file.display().to_string(), out.display().to_string());
+    let mut args = vec![
+        "--color", "never", "import", &file, "--out", &out, "--id", id,
+    ];
+    args.extend_from_slice(extra);
+    let o = common::autobio(&args);
     (
         o.status.success(),
         common::text(&o.stdout),
@@ -165,6 +165,39 @@ fn autoprotocol_from_its_library_imports_checks_and_the_expert_carries_it_out() 
             "{warned}"
         );
     }
+    // Kept on request as instrument-only steps: the robots stand by for each one's duration.
+    let (ok, said, warned) = import_with(
+        &file,
+        &out,
+        "imported.ap_spin",
+        &["--keep-instrument-steps"],
+    );
+    assert!(ok, "{said}{warned}");
+    let text = std::fs::read_to_string(&out).unwrap();
+    for line in [
+        "do = \"external\"\nwhat = \"spin tube\"\nduration = \"60 s\"",
+        "what = \"incubate tube\"\nduration = \"600 s\"",
+        "\"tube.volume of culture = 100 µL\",",
+    ] {
+        assert!(text.contains(line), "{line} not in:\n{text}");
+    }
+    let task = common::compile(&out.display().to_string());
+    let r = common::run(&task, 0, "expert");
+    assert!(r.success, "{:#?}", r.verdict);
+    assert!(!common::run(&task, 0, "hold").success);
+    // Its export writes the kept instructions back as they were.
+    let back: serde_json::Value =
+        serde_json::from_str(&export(&out, &dir.join("spin.exported.json"))).unwrap();
+    let runs = |doc: &serde_json::Value| -> Vec<serde_json::Value> {
+        doc["instructions"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|i| i["op"] == "spin" || i["op"] == "incubate")
+            .cloned()
+            .collect()
+    };
+    assert_eq!(runs(&back), runs(&serde_json::from_str(&source).unwrap()));
 }
 
 #[test]
@@ -419,6 +452,33 @@ fn opentrons_protocols_analysed_by_opentrons_import_and_the_expert_carries_them_
         assert!(r.success, "{name}: {:#?}", r.verdict);
         assert!(!common::run(&task, 0, "hold").success, "{name}");
     }
+    // A magnetic module's commands: refused, or kept as instrument-only steps on request.
+    let analysis = analyse("magnet_steps");
+    let out = dir.join("magnet.toml");
+    let (ok, _, warned) = import(&analysis, &out, "imported.magnet");
+    assert!(!ok && !out.exists(), "{warned}");
+    assert!(
+        warned.contains("module `magneticModuleV2` has no realisation here")
+            && warned.contains("magneticModule/engage has no realisation here")
+            && warned.contains("`--keep-instrument-steps`"),
+        "{warned}"
+    );
+    let (ok, said, warned) = import_with(
+        &analysis,
+        &out,
+        "imported.magnet",
+        &["--keep-instrument-steps"],
+    );
+    assert!(ok, "{said}{warned}");
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(
+        text.contains("do = \"external\"\nwhat = \"magneticModule/engage {{\\\"height\\\":5.0}}\"")
+            && text.contains("what = \"magneticModule/disengage\""),
+        "{text}"
+    );
+    let task = common::compile(&out.display().to_string());
+    let r = common::run(&task, 0, "expert");
+    assert!(r.success, "{:#?}", r.verdict);
     // Reagent kept cold on a temperature module: refused at the module's commands.
     let analysis = analyse("cold_block_transfer");
     let out = dir.join("cold.toml");
@@ -617,6 +677,7 @@ fn mutated_autoprotocol_files_never_panic_and_point_inside_themselves() {
         robots: vec![],
         deps: runtime::deps::deps_dir(),
         file_name: "case.json".into(),
+        keep_instrument_steps: false,
     };
     let ops = [
         "\"liquid_handle\"",

@@ -16,6 +16,7 @@ fuzz_target!(|data: &[u8]| {
         robots: vec![],
         deps: std::path::PathBuf::from("../.deps"),
         file_name: "case.json".into(),
+        keep_instrument_steps: true,
     };
     let imported = interchange::import(text, &options);
     for d in &imported.diagnostics {

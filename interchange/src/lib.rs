@@ -17,8 +17,9 @@
 //! import time; labware definitions come from the file or from the installed
 //! `opentrons-shared-data` ([`labware::definition::Installed`]).
 //!
-//! Not here: keeping refused instrument steps as instrument-only steps; Autoprotocol's `spin` and
-//! `incubate` as robot steps. Its tests are beside the code and in tests/import.rs and
+//! On request (`Options::keep_instrument_steps`) a command of an instrument we have no model of is
+//! kept as an instrument-only step (`external`) instead of refused. Not here: Autoprotocol's
+//! `spin` and `incubate` as robot steps. Its tests are beside the code and in tests/import.rs and
 //! tests/import_autoprotocol.rs.
 
 pub mod autoprotocol;
@@ -46,6 +47,11 @@ pub struct Options {
     pub deps: PathBuf,
     /// The source file's name, for the written file's header.
     pub file_name: String,
+    /// Keep a command that has no robot realisation as an instrument-only step (`external`:
+    /// the robots stand by for its duration) instead of refusing it: an instrument we have no
+    /// model of (a magnet, a plate reader, a temperature module; Autoprotocol's `spin` and
+    /// `incubate`).
+    pub keep_instrument_steps: bool,
 }
 
 /// A finding about the source: a code, where in the file (a path of keys), a message and a hint.
@@ -101,7 +107,7 @@ pub fn import(text: &str, options: &Options) -> Imported {
     let lowered: Option<autoprotocol::lower::Lowered>;
     let read;
     let src = if autoprotocol::is_autoprotocol(&doc) {
-        let (l, f) = autoprotocol::lower::lower(&doc);
+        let (l, f) = autoprotocol::lower::lower(&doc, options.keep_instrument_steps);
         findings = f;
         match l {
             Some(l) => {

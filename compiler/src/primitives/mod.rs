@@ -37,6 +37,8 @@ pub enum ArgKind {
     Profile,
     /// A whole number of times, e.g. "5".
     Count,
+    /// Free text (what an instrument-only step does).
+    Text,
 }
 
 impl ArgKind {
@@ -53,6 +55,7 @@ impl ArgKind {
             ArgKind::Speed => "rotational speed in rpm",
             ArgKind::Temperature => "temperature, e.g. \"42 °C\"",
             ArgKind::Count => "whole number, e.g. 5",
+            ArgKind::Text => "text",
             ArgKind::Profile => {
                 "profile, e.g. \"95 °C 3 min, 30 x [95 °C 15 s, 55 °C 15 s, 72 °C 30 s]\""
             }
@@ -212,6 +215,7 @@ fn placeholders(
 mod aspirate;
 mod close_lid;
 mod dispense;
+mod external;
 mod hand_over;
 mod hold;
 mod incubate;
@@ -278,6 +282,7 @@ pub const CATALOGUE: &[&LabPrimitive] = &[
     &incubate::PRIMITIVE,
     &wait::PRIMITIVE,
     &invert::PRIMITIVE,
+    &external::PRIMITIVE,
 ];
 
 /// What every primitive's file imports.

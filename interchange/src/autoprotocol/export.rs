@@ -3,7 +3,9 @@
 //! as `liquid_handle`, its instrument runs as `thermocycle`, `spin` and `incubate` on the
 //! containers standing in the instrument when it runs, its step timing as `time_constraints`.
 //! The robot's motions (picks, places, lids, presses, retracts) are dropped: the cloud lab's
-//! own machines do them. One episode's draw of the task's parameters is written (`seed`).
+//! own machines do them. An instrument-only step (`external`) imported from Autoprotocol writes
+//! its instruction back as it was. One episode's draw of the task's parameters is written
+//! (`seed`).
 //!
 //! Containers become refs by what they are: a 1.5 mL tube is a `micro-1.5` ref of its own name;
 //! the PCR tubes standing in a 96-well block (the aluminium block's, the cycler's) are wells of
@@ -438,6 +440,19 @@ impl Exporter<'_> {
                     self.instructions.push(instruction);
                 }
             }
+            "external" => match args
+                .get("instruction")
+                .and_then(|t| serde_json::from_str::<Value>(t).ok())
+                .filter(|v| v.get("op").is_some())
+            {
+                // An instrument-only step imported from Autoprotocol: its instruction as it was.
+                Some(instruction) => self.instructions.push(instruction),
+                None => self.notes.push(format!(
+                    "instrument-only step {} (`{}`) not written: it carries no Autoprotocol instruction",
+                    i + 1,
+                    args.get("what").map_or("", String::as_str)
+                )),
+            },
             "place" => {
                 if let (Some(on), Some(to)) = (on, args.get("to")) {
                     let place = to

@@ -11,7 +11,8 @@
 //! location, one after the other) and air (`liquid_class = "air"`) are dropped, since our dispense
 //! blows out and the bookkeeping is unchanged; `seal`, `unseal`, `cover` and `uncover` are dropped
 //! (the cycler's heated lid closes over its tubes; a tube stands open); `spin`, `incubate` and
-//! the instruments we have no model of are refused with the instruction's index and op.
+//! the instruments we have no model of are refused with the instruction's index and op (kept as
+//! instrument-only steps, `external`, on request).
 
 use super::spec::{CycleGroup, LiquidHandle, Pipette, Provision, Ref, Thermocycle, WellVolume};
 use super::units::{self, Dimension};
@@ -118,6 +119,8 @@ struct Lowering {
     uses: BTreeMap<String, Vec<usize>>,
     /// Refs refused (their error stands; their uses are not reported again).
     refused: std::collections::BTreeSet<String>,
+    /// Instructions with no realisation kept as instrument-only steps.
+    keep: bool,
 }
 
 /// The rack's labware id (no ref can have it: refs are keyed by their own names).
@@ -126,7 +129,7 @@ const CYCLER_ID: &str = "\u{0}cycler";
 const PIPETTE_ID: &str = "\u{0}pipette";
 
 /// Lowers a document, or says why it cannot be read at all.
-pub fn lower(doc: &Value) -> (Option<Lowered>, Vec<Finding>) {
+pub fn lower(doc: &Value, keep: bool) -> (Option<Lowered>, Vec<Finding>) {
     let mut l = Lowering {
         commands: Vec::new(),
         findings: Vec::new(),
@@ -139,6 +142,7 @@ pub fn lower(doc: &Value) -> (Option<Lowered>, Vec<Finding>) {
         dropped: BTreeMap::new(),
         uses: BTreeMap::new(),
         refused: Default::default(),
+        keep,
     };
     let Some(refs) = doc.get("refs").and_then(Value::as_object) else {
         l.error(
@@ -532,21 +536,24 @@ impl Lowering {
                 }
             }
             op => {
+                let instrument = NOT_YET.iter().any(|(o, _)| *o == op) || NO_MODEL.contains(&op);
                 if let Some((_, why)) = DROPPED_OPS.iter().find(|(o, _)| *o == op) {
                     self.drop(op, index, why);
+                } else if instrument && self.keep {
+                    self.keep_instruction(op, value, at, label);
                 } else if let Some((_, hint)) = NOT_YET.iter().find(|(o, _)| *o == op) {
                     self.error(
                         Code::E0042,
                         at,
                         format!("{label} has no realisation yet"),
-                        hint,
+                        &format!("{hint}; or keep it as an instrument-only step (`--keep-instrument-steps`)"),
                     );
                 } else if NO_MODEL.contains(&op) {
                     self.error(
                         Code::E0042,
                         at,
                         format!("{label} has no realisation here: the instrument has no model on our bench"),
-                        "remove the instruction, or write the protocol's robot steps in our language by hand",
+                        "remove the instruction, write the protocol's robot steps in our language by hand, or keep it as an instrument-only step (`--keep-instrument-steps`)",
                     );
                 } else {
                     let mut at = at;
@@ -560,6 +567,25 @@ impl Lowering {
                 }
             }
         }
+    }
+
+    /// An instruction kept as an instrument-only step: what it does in words, its duration
+    /// when it has one, and the instruction itself (which an export writes back).
+    fn keep_instruction(&mut self, op: &str, value: &Value, at: Vec<Key>, label: String) {
+        let what = match value.get("object").and_then(Value::as_str) {
+            Some(object) => format!("{op} {object}"),
+            None => op.replace('_', " "),
+        };
+        let mut params = json!({"what": what, "instruction": value.to_string()});
+        if let Some(d) = value.get("duration").and_then(Value::as_str) {
+            let mut at_d = at.clone();
+            at_d.push(Key::field("duration"));
+            match self.quantity(d, Dimension::Time, &at_d) {
+                Some(seconds) => params["seconds"] = json!(seconds),
+                None => return,
+            }
+        }
+        self.push("external", params, at, label, None);
     }
 
     fn provision(&mut self, p: &Provision, at: &[Key], label: &str, index: usize) {

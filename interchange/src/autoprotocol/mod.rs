@@ -5,8 +5,8 @@
 //! (`timing.rs`); exported from a compiled task (`export.rs`). Its types are ours, written from
 //! the published specification (`spec.rs`); its quantities are read by `units.rs`.
 //!
-//! Not here: `spin` and `incubate` realised as robot steps (they are refused with a hint), the
-//! instruments we have no model of (refused), instrument-only steps.
+//! Not here: `spin` and `incubate` realised as robot steps (they are refused with a hint, or kept
+//! as instrument-only steps on request, as the instruments we have no model of are).
 
 pub mod export;
 pub mod lower;

@@ -21,7 +21,8 @@ pub enum Fate {
 const GANTRY: &str = "a gantry's own motion: the hand-held pipette's step moves there itself";
 const TIPS: &str =
     "the hand-held pipette's tip is part of it here: tips are not picked up or dropped";
-const NO_MODULE: &str = "the instrument has no model on our bench";
+/// Why a module's command is refused (kept as an instrument-only step on request).
+pub const NO_MODULE: &str = "the instrument has no model on our bench";
 const ASK: &str = "remove the command (or the module's steps) from the protocol, or write the step in our language by hand";
 
 /// The fate of a command type.

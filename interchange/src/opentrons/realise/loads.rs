@@ -35,6 +35,7 @@ impl Walk<'_> {
                     return;
                 }
                 Some(_) => (Some(module_id.clone()), None),
+                None if self.kept_modules.contains(module_id) => (None, None),
                 None if self.refused.contains(module_id) => {
                     self.refused.insert(id);
                     return;
@@ -203,6 +204,11 @@ impl Walk<'_> {
         let Some(id) = self.load_id(c, p.module_id.clone(), "moduleId") else {
             return;
         };
+        if self.options.keep_instrument_steps && !p.model.starts_with("thermocyclerModule") {
+            // Its commands become instrument-only steps; what stands on it, on the bench.
+            self.kept_modules.insert(id);
+            return;
+        }
         if p.model.starts_with("thermocyclerModule") {
             if !self.cyclers.is_empty() {
                 self.error(
@@ -225,7 +231,7 @@ impl Walk<'_> {
                     p.model,
                     "the thermocycler is the one module our bench has"
                 ),
-                "remove the module and its steps, or write them in our language by hand",
+                "remove the module and its steps, write them in our language by hand, or keep its commands as instrument-only steps (`--keep-instrument-steps`)",
             );
         }
     }

@@ -112,6 +112,11 @@ impl Tube {
     }
 }
 
+/// Text as a step argument: braces doubled, so none reads as a parameter's placeholder.
+fn braced(text: &str) -> String {
+    text.replace('{', "{{").replace('}', "}}")
+}
+
 /// The protocol's id and instruction.
 pub struct Names {
     pub id: String,
@@ -145,6 +150,9 @@ struct Walk<'a> {
     refused: std::collections::BTreeSet<String>,
     /// Our name of each source liquid, by its id.
     liquid_names: BTreeMap<String, String>,
+    /// Modules with no model here whose commands are kept as instrument-only steps (the
+    /// labware on them stands on the bench).
+    kept_modules: std::collections::BTreeSet<String>,
 }
 
 /// Realises the run; `None` with errors among the findings when it cannot be.
@@ -171,6 +179,7 @@ pub fn realise(src: &Source, options: &Options, names: &Names) -> (Option<Draft>
         other_volumes: Default::default(),
         refused: Default::default(),
         liquid_names: BTreeMap::new(),
+        kept_modules: Default::default(),
     };
     for c in &src.commands {
         if c.failed {
@@ -182,8 +191,15 @@ pub fn realise(src: &Source, options: &Options, names: &Names) -> (Option<Draft>
             );
             continue;
         }
+        if c.command_type == "external" {
+            w.external(c);
+            continue;
+        }
         match commands::fate(&c.command_type) {
             Fate::Realised => w.command(c),
+            Fate::Refused(commands::NO_MODULE, _) if options.keep_instrument_steps => {
+                w.keep_module_command(c)
+            }
             Fate::Dropped(why) => {
                 let e = w
                     .dropped
@@ -195,7 +211,13 @@ pub fn realise(src: &Source, options: &Options, names: &Names) -> (Option<Draft>
                 Code::E0042,
                 c.path(),
                 format!("{} has no realisation here: {why}", c.label()),
-                hint,
+                &if why == commands::NO_MODULE {
+                    format!(
+                        "{hint}; or keep it as an instrument-only step (`--keep-instrument-steps`)"
+                    )
+                } else {
+                    hint.to_string()
+                },
             ),
         }
     }
@@ -309,6 +331,44 @@ impl Walk<'_> {
                 "remove the command",
             ),
         }
+    }
+
+    /// An instrument-only step a lowered source keeps (`external`).
+    fn external(&mut self, c: &Command) {
+        let text = |key: &str| c.params.get(key).and_then(|v| v.as_str()).map(braced);
+        let mut args = vec![("what".to_string(), text("what").unwrap_or_default())];
+        if let Some(seconds) = c.params.get("seconds").and_then(|v| v.as_f64()) {
+            self.waits_s += seconds;
+            args.push(("duration".into(), format!("{} s", draft::number(seconds))));
+        }
+        if let Some(instruction) = text("instruction") {
+            args.push(("instruction".into(), instruction));
+        }
+        self.steps.push(Step {
+            primitive: "external".into(),
+            args,
+            with: self.robot(0),
+            from: Some(c.label()),
+        });
+    }
+
+    /// A command of a module with no model here, kept as an instrument-only step: its type and
+    /// parameters in words (the module's id left out).
+    fn keep_module_command(&mut self, c: &Command) {
+        let mut params = c.params.clone();
+        if let Some(m) = params.as_object_mut() {
+            m.remove("moduleId");
+        }
+        let what = match params.as_object().filter(|m| !m.is_empty()) {
+            Some(_) => format!("{} {}", c.command_type, params),
+            None => c.command_type.clone(),
+        };
+        self.steps.push(Step {
+            primitive: "external".into(),
+            args: vec![("what".into(), braced(&what))],
+            with: self.robot(0),
+            from: Some(c.label()),
+        });
     }
 
     fn robot(&self, i: usize) -> String {
