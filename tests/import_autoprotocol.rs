@@ -665,6 +665,60 @@ fn faulty_autoprotocol_files_are_refused_with_the_instruction_and_its_place() {
         text.contains("within = \"7200 s\"") && text.contains("after = \"step_"),
         "{text}"
     );
+    // It survives an export and an import again: from the thermocycle's start to its end.
+    let good_toml = dir.join("good.toml");
+    let back = dir.join("good.exported.json");
+    let doc: serde_json::Value = serde_json::from_str(&export(&good_toml, &back)).unwrap();
+    let at = doc["instructions"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|i| i["op"] == "thermocycle")
+        .unwrap();
+    assert_eq!(
+        doc["time_constraints"],
+        serde_json::json!([{"from": {"instruction_start": at}, "to": {"instruction_end": at},
+                            "less_than": "7200:second"}]),
+        "{doc}"
+    );
+    let again = dir.join("good.again.toml");
+    let (ok, said, warned) = import(&back, &again, "imported.good");
+    assert!(ok, "{said}{warned}");
+    assert_eq!(task_of(&good_toml), task_of(&again));
+    // A kept instruction names its ref under the item's name, and its ref is exported.
+    let kept = GOOD
+        .replace("\"mix\"", "\"2x-mix\"")
+        .replace("mix/0", "2x-mix/0")
+        .replace(
+            "{\"op\": \"thermocycle\"",
+            "{\"op\": \"absorbance\", \"object\": \"2x-mix\", \"wavelength\": \"600:nanometer\"},\n    {\"op\": \"thermocycle\"",
+        );
+    let file = dir.join("kept.json");
+    std::fs::write(&file, &kept).unwrap();
+    let first = dir.join("kept.toml");
+    let (ok, said, warned) =
+        import_with(&file, &first, "imported.kept", &["--keep-instrument-steps"]);
+    assert!(ok, "{said}{warned}");
+    let text = std::fs::read_to_string(&first).unwrap();
+    assert!(
+        text.contains("[labware.ref_2x_mix]") && text.contains("what = \"absorbance ref_2x_mix\""),
+        "{text}"
+    );
+    let back = dir.join("kept.exported.json");
+    let doc: serde_json::Value = serde_json::from_str(&export(&first, &back)).unwrap();
+    let read = doc["instructions"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|i| i["op"] == "absorbance")
+        .unwrap();
+    assert_eq!(read["object"], "ref_2x_mix", "{doc}");
+    assert_eq!(doc["refs"]["ref_2x_mix"]["new"], "micro-1.5", "{doc}");
+    let again = dir.join("kept.again.toml");
+    let (ok, said, warned) =
+        import_with(&back, &again, "imported.kept", &["--keep-instrument-steps"]);
+    assert!(ok, "{said}{warned}");
+    assert_eq!(task_of(&first), task_of(&again));
 }
 
 #[test]

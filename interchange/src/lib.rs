@@ -107,7 +107,7 @@ pub fn import(text: &str, options: &Options) -> Imported {
     let lowered: Option<autoprotocol::lower::Lowered>;
     let read;
     let src = if autoprotocol::is_autoprotocol(&doc) {
-        let (l, f) = autoprotocol::lower::lower(&doc, options.keep_instrument_steps);
+        let (l, f) = autoprotocol::lower::lower(&doc, options);
         findings = f;
         match l {
             Some(l) => {

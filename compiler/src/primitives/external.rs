@@ -2,9 +2,9 @@
 //! read, a magnet engaged, a spin in a centrifuge the scene does not have): the robots stand by
 //! for its `duration`. `autobio import --keep-instrument-steps` writes one where an imported
 //! command has no robot realisation; its `instruction` keeps the source's Autoprotocol
-//! instruction, which `autobio export --to autoprotocol` writes back. It changes nothing the
-//! proof traces: what the instrument does to the lab is not modelled, so no success predicate can
-//! see it.
+//! instruction, which `autobio export --to autoprotocol` writes back. The proof advances the lab
+//! clock by its duration and changes nothing else: what the instrument does to the lab is not
+//! modelled, so no success predicate can see it.
 
 use super::prelude::*;
 use crate::motion::{Motion, MotionStep};

@@ -589,10 +589,10 @@ mod tests {
     fn every_primitive_has_an_effect_and_a_kind() {
         for p in CATALOGUE.iter() {
             let used = labware::KINDS.iter().any(|k| k.supports(p.name));
-            // `release` and `retract` take no `on`; `lock` is for a latch locked by hand apart
-            // from closing, which no kind has yet (the catalogue says so).
+            // `release`, `retract`, `wait` and `external` take no `on`; `lock` is for a latch
+            // locked by hand apart from closing, which no kind has yet (the catalogue says so).
             assert!(
-                used || ["release", "retract", "lock", "wait"].contains(&p.name),
+                used || ["release", "retract", "lock", "wait", "external"].contains(&p.name),
                 "{} is used by no kind",
                 p.name
             );

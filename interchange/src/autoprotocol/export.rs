@@ -475,9 +475,44 @@ impl Exporter<'_> {
         Ok(())
     }
 
+    /// The instructions plan step `i` wrote (a draw's liquid handling is written at the draw).
+    fn written_by(&self, i: usize) -> std::ops::Range<usize> {
+        let end = self
+            .first_at_step
+            .get(i + 1)
+            .copied()
+            .unwrap_or(self.instructions.len());
+        self.first_at_step[i]..end
+    }
+
+    /// Plan step `i` as a point in time of the document: the end of the instructions it wrote
+    /// (as the `earlier` step of a constraint) or their start; for a step that wrote none (a lid shut before a run, opened after it), the
+    /// start of the nearest instruction written after it or the end of the nearest written
+    /// before it (the later on a tie), as an import realises an instruction's start and end.
+    fn point(&self, i: usize, earlier: bool) -> Option<Value> {
+        let wrote = self.written_by(i);
+        if !wrote.is_empty() {
+            return Some(if earlier {
+                json!({"instruction_end": wrote.end - 1})
+            } else {
+                json!({"instruction_start": wrote.start})
+            });
+        }
+        let steps = self.first_at_step.len();
+        let before = (0..i).rev().find(|p| !self.written_by(*p).is_empty());
+        let after = (i + 1..steps).find(|q| !self.written_by(*q).is_empty());
+        match (before, after) {
+            (Some(p), Some(q)) if i - p < q - i => {
+                Some(json!({"instruction_end": self.written_by(p).end - 1}))
+            }
+            (_, Some(q)) => Some(json!({"instruction_start": self.written_by(q).start})),
+            (Some(p), None) => Some(json!({"instruction_end": self.written_by(p).end - 1})),
+            (None, None) => None,
+        }
+    }
+
     /// The task's step timing (`within`, `after`) as constraints between the instructions the
-    /// two steps wrote: from the end of the last instruction at or before the earlier step, to
-    /// the start of the first at or after the later one.
+    /// two steps stand for ([`Self::point`]): from the earlier's end, to the later's start.
     fn constraints(&mut self, steps: &[&PlannedStep]) -> Vec<Value> {
         let outcome = |s: &PlannedStep| -> Option<String> {
             let template = compiler::primitives::primitive(&s.primitive)?.outcome?;
@@ -512,24 +547,16 @@ impl Exporter<'_> {
                     ));
                     continue;
                 };
-                // The last instruction written by the earlier step or before it; the first
-                // written by the later step or after it.
-                let end = self
-                    .first_at_step
-                    .get(a + 1)
-                    .copied()
-                    .unwrap_or(self.instructions.len());
-                let start = self.first_at_step[b];
-                if end == 0 || start >= self.instructions.len() || start < end {
+                let (Some(from), Some(to)) = (self.point(a, true), self.point(b, false)) else {
                     self.notes.push(format!(
-                        "step timing `{}` not written: no lab instruction stands on each side of it",
+                        "step timing `{}` not written: the protocol writes no lab instruction",
                         (self.fill)(&p.text)
                     ));
                     continue;
-                }
+                };
                 out.push(json!({
-                    "from": {"instruction_end": end - 1},
-                    "to": {"instruction_start": start},
+                    "from": from,
+                    "to": to,
                     "less_than": units::write(since.within_s, Dimension::Time),
                 }));
             }

@@ -83,7 +83,7 @@ const NO_MODEL: [&str; 26] = [
 /// What a ref is here.
 #[derive(Clone, Debug)]
 enum Container {
-    /// A PCR plate: its labware id (the ref's name).
+    /// A PCR plate (its labware id is the ref's name).
     Plate,
     /// A tube: the rack's well it stands in.
     Tube(String),
@@ -121,6 +121,8 @@ struct Lowering {
     refused: std::collections::BTreeSet<String>,
     /// Instructions with no realisation kept as instrument-only steps.
     keep: bool,
+    /// The ref the cycler holds (the first thermocycle's).
+    cycled: Option<String>,
 }
 
 /// The rack's labware id (no ref can have it: refs are keyed by their own names).
@@ -129,7 +131,7 @@ const CYCLER_ID: &str = "\u{0}cycler";
 const PIPETTE_ID: &str = "\u{0}pipette";
 
 /// Lowers a document, or says why it cannot be read at all.
-pub fn lower(doc: &Value, keep: bool) -> (Option<Lowered>, Vec<Finding>) {
+pub fn lower(doc: &Value, options: &crate::Options) -> (Option<Lowered>, Vec<Finding>) {
     let mut l = Lowering {
         commands: Vec::new(),
         findings: Vec::new(),
@@ -142,7 +144,8 @@ pub fn lower(doc: &Value, keep: bool) -> (Option<Lowered>, Vec<Finding>) {
         dropped: BTreeMap::new(),
         uses: BTreeMap::new(),
         refused: Default::default(),
-        keep,
+        keep: options.keep_instrument_steps,
+        cycled: None,
     };
     let Some(refs) = doc.get("refs").and_then(Value::as_object) else {
         l.error(
@@ -184,7 +187,13 @@ pub fn lower(doc: &Value, keep: bool) -> (Option<Lowered>, Vec<Finding>) {
             .flatten()
             .map(str::to_string)
     });
-    l.refs(refs, cycled.as_deref());
+    let robots: Vec<String> = if options.robots.is_empty() {
+        vec!["left".into(), "arm".into()]
+    } else {
+        options.robots.iter().map(|(n, _)| n.clone()).collect()
+    };
+    l.refs(refs, cycled.as_deref(), &robots);
+    l.cycled = cycled;
     for (index, instruction) in instructions.iter().enumerate() {
         l.instruction(index, instruction);
     }
@@ -220,12 +229,25 @@ fn item_name(name: &str) -> String {
     let mut out: String = name
         .chars()
         .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
-        .take(60)
         .collect();
     if !out.starts_with(|c: char| c.is_ascii_alphabetic()) {
         out.insert_str(0, "ref_");
     }
+    out.truncate(60);
     out
+}
+
+/// Whether `item` is the name a well of plate `plate` gets (`<plate>_<well>`).
+fn names_a_well_of(item: &str, plate: &str) -> bool {
+    item.strip_prefix(plate)
+        .and_then(|rest| rest.strip_prefix('_'))
+        .is_some_and(|well| {
+            let mut c = well.chars();
+            c.next().is_some_and(|r| ('a'..='h').contains(&r))
+                && c.as_str()
+                    .parse::<u32>()
+                    .is_ok_and(|n| (1..=12).contains(&n))
+        })
 }
 
 impl Lowering {
@@ -267,8 +289,15 @@ impl Lowering {
     }
 
     /// Every ref: what it is, its item name, and its load.
-    fn refs(&mut self, refs: &serde_json::Map<String, Value>, cycled: Option<&str>) {
-        let mut taken: Vec<String> = Vec::new();
+    fn refs(
+        &mut self,
+        refs: &serde_json::Map<String, Value>,
+        cycled: Option<&str>,
+        robots: &[String],
+    ) {
+        // Names an item may not take: the robots', the cycler's, the pipette's.
+        let mut taken: Vec<String> = robots.to_vec();
+        taken.extend(["cycler".to_string(), "pipette".to_string()]);
         let mut tubes = Vec::new();
         let mut plates = Vec::new();
         for (name, value) in refs {
@@ -306,7 +335,7 @@ impl Lowering {
                 continue;
             };
             let mut item = item_name(name);
-            while taken.contains(&item) || item == "cycler" || item == "pipette" {
+            while taken.contains(&item) {
                 item.push('_');
             }
             taken.push(item.clone());
@@ -329,6 +358,14 @@ impl Lowering {
                 );
             }
         }
+        // A tube's name is not one a plate's well gets; tubes fill the rack in their names'
+        // order (what an export writes them back under).
+        for (_, tube) in &mut tubes {
+            while plates.iter().any(|(_, plate)| names_a_well_of(tube, plate)) {
+                tube.push('_');
+            }
+        }
+        tubes.sort_by(|a, b| a.1.cmp(&b.1));
         if let Some(c) = cycled
             && plates.iter().any(|(n, _)| n == c)
         {
@@ -353,7 +390,9 @@ impl Lowering {
                     ),
                     "use at most 24 tubes",
                 );
-                tubes.truncate(capacity);
+                for (name, _) in tubes.drain(capacity..) {
+                    self.refused.insert(name);
+                }
             }
             let mut rack = "tube_rack".to_string();
             while taken.contains(&rack) {
@@ -391,7 +430,7 @@ impl Lowering {
                 json!({"labwareId": name, "loadName": PLATE_LOAD.0, "namespace": "opentrons",
                        "version": PLATE_LOAD.1, "location": location}),
                 vec![Key::field("refs"), Key::field(&name)],
-                format!("refs.{name} (96-pcr)"),
+                format!("refs.{name} (a 96-well PCR plate)"),
                 Some(item.clone()),
             );
             self.names.insert(name.clone(), item);
@@ -509,11 +548,6 @@ impl Lowering {
             return;
         };
         let label = format!("instructions[{index}] {op}");
-        if let Some(object) = value.get("object").and_then(Value::as_str)
-            && self.containers.contains_key(object)
-        {
-            self.uses.entry(object.to_string()).or_default().push(index);
-        }
         match op {
             "provision" => {
                 if let Some(p) = self.typed::<Provision>(value, &at, &label) {
@@ -540,7 +574,7 @@ impl Lowering {
                 if let Some((_, why)) = DROPPED_OPS.iter().find(|(o, _)| *o == op) {
                     self.drop(op, index, why);
                 } else if instrument && self.keep {
-                    self.keep_instruction(op, value, at, label);
+                    self.keep_instruction(op, value, at, label, index);
                 } else if let Some((_, hint)) = NOT_YET.iter().find(|(o, _)| *o == op) {
                     self.error(
                         Code::E0042,
@@ -569,19 +603,108 @@ impl Lowering {
         }
     }
 
+    /// A ref used by instruction `index` (what a time constraint's `ref_start` and `ref_end`
+    /// find).
+    fn use_ref(&mut self, name: &str, index: usize) {
+        if self.containers.contains_key(name) {
+            let uses = self.uses.entry(name.to_string()).or_default();
+            if uses.last() != Some(&index) {
+                uses.push(index);
+            }
+        }
+    }
+
+    /// A kept instruction's text with its refs under their item names (`ref/3` too), and the
+    /// wells it names, so that each has its tube and an export writes its ref.
+    fn renamed(&mut self, value: &Value, index: usize, wells: &mut Vec<(String, String)>) -> Value {
+        match value {
+            Value::String(text) => {
+                let (name, well) = text.rsplit_once('/').unwrap_or((text, ""));
+                let Some(item) = self.names.get(name).cloned() else {
+                    return value.clone();
+                };
+                self.use_ref(name, index);
+                let well_of = match self.containers.get(name) {
+                    Some(Container::Tube(rack_well)) => {
+                        Some((RACK_ID.to_string(), rack_well.clone()))
+                    }
+                    Some(Container::Plate) if well.is_empty() => {
+                        Some((name.to_string(), "A1".to_string()))
+                    }
+                    Some(Container::Plate) => {
+                        well.parse::<usize>().ok().filter(|i| *i < 96).map(|i| {
+                            (
+                                name.to_string(),
+                                format!("{}{}", (b'A' + (i / 12) as u8) as char, i % 12 + 1),
+                            )
+                        })
+                    }
+                    None => None,
+                };
+                wells.extend(well_of);
+                Value::String(if well.is_empty() {
+                    item
+                } else {
+                    format!("{item}/{well}")
+                })
+            }
+            Value::Array(items) => Value::Array(
+                items
+                    .iter()
+                    .map(|v| self.renamed(v, index, wells))
+                    .collect(),
+            ),
+            Value::Object(map) => Value::Object(
+                map.iter()
+                    .map(|(k, v)| {
+                        (
+                            k.clone(),
+                            if k == "op" {
+                                v.clone()
+                            } else {
+                                self.renamed(v, index, wells)
+                            },
+                        )
+                    })
+                    .collect(),
+            ),
+            other => other.clone(),
+        }
+    }
+
     /// An instruction kept as an instrument-only step: what it does in words, its duration
-    /// when it has one, and the instruction itself (which an export writes back).
-    fn keep_instruction(&mut self, op: &str, value: &Value, at: Vec<Key>, label: String) {
-        let what = match value.get("object").and_then(Value::as_str) {
+    /// when it has one, and the instruction itself with its refs under their item names (which
+    /// an export writes back).
+    fn keep_instruction(
+        &mut self,
+        op: &str,
+        value: &Value,
+        at: Vec<Key>,
+        label: String,
+        index: usize,
+    ) {
+        let mut wells = Vec::new();
+        let instruction = self.renamed(value, index, &mut wells);
+        let what = match instruction.get("object").and_then(Value::as_str) {
             Some(object) => format!("{op} {object}"),
             None => op.replace('_', " "),
         };
-        let mut params = json!({"what": what, "instruction": value.to_string()});
+        let mut params =
+            json!({"what": what, "instruction": instruction.to_string(), "wells": wells});
         if let Some(d) = value.get("duration").and_then(Value::as_str) {
             let mut at_d = at.clone();
             at_d.push(Key::field("duration"));
             match self.quantity(d, Dimension::Time, &at_d) {
-                Some(seconds) => params["seconds"] = json!(seconds),
+                Some(seconds) if seconds >= 0.0 => params["seconds"] = json!(seconds),
+                Some(seconds) => {
+                    self.error(
+                        Code::E0044,
+                        at_d,
+                        format!("{label}: {seconds} s is no time to stand by"),
+                        "a duration is 0 s or more",
+                    );
+                    return;
+                }
                 None => return,
             }
         }
@@ -796,7 +919,21 @@ impl Lowering {
     fn thermocycle(&mut self, t: &Thermocycle, at: &[Key], label: &str, index: usize) {
         let mut at_object = at.to_vec();
         at_object.push(Key::field("object"));
+        self.use_ref(&t.object, index);
         match self.containers.get(&t.object) {
+            Some(Container::Plate) if self.cycled.as_deref() != Some(t.object.as_str()) => {
+                self.error(
+                    Code::E0042,
+                    at_object,
+                    format!(
+                        "{label}: `{}` is a second plate to thermocycle: the cycler holds `{}` from the start (a plate is not carried here)",
+                        t.object,
+                        self.cycled.as_deref().unwrap_or_default()
+                    ),
+                    "thermocycle one plate per protocol",
+                );
+                return;
+            }
             Some(Container::Plate) => {}
             Some(Container::Tube(_)) => {
                 self.error(

@@ -117,10 +117,10 @@ pub fn apply(draft: &mut Draft, lowered: &Lowered) -> Vec<Finding> {
                 return None;
             }
             let Some(found) = set.into_iter().flatten().next() else {
-                bad(
-                    format!("time_constraints[{n}].{side} names a ref no instruction uses"),
-                    findings,
-                );
+                findings.push(not_carried(
+                    n,
+                    format!("time_constraints[{n}] not carried: its `{side}` names a ref no realised instruction uses"),
+                ));
                 return None;
             };
             if found.0 >= lowered.instructions {

@@ -61,6 +61,17 @@ impl Dimension {
         }
     }
 
+    /// The unit names the specification gives, for messages.
+    fn names(self) -> &'static str {
+        match self {
+            Dimension::Volume => "nanoliter, microliter, milliliter, liter",
+            Dimension::Time => "millisecond, second, minute, hour, day",
+            Dimension::Temperature => "celsius",
+            Dimension::Acceleration => "g, meter/second^2",
+            Dimension::Speed => "rpm, hertz",
+        }
+    }
+
     fn noun(self) -> &'static str {
         match self {
             Dimension::Volume => "a volume",
@@ -93,17 +104,11 @@ impl fmt::Display for UnitError {
                 "`{text}` is no quantity: Autoprotocol writes one as `<number>:<unit>`"
             ),
             UnitError::Unit { text, unit, wanted } => {
-                let names: Vec<&str> = wanted
-                    .units()
-                    .iter()
-                    .map(|(n, _)| *n)
-                    .filter(|n| n.len() > 3)
-                    .collect();
                 write!(
                     f,
                     "`{text}`: `{unit}` is not {} unit (it takes {})",
                     wanted.noun(),
-                    names.join(", ")
+                    wanted.names()
                 )
             }
         }

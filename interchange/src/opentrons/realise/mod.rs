@@ -344,6 +344,15 @@ impl Walk<'_> {
         if let Some(instruction) = text("instruction") {
             args.push(("instruction".into(), instruction));
         }
+        // The wells it names get their tubes (empty, unless something else fills them).
+        let wells: Vec<(String, String)> = c
+            .params
+            .get("wells")
+            .and_then(|w| serde_json::from_value(w.clone()).ok())
+            .unwrap_or_default();
+        for (labware, well) in wells {
+            self.tube(c, &labware, &well);
+        }
         self.steps.push(Step {
             primitive: "external".into(),
             args,
