@@ -237,6 +237,22 @@ fn item_name(name: &str) -> String {
     out
 }
 
+/// A 96-well plate's well as written in an aliquot (a 0-based index along the rows, or a name
+/// such as `b3`) by its name (`B3`); none for a well the plate does not have.
+fn plate_well(well: &str) -> Option<String> {
+    match well.parse::<usize>() {
+        Ok(i) if i < 96 => Some(format!("{}{}", (b'A' + (i / 12) as u8) as char, i % 12 + 1)),
+        Ok(_) => None,
+        Err(_) => {
+            let upper = well.to_ascii_uppercase();
+            let mut c = upper.chars();
+            let row = c.next().filter(|r| ('A'..='H').contains(r));
+            let col: Option<u32> = c.as_str().parse().ok().filter(|c| (1..=12).contains(c));
+            row.zip(col).map(|(r, c)| format!("{r}{c}"))
+        }
+    }
+}
+
 /// Whether `item` is the name a well of plate `plate` gets (`<plate>_<well>`).
 fn names_a_well_of(item: &str, plate: &str) -> bool {
     item.strip_prefix(plate)
@@ -470,34 +486,18 @@ impl Lowering {
                 }
                 Some((RACK_ID.to_string(), rack_well))
             }
-            Container::Plate => {
-                let named = match well.parse::<usize>() {
-                    Ok(i) if i < 96 => {
-                        Some(format!("{}{}", (b'A' + (i / 12) as u8) as char, i % 12 + 1))
-                    }
-                    Ok(_) => None,
-                    Err(_) => {
-                        let upper = well.to_ascii_uppercase();
-                        let mut c = upper.chars();
-                        let row = c.next().filter(|r| ('A'..='H').contains(r));
-                        let col: Option<u32> =
-                            c.as_str().parse().ok().filter(|c| (1..=12).contains(c));
-                        row.zip(col).map(|(r, c)| format!("{r}{c}"))
-                    }
-                };
-                match named {
-                    Some(w) => Some((name.to_string(), w)),
-                    None => {
-                        self.error(
-                            Code::E0041,
-                            at.to_vec(),
-                            format!("`{text}`: a 96-pcr plate has wells 0 to 95 (A1 to H12)"),
-                            "a well is a 0-based index or a name such as `B3`",
-                        );
-                        None
-                    }
+            Container::Plate => match plate_well(well) {
+                Some(w) => Some((name.to_string(), w)),
+                None => {
+                    self.error(
+                        Code::E0041,
+                        at.to_vec(),
+                        format!("`{text}`: a 96-pcr plate has wells 0 to 95 (A1 to H12)"),
+                        "a well is a 0-based index or a name such as `B3`",
+                    );
+                    None
                 }
-            }
+            },
         }
     }
 
@@ -631,14 +631,7 @@ impl Lowering {
                     Some(Container::Plate) if well.is_empty() => {
                         Some((name.to_string(), "A1".to_string()))
                     }
-                    Some(Container::Plate) => {
-                        well.parse::<usize>().ok().filter(|i| *i < 96).map(|i| {
-                            (
-                                name.to_string(),
-                                format!("{}{}", (b'A' + (i / 12) as u8) as char, i % 12 + 1),
-                            )
-                        })
-                    }
+                    Some(Container::Plate) => plate_well(well).map(|w| (name.to_string(), w)),
                     None => None,
                 };
                 wells.extend(well_of);
@@ -1027,5 +1020,26 @@ impl Lowering {
             out.push(json!({"celsius": celsius, "holdSeconds": seconds}));
         }
         Some(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{item_name, names_a_well_of, plate_well};
+
+    #[test]
+    fn wells_names_and_reserved_names() {
+        assert_eq!(plate_well("0").as_deref(), Some("A1"));
+        assert_eq!(plate_well("13").as_deref(), Some("B2"));
+        assert_eq!(plate_well("95").as_deref(), Some("H12"));
+        assert_eq!(plate_well("b3").as_deref(), Some("B3"));
+        assert_eq!(plate_well("96"), None);
+        assert_eq!(plate_well("I1"), None);
+        assert_eq!(plate_well("A13"), None);
+        assert_eq!(item_name("2x-mix"), "ref_2x_mix");
+        assert_eq!(item_name("μ tube"), "ref___tube");
+        assert_eq!(item_name(&"9".repeat(80)).len(), 60);
+        assert!(names_a_well_of("pcr_a1", "pcr") && names_a_well_of("pcr_h12", "pcr"));
+        assert!(!names_a_well_of("pcr_mix", "pcr") && !names_a_well_of("pcr_a13", "pcr"));
     }
 }
