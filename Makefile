@@ -56,9 +56,10 @@ demo: build
 
 test: setup
 	$(CARGO) test --release --workspace --no-fail-fast
-	# The Python package (python/tests) in its own environment, against the CLI just built.
+	# The Python package (python/tests) in its own environment, against the CLI just built, on
+	# two workers (pytest-xdist).
 	AUTOBIO_BIN=$${CARGO_TARGET_DIR:-target}/release/autobio \
-	  .deps/python-env/bin/python -m pytest python/tests -q -p no:cacheprovider
+	  .deps/python-env/bin/python -m pytest python/tests -q -p no:cacheprovider -n 2
 	$(CARGO) clippy --release --workspace --all-targets -- -D warnings
 	$(CARGO) fmt --all -- --check
 
