@@ -575,31 +575,9 @@ fn mutated_opentrons_files_never_panic_and_point_inside_themselves() {
         let Ok(text) = String::from_utf8(text) else {
             continue;
         };
-        let imported = std::panic::catch_unwind(|| interchange::import(&text, &options))
-            .unwrap_or_else(|_| panic!("case {case} panicked on:\n{text}"));
-        for d in &imported.diagnostics {
-            assert!(
-                d.span.start <= d.span.end && d.span.end <= text.len(),
-                "case {case}: {d:?} outside {} bytes",
-                text.len()
-            );
-        }
-        match &imported.protocol {
-            Some(p) => {
-                written += 1;
-                let (_, diags) = dsl::parse(p);
-                assert!(
-                    !diags.iter().any(|d| d.code == dsl::Code::E0001),
-                    "case {case}: the written file is not TOML:\n{p}"
-                );
-            }
-            None => {
-                refused += 1;
-                assert!(
-                    imported.diagnostics.iter().any(|d| d.is_error()),
-                    "case {case}"
-                );
-            }
+        match import_mutated(case, &text, &options) {
+            Some(_) => written += 1,
+            None => refused += 1,
         }
     }
     // The mutations reach both ends: some still import, most are refused.
@@ -607,6 +585,41 @@ fn mutated_opentrons_files_never_panic_and_point_inside_themselves() {
         written > 50 && refused > 1500,
         "{written} written, {refused} refused"
     );
+}
+
+/// Imports a mutated file: it must not panic, every finding must lie inside it, a written
+/// protocol must be TOML and a refusal must say why. The written protocol, if any.
+pub(crate) fn import_mutated(
+    case: usize,
+    text: &str,
+    options: &interchange::Options,
+) -> Option<String> {
+    let imported = std::panic::catch_unwind(|| interchange::import(text, options))
+        .unwrap_or_else(|_| panic!("case {case} panicked on:\n{text}"));
+    for d in &imported.diagnostics {
+        assert!(
+            d.span.start <= d.span.end && d.span.end <= text.len(),
+            "case {case}: {d:?} outside {} bytes",
+            text.len()
+        );
+    }
+    match imported.protocol {
+        Some(p) => {
+            let (_, diags) = dsl::parse(&p);
+            assert!(
+                !diags.iter().any(|d| d.code == dsl::Code::E0001),
+                "case {case}: the written file is not TOML:\n{p}"
+            );
+            Some(p)
+        }
+        None => {
+            assert!(
+                imported.diagnostics.iter().any(|d| d.is_error()),
+                "case {case}"
+            );
+            None
+        }
+    }
 }
 
 /// A holder loaded by its own definition is that holder (the cycler whose block has the same
