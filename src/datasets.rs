@@ -79,6 +79,7 @@ pub struct ExportArgs {
     /// `lerobot-v21` or `lerobot-v30`
     #[arg(long, value_enum, default_value = "lerobot-v30")]
     format: DatasetFormat,
+    /// Where to write: the dataset's folder, or with `--to`, the document
     #[arg(long)]
     out: PathBuf,
     /// Dataset videos: `av1` (libsvtav1, LeRobot's default) or `h264`
