@@ -143,30 +143,25 @@ if [ ! -e "$DEPS/python/mcap/reader.py" ]; then
   python3 -m pip install -q --disable-pip-version-check --target "$DEPS/python.tmp" "$MCAP_PY"
   rm -rf "$DEPS/python" && mv "$DEPS/python.tmp" "$DEPS/python"
 fi
+# A virtual environment under $DEPS made from a requirements file, remade when the file changes:
+# venv_from REQUIREMENTS NAME WHAT.
+venv_from() {
+  local reqs=$1 name=$2 what=$3
+  local stamp="$DEPS/$name/.requirements-$(sha256sum "$reqs" | cut -c1-16)"
+  [ -e "$stamp" ] && return 0
+  echo "setup: making $what ($DEPS/$name)"
+  rm -rf "$DEPS/$name.tmp"
+  python3 -m venv "$DEPS/$name.tmp"
+  "$DEPS/$name.tmp/bin/pip" install -q --disable-pip-version-check -r "$reqs"
+  rm -rf "$DEPS/$name" && mv "$DEPS/$name.tmp" "$DEPS/$name"
+  touch "$stamp"
+}
 # The reference model servers (tests/servers): openpi-client's msgpack-numpy and allenai's
-# vla-eval, in their own virtual environment; remade when the requirements change.
-REQS=tests/servers/requirements.txt
-STAMP="$DEPS/servers/.requirements-$(sha256sum "$REQS" | cut -c1-16)"
-if [ ! -e "$STAMP" ]; then
-  echo "setup: making the reference model servers' environment ($DEPS/servers)"
-  rm -rf "$DEPS/servers.tmp"
-  python3 -m venv "$DEPS/servers.tmp"
-  "$DEPS/servers.tmp/bin/pip" install -q --disable-pip-version-check -r "$REQS"
-  rm -rf "$DEPS/servers" && mv "$DEPS/servers.tmp" "$DEPS/servers"
-  touch "$STAMP"
-fi
+# vla-eval, in their own virtual environment.
+venv_from tests/servers/requirements.txt servers "the reference model servers' environment"
 # The lab languages' tools (tests/lab_languages): autoprotocol-python and Opentrons' analyzer, which
 # the import tests run to write the Autoprotocol documents and Opentrons analyses they import.
-REQS=tests/lab_languages/requirements.txt
-STAMP="$DEPS/lab-languages/.requirements-$(sha256sum "$REQS" | cut -c1-16)"
-if [ ! -e "$STAMP" ]; then
-  echo "setup: making the lab languages' environment ($DEPS/lab-languages)"
-  rm -rf "$DEPS/lab-languages.tmp"
-  python3 -m venv "$DEPS/lab-languages.tmp"
-  "$DEPS/lab-languages.tmp/bin/pip" install -q --disable-pip-version-check -r "$REQS"
-  rm -rf "$DEPS/lab-languages" && mv "$DEPS/lab-languages.tmp" "$DEPS/lab-languages"
-  touch "$STAMP"
-fi
+venv_from tests/lab_languages/requirements.txt lab-languages "the lab languages' environment"
 # The Python package (python/, issue 25): maturin builds the wheel from the Rust core (cargo does
 # nothing when nothing changed), and a fresh virtual environment (.deps/python-env) gets it beside
 # gymnasium, vla-eval and pytest from PyPI; the wheel is reinstalled whenever it changed.
