@@ -55,10 +55,16 @@ pub struct DemoArgs {
     /// Record a protocol whose success already holds at the start (W0001; refused otherwise)
     #[arg(long)]
     allow_trivial: bool,
+    #[command(flatten)]
+    perturb: crate::front::PerturbArgs,
 }
 
 pub fn run(front: &Front, a: &DemoArgs) -> Result<ExitCode> {
-    let tasks = front.load_all_to_run(&a.protocol, a.allow_trivial)?;
+    let tasks: Vec<compiler::Task> = front
+        .load_all_to_run(&a.protocol, a.allow_trivial)?
+        .into_iter()
+        .map(|t| a.perturb.apply(t))
+        .collect();
     let version = match a.format {
         DemoFormat::Mcap if a.shard.is_some() => {
             bail!("--shard splits datasets; for recordings use eval --record --shard")

@@ -73,6 +73,9 @@ pub struct EvalArgs {
     /// robot that does nothing would pass it)
     #[arg(long)]
     allow_trivial: bool,
+    /// (A suite names its own perturbations: not with --suite.)
+    #[command(flatten)]
+    perturb: crate::front::PerturbArgs,
     /// The checkpoint the model serves, one of several trained alike on different training
     /// seeds (a path, a hub revision, a hash): recorded in the run, so that a leaderboard shows
     /// the SEM over training seeds, as the paper does. Needs --training-seed
@@ -108,6 +111,11 @@ pub fn eval(front: &Front, a: &EvalArgs) -> Result<ExitCode> {
         }),
         None => None,
     };
+    if a.suite.is_some() && !a.perturb.presets.is_empty() {
+        anyhow::bail!(
+            "--perturb changes the tasks a suite names, so the run would not be the suite's; run the tasks with --protocol"
+        );
+    }
     let suite = match (&a.suite, &a.out) {
         (Some(file), Some(out)) => Some(suite_run(file, out)?),
         _ => None,
@@ -119,7 +127,7 @@ pub fn eval(front: &Front, a: &EvalArgs) -> Result<ExitCode> {
     let mut rows = Vec::new();
     let mut written = Vec::new();
     for p in &protocols {
-        let task = front.load_to_run(p, a.allow_trivial)?;
+        let task = a.perturb.apply(front.load_to_run(p, a.allow_trivial)?);
         let opts = scoring::eval::EvalOptions {
             policy: a.policy.clone(),
             episodes,

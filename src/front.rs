@@ -75,3 +75,20 @@ impl Front {
             .collect()
     }
 }
+
+/// `--perturb DIM[:STRENGTH]`, for the subcommands that run or draw episodes.
+#[derive(Clone, Debug, Default, clap::Args)]
+pub struct PerturbArgs {
+    /// Perturb every episode along a dimension at strength 1 (mild, the default) or 2 (strong):
+    /// light, material, camera, noise, language, robot_start or layout (`--perturb camera:2`;
+    /// repeat for more; over the task's own `[perturb]`; docs/robustness.md)
+    #[arg(long = "perturb", value_name = "DIM[:STRENGTH]")]
+    pub presets: Vec<compiler::perturb::Preset>,
+}
+
+impl PerturbArgs {
+    /// The task with the presets over its own perturbations.
+    pub fn apply(&self, task: compiler::Task) -> compiler::Task {
+        task.with_perturb(&compiler::perturb::Preset::combine(&self.presets))
+    }
+}

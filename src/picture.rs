@@ -1,6 +1,7 @@
 //! `autobio render`: a seed's initial scene as one PNG (every task camera, then the view from
 //! above, side by side), drawn without the expert or any episode, so an author sees the layout a
-//! seed draws before an evaluation. The drawing is `runtime::picture`'s.
+//! seed draws before an evaluation. A perturbed task (its own `[perturb]` or `--perturb`) is drawn
+//! twice, the clean scene above the perturbed one. The drawing is `runtime::picture`'s.
 
 use crate::front::Front;
 use anyhow::{Context, Result};
@@ -20,27 +21,54 @@ pub struct RenderArgs {
     /// Each view's size WxH
     #[arg(long, value_parser = crate::replay::parse_size, default_value = "320x240")]
     size: [usize; 2],
+    #[command(flatten)]
+    perturb: crate::front::PerturbArgs,
 }
 
 pub fn run(front: &Front, a: &RenderArgs) -> Result<ExitCode> {
-    let task = front.load(&a.file)?;
-    let frames = runtime::picture::initial_scene(&task, a.seed, a.size)?;
-    let sheet = runtime::picture::side_by_side(&frames);
+    let task = a.perturb.apply(front.load(&a.file)?);
+    let clean = compiler::Task {
+        perturb: None,
+        ..task.clone()
+    };
+    let frames = runtime::picture::initial_scene(&clean, a.seed, a.size)?;
+    let mut sheet = runtime::picture::side_by_side(&frames);
+    let drawn = task.sample(a.seed).perturbation;
+    if drawn.is_some() {
+        let perturbed = runtime::picture::initial_scene(&task, a.seed, a.size)?;
+        sheet = runtime::picture::stacked(&[sheet, runtime::picture::side_by_side(&perturbed)]);
+    }
     let png = sheet.to_png().context("encoding the PNG")?;
     std::fs::write(&a.png, png).with_context(|| format!("writing {}", a.png.display()))?;
-    let params = task.sample(a.seed).params;
-    let drawn: Vec<String> = params.iter().map(|(k, v)| format!("{k}={v}")).collect();
+    let params: Vec<String> = task
+        .sample(a.seed)
+        .params
+        .iter()
+        .map(|(k, v)| format!("{k}={v}"))
+        .collect();
+    let views = frames
+        .iter()
+        .map(|f| f.camera.as_str())
+        .collect::<Vec<_>>()
+        .join(", ");
     outln!(
-        "{}: {} seed {} ({}){}",
+        "{}: {} seed {} ({views}){}",
         a.png.display(),
         task.id,
         a.seed,
-        sheet.camera.replace('+', ", "),
-        if drawn.is_empty() {
+        if params.is_empty() {
             String::new()
         } else {
-            format!("; drew {}", drawn.join(", "))
+            format!("; drew {}", params.join(", "))
         }
     );
+    if let Some(d) = drawn {
+        let json = serde_json::to_string(&d).context("describing the perturbation")?;
+        outln!("clean above, perturbed below: {json}");
+        let (said, told) = (clean.sample(a.seed).instruction, task.sample(a.seed).instruction);
+        if said != told {
+            outln!("instruction: {said:?} -> {told:?}");
+        }
+    }
     Ok(ExitCode::SUCCESS)
 }

@@ -537,6 +537,8 @@ fn lower_chain(
             stages,
             // A chain is written by hand; its stages' provenance stays in their files.
             imported_from: None,
+            paraphrases: Vec::new(),
+            perturb: None,
         }
         .with_programmes(),
     )

@@ -21,6 +21,7 @@ pub mod describe;
 mod loops;
 pub mod motion;
 pub mod params;
+pub mod perturb;
 pub mod predicates;
 pub mod primitives;
 pub mod profile;
@@ -110,9 +111,17 @@ pub fn compile(p: &Protocol, file: &str) -> (Option<Task>, Vec<Diagnostic>) {
                     format: i.format.clone(),
                     sha256: i.sha256.clone(),
                 }),
+                paraphrases: p.meta.paraphrases.iter().map(|s| s.value.clone()).collect(),
+                perturb: None,
             }
             .with_programmes(),
         )
+        .map(|mut task| {
+            if let Some(table) = &p.perturb {
+                task.perturb = perturb::lower(&mut cx, table, &task);
+            }
+            task
+        })
     });
     let ok = !cx.has_errors();
     (task.filter(|_| ok), cx.diags)

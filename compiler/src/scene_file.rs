@@ -181,6 +181,18 @@ pub(crate) fn merge(
         (None, Some(c)) => p.camera = Some(c),
         _ => {}
     }
+    // The protocol's own setting of a dimension stands over the scene's.
+    match (&mut p.perturb, scene.perturb) {
+        (Some(own), Some(shared)) => {
+            for d in shared.dimensions {
+                if !own.dimensions.iter().any(|o| o.name.value == d.name.value) {
+                    own.dimensions.push(d);
+                }
+            }
+        }
+        (None, Some(shared)) => p.perturb = Some(shared),
+        _ => {}
+    }
     Some(merged)
 }
 

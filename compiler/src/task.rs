@@ -37,6 +37,14 @@ pub struct Task {
     /// the task's content, so its hash covers it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub imported_from: Option<ImportedFrom>,
+    /// Other wordings of `instruction` (same placeholders) that the `language` perturbation
+    /// draws from (`[protocol] paraphrases`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub paraphrases: Vec<String>,
+    /// How episodes vary beyond the randomisation (`[perturb]`, a suite's or `--perturb`'s
+    /// presets over it): part of the task's content, so its hash covers it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub perturb: Option<crate::perturb::Perturb>,
 }
 
 /// Where an imported protocol came from: the source file's name, its format and the SHA-256 of
@@ -253,6 +261,10 @@ pub struct SceneInstance {
     /// The task's instruction, and each stage's, with the parameters filled in.
     pub instruction: String,
     pub stage_instructions: Vec<String>,
+    /// What the task's perturbations drew for this episode (their changes to the instruction,
+    /// start pose and layout are already in the fields above).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub perturbation: Option<crate::perturb::Drawn>,
 }
 
 impl Task {
@@ -289,6 +301,7 @@ impl Task {
     /// roles in name order), then the places of parts lying apart (items in order, parts in name
     /// order: radius, then angle, upstream's disc draw; only where a radius is given). Each kind
     /// of draw comes after the older ones, so that adding one leaves every other draw as it was.
+    /// The task's perturbations draw last, each from a stream of its own (`perturb::draw`).
     /// The same task and seed always give the same instance.
     pub fn sample(&self, seed: u64) -> SceneInstance {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
@@ -351,7 +364,7 @@ impl Task {
             }
         }
         let fill = |t: &str| render(t, &params).unwrap_or_else(|_| t.to_string());
-        SceneInstance {
+        let mut instance = SceneInstance {
             seed,
             robot_q,
             labware_placement,
@@ -360,7 +373,22 @@ impl Task {
             params,
             labware_joints,
             part_placement,
+            perturbation: None,
+        };
+        if let Some(p) = self.perturb.as_ref().filter(|p| !p.is_empty()) {
+            instance.perturbation = Some(crate::perturb::draw(p, self, &mut instance));
         }
+        instance
+    }
+
+    /// The task with `over`'s perturbation dimensions replacing its own (a suite's or the
+    /// command line's presets).
+    pub fn with_perturb(mut self, over: &crate::perturb::Perturb) -> Task {
+        if !over.is_empty() {
+            let own = self.perturb.take().unwrap_or_default();
+            self.perturb = Some(own.overlay(over));
+        }
+        self
     }
 
     pub fn labware_index(&self, name: &str) -> Option<usize> {

@@ -22,6 +22,8 @@ pub struct Capture {
     pub(crate) images: Vec<ImageStats>,
     size: [usize; 2],
     error: Option<DatasetError>,
+    /// What the episode's perturbations drew (`compiler::perturb::Drawn` as JSON), if any.
+    pub(crate) perturbation: Option<serde_json::Value>,
 }
 
 impl Capture {
@@ -58,6 +60,7 @@ impl Capture {
             images: vec![ImageStats::default(); cameras],
             size,
             error: None,
+            perturbation: None,
         })
     }
 
@@ -98,6 +101,11 @@ impl Capture {
         Ok(())
     }
 
+    /// Records what the episode's perturbations drew, for the dataset's commit record.
+    pub fn set_perturbation(&mut self, drawn: Option<&compiler::perturb::Drawn>) {
+        self.perturbation = drawn.and_then(|d| serde_json::to_value(d).ok());
+    }
+
     /// Whether this capture keeps the environment state.
     pub fn wants_environment_state(&self) -> bool {
         self.environment_state.is_some()
@@ -112,6 +120,9 @@ impl Capture {
 /// A capture watches an episode: every control step's state, action and frames.
 impl Observer for Capture {
     fn before_step(&mut self, env: &mut Env, action: &[f64]) -> Result<(), ObserveError> {
+        if self.rows.is_empty() {
+            self.set_perturbation(env.instance().perturbation.as_ref());
+        }
         let state = env.episode().state();
         let environment = match &mut self.environment_state {
             Some(layout) => env

@@ -57,6 +57,10 @@ pub(crate) struct Committed {
     pub instruction: String,
     /// Per feature: LeRobot's stats JSON with quantiles.
     pub stats: BTreeMap<String, Value>,
+    /// What the episode's perturbations drew (light, colours, cameras, noise, wording, start
+    /// pose, layout), when its task had any (docs/robustness.md).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub perturbation: Option<Value>,
 }
 
 /// What a dataset's frames observe: LeRobot's feature sets.
@@ -422,6 +426,7 @@ impl DatasetWriter {
             seed: capture.seed,
             plan,
             instruction: instruction.to_string(),
+            perturbation: capture.perturbation.take(),
             image_stats: capture
                 .images
                 .iter()
@@ -458,6 +463,7 @@ impl DatasetWriter {
             seed: c.seed,
             plan: c.plan,
             instruction: c.instruction.clone(),
+            perturbation: c.perturbation.clone(),
             image_stats: from
                 .cameras
                 .iter()
@@ -546,6 +552,7 @@ impl DatasetWriter {
             length,
             instruction: e.instruction.clone(),
             stats,
+            perturbation: e.perturbation.clone(),
         };
         // The commit point: the episode exists once its line is on disk.
         let record = self.root.join("meta/autobio.jsonl");
@@ -860,6 +867,7 @@ struct Episode {
     seed: u64,
     plan: Option<usize>,
     instruction: String,
+    perturbation: Option<Value>,
     image_stats: Vec<Value>,
     videos: Vec<PathBuf>,
     owned: bool,

@@ -162,6 +162,7 @@ pub fn export(
             capture.discard();
             return Err(unreadable(&rec.path, e));
         }
+        capture.set_perturbation(rec.instance.perturbation.as_ref());
         let n = writer.commit(capture, &rec.instance.instruction, None)?;
         out.frames += n;
         progress(Step {

@@ -71,6 +71,48 @@ pub struct Protocol {
     /// `[camera]`: where the fixed camera stands, when not at the bench's default.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub camera: Option<Camera>,
+    /// `[perturb]`: how episodes vary beyond the task's own randomisation (docs/robustness.md).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub perturb: Option<Perturb>,
+}
+
+/// The `[perturb]` table: one entry per dimension, as written. Which dimensions and fields
+/// exist, and their units, is the parser's; ranges and names are checked by the compiler.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Perturb {
+    pub dimensions: Vec<PerturbDimension>,
+    pub span: Span,
+}
+
+/// One dimension (`light = 2`, `camera = { shift_m = 0.02 }`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PerturbDimension {
+    pub name: Spanned<String>,
+    pub setting: PerturbSetting,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub enum PerturbSetting {
+    /// `light = 2`: the dimension's preset of that strength.
+    Strength(Spanned<i64>),
+    /// `light = { ... }`: its fields given (those not given are the strength-1 preset's).
+    Fields(Vec<PerturbField>),
+}
+
+/// One field of a dimension: its base name (the unit suffix taken off) and value, in canonical
+/// units (metres, radians).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PerturbField {
+    pub key: Spanned<String>,
+    pub value: Spanned<PerturbValue>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub enum PerturbValue {
+    Number(f64),
+    /// `[low, high]`.
+    Range([f64; 2]),
+    Texts(Vec<Spanned<String>>),
 }
 
 /// The `[camera]` table: the fixed camera's position and the point it looks at (metres, world
@@ -97,6 +139,10 @@ pub struct Meta {
     /// from (docs/import.md).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub imported_from: Option<ImportedFrom>,
+    /// `paraphrases = [..]`: other wordings of the instruction, with the same placeholders, that
+    /// the `language` perturbation draws from.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub paraphrases: Vec<Spanned<String>>,
 }
 
 /// Where an imported protocol came from: the source file's name, its format (as `autobio import`
@@ -371,6 +417,26 @@ impl Protocol {
                 s(&mut f.span);
             }
             s(&mut c.span);
+        }
+        if let Some(p) = &mut self.perturb {
+            s(&mut p.span);
+            for d in &mut p.dimensions {
+                s(&mut d.name.span);
+                match &mut d.setting {
+                    PerturbSetting::Strength(x) => s(&mut x.span),
+                    PerturbSetting::Fields(fields) => {
+                        for f in fields {
+                            s(&mut f.key.span);
+                            s(&mut f.value.span);
+                            if let PerturbValue::Texts(texts) = &mut f.value.value {
+                                for t in texts {
+                                    s(&mut t.span);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
         }
     }
 }

@@ -106,6 +106,9 @@ pub enum Code {
     E0043,
     /// An imported value that is out of range.
     E0044,
+    /// A perturbation the task cannot take: a paraphrase that drops or adds a parameter, a camera
+    /// turned or moved off the work, a camera it names that the task does not have.
+    E0045,
     /// The success condition already holds at the start.
     W0001,
     /// The state proof sampled parameter combinations.
@@ -170,6 +173,7 @@ impl Code {
             Code::E0042 => "E0042",
             Code::E0043 => "E0043",
             Code::E0044 => "E0044",
+            Code::E0045 => "E0045",
             Code::W0001 => "W0001",
             Code::W0002 => "W0002",
             Code::W0003 => "W0003",
@@ -184,7 +188,7 @@ impl Code {
         }
     }
 
-    pub const ALL: [Code; 48] = [
+    pub const ALL: [Code; 49] = [
         Code::E0001,
         Code::E0002,
         Code::E0003,
@@ -222,6 +226,7 @@ impl Code {
         Code::E0042,
         Code::E0043,
         Code::E0044,
+        Code::E0045,
         Code::W0001,
         Code::W0002,
         Code::W0003,
@@ -283,6 +288,7 @@ impl Code {
             Code::E0042 => "an imported command with no robot realisation here",
             Code::E0043 => "imported labware with no kind here",
             Code::E0044 => "an imported value out of range",
+            Code::E0045 => "a perturbation the task cannot take",
             Code::W0001 => "the success condition already holds at the start",
             Code::W0002 => "the state proof sampled parameter combinations",
             Code::W0003 => "a position far outside any bench",
@@ -408,6 +414,9 @@ impl Code {
             }
             Code::E0044 => {
                 "A number in the imported file cannot be used: a volume larger than the tube a well becomes holds,\na negative or non-finite volume or time, a volume no hand-held pipette here sets (the P200 sets\n20-200 µL, the P1000 100-1000 µL); an Autoprotocol quantity that does not read as `number:unit`\nor whose unit is of the wrong kind (the message lists the units the field takes)."
+            }
+            Code::E0045 => {
+                "A `[perturb]` dimension or a paraphrase would change what the task is, not how it looks or is\nsaid: a paraphrase (`[protocol] paraphrases`) must name every `{param}` the instruction names\nand no other, or an episode would be told a different task; `perturb.camera` may not turn or\nmove a fixed camera so far (with its field of view narrowed by `fovy`) that the middle of the\nwork could leave the view's inner 80 %, and its `cameras` must name the task's cameras\n(`bench`, `<robot>_wrist`). Narrow `shift_m`, `turn_deg` or `fovy_deg`, or fix the\nparaphrase. docs/robustness.md describes every dimension."
             }
             Code::W0001 => {
                 "Every success predicate is already true in the initial state, so an episode succeeds before the\nrobot moves. Usually an initial `state` or a predicate is wrong. A round trip (open a lid, then\nclose it) is written with `was` (`cycler.lid was open` beside `cycler.lid is closed`) or as a chain. `eval` and `demo` refuse the task unless `--allow-trivial`."

@@ -19,7 +19,7 @@ pub mod render;
 pub mod source;
 
 pub use diagnostic::{Code, Diagnostic, Severity, Span, did_you_mean};
-pub use parse::parse;
+pub use parse::{parse, perturb_dimensions};
 pub use quantity::{Dimension, ParseQuantityError, Quantity, parse_quantity};
 
 /// The words success predicates are made of, which a named liquid may not be (`tube.volume of

@@ -6,6 +6,10 @@ use crate::quantity::{Dimension, parse_quantity, unit};
 use crate::{Code, Diagnostic, Span, did_you_mean};
 use toml::de::{DeTable, DeValue};
 
+mod perturb;
+
+pub use perturb::dimension_names as perturb_dimensions;
+
 type Value<'i> = toml::Spanned<DeValue<'i>>;
 type Key<'i> = toml::Spanned<std::borrow::Cow<'i, str>>;
 
@@ -101,6 +105,7 @@ const TOP_KEYS: &[&str] = &[
     "success",
     "tolerances",
     "camera",
+    "perturb",
 ];
 const CHAIN_TOP_KEYS: &[&str] = &["format", "chain", "stages"];
 const SCENE_TOP_KEYS: &[&str] = &[
@@ -110,6 +115,7 @@ const SCENE_TOP_KEYS: &[&str] = &[
     "labware",
     "randomise",
     "camera",
+    "perturb",
 ];
 const SCENE_KEYS: &[&str] = &["description"];
 const CHAIN_KEYS: &[&str] = &["id", "version", "level", "instruction"];
@@ -124,6 +130,7 @@ const PROTOCOL_KEYS: &[&str] = &[
     "instruction",
     "time_limit",
     "imported_from",
+    "paraphrases",
 ];
 const IMPORTED_KEYS: &[&str] = &["file", "format", "sha256"];
 const ROBOT_KEYS: &[&str] = &["model", "base"];
@@ -538,6 +545,7 @@ impl Parser {
                 p.randomise = self.named_tables(value, "[randomise]", |s, n, t| s.randomise(n, t))
             }
             "camera" => p.camera = self.camera(value),
+            "perturb" => p.perturb = self.perturb(value),
             _ => return false,
         }
         true
@@ -560,6 +568,11 @@ impl Parser {
                 "instruction" => m.instruction = self.prompt(value, "protocol.instruction"),
                 "time_limit" => m.time_limit = self.time_limit(k, value),
                 "imported_from" => m.imported_from = self.imported_from(value),
+                "paraphrases" => {
+                    m.paraphrases = self
+                        .texts(value, "protocol.paraphrases")
+                        .unwrap_or_default()
+                }
                 _ => self.unknown_key(key, PROTOCOL_KEYS, "`[protocol]`"),
             }
         }

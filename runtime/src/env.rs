@@ -209,6 +209,9 @@ impl Env {
         let task = self.task.clone();
         *self = Env::new(scene, &task, &instance, self.opts);
         self.cameras = cameras;
+        if let Some(c) = self.cameras.as_mut() {
+            c.set_look(&self.episode.scene, self.instance.perturbation.as_ref());
+        }
         Ok(self.observe())
     }
 
@@ -307,30 +310,38 @@ impl Env {
         })
     }
 
-    /// Every task camera's frame of the state now, in task order; drawn once per control step
-    /// however many ask.
+    /// Every task camera's frame of the state now, in task order, under the episode's drawn
+    /// perturbation (its look, then its sensor noise); drawn once per control step however many
+    /// ask.
     pub fn frames(&mut self) -> Result<&[Image], RenderError> {
         let step = self.control_steps();
         if self.frames.as_ref().is_none_or(|(k, _)| *k != step) {
-            if self.cameras.is_none() {
-                let [w, h] = self.image_size();
-                self.cameras = Some(Cameras::new(&self.episode.scene, w, h)?);
-            }
             let names: Vec<String> = self.task.cameras.iter().map(|c| c.name.clone()).collect();
+            self.make_cameras()?;
             let cams = self.cameras.as_mut().expect("made above");
-            let images = cams.render(&self.episode.data, self.episode.logic(), &names)?;
+            let mut images = cams.render(&self.episode.data, self.episode.logic(), &names)?;
+            let drawn = self.instance.perturbation.as_ref();
+            crate::perturb::degrade_frames(&mut images, drawn, self.instance.seed, step);
             self.frames = Some((step, images));
         }
         Ok(&self.frames.as_ref().expect("drawn above").1)
     }
 
+    /// Makes the cameras on first use, with the episode's look.
+    fn make_cameras(&mut self) -> Result<(), RenderError> {
+        if self.cameras.is_none() {
+            let [w, h] = self.image_size();
+            let mut cams = Cameras::new(&self.episode.scene, w, h)?;
+            cams.set_look(&self.episode.scene, self.instance.perturbation.as_ref());
+            self.cameras = Some(cams);
+        }
+        Ok(())
+    }
+
     /// The state now from a free camera (`view`), at the environment's image size; not one of the
     /// task's cameras, and not cached.
     pub fn view(&mut self, view: &crate::render::View) -> Result<Image, RenderError> {
-        if self.cameras.is_none() {
-            let [w, h] = self.image_size();
-            self.cameras = Some(Cameras::new(&self.episode.scene, w, h)?);
-        }
+        self.make_cameras()?;
         let cams = self.cameras.as_mut().expect("made above");
         cams.render_view(&self.episode.data, self.episode.logic(), view)
     }

@@ -16,6 +16,7 @@ pub mod deps;
 mod env;
 mod episode;
 pub mod kinematics;
+pub mod perturb;
 pub mod picture;
 pub mod render;
 mod scene;

@@ -1,7 +1,8 @@
 //! A seed's initial scene as pictures, without running an episode: every task camera and a view
 //! from above that frames every robot base and item (`autobio render`), so that an author sees
-//! what a seed draws before waiting on an evaluation. It reads the instance the seed draws and
-//! draws; it steps nothing.
+//! what a seed draws before waiting on an evaluation; rows of such pictures stacked (a clean
+//! scene over its perturbed self). It reads the instance the seed draws and draws; it steps
+//! nothing.
 
 use crate::env::{Env, EnvError, EnvOptions};
 use crate::render::View;
@@ -77,6 +78,29 @@ pub fn side_by_side(frames: &[Image]) -> Image {
             .join("+"),
         width: w * frames.len(),
         height: h,
+        rgb,
+    }
+}
+
+/// Images of one width stacked top to bottom, as one image named after them (`a / b`).
+pub fn stacked(rows: &[Image]) -> Image {
+    let w = rows.first().map_or(0, |r| r.width);
+    let mut rgb = Vec::new();
+    for r in rows {
+        for y in 0..r.height {
+            let mut line = r.rgb[y * r.width * 3..(y + 1) * r.width * 3].to_vec();
+            line.resize(w * 3, 0);
+            rgb.extend_from_slice(&line[..w * 3]);
+        }
+    }
+    Image {
+        camera: rows
+            .iter()
+            .map(|r| r.camera.as_str())
+            .collect::<Vec<_>>()
+            .join(" / "),
+        width: w,
+        height: rows.iter().map(|r| r.height).sum(),
         rgb,
     }
 }

@@ -40,7 +40,12 @@ pub const SIMPLIFIED_MAX_SIDE: usize = 320;
 pub struct Cameras {
     renderer: MjRenderer,
     ids: Vec<usize>,
-    /// The renderer's own data: the drawn state, positions computed from its `qpos`.
+    /// The render model as the scene built it.
+    base: Arc<MjModel>,
+    /// Whether the mirror's model is a perturbed copy of `base` ([`Cameras::set_look`]).
+    looked: bool,
+    /// The renderer's own data: the drawn state, positions computed from its `qpos`, on `base`
+    /// or on a perturbed copy of it.
     mirror: MjData<Arc<MjModel>>,
     /// Instrument displays, and a copy of the render model whose texture pixels they are drawn
     /// into (uploads read textures from it; nothing else uses it).
@@ -174,10 +179,12 @@ impl Cameras {
             }
         }
         let textures = (!screens.is_empty()).then(|| (*model).clone());
-        let mirror = MjData::new(model);
+        let mirror = MjData::new(model.clone());
         Ok(Cameras {
             renderer,
             ids: scene.cameras.clone(),
+            base: model,
+            looked: false,
             mirror,
             screens,
             textures,
@@ -186,6 +193,26 @@ impl Cameras {
             width,
             height,
         })
+    }
+
+    /// Shows `drawn`'s lights, surface colours and camera poses from the next frame on, on a copy
+    /// of the render model (`None`, or a draw with nothing visual: the scene as built). The
+    /// simulated model is not touched.
+    pub fn set_look(&mut self, scene: &Scene, drawn: Option<&compiler::perturb::Drawn>) {
+        let visual = drawn.filter(|d| d.light.is_some() || !d.material.is_empty() || !d.camera.is_empty());
+        if visual.is_none() && !self.looked {
+            return;
+        }
+        let model = match visual {
+            Some(d) => {
+                let mut m = (*self.base).clone();
+                crate::perturb::apply_look(&mut m, scene, d);
+                Arc::new(m)
+            }
+            None => self.base.clone(),
+        };
+        self.mirror = MjData::new(model);
+        self.looked = visual.is_some();
     }
 
     /// Renders every camera of the task, in task order, with each item's logic state (`logic`, in

@@ -184,6 +184,17 @@ fn pedestal(robot: &str, base: &Pose) -> String {
     )
 }
 
+/// The lights a task's light perturbation may turn on beyond the ceiling's, off as built (none
+/// for a task without one, whose scene stays as it was).
+fn spare_lights(task: &Task) -> String {
+    let most = task
+        .perturb
+        .as_ref()
+        .and_then(|p| p.light.as_ref())
+        .map_or(1, |l| l.lights[1]);
+    crate::perturb::spare_lights(most.saturating_sub(1))
+}
+
 /// The scene's MJCF; `detail` picks the robots' visual meshes (nothing else differs).
 pub fn scene_xml(task: &Task, placements: &[Pose], detail: Detail) -> Result<String, SceneError> {
     let mut world = String::new();
@@ -278,7 +289,7 @@ pub fn scene_xml(task: &Task, placements: &[Pose], detail: Detail) -> Result<Str
 {actuator}</mujoco>
 "#,
         id = task.id,
-        room = ROOM,
+        room = format!("{ROOM}{}", spare_lights(task)),
         bx = BENCH_HALF[0],
         by = BENCH_HALF[1],
         bz = BENCH_TOP / 2.0,

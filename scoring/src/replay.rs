@@ -374,12 +374,16 @@ pub fn frames(
         .unwrap_or(1)
         .max(1);
     let mut cams = Cameras::with_detail(&scene, w, h, detail)?;
+    // The episode's perturbation, as its environment showed it.
+    let drawn = rec.instance.perturbation.as_ref();
+    cams.set_look(&scene, drawn);
     let names: Vec<String> = rec.task.cameras.iter().map(|c| c.name.clone()).collect();
     let mut ep = Episode::new(scene.clone(), &rec.task, &rec.instance);
     // The last state follows the last action; an episode records frames only before actions.
     for k in (0..rec.steps()).step_by(every) {
         rec.restore(&mut ep, k)?;
-        let images = cams.render(&ep.data, ep.logic(), &names)?;
+        let mut images = cams.render(&ep.data, ep.logic(), &names)?;
+        runtime::perturb::degrade_frames(&mut images, drawn, rec.instance.seed, k as u64);
         each(k, rec.summary.physics[k].0, images)?;
     }
     Ok(())

@@ -103,6 +103,9 @@ pub(crate) fn lower<'a>(cx: &mut Cx, p: &'a Protocol, file: &str) -> Option<Lowe
         &params,
     );
     let m = &p.meta;
+    if let Some(i) = &m.instruction {
+        crate::perturb::check_paraphrases(cx, &m.paraphrases, &i.value);
+    }
     let labware_spans = labware_spans(p);
     let camera = p.camera.as_ref().and_then(|c| cameras::fixed_camera(cx, c));
     let id = m.id.as_ref()?.value.clone();
