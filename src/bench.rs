@@ -3,7 +3,9 @@
 //!   task's and the two-Aloha unscrewing scene, the thread under load): harness
 //!   steps/s (episode stepping with instrument logic) vs a bare `mj_step` loop on the same compiled
 //!   model and initial state;
-//! - rendering: frames/s of one 224x224 camera image (both task cameras, alternating);
+//! - rendering: frames/s of one 224x224 camera image (both task cameras, alternating), with the
+//!   full meshes, the simplified ones, and the simplified ones under every visual perturbation
+//!   at its strong preset (light, material, camera, noise: docs/robustness.md);
 //! - expert: full scripted-expert episodes per minute (no recording);
 //! - lab physics: each mechanism's scene with it and without it (ratio), one liquid solve, and
 //!   the pipetting process's cost per step while a tip draws (as a share of the pipetting
@@ -227,8 +229,27 @@ fn scene_figures(task: &compiler::Task) -> Result<f64> {
     let names: Vec<String> = task.cameras.iter().map(|c| c.name.clone()).collect();
     let mut rates = Vec::new();
     for detail in [robots::Detail::Full, robots::Detail::Simplified] {
-        rates.push(render_rate(&scene, &mut ep, &names, detail)?);
+        rates.push(render_rate(&scene, &mut ep, &names, detail, None)?);
     }
+    // Every visual perturbation at its strong preset, on the scene built for it (its spare
+    // lights), drawn as the environment draws it (the look, then the sensor noise).
+    let looks: Vec<compiler::perturb::Preset> = ["light:2", "material:2", "camera:2", "noise:2"]
+        .iter()
+        .map(|p| p.parse())
+        .collect::<Result<_, _>>()?;
+    let shaken = task
+        .clone()
+        .with_perturb(&compiler::perturb::Preset::combine(&looks));
+    let shaken_instance = shaken.sample(0);
+    let shaken_scene = Arc::new(runtime::Scene::build(&shaken, &shaken_instance)?);
+    let mut shaken_ep = runtime::Episode::new(shaken_scene.clone(), &shaken, &shaken_instance);
+    let perturbed = render_rate(
+        &shaken_scene,
+        &mut shaken_ep,
+        &names,
+        robots::Detail::Simplified,
+        shaken_instance.perturbation.as_ref(),
+    )?;
     outln!(
         "render   224x224 full   {:>10.1} frames/s ({} cameras, one control step between sets, not timed)",
         rates[0],
@@ -238,6 +259,11 @@ fn scene_figures(task: &compiler::Task) -> Result<f64> {
         "render   224x224 simple {:>10.1} frames/s   ratio {:.2}x (simplified visual meshes, the default at this size)",
         rates[1],
         rates[1] / rates[0]
+    );
+    outln!(
+        "render   224x224 perturbed {:>7.1} frames/s   ratio {:.2}x the clean simplified figure (light, material, camera and noise at strength 2)",
+        perturbed,
+        perturbed / rates[1]
     );
 
     let n = 3;
@@ -263,32 +289,37 @@ fn scene_figures(task: &compiler::Task) -> Result<f64> {
     Ok(1.0 / bare_rate)
 }
 
-/// Frames/s of every task camera at 224x224 with this level of detail: the best of three rounds
-/// of 40 frame sets, one control step between sets (not timed: rendering only).
+/// Frames/s of every task camera at 224x224 with this level of detail (and an episode's drawn
+/// perturbation: its look and its sensor noise): the best of three rounds of 40 frame sets, one
+/// control step between sets (not timed: rendering only).
 fn render_rate(
     scene: &runtime::Scene,
     ep: &mut runtime::Episode,
     names: &[String],
     detail: robots::Detail,
+    drawn: Option<&compiler::perturb::Drawn>,
 ) -> Result<f64> {
     let mut cams = runtime::render::Cameras::with_detail(scene, 224, 224, detail)
         .map_err(anyhow::Error::msg)?;
+    cams.set_look(scene, drawn);
     cams.render(&ep.data, ep.logic(), names)
         .map_err(anyhow::Error::msg)?;
     let rounds = 40;
     let mut best = f64::MAX;
     for _ in 0..3 {
         let mut spent = 0.0;
-        for _ in 0..rounds {
+        for k in 0..rounds {
             ep.control_step()?;
             let t = Instant::now();
-            cams.render(&ep.data, ep.logic(), names)
+            let mut frames = cams
+                .render(&ep.data, ep.logic(), names)
                 .map_err(anyhow::Error::msg)?;
+            runtime::perturb::degrade_frames(&mut frames, drawn, 0, k);
             spent += t.elapsed().as_secs_f64();
         }
         best = best.min(spent);
     }
-    Ok((rounds * names.len()) as f64 / best)
+    Ok((rounds as usize * names.len()) as f64 / best)
 }
 
 /// Steps/s of a model from its XML: the best of three timed runs of `steps` steps, `drive` called

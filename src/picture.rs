@@ -65,7 +65,10 @@ pub fn run(front: &Front, a: &RenderArgs) -> Result<ExitCode> {
     if let Some(d) = drawn {
         let json = serde_json::to_string(&d).context("describing the perturbation")?;
         outln!("clean above, perturbed below: {json}");
-        let (said, told) = (clean.sample(a.seed).instruction, task.sample(a.seed).instruction);
+        let (said, told) = (
+            clean.sample(a.seed).instruction,
+            task.sample(a.seed).instruction,
+        );
         if said != told {
             outln!("instruction: {said:?} -> {told:?}");
         }

@@ -40,6 +40,7 @@ mod no_simulator;
 mod observation_history;
 mod paper_fidelity;
 mod pcr_setup;
+mod perturb;
 mod pictures;
 mod pipette;
 mod planning;

@@ -63,7 +63,11 @@ fn light(model: &mut MjModel, l: &LightDraw) {
     let tilt = nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::x_axis(), l.tilt_rad[0])
         * nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::y_axis(), l.tilt_rad[1]);
     let names: Vec<Option<String>> = (0..model.ffi().nlight as usize)
-        .map(|i| model.id_to_name(MjtObjBase::mjOBJ_LIGHT, i).map(str::to_string))
+        .map(|i| {
+            model
+                .id_to_name(MjtObjBase::mjOBJ_LIGHT, i)
+                .map(str::to_string)
+        })
         .collect();
     let mut spares_on = 0;
     for (i, name) in names.iter().enumerate() {
@@ -170,7 +174,9 @@ fn camera(model: &mut MjModel, id: usize, c: &CameraDraw) {
     let p = model.cam_pos()[id];
     model.cam_pos_mut()[id] = [0, 1, 2].map(|k| p[k] + c.shift_m[k]);
     let q = model.cam_quat()[id];
-    let own = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(q[0], q[1], q[2], q[3]));
+    let own = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+        q[0], q[1], q[2], q[3],
+    ));
     let turn = nalgebra::UnitQuaternion::from_scaled_axis(nalgebra::Vector3::from(c.turn_rad));
     let t = turn * own;
     model.cam_quat_mut()[id] = [t.w, t.i, t.j, t.k];
@@ -197,16 +203,19 @@ pub fn degrade(image: &mut Image, noise: &NoiseDraw, seed: u64, step: u64, camer
     }
     if noise.gaussian > 0.0 {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        // Streams 1-7 are the perturbation draws'; each frame's is past them.
+        // Streams 1-7 are the perturbation draws'; each frame's is past them. Its bytes come
+        // from a fast generator seeded from that stream (a frame takes 600 kB of them).
         rng.set_stream((1 << 40) | (step << 8) | camera as u64);
-        grain(&mut image.rgb, noise.gaussian * 255.0, &mut rng);
+        let mut fast = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(rng.next_u64());
+        grain(&mut image.rgb, noise.gaussian * 255.0, &mut fast);
     }
     if let Some(q) = noise.jpeg_quality {
         compress(&mut image.rgb, w, h, q);
     }
 }
 
-/// A separable Gaussian blur of standard deviation `sigma` pixels, edges clamped.
+/// A separable Gaussian blur of standard deviation `sigma` pixels, edges clamped. Both passes
+/// add whole shifted rows at once (contiguous, so the compiler vectorises them).
 fn blur(rgb: &mut [u8], w: usize, h: usize, sigma: f64) {
     let radius = (3.0 * sigma).ceil() as usize;
     let weights: Vec<f32> = (0..=2 * radius)
@@ -217,52 +226,53 @@ fn blur(rgb: &mut [u8], w: usize, h: usize, sigma: f64) {
         .collect();
     let total: f32 = weights.iter().sum();
     let weights: Vec<f32> = weights.iter().map(|x| x / total).collect();
-    let mut tmp = vec![0f32; rgb.len()];
-    // Along rows into `tmp`, then along columns back.
+    let row = w * 3;
+    // Along rows: each row padded by its edge pixels, then the weighted sum of its shifts.
+    let mut across = vec![0f32; rgb.len()];
+    let mut padded = vec![0f32; (w + 2 * radius) * 3];
     for y in 0..h {
-        for x in 0..w {
-            let mut acc = [0f32; 3];
-            for (i, wt) in weights.iter().enumerate() {
-                let sx = (x + i).saturating_sub(radius).min(w - 1);
-                let at = (y * w + sx) * 3;
-                for c in 0..3 {
-                    acc[c] += wt * f32::from(rgb[at + c]);
-                }
+        let src = &rgb[y * row..(y + 1) * row];
+        for (k, px) in padded.chunks_exact_mut(3).enumerate() {
+            let x = k.saturating_sub(radius).min(w - 1);
+            for c in 0..3 {
+                px[c] = f32::from(src[x * 3 + c]);
             }
-            tmp[(y * w + x) * 3..(y * w + x) * 3 + 3].copy_from_slice(&acc);
+        }
+        let out = &mut across[y * row..(y + 1) * row];
+        for (i, &wt) in weights.iter().enumerate() {
+            for (o, &p) in out.iter_mut().zip(&padded[i * 3..i * 3 + row]) {
+                *o += wt * p;
+            }
         }
     }
+    // Along columns: each output row the weighted sum of its neighbouring rows.
+    let mut acc = vec![0f32; row];
     for y in 0..h {
-        for x in 0..w {
-            let mut acc = [0f32; 3];
-            for (i, wt) in weights.iter().enumerate() {
-                let sy = (y + i).saturating_sub(radius).min(h - 1);
-                let at = (sy * w + x) * 3;
-                for c in 0..3 {
-                    acc[c] += wt * tmp[at + c];
-                }
+        acc.fill(0.0);
+        for (i, &wt) in weights.iter().enumerate() {
+            let sy = (y + i).saturating_sub(radius).min(h - 1);
+            for (a, &p) in acc.iter_mut().zip(&across[sy * row..(sy + 1) * row]) {
+                *a += wt * p;
             }
-            for c in 0..3 {
-                rgb[(y * w + x) * 3 + c] = acc[c].round().clamp(0.0, 255.0) as u8;
-            }
+        }
+        for (d, a) in rgb[y * row..(y + 1) * row].iter_mut().zip(&acc) {
+            *d = (a + 0.5).clamp(0.0, 255.0) as u8;
         }
     }
 }
 
 /// Zero-mean noise of standard deviation `sigma` (in 8-bit levels) on every channel: the sum of
-/// four uniform bytes, scaled (close to Gaussian; two samples per 64 random bits).
-fn grain(rgb: &mut [u8], sigma: f64, rng: &mut ChaCha8Rng) {
-    // Four uniform bytes sum to mean 510 and standard deviation sqrt(4 * (256^2 - 1) / 12).
+/// four uniform random bytes, centred and scaled (close to Gaussian), the bytes drawn in bulk.
+fn grain(rgb: &mut [u8], sigma: f64, rng: &mut impl RngCore) {
+    // Four uniform bytes sum to mean 510 with standard deviation sqrt(4 * (256^2 - 1) / 12).
     let scale = (sigma / (4.0 * (256.0f64 * 256.0 - 1.0) / 12.0).sqrt()) as f32;
-    let mut chunks = rgb.chunks_mut(2);
-    while let Some(pair) = chunks.next() {
-        let bits = rng.next_u64();
-        for (k, px) in pair.iter_mut().enumerate() {
-            let b = (bits >> (32 * k)).to_le_bytes();
-            let sum = u32::from(b[0]) + u32::from(b[1]) + u32::from(b[2]) + u32::from(b[3]);
-            let n = (sum as f32 - 510.0) * scale;
-            *px = (f32::from(*px) + n).round().clamp(0.0, 255.0) as u8;
-        }
+    let mut bytes = vec![0u8; rgb.len() * 4];
+    rng.fill_bytes(&mut bytes);
+    for (px, b) in rgb.iter_mut().zip(bytes.chunks_exact(4)) {
+        let sum = i32::from(b[0]) + i32::from(b[1]) + i32::from(b[2]) + i32::from(b[3]);
+        let n = (sum - 510) as f32 * scale;
+        // Adding a half and truncating rounds (without `round`, which does not vectorise here).
+        *px = (f32::from(*px) + n + 0.5).clamp(0.0, 255.0) as u8;
     }
 }
 
@@ -273,7 +283,10 @@ fn compress(rgb: &mut [u8], w: usize, h: usize, quality: u8) {
     };
     let mut encoded = Vec::new();
     let enc = jpeg_encoder::Encoder::new(&mut encoded, quality.clamp(1, 100));
-    if enc.encode(rgb, w16, h16, jpeg_encoder::ColorType::Rgb).is_err() {
+    if enc
+        .encode(rgb, w16, h16, jpeg_encoder::ColorType::Rgb)
+        .is_err()
+    {
         return;
     }
     let mut dec = zune_jpeg::JpegDecoder::new(zune_jpeg::zune_core::bytestream::ZCursor::new(
@@ -293,14 +306,31 @@ mod tests {
     #[test]
     fn a_tint_of_nothing_keeps_the_colour_and_a_hue_turn_keeps_value() {
         let c = [0.72, 0.66, 0.56, 1.0];
-        let same = tinted(c, Tint { hue: 0.0, saturation: 1.0, value: 1.0 });
+        let same = tinted(
+            c,
+            Tint {
+                hue: 0.0,
+                saturation: 1.0,
+                value: 1.0,
+            },
+        );
         for k in 0..4 {
             assert!((same[k] - c[k]).abs() < 1e-5, "{same:?}");
         }
-        let turned = tinted(c, Tint { hue: 0.5, saturation: 1.0, value: 1.0 });
+        let turned = tinted(
+            c,
+            Tint {
+                hue: 0.5,
+                saturation: 1.0,
+                value: 1.0,
+            },
+        );
         let max = |x: [f32; 4]| x[0].max(x[1]).max(x[2]);
         assert!((max(turned) - max(c)).abs() < 1e-5);
-        assert!(turned[2] > turned[0], "a warm colour turned half way is cool: {turned:?}");
+        assert!(
+            turned[2] > turned[0],
+            "a warm colour turned half way is cool: {turned:?}"
+        );
     }
 
     #[test]
@@ -311,7 +341,11 @@ mod tests {
             height: 48,
             rgb: vec![v; 64 * 48 * 3],
         };
-        let n = NoiseDraw { gaussian: 0.05, blur_px: 0.0, jpeg_quality: None };
+        let n = NoiseDraw {
+            gaussian: 0.05,
+            blur_px: 0.0,
+            jpeg_quality: None,
+        };
         let (mut a, mut b, mut c) = (img(128), img(128), img(128));
         degrade(&mut a, &n, 7, 3, 0);
         degrade(&mut b, &n, 7, 3, 0);
@@ -319,13 +353,30 @@ mod tests {
         assert_eq!(a.rgb, b.rgb);
         assert_ne!(a.rgb, c.rgb);
         let mean = a.rgb.iter().map(|&x| f64::from(x)).sum::<f64>() / a.rgb.len() as f64;
-        let sd = (a.rgb.iter().map(|&x| (f64::from(x) - mean).powi(2)).sum::<f64>()
+        let sd = (a
+            .rgb
+            .iter()
+            .map(|&x| (f64::from(x) - mean).powi(2))
+            .sum::<f64>()
             / a.rgb.len() as f64)
             .sqrt();
-        assert!((mean - 128.0).abs() < 0.5 && (sd - 0.05 * 255.0).abs() < 0.6, "{mean} {sd}");
+        assert!(
+            (mean - 128.0).abs() < 0.5 && (sd - 0.05 * 255.0).abs() < 0.6,
+            "{mean} {sd}"
+        );
         // A blur keeps a flat image flat; JPEG keeps it near.
         let mut flat = img(90);
-        degrade(&mut flat, &NoiseDraw { gaussian: 0.0, blur_px: 1.5, jpeg_quality: Some(30) }, 0, 0, 0);
+        degrade(
+            &mut flat,
+            &NoiseDraw {
+                gaussian: 0.0,
+                blur_px: 1.5,
+                jpeg_quality: Some(30),
+            },
+            0,
+            0,
+            0,
+        );
         assert!(flat.rgb.iter().all(|&x| x.abs_diff(90) <= 2));
     }
 }

@@ -199,7 +199,8 @@ impl Cameras {
     /// of the render model (`None`, or a draw with nothing visual: the scene as built). The
     /// simulated model is not touched.
     pub fn set_look(&mut self, scene: &Scene, drawn: Option<&compiler::perturb::Drawn>) {
-        let visual = drawn.filter(|d| d.light.is_some() || !d.material.is_empty() || !d.camera.is_empty());
+        let visual =
+            drawn.filter(|d| d.light.is_some() || !d.material.is_empty() || !d.camera.is_empty());
         if visual.is_none() && !self.looked {
             return;
         }

@@ -108,7 +108,11 @@ fn synonyms(text: &str, rng: &mut ChaCha8Rng) -> (String, usize) {
         {
             if uniform(rng, 0.0, 1.0) < 0.5 {
                 let upper = rest.starts_with(|x: char| x.is_uppercase());
-                out.push_str(&if upper { capitalised(to) } else { to.to_string() });
+                out.push_str(&if upper {
+                    capitalised(to)
+                } else {
+                    to.to_string()
+                });
                 n += 1;
             } else {
                 out.push_str(&rest[..from.len()]);
@@ -126,7 +130,8 @@ fn synonyms(text: &str, rng: &mut ChaCha8Rng) -> (String, usize) {
 
 /// Whether `text` starts with the word or phrase `w` (any case), followed by no letter.
 fn starts_word(text: &str, w: &str) -> bool {
-    text.get(..w.len()).is_some_and(|h| h.eq_ignore_ascii_case(w))
+    text.get(..w.len())
+        .is_some_and(|h| h.eq_ignore_ascii_case(w))
         && !text[w.len()..].starts_with(|c: char| c.is_alphanumeric() || c == '_')
 }
 
@@ -156,10 +161,16 @@ mod tests {
         }
         assert!(seen.len() > 10, "{seen:?}");
         // Strength 1 with paraphrases draws one of them, unframed.
-        let ps = vec!["Move the tube at {slot}.".to_string(), "Take {slot}.".into()];
+        let ps = vec![
+            "Move the tube at {slot}.".to_string(),
+            "Take {slot}.".into(),
+        ];
         for seed in 0..10 {
             let (text, how) = reword(t, &ps, 1, &mut ChaCha8Rng::seed_from_u64(seed));
-            assert!(ps.contains(&text) && how.starts_with("paraphrase"), "{text}");
+            assert!(
+                ps.contains(&text) && how.starts_with("paraphrase"),
+                "{text}"
+            );
         }
         // A word inside a longer word or a placeholder is not a synonym's.
         let (s, _) = synonyms("Tubes {tube} tube_a", &mut ChaCha8Rng::seed_from_u64(0));

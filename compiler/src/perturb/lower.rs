@@ -54,7 +54,14 @@ pub(crate) fn lower(cx: &mut Cx, table: &ast::Perturb, task: &Task) -> Option<Pe
 }
 
 /// Reports a value outside `[lo, hi]`; whether it was inside.
-fn within(cx: &mut Cx, v: &Spanned<PerturbValue>, what: &str, lo: f64, hi: f64, unit: &str) -> bool {
+fn within(
+    cx: &mut Cx,
+    v: &Spanned<PerturbValue>,
+    what: &str,
+    lo: f64,
+    hi: f64,
+    unit: &str,
+) -> bool {
     let bad = match &v.value {
         PerturbValue::Number(x) => !(lo..=hi).contains(x),
         PerturbValue::Range([a, b]) => !(lo..=hi).contains(a) || !(lo..=hi).contains(b),
@@ -122,7 +129,14 @@ fn field(
         }
         (Dimension::Light, "direction") => {
             let x = deg(number(v));
-            let ok = within(cx, &Spanned::new(PerturbValue::Number(x), v.span), &what, 0.0, 80.0, "°");
+            let ok = within(
+                cx,
+                &Spanned::new(PerturbValue::Number(x), v.span),
+                &what,
+                0.0,
+                80.0,
+                "°",
+            );
             if let Some(l) = p.light.as_mut().filter(|_| ok) {
                 l.direction_deg = x;
             }
@@ -191,7 +205,14 @@ fn field(
         }
         (Dimension::Camera, "turn" | "fovy") => {
             let x = deg(number(v));
-            let ok = within(cx, &Spanned::new(PerturbValue::Number(x), v.span), &what, 0.0, 30.0, "°");
+            let ok = within(
+                cx,
+                &Spanned::new(PerturbValue::Number(x), v.span),
+                &what,
+                0.0,
+                30.0,
+                "°",
+            );
             if let Some(c) = p.camera.as_mut().filter(|_| ok) {
                 if key == "turn" {
                     c.turn_deg = x;
@@ -211,7 +232,10 @@ fn field(
                     cx.err(
                         Code::E0045,
                         n.span,
-                        format!("`{what}` names `{}`, which is not one of the task's cameras", n.value),
+                        format!(
+                            "`{what}` names `{}`, which is not one of the task's cameras",
+                            n.value
+                        ),
                         Some(hint_for(&n.value, &known, "cameras")),
                     );
                     return false;
@@ -275,7 +299,14 @@ fn field(
         }
         (Dimension::Layout, "turn") => {
             let x = deg(number(v));
-            let ok = within(cx, &Spanned::new(PerturbValue::Number(x), v.span), &what, 0.0, 45.0, "°");
+            let ok = within(
+                cx,
+                &Spanned::new(PerturbValue::Number(x), v.span),
+                &what,
+                0.0,
+                45.0,
+                "°",
+            );
             if let Some(l) = p.layout.as_mut().filter(|_| ok) {
                 l.turn_deg = x;
             }
@@ -286,11 +317,15 @@ fn field(
     }
 }
 
-/// The share of a camera's half view the middle of the work may reach when shaken.
-const KEEP_IN_VIEW: f64 = 0.8;
+/// The share of a camera's narrowest half view its axis may turn through: the middle of the
+/// clean frame stays in the middle half of the shaken one.
+const KEEP_IN_VIEW: f64 = 0.5;
 
-/// Every fixed camera the shake moves still has the middle of the work (the items' places) in
-/// the inner part of its view at the shake's extremes; E0045 otherwise.
+/// Every fixed camera the shake moves keeps the work its task frames: the clean view's centre
+/// (what the camera was aimed at) stays within the inner half of the shaken view, at the shake's
+/// extremes (the largest turn, plus the angle the largest shift subtends at the items' middle,
+/// with the field of view at its narrowest); E0045 otherwise. Wrist cameras move with the arm
+/// and are not checked.
 fn camera_keeps_the_work(cx: &mut Cx, c: &CameraShake, table: &ast::Perturb, task: &Task) -> bool {
     let v = |a: [f64; 3]| nalgebra::Vector3::new(a[0], a[1], a[2]);
     let places: Vec<_> = task
@@ -311,28 +346,23 @@ fn camera_keeps_the_work(cx: &mut Cx, c: &CameraShake, table: &ast::Perturb, tas
         if !c.cameras.is_empty() && !c.cameras.contains(&cam.name) {
             continue;
         }
-        let CameraMount::Fixed { pos, xyaxes, fovy_deg } = &cam.mount else {
+        let CameraMount::Fixed { pos, fovy_deg, .. } = &cam.mount else {
             continue;
         };
-        let (x, y) = (v([xyaxes[0], xyaxes[1], xyaxes[2]]), v([xyaxes[3], xyaxes[4], xyaxes[5]]));
-        let forward = y.cross(&x).normalize();
-        let to = middle - v(*pos);
-        let distance = to.norm().max(1e-6);
-        let off_axis = to.normalize().dot(&forward).clamp(-1.0, 1.0).acos();
-        let worst = off_axis + c.turn_deg.to_radians() + (c.shift_m / distance).atan();
-        let half = ((fovy_deg - c.fovy_deg).max(1.0) / 2.0).to_radians();
+        let distance = (middle - v(*pos)).norm().max(0.05);
+        let worst = c.turn_deg + (c.shift_m / distance).atan().to_degrees();
+        let half = (fovy_deg - c.fovy_deg).max(1.0) / 2.0;
         if worst > KEEP_IN_VIEW * half {
             cx.err(
                 Code::E0045,
                 span,
                 format!(
-                    "camera `{}` could lose the work: turned {:.1}° and moved {:.0} mm, the work's middle would be {:.1}° off its axis, past {:.1}° ({:.0} % of half its narrowest view)",
+                    "camera `{}` could lose the work: turned {:.1}° and moved {:.0} mm ({:.0} mm from the items), its aim could swing {worst:.1}°, past {:.1}° (half of half its narrowest view)",
                     cam.name,
                     c.turn_deg,
                     c.shift_m * 1000.0,
-                    worst.to_degrees(),
-                    (KEEP_IN_VIEW * half).to_degrees(),
-                    KEEP_IN_VIEW * 100.0
+                    distance * 1000.0,
+                    KEEP_IN_VIEW * half,
                 ),
                 Some("narrow `turn_deg`, `shift_m` or `fovy_deg`, or name the cameras to shake in `cameras`".into()),
             );
@@ -363,8 +393,14 @@ pub(crate) fn check_paraphrases(cx: &mut Cx, paraphrases: &[Spanned<String>], in
         };
         let msg = match (dropped.is_empty(), added.is_empty()) {
             (true, true) => continue,
-            (false, _) => format!("the paraphrase drops {} that the instruction names", list(&dropped)),
-            (true, false) => format!("the paraphrase names {}, which the instruction does not", list(&added)),
+            (false, _) => format!(
+                "the paraphrase drops {} that the instruction names",
+                list(&dropped)
+            ),
+            (true, false) => format!(
+                "the paraphrase names {}, which the instruction does not",
+                list(&added)
+            ),
         };
         cx.err(
             Code::E0045,

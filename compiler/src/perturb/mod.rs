@@ -15,8 +15,8 @@ mod draw;
 mod language;
 mod lower;
 
-pub use draw::{CameraDraw, Drawn, LightDraw, NoiseDraw, Tint};
 pub(crate) use draw::draw;
+pub use draw::{CameraDraw, Drawn, LightDraw, NoiseDraw, Tint};
 pub(crate) use lower::{check_paraphrases, lower};
 
 use serde::{Deserialize, Serialize};

@@ -56,10 +56,7 @@ const DIMENSIONS: &[(&str, &[(&str, Shape)])] = &[
             ("jpeg_quality", Shape::Range),
         ],
     ),
-    (
-        "language",
-        &[("rewrite", Shape::Number(None))],
-    ),
+    ("language", &[("rewrite", Shape::Number(None))]),
     (
         "robot_start",
         &[("joints", Shape::Number(Some(Dimension::Angle)))],
@@ -93,11 +90,9 @@ impl Parser {
                 DeValue::Integer(_) => self
                     .integer(value, &format!("perturb.{name}"))
                     .map(PerturbSetting::Strength),
-                DeValue::Table(ft) => Some(PerturbSetting::Fields(self.perturb_fields(
-                    name,
-                    fields,
-                    ft,
-                ))),
+                DeValue::Table(ft) => Some(PerturbSetting::Fields(
+                    self.perturb_fields(name, fields, ft),
+                )),
                 other => {
                     self.err(
                         Code::E0004,
