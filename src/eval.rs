@@ -120,14 +120,23 @@ pub fn eval(front: &Front, a: &EvalArgs) -> Result<ExitCode> {
         (Some(file), Some(out)) => Some(suite_run(file, out)?),
         _ => None,
     };
-    let (protocols, episodes, seed, runs) = match &suite {
-        Some(s) => (s.protocols(), s.suite.episodes, s.suite.seed, s.suite.runs),
-        None => (a.protocol.clone(), a.episodes, a.seed, a.runs),
+    let (entries, episodes, seed, runs) = match &suite {
+        Some(s) => (s.entries(), s.suite.episodes, s.suite.seed, s.suite.runs),
+        None => {
+            let clean = |p: &PathBuf| results::suite::Entry {
+                protocol: p.clone(),
+                listed: p.display().to_string(),
+                variant: None,
+            };
+            let entries = a.protocol.iter().map(clean).collect();
+            (entries, a.episodes, a.seed, a.runs)
+        }
     };
     let mut rows = Vec::new();
     let mut written = Vec::new();
-    for p in &protocols {
-        let task = a.perturb.apply(front.load_to_run(p, a.allow_trivial)?);
+    for entry in &entries {
+        let loaded = front.load_to_run(&entry.protocol, a.allow_trivial)?;
+        let task = entry.task(a.perturb.apply(loaded));
         let opts = scoring::eval::EvalOptions {
             policy: a.policy.clone(),
             episodes,
@@ -244,8 +253,13 @@ fn suite_run(file: &std::path::Path, out: &std::path::Path) -> Result<results::s
             std::fs::write(&copy, &bytes).with_context(|| format!("writing {}", copy.display()))?;
         }
     }
+    let variants = if suite.suite.perturb.is_empty() {
+        String::new()
+    } else {
+        format!(", each clean and under {}", suite.suite.perturb.join(", "))
+    };
     errln!(
-        "suite {} ({} tasks, {} episodes x {} runs from seed {})",
+        "suite {} ({} tasks{variants}, {} episodes x {} runs from seed {})",
         suite.suite.name,
         suite.suite.tasks.len(),
         suite.suite.episodes,

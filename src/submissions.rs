@@ -253,11 +253,14 @@ fn audit(c: &LeaderboardCommand) -> Result<ExitCode> {
         backoff_s: 0.25,
     };
     let mut rows = Vec::new();
-    for protocol in suite.protocols() {
-        let checked = compiler::check_file(&protocol, None)?;
-        let task = checked
-            .task
-            .with_context(|| format!("the shipped {} does not compile", protocol.display()))?;
+    for entry in suite.entries() {
+        let protocol = &entry.protocol;
+        let checked = compiler::check_file(protocol, None)?;
+        let task = entry.task(
+            checked
+                .task
+                .with_context(|| format!("the shipped {} does not compile", protocol.display()))?,
+        );
         let opts = scoring::eval::EvalOptions {
             episodes: *episodes,
             seed,

@@ -299,3 +299,194 @@ fn render_shows_the_clean_scene_over_the_perturbed_one() {
         common::text(&bad.stderr)
     );
 }
+
+mod forged {
+    //! Bundles of the shipped `robustness-smoke` suite (the thermal cycler's close, clean, under
+    //! `light:2` and under `layout:1`), genuine and with a perturbation removed or altered,
+    //! verified from a folder outside the checkout with the shipped suites compiled in.
+
+    use crate::common::{self, scratch, text};
+    use crate::leaderboard::{members, pack, rewrite};
+    use serde_json::Value;
+    use std::collections::BTreeMap;
+    use std::path::{Path, PathBuf};
+    use std::sync::OnceLock;
+
+    const LIGHT: &str = "thermal_cycler.close_lid@light-2";
+    const LAYOUT: &str = "thermal_cycler.close_lid@layout-1";
+    const CLEAN: &str = "thermal_cycler.close_lid";
+
+    pub(super) fn genuine() -> &'static (PathBuf, BTreeMap<String, Vec<u8>>) {
+        static G: OnceLock<(PathBuf, BTreeMap<String, Vec<u8>>)> = OnceLock::new();
+        G.get_or_init(|| {
+            let root = scratch("perturb-forgeries");
+            let suite = Path::new(env!("CARGO_MANIFEST_DIR")).join("suites/robustness-smoke.toml");
+            let run = root.join("run");
+            common::eval_suite(&suite, &run, &["--policy", "expert"]);
+            let bundle = root.join("expert.tar.zst");
+            common::submit(&run, "scripted expert", &bundle, &[]);
+            let away = root.join("elsewhere");
+            std::fs::create_dir_all(&away).unwrap();
+            (away, members(&bundle))
+        })
+    }
+
+    /// Packs `m` (rehashed, as a forger would) and verifies it away: exit code, refusals, all said.
+    fn verify(name: &str, m: &BTreeMap<String, Vec<u8>>) -> (i32, Vec<String>, String) {
+        let out = scratch(name).join("b.tar.zst");
+        pack(m, &out, true);
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_autobio"))
+            .args(["leaderboard", "verify", out.to_str().unwrap()])
+            .current_dir(&genuine().0)
+            .output()
+            .unwrap();
+        let said = text(&o.stdout) + &text(&o.stderr);
+        let refusals = said
+            .lines()
+            .filter_map(|l| l.strip_prefix("refused: "))
+            .map(str::to_string)
+            .collect();
+        (o.status.code().unwrap(), refusals, said)
+    }
+
+    /// The recording of `task`'s seed 0 with its `/task` message edited.
+    fn edit_task_message(m: &mut BTreeMap<String, Vec<u8>>, task: &str, edit: impl Fn(&mut Value)) {
+        let key = format!("runs/0/{task}_seed0.mcap");
+        let dir = scratch("perturb-forged-recording");
+        let (src, dst) = (dir.join("in.mcap"), dir.join("out.mcap"));
+        std::fs::write(&src, &m[&key]).unwrap();
+        rewrite(&src, &dst, |topic, data| {
+            (topic == "/task").then(|| {
+                let mut v: Value = serde_json::from_slice(data).unwrap();
+                edit(&mut v);
+                serde_json::to_vec(&v).unwrap()
+            })
+        });
+        m.insert(key, std::fs::read(&dst).unwrap());
+    }
+
+    fn refused_for(name: &str, m: &BTreeMap<String, Vec<u8>>, task: &str, why: &str) {
+        let (code, refusals, said) = verify(name, m);
+        assert_eq!(code, 1, "{name}: {said}");
+        assert!(
+            refusals.iter().any(|r| r.contains(task) && r.contains(why)),
+            "{name}: no refusal of {task} for `{why}` in {refusals:#?}"
+        );
+    }
+
+    #[test]
+    fn forged_perturbations_are_refused() {
+        let (_, genuine) = genuine();
+        // The control: the genuine run, repacked, verifies; it holds each preset's task.
+        let (code, refusals, said) = verify("perturb-control", genuine);
+        assert_eq!((code, refusals.len()), (0, 0), "{said}");
+        for t in [CLEAN, LIGHT, LAYOUT] {
+            assert!(
+                genuine.contains_key(&format!("runs/0/{t}.manifest.json")),
+                "{t}"
+            );
+        }
+
+        // The light perturbation removed from what the recording says the episode was.
+        let mut m = genuine.clone();
+        edit_task_message(&mut m, LIGHT, |v| {
+            v["task"].as_object_mut().unwrap().remove("perturb");
+            v["instance"]
+                .as_object_mut()
+                .unwrap()
+                .remove("perturbation");
+        });
+        refused_for("perturb-removed", &m, LIGHT, "`/task` message 0 (at 0 s) is not the episode's");
+
+        // The light perturbation altered (a dimmer draw claimed).
+        let mut m = genuine.clone();
+        edit_task_message(&mut m, LIGHT, |v| {
+            v["instance"]["perturbation"]["light"]["scale"] = Value::from(1.0);
+        });
+        refused_for("perturb-altered", &m, LIGHT, "`/task` message 0 (at 0 s) is not the episode's");
+
+        // The manifest claims the clean task's content for the perturbed task's run.
+        let mut m = genuine.clone();
+        let clean: Value =
+            serde_json::from_slice(&m[&format!("runs/0/{CLEAN}.manifest.json")]).unwrap();
+        let key = format!("runs/0/{LIGHT}.manifest.json");
+        let mut manifest: Value = serde_json::from_slice(&m[&key]).unwrap();
+        manifest["task_content_sha256"] = clean["task_content_sha256"].clone();
+        m.insert(key, serde_json::to_vec_pretty(&manifest).unwrap());
+        refused_for("perturb-clean-content", &m, LIGHT, "under the suite's `light:2`");
+
+        // The layout run's recording replaced by the clean run's (renamed): its actions, made
+        // for the clean layout, are re-enacted on the perturbed one.
+        let mut m = genuine.clone();
+        let clean_rec = m[&format!("runs/0/{CLEAN}_seed0.mcap")].clone();
+        m.insert(format!("runs/0/{LAYOUT}_seed0.mcap"), clean_rec);
+        refused_for("perturb-layout-swapped", &m, LAYOUT, "re-enacted from its seed and recorded actions");
+
+        // The suite's presets dropped from the index: not the shipped suite.
+        let mut m = genuine.clone();
+        let mut index: Value = serde_json::from_slice(&m["index.json"]).unwrap();
+        index["suite"].as_object_mut().unwrap().remove("perturb");
+        m.insert(
+            "index.json".into(),
+            serde_json::to_vec_pretty(&index).unwrap(),
+        );
+        let (code, refusals, said) = verify("perturb-suite-edited", &m);
+        assert_eq!(code, 1, "{said}");
+        assert!(
+            refusals
+                .iter()
+                .any(|r| r.contains("is not the suite file it names")),
+            "{refusals:#?}"
+        );
+    }
+}
+
+mod site {
+    use super::forged_fixture;
+    use crate::common::{self, scratch};
+    use serde_json::Value;
+
+    #[test]
+    fn the_site_shows_success_per_preset_beside_clean_with_the_drop() {
+        let bundles = scratch("perturb-site").join("bundles");
+        std::fs::create_dir_all(&bundles).unwrap();
+        crate::leaderboard::pack(forged_fixture(), &bundles.join("expert.tar.zst"), true);
+        let site = scratch("perturb-site").join("site");
+        common::autobio_ok(&[
+            "leaderboard",
+            "build",
+            bundles.to_str().unwrap(),
+            "--out",
+            site.to_str().unwrap(),
+        ]);
+        let html = std::fs::read_to_string(site.join("index.html")).unwrap();
+        assert!(
+            html.contains("Robustness") && html.contains("<th>layout:1</th>"),
+            "{html}"
+        );
+        let json: Value =
+            serde_json::from_slice(&std::fs::read(site.join("robustness.json")).unwrap()).unwrap();
+        let (group, table) = json.as_object().unwrap().iter().next().unwrap();
+        assert!(group.contains("robustness-smoke"), "{group}");
+        assert_eq!(table["presets"], serde_json::json!(["light:2", "layout:1"]));
+        let row = &table["rows"][0];
+        // The expert wins every episode, clean and perturbed: no drop, an interval about it.
+        assert_eq!(row["clean"][0], 100.0);
+        for cell in row["cells"].as_array().unwrap() {
+            assert_eq!(cell["success"], 100.0);
+            assert_eq!(cell["drop"], 0.0);
+            let [lo, hi] = [0, 1].map(|k| cell["drop_interval"][k].as_f64().unwrap());
+            assert!(lo < 0.0 && hi > 0.0, "{cell}");
+        }
+        let md = std::fs::read_to_string(site.join("ranking.md")).unwrap();
+        assert!(
+            md.contains("| model | clean % | light:2 | layout:1 |"),
+            "{md}"
+        );
+    }
+}
+
+/// The genuine `robustness-smoke` run's bundle members (shared with the site test).
+fn forged_fixture() -> &'static std::collections::BTreeMap<String, Vec<u8>> {
+    &forged::genuine().1
+}

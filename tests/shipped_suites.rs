@@ -87,6 +87,8 @@ fn every_shipped_suite_compiles_and_none_is_trivial() {
             "lab.toml",
             "learned-smoke.toml",
             "paper.toml",
+            "robustness-smoke.toml",
+            "robustness.toml",
             "smoke.toml"
         ]
     );
@@ -107,6 +109,19 @@ fn every_shipped_suite_compiles_and_none_is_trivial() {
                 p.display()
             );
             assert_eq!(c.trivial_at(), None, "{name}: {} is trivial", p.display());
+        }
+        // Each preset the suite names keeps every task's cameras on the work (E0045's check).
+        for e in s.entries() {
+            let task = e.task(
+                compiler::check_file(&e.protocol, None)
+                    .unwrap()
+                    .task
+                    .unwrap(),
+            );
+            if let Some(shake) = task.perturb.as_ref().and_then(|p| p.camera.as_ref()) {
+                let problem = compiler::perturb::camera_problem(&task, shake);
+                assert_eq!(problem, None, "{name}: {}", task.id);
+            }
         }
     }
 }

@@ -317,16 +317,38 @@ fn field(
     }
 }
 
-/// The share of a camera's narrowest half view its axis may turn through: the middle of the
+/// The share of a camera's narrowest half view its aim may swing through: the middle of the
 /// clean frame stays in the middle half of the shaken one.
 const KEEP_IN_VIEW: f64 = 0.5;
 
-/// Every fixed camera the shake moves keeps the work its task frames: the clean view's centre
-/// (what the camera was aimed at) stays within the inner half of the shaken view, at the shake's
-/// extremes (the largest turn, plus the angle the largest shift subtends at the items' middle,
-/// with the field of view at its narrowest); E0045 otherwise. Wrist cameras move with the arm
-/// and are not checked.
+/// Reports (E0045, at the `camera` dimension) a shake that could lose the work; whether none could.
 fn camera_keeps_the_work(cx: &mut Cx, c: &CameraShake, table: &ast::Perturb, task: &Task) -> bool {
+    let Some(problem) = camera_problem(task, c) else {
+        return true;
+    };
+    let span = table
+        .dimensions
+        .iter()
+        .find(|d| d.name.value == "camera")
+        .map_or(table.span, |d| d.name.span);
+    cx.err(
+        Code::E0045,
+        span,
+        problem,
+        Some(
+            "narrow `turn_deg`, `shift_m` or `fovy_deg`, or name the cameras to shake in `cameras`"
+                .into(),
+        ),
+    );
+    false
+}
+
+/// Whether a camera shake keeps the work each fixed camera of `task` frames: the clean view's
+/// centre (what the camera was aimed at) stays within the inner half of the shaken view at the
+/// shake's extremes (the largest turn, plus the angle the largest shift subtends at the items'
+/// middle, with the field of view at its narrowest). `None` when it does, else what goes wrong.
+/// Wrist cameras move with the arm and are not checked.
+pub fn camera_problem(task: &Task, c: &CameraShake) -> Option<String> {
     let v = |a: [f64; 3]| nalgebra::Vector3::new(a[0], a[1], a[2]);
     let places: Vec<_> = task
         .labware
@@ -334,14 +356,9 @@ fn camera_keeps_the_work(cx: &mut Cx, c: &CameraShake, table: &ast::Perturb, tas
         .map(|l| l.placement.translation.vector)
         .collect();
     if places.is_empty() {
-        return true;
+        return None;
     }
     let middle = places.iter().sum::<nalgebra::Vector3<f64>>() / places.len() as f64;
-    let span = table
-        .dimensions
-        .iter()
-        .find(|d| d.name.value == "camera")
-        .map_or(table.span, |d| d.name.span);
     for cam in &task.cameras {
         if !c.cameras.is_empty() && !c.cameras.contains(&cam.name) {
             continue;
@@ -353,23 +370,17 @@ fn camera_keeps_the_work(cx: &mut Cx, c: &CameraShake, table: &ast::Perturb, tas
         let worst = c.turn_deg + (c.shift_m / distance).atan().to_degrees();
         let half = (fovy_deg - c.fovy_deg).max(1.0) / 2.0;
         if worst > KEEP_IN_VIEW * half {
-            cx.err(
-                Code::E0045,
-                span,
-                format!(
-                    "camera `{}` could lose the work: turned {:.1}° and moved {:.0} mm ({:.0} mm from the items), its aim could swing {worst:.1}°, past {:.1}° (half of half its narrowest view)",
-                    cam.name,
-                    c.turn_deg,
-                    c.shift_m * 1000.0,
-                    distance * 1000.0,
-                    KEEP_IN_VIEW * half,
-                ),
-                Some("narrow `turn_deg`, `shift_m` or `fovy_deg`, or name the cameras to shake in `cameras`".into()),
-            );
-            return false;
+            return Some(format!(
+                "camera `{}` could lose the work: turned {:.1}° and moved {:.0} mm ({:.0} mm from the items), its aim could swing {worst:.1}°, past {:.1}° (half of half its narrowest view)",
+                cam.name,
+                c.turn_deg,
+                c.shift_m * 1000.0,
+                distance * 1000.0,
+                KEEP_IN_VIEW * half,
+            ));
         }
     }
-    true
+    None
 }
 
 /// Each paraphrase names exactly the instruction's placeholders (E0045 for one dropped or added).

@@ -17,6 +17,7 @@ mod lower;
 
 pub(crate) use draw::draw;
 pub use draw::{CameraDraw, Drawn, LightDraw, NoiseDraw, Tint};
+pub use lower::camera_problem;
 pub(crate) use lower::{check_paraphrases, lower};
 
 use serde::{Deserialize, Serialize};

@@ -83,6 +83,52 @@ fn ranking(body: &mut String, g: &Group) {
         body.push_str("<h3>Paired over the suite (same tasks and seeds, exact McNemar)</h3>");
         body.push_str(&paired_table(&g.paired));
     }
+    if let Some(r) = &g.robustness {
+        robustness(body, r);
+    }
+}
+
+/// A robustness suite's table: clean success, then per preset its success and the drop from
+/// clean over the same tasks, each with its 95% interval.
+fn robustness(body: &mut String, r: &super::robustness::Robustness) {
+    body.push_str(
+        "<h3>Robustness: success under each perturbation (Wilson 95%) and the drop from clean \
+         over the same tasks (Newcombe 95%)</h3><table class=robustness><tr><th>model</th><th>clean %</th>",
+    );
+    for p in &r.presets {
+        let _ = write!(body, "<th>{}</th>", esc(p));
+    }
+    body.push_str("</tr>");
+    for row in &r.rows {
+        let _ = write!(
+            body,
+            "<tr><td class=l><a href=\"submissions/{}.html\">{}</a></td><td>{:.1} [{:.1}, {:.1}]</td>",
+            row.submission,
+            esc(&row.model),
+            row.clean.0,
+            row.clean.1[0],
+            row.clean.1[1]
+        );
+        for c in &row.cells {
+            match c {
+                Some(c) => {
+                    let _ = write!(
+                        body,
+                        "<td>{:.1} [{:.1}, {:.1}]<br>drop {:+.1} [{:+.1}, {:+.1}]</td>",
+                        c.success,
+                        c.wilson[0],
+                        c.wilson[1],
+                        -c.drop,
+                        -c.drop_interval[1],
+                        -c.drop_interval[0]
+                    );
+                }
+                None => body.push_str("<td>–</td>"),
+            }
+        }
+        body.push_str("</tr>");
+    }
+    body.push_str("</table>");
 }
 
 /// The paper's tables: its per-task scores and its long-horizon (concatenation) table.

@@ -309,6 +309,7 @@ fn refused_unreadable(name: &str, sha: &str, why: String) -> Submission {
                 seed: 0,
                 runs: 0,
                 tasks: Vec::new(),
+                perturb: Vec::new(),
             },
             suite_sha256: String::new(),
             files: BTreeMap::new(),

@@ -37,6 +37,43 @@ pub(super) fn ranking(site: &Site) -> String {
                 r.mean_score
             );
         }
+        if let Some(r) = &g.robustness {
+            let _ = write!(
+                md,
+                "\nRobustness: success under each perturbation [Wilson 95%], and the change from clean over the same tasks [Newcombe 95%].\n\n| model | clean % |{}\n|---|---|{}\n",
+                r.presets
+                    .iter()
+                    .map(|p| format!(" {} |", md_cell(p)))
+                    .collect::<String>(),
+                "---|".repeat(r.presets.len())
+            );
+            for row in &r.rows {
+                let cells: String = row
+                    .cells
+                    .iter()
+                    .map(|c| match c {
+                        Some(c) => format!(
+                            " {:.1} [{:.1}, {:.1}], {:+.1} [{:+.1}, {:+.1}] |",
+                            c.success,
+                            c.wilson[0],
+                            c.wilson[1],
+                            -c.drop,
+                            -c.drop_interval[1],
+                            -c.drop_interval[0]
+                        ),
+                        None => " – |".into(),
+                    })
+                    .collect();
+                let _ = writeln!(
+                    md,
+                    "| {} | {:.1} [{:.1}, {:.1}] |{cells}",
+                    md_cell(&row.model),
+                    row.clean.0,
+                    row.clean.1[0],
+                    row.clean.1[1]
+                );
+            }
+        }
     }
     md
 }

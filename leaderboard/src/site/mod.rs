@@ -7,7 +7,8 @@
 //! paper, not re-run".
 //!
 //! Pages: an overall ranking per suite and conditions (results under another suite, autobio
-//! version or model profile are never averaged together), a page per task (success with its
+//! version or model profile are never averaged together; a robustness suite's group also shows
+//! success per perturbation preset and the drop from clean, `robustness.rs`, `robustness.json`), a page per task (success with its
 //! Wilson 95% interval, mean score, mean ± SEM across runs, a chart with error bars, and paired
 //! McNemar tests between submissions on the same seeds), a page per submission (conditions,
 //! standing, every episode's outcome), and JSON and Markdown exports of each table. Same inputs,
@@ -27,6 +28,7 @@ mod load;
 mod markdown;
 pub mod model;
 mod paper;
+pub mod robustness;
 mod stats;
 
 pub use load::{Record, Standing, Submission, TaskResult, load, record_path, write_record};
@@ -131,6 +133,15 @@ pub fn build(
         .map(|g| (g.name.as_str(), &g.rows))
         .collect();
     files.write("ranking.json", &json(&ranks))?;
+    // A robustness suite's tables, by group (only where a group's suite names presets).
+    let robust: BTreeMap<&str, &robustness::Robustness> = site
+        .groups
+        .iter()
+        .filter_map(|g| Some((g.name.as_str(), g.robustness.as_ref()?)))
+        .collect();
+    if !robust.is_empty() {
+        files.write("robustness.json", &json(&robust))?;
+    }
     files.write("reference.json", &json(&site.reference))?;
     for page in &site.tasks {
         let file = &page.slug;

@@ -39,6 +39,8 @@ pub struct Group {
     pub chart: Vec<Bar>,
     /// Every two of the group's submissions paired over the suite's episodes.
     pub paired: Vec<Paired>,
+    /// When the group's suite names perturbation presets: success under each, and the drop.
+    pub robustness: Option<super::robustness::Robustness>,
 }
 
 /// One bar of a chart with its error bar (percent).
@@ -221,11 +223,13 @@ fn groups(subs: &[Submission]) -> Vec<Group> {
                     paired.extend(paired_over_suite(a, b));
                 }
             }
+            let robustness = super::robustness::table(&members);
             Group {
                 name,
                 rows,
                 chart,
                 paired,
+                robustness,
             }
         })
         .collect()

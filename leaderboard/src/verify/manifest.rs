@@ -67,9 +67,13 @@ pub(super) fn check(
     if m.task_content_sha256.as_deref() != Some(want.content) {
         // Everything else derived from the task (its hashes, files, conditions, episodes)
         // differs for this one reason.
+        let under = results::suite::split_variant(&task.id)
+            .1
+            .map(|p| format!(" under the suite's `{p}`"))
+            .unwrap_or_default();
         failures.push(format!(
             "{shown}: the results are for a modified task (its compiled content \
-             differs from the shipped {})",
+             differs from the shipped {}{under})",
             want.protocol.display()
         ));
         return (None, failures);

@@ -182,7 +182,8 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
     let mut checkpoints: Vec<Checkpointed> = Vec::new();
     // Each (folder, task)'s manifest and journal, for its results file.
     let mut reports: Vec<manifest::Reported> = Vec::new();
-    for (entry, protocol) in suite.tasks.iter().zip(shipped.protocols()) {
+    for suite_entry in shipped.entries() {
+        let (entry, protocol) = (suite_entry.listed.as_str(), suite_entry.protocol.clone());
         // This task's results files, checked once its seeds are the plan's.
         let mut task_reports: Vec<manifest::Reported> = Vec::new();
         let task = match compiler::check_file(&protocol, None) {
@@ -195,8 +196,9 @@ pub fn verify(bundle: &Unpacked, opts: &VerifyOptions, reenact: &Reenact) -> Ver
                 ));
                 continue;
             }
+            // A preset's run is the shipped task under it (its id and content name it).
             Ok(c) => match c.task {
-                Some(t) => t,
+                Some(t) => suite_entry.task(t),
                 None => {
                     v.failures.push(format!(
                         "the shipped {} does not compile",
