@@ -396,14 +396,24 @@ mod forged {
                 .unwrap()
                 .remove("perturbation");
         });
-        refused_for("perturb-removed", &m, LIGHT, "`/task` message 0 (at 0 s) is not the episode's");
+        refused_for(
+            "perturb-removed",
+            &m,
+            LIGHT,
+            "`/task` message 0 (at 0 s) is not the episode's",
+        );
 
         // The light perturbation altered (a dimmer draw claimed).
         let mut m = genuine.clone();
         edit_task_message(&mut m, LIGHT, |v| {
             v["instance"]["perturbation"]["light"]["scale"] = Value::from(1.0);
         });
-        refused_for("perturb-altered", &m, LIGHT, "`/task` message 0 (at 0 s) is not the episode's");
+        refused_for(
+            "perturb-altered",
+            &m,
+            LIGHT,
+            "`/task` message 0 (at 0 s) is not the episode's",
+        );
 
         // The manifest claims the clean task's content for the perturbed task's run.
         let mut m = genuine.clone();
@@ -413,14 +423,24 @@ mod forged {
         let mut manifest: Value = serde_json::from_slice(&m[&key]).unwrap();
         manifest["task_content_sha256"] = clean["task_content_sha256"].clone();
         m.insert(key, serde_json::to_vec_pretty(&manifest).unwrap());
-        refused_for("perturb-clean-content", &m, LIGHT, "under the suite's `light:2`");
+        refused_for(
+            "perturb-clean-content",
+            &m,
+            LIGHT,
+            "under the suite's `light:2`",
+        );
 
         // The layout run's recording replaced by the clean run's (renamed): its actions, made
         // for the clean layout, are re-enacted on the perturbed one.
         let mut m = genuine.clone();
         let clean_rec = m[&format!("runs/0/{CLEAN}_seed0.mcap")].clone();
         m.insert(format!("runs/0/{LAYOUT}_seed0.mcap"), clean_rec);
-        refused_for("perturb-layout-swapped", &m, LAYOUT, "re-enacted from its seed and recorded actions");
+        refused_for(
+            "perturb-layout-swapped",
+            &m,
+            LAYOUT,
+            "re-enacted from its seed and recorded actions",
+        );
 
         // The suite's presets dropped from the index: not the shipped suite.
         let mut m = genuine.clone();

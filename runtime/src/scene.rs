@@ -289,7 +289,7 @@ pub fn scene_xml(task: &Task, placements: &[Pose], detail: Detail) -> Result<Str
 {actuator}</mujoco>
 "#,
         id = task.id,
-        room = format!("{ROOM}{}", spare_lights(task)),
+        room = ROOM.to_string() + &spare_lights(task),
         bx = BENCH_HALF[0],
         by = BENCH_HALF[1],
         bz = BENCH_TOP / 2.0,
