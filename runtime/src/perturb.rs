@@ -4,40 +4,13 @@
 //! is the same under any look. What is drawn, and from which seed, is the compiler's
 //! (`compiler::perturb`); this module only shows it.
 
-use crate::scene::{Owner, Scene};
+use crate::scene::{Owner, SPARE_LIGHT, Scene};
 use compiler::perturb::{CameraDraw, Drawn, LightDraw, NoiseDraw, Tint};
 use mujoco_rs::prelude::*;
 use rand_chacha::ChaCha8Rng;
 use rand_core::{RngCore, SeedableRng};
 use results::Image;
 use std::collections::BTreeSet;
-
-/// The name prefix of the lights a light perturbation may turn on (off in the scene as built).
-pub const SPARE_LIGHT: &str = "perturb/light";
-
-/// The MJCF of `n` spare lights around the room, off until a light perturbation turns them on.
-pub(crate) fn spare_lights(n: u32) -> String {
-    const PLACES: [[f64; 3]; 3] = [[-1.6, -1.4, 2.4], [1.6, -1.2, 2.2], [0.0, 1.6, 2.6]];
-    PLACES
-        .iter()
-        .take(n as usize)
-        .enumerate()
-        .map(|(k, p)| {
-            // Each looks at the bench's middle.
-            let d = [-p[0], -p[1], 0.9 - p[2]];
-            format!(
-                "    <light name=\"{SPARE_LIGHT}{}\" pos=\"{} {} {}\" dir=\"{} {} {}\" directional=\"false\" castshadow=\"false\" diffuse=\"0.3 0.3 0.3\" active=\"false\"/>\n",
-                k + 1,
-                p[0],
-                p[1],
-                p[2],
-                d[0],
-                d[1],
-                d[2]
-            )
-        })
-        .collect()
-}
 
 /// `drawn`'s lights, colours and cameras set on `model`, a copy of `scene`'s render model.
 pub(crate) fn apply_look(model: &mut MjModel, scene: &Scene, drawn: &Drawn) {

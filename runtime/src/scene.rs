@@ -192,7 +192,35 @@ fn spare_lights(task: &Task) -> String {
         .as_ref()
         .and_then(|p| p.light.as_ref())
         .map_or(1, |l| l.lights[1]);
-    crate::perturb::spare_lights(most.saturating_sub(1))
+    spare_light_mjcf(most.saturating_sub(1))
+}
+
+/// The name prefix of the lights a light perturbation may turn on (off in the scene as built;
+/// `crate::perturb` turns them on).
+pub const SPARE_LIGHT: &str = "perturb/light";
+
+/// The MJCF of `n` spare lights around the room, off until a light perturbation turns them on.
+fn spare_light_mjcf(n: u32) -> String {
+    const PLACES: [[f64; 3]; 3] = [[-1.6, -1.4, 2.4], [1.6, -1.2, 2.2], [0.0, 1.6, 2.6]];
+    PLACES
+        .iter()
+        .take(n as usize)
+        .enumerate()
+        .map(|(k, p)| {
+            // Each looks at the bench's middle.
+            let d = [-p[0], -p[1], 0.9 - p[2]];
+            format!(
+                "    <light name=\"{SPARE_LIGHT}{}\" pos=\"{} {} {}\" dir=\"{} {} {}\" directional=\"false\" castshadow=\"false\" diffuse=\"0.3 0.3 0.3\" active=\"false\"/>\n",
+                k + 1,
+                p[0],
+                p[1],
+                p[2],
+                d[0],
+                d[1],
+                d[2]
+            )
+        })
+        .collect()
 }
 
 /// The scene's MJCF; `detail` picks the robots' visual meshes (nothing else differs).
