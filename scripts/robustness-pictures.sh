@@ -10,7 +10,7 @@ autobio() {
 }
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-for d in light material camera noise robot_start layout; do
+for d in light material camera noise robot_start layout distractors; do
   for s in 1 2; do
     autobio render protocols/tube/transfer.toml --seed 3 --size 160x120 \
       --perturb "$d:$s" --png "$tmp/$d-$s.png" >/dev/null

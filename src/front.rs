@@ -80,7 +80,7 @@ impl Front {
 #[derive(Clone, Debug, Default, clap::Args)]
 pub struct PerturbArgs {
     /// Perturb every episode along a dimension at strength 1 (mild, the default) or 2 (strong):
-    /// light, material, camera, noise, language, robot_start or layout (`--perturb camera:2`;
+    /// light, material, camera, noise, language, robot_start, layout or distractors (`--perturb camera:2`;
     /// repeat for more; over the task's own `[perturb]`; docs/robustness.md)
     #[arg(long = "perturb", value_name = "DIM[:STRENGTH]")]
     pub presets: Vec<compiler::perturb::Preset>,

@@ -1,8 +1,8 @@
 //! Perturbations (docs/robustness.md): each dimension changes what it should (the frames, the
-//! instruction, the start pose, the layout) and nothing else; the visual ones and the wording
-//! leave the expert's trajectory as it was, hash for hash, while frames are drawn every step;
-//! under start-pose and layout perturbations the expert still wins and the motionless robot
-//! still fails; a dimension's draw does not depend on which others are on; and `autobio demo
+//! instruction, the start pose, the layout, the items on the bench) and nothing else; the visual
+//! ones and the wording leave the expert's trajectory as it was, hash for hash, while frames are
+//! drawn every step; under start-pose, layout and distractor perturbations the expert still wins
+//! and the motionless robot still fails; a dimension's draw does not depend on which others are on; and `autobio demo
 //! --perturb` writes what each episode drew into the dataset, which LeRobot's readers load.
 
 use crate::common;
@@ -85,6 +85,17 @@ fn each_dimension_changes_what_it_should_and_nothing_else() {
             match d {
                 // Only words change: the same pixels.
                 Dimension::Language => assert_eq!(share, 0.0, "{d}"),
+                // Racks stood at the bench's free places: bodies of the scene, in view or not
+                // (one rack may stand at the frame's edge).
+                Dimension::Distractors => {
+                    let drawn = inst.perturbation.as_ref().unwrap();
+                    assert!(!drawn.distractors.is_empty());
+                    let bodies = |t: &Task, i: &SceneInstance| {
+                        runtime::Scene::build(t, i).unwrap().model.ffi().nbody
+                    };
+                    assert!(bodies(&t, &inst) > bodies(&task, &clean), "{d}:{strength}");
+                    assert!(share > 0.0, "{d}:{strength} changed no pixel");
+                }
                 _ => assert!(share > 0.02, "{d}:{strength} changed {share} of the pixels"),
             }
             // A dimension draws the same whether the others are on or not.
@@ -99,6 +110,8 @@ fn each_dimension_changes_what_it_should_and_nothing_else() {
                     Dimension::Language => alone.language == with_all.language,
                     Dimension::RobotStart => alone.robot_start == with_all.robot_start,
                     Dimension::Layout => alone.layout == with_all.layout,
+                    // Drawn after the layout, clear of the items where they then stand.
+                    Dimension::Distractors => true,
                 };
                 assert!(same, "{d} draws differently beside the others");
             }
@@ -183,10 +196,14 @@ fn the_expert_trajectory_is_the_same_under_every_look_and_wording() {
 }
 
 #[test]
-fn under_start_pose_and_layout_perturbations_the_expert_wins_and_hold_fails() {
+fn under_start_pose_layout_and_distractor_perturbations_the_expert_wins_and_hold_fails() {
     for path in [PICK_UP, "protocols/thermal_cycler/close_lid.toml"] {
         let task = common::compile(path);
-        for d in [Dimension::RobotStart, Dimension::Layout] {
+        for d in [
+            Dimension::RobotStart,
+            Dimension::Layout,
+            Dimension::Distractors,
+        ] {
             let t = under(&task, d, 2);
             for seed in 0..3 {
                 let r = common::run(&t, seed, "expert");

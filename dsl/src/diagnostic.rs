@@ -107,7 +107,8 @@ pub enum Code {
     /// An imported value that is out of range.
     E0044,
     /// A perturbation the task cannot take: a paraphrase that drops or adds a parameter, a camera
-    /// turned or moved off the work, a camera it names that the task does not have.
+    /// turned or moved off the work, a camera it names that the task does not have, distractors
+    /// on a bench with no free place.
     E0045,
     /// The success condition already holds at the start.
     W0001,
@@ -416,7 +417,7 @@ impl Code {
                 "A number in the imported file cannot be used: a volume larger than the tube a well becomes holds,\na negative or non-finite volume or time, a volume no hand-held pipette here sets (the P200 sets\n20-200 µL, the P1000 100-1000 µL); an Autoprotocol quantity that does not read as `number:unit`\nor whose unit is of the wrong kind (the message lists the units the field takes)."
             }
             Code::E0045 => {
-                "A `[perturb]` dimension or a paraphrase would change what the task is, not how it looks or is\nsaid: a paraphrase (`[protocol] paraphrases`) must name every `{param}` the instruction names\nand no other, or an episode would be told a different task; `perturb.camera` may not turn or\nmove a fixed camera so far that what it is aimed at (the clean view's centre) could leave the\ninner half of its shaken view (its field of view at its narrowest, the shift seen from the\nitems' middle), and its `cameras` must name the task's cameras (`table_front`, `<robot>/wrist`). Narrow `shift_m`, `turn_deg` or `fovy_deg`, or fix the\nparaphrase. docs/robustness.md describes every dimension."
+                "A `[perturb]` dimension or a paraphrase would change what the task is, not how it looks or is\nsaid: a paraphrase (`[protocol] paraphrases`) must name every `{param}` the instruction names\nand no other, or an episode would be told a different task; `perturb.camera` may not turn or\nmove a fixed camera so far that what it is aimed at (the clean view's centre) could leave the\ninner half of its shaken view (its field of view at its narrowest, the shift seen from the\nitems' middle), and its `cameras` must name the task's cameras (`table_front`, `<robot>/wrist`);\n`perturb.distractors` needs a free place on the bench (20 cm from every item, 30 cm from\nevery robot's base, 15 cm from the way between them). Narrow `shift_m`, `turn_deg` or\n`fovy_deg`, fix the paraphrase, or leave distractors out of a crowded bench. docs/robustness.md describes every dimension."
             }
             Code::W0001 => {
                 "Every success predicate is already true in the initial state, so an episode succeeds before the\nrobot moves. Usually an initial `state` or a predicate is wrong. A round trip (open a lid, then\nclose it) is written with `was` (`cycler.lid was open` beside `cycler.lid is closed`) or as a chain. `eval` and `demo` refuse the task unless `--allow-trivial`."

@@ -67,3 +67,13 @@ registry::registry! {
         "pipette_p200" => pipette::Params::p200(),
     },
 }
+
+/// The kinds that stand on the bench alone and hold still, unused: the racks and blocks. What a
+/// `distractors` perturbation may place (docs/robustness.md).
+pub fn distractor_kinds() -> Vec<&'static str> {
+    KINDS
+        .iter()
+        .map(|k| k.name)
+        .filter(|k| matches!(Model::for_kind(k), Some(Model::Rack(_))))
+        .collect()
+}

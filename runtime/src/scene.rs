@@ -102,6 +102,9 @@ pub struct Scene {
     pub xml: String,
     /// Labware placements the model was built with.
     pub placements: Vec<Pose>,
+    /// The distractors the model was built with (a `distractors` perturbation's draw): inert
+    /// items no step, check or state names.
+    pub distractors: Vec<compiler::perturb::Distractor>,
     /// Each body's owner (`None`: the world, the bench, the room), for contact predicates.
     pub body_owner: Vec<Option<Owner>>,
     /// Each body's finger (the robot whose finger it is or hangs from) and loose part (the
@@ -184,6 +187,18 @@ fn pedestal(robot: &str, base: &Pose) -> String {
     )
 }
 
+/// The name prefix of distractor items in the scene (`perturb/distractor1`, ...).
+pub const DISTRACTOR: &str = "perturb/distractor";
+
+/// The distractors an instance's perturbation drew (none without one).
+fn distractors_of(instance: &SceneInstance) -> Vec<compiler::perturb::Distractor> {
+    instance
+        .perturbation
+        .as_ref()
+        .map(|p| p.distractors.clone())
+        .unwrap_or_default()
+}
+
 /// The lights a task's light perturbation may turn on beyond the ceiling's, off as built (none
 /// for a task without one, whose scene stays as it was).
 fn spare_lights(task: &Task) -> String {
@@ -224,7 +239,12 @@ fn spare_light_mjcf(n: u32) -> String {
 }
 
 /// The scene's MJCF; `detail` picks the robots' visual meshes (nothing else differs).
-pub fn scene_xml(task: &Task, placements: &[Pose], detail: Detail) -> Result<String, SceneError> {
+pub fn scene_xml(
+    task: &Task,
+    placements: &[Pose],
+    distractors: &[compiler::perturb::Distractor],
+    detail: Detail,
+) -> Result<String, SceneError> {
     let mut world = String::new();
     let mut assets = String::new();
     for cam in &task.cameras {
@@ -275,6 +295,21 @@ pub fn scene_xml(task: &Task, placements: &[Pose], detail: Detail) -> Result<Str
         plugins.extend(
             model
                 .mechanisms(&l.name)
+                .iter()
+                .map(Mechanism::plugin_instance),
+        );
+    }
+    for (k, d) in distractors.iter().enumerate() {
+        let name = format!("{DISTRACTOR}{}", k + 1);
+        let model = labware::Model::for_kind(&d.kind)
+            .ok_or_else(|| SceneError::Unmodelled(name.clone(), d.kind.clone()))?;
+        let instrument = model
+            .instrument()
+            .ok_or_else(|| SceneError::Unmodelled(name.clone(), d.kind.clone()))?;
+        labware.append(instrument.fragment(&name, &d.pose()));
+        plugins.extend(
+            instrument
+                .mechanisms(&name)
                 .iter()
                 .map(Mechanism::plugin_instance),
         );
@@ -554,7 +589,12 @@ impl Scene {
         // (`Episode::reset`) relies on it.
         compiler::quantities::Quantities::resolve(task, &instance.params)?;
         match slot {
-            Some(s) if s.placements == instance.labware_placement => Ok(s.clone()),
+            Some(s)
+                if s.placements == instance.labware_placement
+                    && s.distractors == distractors_of(instance) =>
+            {
+                Ok(s.clone())
+            }
             _ => {
                 let built = std::sync::Arc::new(Scene::build(task, instance)?);
                 *slot = Some(built.clone());
@@ -570,8 +610,9 @@ impl Scene {
         check_measurable(task)?;
         compiler::quantities::Quantities::resolve(task, &instance.params)?;
         let placements = instance.labware_placement.clone();
+        let distractors = distractors_of(instance);
         physics::register().map_err(|e| SceneError::Compile(e.to_string()))?;
-        let xml = scene_xml(task, &placements, Detail::Full)?;
+        let xml = scene_xml(task, &placements, &distractors, Detail::Full)?;
         let model =
             MjModel::from_xml_string(&xml).map_err(|e| SceneError::Compile(e.to_string()))?;
         let errors = physics::instance_errors(model.ffi(), MjData::new(&model).ffi());
@@ -632,6 +673,7 @@ impl Scene {
             cameras,
             xml,
             placements,
+            distractors,
             body_owner,
             body_finger,
             body_part,
@@ -650,8 +692,13 @@ impl Scene {
         }
         self.simplified
             .get_or_init(|| {
-                let xml = scene_xml(&self.task, &self.placements, Detail::Simplified)
-                    .map_err(|e| SimplifiedError::Xml(Arc::new(e)))?;
+                let xml = scene_xml(
+                    &self.task,
+                    &self.placements,
+                    &self.distractors,
+                    Detail::Simplified,
+                )
+                .map_err(|e| SimplifiedError::Xml(Arc::new(e)))?;
                 let m = MjModel::from_xml_string(&xml)?;
                 let same = |a: &MjModel, b: &MjModel| {
                     let (a, b) = (a.ffi(), b.ffi());

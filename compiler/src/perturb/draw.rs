@@ -34,6 +34,9 @@ pub struct Drawn {
     /// Offsets added to an item's placement: x, y (m), yaw (rad), by item.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub layout: BTreeMap<String, [f64; 3]>,
+    /// Unused items stood where they block nothing (the runtime builds them into the scene).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub distractors: Vec<super::Distractor>,
 }
 
 impl Drawn {
@@ -213,6 +216,11 @@ pub(crate) fn draw(p: &Perturb, task: &Task, instance: &mut SceneInstance) -> Dr
             );
             d.layout.insert(item.name.clone(), o);
         }
+    }
+    // After the layout: distractors keep clear of the items where they now stand.
+    if let Some(x) = &p.distractors {
+        let mut rng = stream(seed, Dimension::Distractors);
+        d.distractors = super::distractors::draw(x, task, instance, &mut rng);
     }
     d
 }

@@ -3,7 +3,7 @@
 //! camera named that the task lacks or a fixed camera shaken off the work (E0045), and each
 //! paraphrase against the instruction's placeholders (E0045).
 
-use super::{CameraShake, Dimension, MAX_LIGHTS, Perturb, STRENGTHS, Surface};
+use super::{CameraShake, Dimension, MAX_DISTRACTORS, MAX_LIGHTS, Perturb, STRENGTHS, Surface};
 use crate::report::{Cx, hint_for};
 use crate::task::{CameraMount, Task};
 use dsl::Code;
@@ -49,6 +49,24 @@ pub(crate) fn lower(cx: &mut Cx, table: &ast::Perturb, task: &Task) -> Option<Pe
         && ok
     {
         ok &= camera_keeps_the_work(cx, c, table, task);
+    }
+    if let Some(d) = &out.distractors
+        && ok
+        && d.count[1] > 0
+        && super::distractors::room(task) == 0
+    {
+        let span = table
+            .dimensions
+            .iter()
+            .find(|d| d.name.value == "distractors")
+            .map_or(table.span, |d| d.name.span);
+        cx.err(
+            Code::E0045,
+            span,
+            "no place on the bench is clear of the work for a distractor (20 cm from every item, 30 cm from every robot's base, 15 cm from the way between them)".into(),
+            Some("move items closer together, or leave distractors out of this task".into()),
+        );
+        ok = false;
     }
     ok.then_some(out)
 }
@@ -311,6 +329,35 @@ fn field(
                 l.turn_deg = x;
             }
             ok
+        }
+        (Dimension::Distractors, "count") => {
+            let ok =
+                within(cx, v, &what, 0.0, f64::from(MAX_DISTRACTORS), "") && whole(cx, v, &what);
+            if let Some(d) = p.distractors.as_mut().filter(|_| ok) {
+                d.count = range(v).map(|x| x as u32);
+            }
+            ok
+        }
+        (Dimension::Distractors, "kinds") => {
+            let PerturbValue::Texts(names) = &v.value else {
+                return false;
+            };
+            let known = labware::distractor_kinds();
+            for n in names {
+                if !known.contains(&n.value.as_str()) {
+                    cx.err(
+                        Code::E0021,
+                        n.span,
+                        format!("`{what}` names `{}`, which is no kind that stands alone unused (a rack or a block)", n.value),
+                        Some(hint_for(&n.value, &known, "such kinds")),
+                    );
+                    return false;
+                }
+            }
+            if let Some(d) = p.distractors.as_mut() {
+                d.kinds = names.iter().map(|n| n.value.clone()).collect();
+            }
+            true
         }
         // The parser admits only the fields above.
         _ => true,

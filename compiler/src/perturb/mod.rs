@@ -1,6 +1,6 @@
 //! Perturbations: how a task's episodes may vary beyond its own randomisation, along the
 //! dimensions robustness studies name (light, materials, camera, image noise, the instruction's
-//! wording, the robot's start pose, the layout). A task carries them in [`Perturb`] (from its
+//! wording, the robot's start pose, the layout, distractor items). A task carries them in [`Perturb`] (from its
 //! `[perturb]` table, a suite's override or `--perturb`), so they are part of its content hash;
 //! [`Task::sample`](crate::Task::sample) draws them per episode into a [`Drawn`] record, each
 //! dimension from its own stream of the episode seed, so no draw of the task's own moves and
@@ -8,13 +8,16 @@
 //!
 //! The visual dimensions (light, material, camera, noise) are only drawn here: the runtime applies
 //! them to its render model and frames, never to the simulated model. Language, start pose and
-//! layout are applied here, to the instance. This module checks nothing about a file (see
+//! layout are applied here, to the instance; distractors are drawn here and built into the scene
+//! by the runtime. This module checks nothing about a file (see
 //! `lower.rs`) and renders nothing.
 
+mod distractors;
 mod draw;
 mod language;
 mod lower;
 
+pub use distractors::Distractor;
 pub(crate) use draw::draw;
 pub use draw::{CameraDraw, Drawn, LightDraw, NoiseDraw, Tint};
 pub use lower::camera_problem;
@@ -34,10 +37,11 @@ pub enum Dimension {
     Language,
     RobotStart,
     Layout,
+    Distractors,
 }
 
 impl Dimension {
-    pub const ALL: [Dimension; 7] = [
+    pub const ALL: [Dimension; 8] = [
         Dimension::Light,
         Dimension::Material,
         Dimension::Camera,
@@ -45,6 +49,7 @@ impl Dimension {
         Dimension::Language,
         Dimension::RobotStart,
         Dimension::Layout,
+        Dimension::Distractors,
     ];
 
     pub fn name(self) -> &'static str {
@@ -56,6 +61,7 @@ impl Dimension {
             Dimension::Language => "language",
             Dimension::RobotStart => "robot_start",
             Dimension::Layout => "layout",
+            Dimension::Distractors => "distractors",
         }
     }
 
@@ -66,7 +72,10 @@ impl Dimension {
     /// Whether the dimension changes only what is seen or read (frames, the instruction), never
     /// the simulation: the expert's trajectory under it is the unperturbed one.
     pub fn leaves_physics(self) -> bool {
-        !matches!(self, Dimension::RobotStart | Dimension::Layout)
+        !matches!(
+            self,
+            Dimension::RobotStart | Dimension::Layout | Dimension::Distractors
+        )
     }
 }
 
@@ -97,6 +106,8 @@ pub struct Perturb {
     pub robot_start: Option<RobotStart>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub layout: Option<Layout>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub distractors: Option<Distractors>,
 }
 
 /// The room's lights: every light's brightness scaled by a factor drawn from `intensity`, its
@@ -204,6 +215,20 @@ pub struct Layout {
     pub turn_deg: f64,
 }
 
+/// Between `count[0]` and `count[1]` unused racks or blocks (of `kinds`; empty: any) placed on
+/// the bench where they block nothing: clear of every item, every robot's base and the straight
+/// way from each base to each item (`distractors.rs`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Distractors {
+    pub count: [u32; 2],
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub kinds: Vec<String>,
+}
+
+/// The most distractors a perturbation may place.
+pub const MAX_DISTRACTORS: u32 = 4;
+
 impl Perturb {
     /// The preset of `dimension` at `strength` (1 mild, 2 strong), alone.
     pub fn preset(dimension: Dimension, strength: u8) -> Perturb {
@@ -258,6 +283,12 @@ impl Perturb {
                     turn_deg: pick(5.0, 12.0),
                 })
             }
+            Dimension::Distractors => {
+                p.distractors = Some(Distractors {
+                    count: if strong { [2, 3] } else { [1, 1] },
+                    kinds: Vec::new(),
+                })
+            }
         }
         p
     }
@@ -279,7 +310,8 @@ impl Perturb {
             noise,
             language,
             robot_start,
-            layout
+            layout,
+            distractors
         );
         self
     }
@@ -294,6 +326,7 @@ impl Perturb {
             self.language.is_some(),
             self.robot_start.is_some(),
             self.layout.is_some(),
+            self.distractors.is_some(),
         ];
         Dimension::ALL
             .into_iter()

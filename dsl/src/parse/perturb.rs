@@ -68,6 +68,10 @@ const DIMENSIONS: &[(&str, &[(&str, Shape)])] = &[
             ("turn", Shape::Number(Some(Dimension::Angle))),
         ],
     ),
+    (
+        "distractors",
+        &[("count", Shape::Range), ("kinds", Shape::Texts)],
+    ),
 ];
 
 /// The `[perturb]` table's dimensions, in their documented order.
