@@ -64,7 +64,7 @@ pub fn run(front: &Front, a: &DemoArgs) -> Result<ExitCode> {
         .load_all_to_run(&a.protocol, a.allow_trivial)?
         .into_iter()
         .map(|t| a.perturb.apply(t))
-        .collect();
+        .collect::<Result<_>>()?;
     let version = match a.format {
         DemoFormat::Mcap if a.shard.is_some() => {
             bail!("--shard splits datasets; for recordings use eval --record --shard")

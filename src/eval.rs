@@ -136,7 +136,8 @@ pub fn eval(front: &Front, a: &EvalArgs) -> Result<ExitCode> {
     let mut written = Vec::new();
     for entry in &entries {
         let loaded = front.load_to_run(&entry.protocol, a.allow_trivial)?;
-        let task = entry.task(a.perturb.apply(loaded));
+        let task = entry.task(a.perturb.apply(loaded)?);
+        crate::front::refuse_problems(&task)?;
         let opts = scoring::eval::EvalOptions {
             policy: a.policy.clone(),
             episodes,

@@ -87,8 +87,34 @@ pub struct PerturbArgs {
 }
 
 impl PerturbArgs {
-    /// The task with the presets over its own perturbations.
-    pub fn apply(&self, task: compiler::Task) -> compiler::Task {
-        task.with_perturb(&compiler::perturb::Preset::combine(&self.presets))
+    /// The task with the presets over its own perturbations, its id naming them
+    /// (`tube.pick_up@camera-2+noise-1`, so that its results never mix with the clean task's);
+    /// refused where a preset would break it (a camera off the work, no room for distractors).
+    pub fn apply(&self, task: compiler::Task) -> Result<compiler::Task> {
+        if self.presets.is_empty() {
+            return Ok(task);
+        }
+        let mut t = task.with_perturb(&compiler::perturb::Preset::combine(&self.presets));
+        let named: Vec<String> = self
+            .presets
+            .iter()
+            .map(|p| format!("{}-{}", p.dimension, p.strength))
+            .collect();
+        t.id = format!("{}@{}", t.id, named.join("+"));
+        refuse_problems(&t)?;
+        Ok(t)
     }
+}
+
+/// Refuses a task whose perturbations would break it (`compiler::perturb::problems`).
+pub fn refuse_problems(task: &compiler::Task) -> Result<()> {
+    let problems = compiler::perturb::problems(task);
+    if problems.is_empty() {
+        return Ok(());
+    }
+    bail!(
+        "{}: its perturbations cannot be run: {}",
+        task.id,
+        problems.join("; ")
+    )
 }

@@ -26,7 +26,7 @@ pub struct RenderArgs {
 }
 
 pub fn run(front: &Front, a: &RenderArgs) -> Result<ExitCode> {
-    let task = a.perturb.apply(front.load(&a.file)?);
+    let task = a.perturb.apply(front.load(&a.file)?)?;
     let clean = compiler::Task {
         perturb: None,
         ..task.clone()

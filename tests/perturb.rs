@@ -268,6 +268,58 @@ fn perturbed_datasets_record_each_episodes_draw_and_load_in_lerobots_readers() {
 }
 
 #[test]
+fn an_empty_table_perturbs_nothing_and_leaves_the_task_as_it_was() {
+    let clean = common::compile(PICK_UP);
+    let empty = common::compile_edited(PICK_UP, |s| s + "\n[perturb]\n");
+    assert_eq!(empty, clean);
+}
+
+#[test]
+fn presets_the_task_cannot_take_are_refused_and_named_ones_rename_the_task() {
+    // A narrow bench camera: the strong camera shake could swing its aim off the work.
+    let dir = common::scratch("perturb-refused");
+    let narrow = dir.join("narrow.toml");
+    let text = std::fs::read_to_string(PICK_UP)
+        .unwrap()
+        .replace("fovy_deg = 45", "fovy_deg = 12");
+    std::fs::write(&narrow, text).unwrap();
+    let out = common::autobio(&[
+        "eval",
+        "--protocol",
+        narrow.to_str().unwrap(),
+        "--perturb",
+        "camera:2",
+    ]);
+    assert_eq!(out.status.code(), Some(2), "{}", common::text(&out.stderr));
+    assert!(
+        common::text(&out.stderr)
+            .contains("its perturbations cannot be run: camera `table_front` could lose the work"),
+        "{}",
+        common::text(&out.stderr)
+    );
+    // A preset the task can take names itself in the task's id, so its results stand apart.
+    let runs = dir.join("runs");
+    let said = common::autobio_ok(&[
+        "eval",
+        "--protocol",
+        PICK_UP,
+        "--perturb",
+        "noise:2",
+        "--perturb",
+        "layout",
+        "--episodes",
+        "1",
+        "--out",
+        runs.to_str().unwrap(),
+    ]);
+    assert!(said.contains("tube.pick_up@noise-2+layout-1"), "{said}");
+    assert!(
+        runs.join("tube.pick_up@noise-2+layout-1.results.json")
+            .exists()
+    );
+}
+
+#[test]
 fn render_shows_the_clean_scene_over_the_perturbed_one() {
     let dir = common::scratch("perturb-render");
     let png = dir.join("camera.png");

@@ -151,6 +151,20 @@ fn compile_stages(
             }
             other => other,
         };
+        // A chain's perturbations are its runs' (`--perturb`, a suite): a stage's own are not
+        // read.
+        if let Document::Protocol(p) = &doc
+            && let Some(t) = &p.perturb
+        {
+            cx.push(
+                Diagnostic::new(
+                    Code::W0008,
+                    t.span,
+                    "a chain stage's `[perturb]` is not read: the chain's episodes are perturbed by `--perturb` or a suite's presets",
+                )
+                .with_hint("remove the table, or perturb the chain with `--perturb` or a suite"),
+            );
+        }
         texts.insert(path.clone(), loaded.text);
         cx.file = None;
         match doc {

@@ -118,7 +118,8 @@ pub fn compile(p: &Protocol, file: &str) -> (Option<Task>, Vec<Diagnostic>) {
         )
         .map(|mut task| {
             if let Some(table) = &p.perturb {
-                task.perturb = perturb::lower(&mut cx, table, &task);
+                // An empty table perturbs nothing and leaves the task (and its hash) as it was.
+                task.perturb = perturb::lower(&mut cx, table, &task).filter(|p| !p.is_empty());
             }
             task
         })

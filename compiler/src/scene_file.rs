@@ -100,7 +100,7 @@ pub(crate) fn merge(
                     named.span,
                     format!("`{}` is not a scene file", named.value),
                 )
-                .with_hint("a scene file has a `[scene]` table and only robots, labware, randomisation and a camera"),
+                .with_hint("a scene file has a `[scene]` table and only robots, labware, randomisation, a camera and perturbations"),
             );
             return None;
         }

@@ -611,6 +611,10 @@ fn start_key_name(prefix: &str) -> String {
 }
 
 impl Instrument for Params {
+    fn footprint_radius(&self) -> f64 {
+        self.base_half[0].hypot(self.base_half[1])
+    }
+
     fn fragment(&self, name: &str, placement: &Pose) -> Fragment {
         let n = LidNames::new(name);
         let key = key_name(name);

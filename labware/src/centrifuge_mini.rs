@@ -96,6 +96,10 @@ impl Params {
 }
 
 impl Instrument for Params {
+    fn footprint_radius(&self) -> f64 {
+        self.base_half[0].hypot(self.base_half[1])
+    }
+
     fn fragment(&self, name: &str, placement: &Pose) -> Fragment {
         let n = LidNames::new(name);
         let b = self.base_half;

@@ -295,6 +295,13 @@ pub trait Instrument {
     /// The item's MJCF at `placement` (world frame). Movable items get a free joint.
     fn fragment(&self, name: &str, placement: &Pose) -> Fragment;
 
+    /// The radius (m) of a circle about the item's origin that its footprint on the bench lies
+    /// within: what keeps a distractor clear of it (`compiler::perturb`). Small items (a tube,
+    /// a pipette) keep the default.
+    fn footprint_radius(&self) -> f64 {
+        0.05
+    }
+
     /// Plugin instances the item needs.
     fn mechanisms(&self, _name: &str) -> Vec<Mechanism> {
         Vec::new()

@@ -273,6 +273,10 @@ impl Params {
 }
 
 impl Instrument for Params {
+    fn footprint_radius(&self) -> f64 {
+        0.5 * self.size[0].hypot(self.size[1])
+    }
+
     fn fragment(&self, name: &str, placement: &Pose) -> Fragment {
         let geoms = self.geoms(name, [0.0; 3]);
         Fragment {

@@ -256,6 +256,10 @@ impl Latch {
 }
 
 impl Instrument for Params {
+    fn footprint_radius(&self) -> f64 {
+        self.base_half[0].hypot(self.base_half[1])
+    }
+
     fn fragment(&self, name: &str, placement: &Pose) -> Fragment {
         let n = LidNames::new(name);
         let (lever_body, lever_joint) = lever_names(name);

@@ -321,6 +321,10 @@ const KEY: [f64; 4] = [0.3, 0.32, 0.36, 1.0];
 const MARK: [f64; 4] = [0.95, 0.95, 0.95, 1.0];
 
 impl Instrument for Params {
+    fn footprint_radius(&self) -> f64 {
+        self.half[0].hypot(self.half[1])
+    }
+
     fn fragment(&self, name: &str, placement: &Pose) -> Fragment {
         let n = Names::new(name);
         let h = self.half;

@@ -210,6 +210,10 @@ impl Part for Params {
 }
 
 impl Instrument for Params {
+    fn footprint_radius(&self) -> f64 {
+        self.housing_half[0].hypot(self.housing_half[1])
+    }
+
     fn fragment(&self, name: &str, placement: &Pose) -> Fragment {
         let h = self.housing_half;
         let drive = self

@@ -1,7 +1,8 @@
 //! A drawn perturbation made visible: lights, surface colours and cameras changed on the render
 //! model's own copy ([`apply_look`]), and the sensor's noise applied to each frame after it is
-//! drawn ([`degrade`]). The simulated model is never touched, so physics (and the trajectory hash)
-//! is the same under any look. What is drawn, and from which seed, is the compiler's
+//! drawn ([`degrade`]). The simulated model is never changed by a look (its only addition, the
+//! spare lights a light perturbation may turn on, is built in off and touches no physics), so
+//! physics (and the trajectory hash) is the same under any look. What is drawn, and from which seed, is the compiler's
 //! (`compiler::perturb`); this module only shows it.
 
 use crate::scene::{Owner, SPARE_LIGHT, Scene};
@@ -171,16 +172,24 @@ pub fn degrade_frames(images: &mut [Image], drawn: Option<&Drawn>, seed: u64, st
 /// frame's noise drawn from the episode seed, the control step and the camera's place.
 pub fn degrade(image: &mut Image, noise: &NoiseDraw, seed: u64, step: u64, camera: usize) {
     let (w, h) = (image.width, image.height);
-    if noise.blur_px > 0.0 {
-        blur(&mut image.rgb, w, h, noise.blur_px);
+    if w == 0 || h == 0 || image.rgb.len() != w * h * 3 {
+        return;
     }
-    if noise.gaussian > 0.0 {
+    // Within what the compiler allows, whatever a recording says.
+    let (blur_px, gaussian) = (
+        noise.blur_px.clamp(0.0, 5.0),
+        noise.gaussian.clamp(0.0, 0.5),
+    );
+    if blur_px > 0.0 {
+        blur(&mut image.rgb, w, h, blur_px);
+    }
+    if gaussian > 0.0 {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        // Streams 1-7 are the perturbation draws'; each frame's is past them. Its bytes come
+        // Streams 1-8 are the perturbation draws'; each frame's is past them. Its bytes come
         // from a fast generator seeded from that stream (a frame takes 600 kB of them).
         rng.set_stream((1 << 40) | (step << 8) | camera as u64);
         let mut fast = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(rng.next_u64());
-        grain(&mut image.rgb, noise.gaussian * 255.0, &mut fast);
+        grain(&mut image.rgb, gaussian * 255.0, &mut fast);
     }
     if let Some(q) = noise.jpeg_quality {
         compress(&mut image.rgb, w, h, q);
@@ -352,4 +361,33 @@ mod tests {
         );
         assert!(flat.rgb.iter().all(|&x| x.abs_diff(90) <= 2));
     }
+
+    #[test]
+    fn a_degraded_frame_is_the_same_bytes_everywhere() {
+        // Recordings of noisy frames are compared byte for byte by `leaderboard verify`, on
+        // whatever CPU: blur, noise and the JPEG round trip (scalar paths only) must not depend
+        // on it. The digest pins this frame's bytes; a change of any of them shows here.
+        use sha2::Digest;
+        let (w, h) = (64, 48);
+        let mut img = Image {
+            camera: "c".into(),
+            width: w,
+            height: h,
+            rgb: (0..w * h * 3).map(|i| ((i * 37) % 251) as u8).collect(),
+        };
+        let n = NoiseDraw {
+            gaussian: 0.04,
+            blur_px: 1.1,
+            jpeg_quality: Some(35),
+        };
+        degrade(&mut img, &n, 11, 7, 1);
+        let digest = hex_of(&sha2::Sha256::digest(&img.rgb));
+        assert_eq!(digest, PINNED, "the degraded frame's bytes changed");
+    }
+
+    fn hex_of(b: &[u8]) -> String {
+        b.iter().map(|x| format!("{x:02x}")).collect()
+    }
+
+    const PINNED: &str = "f7b29308d7f676e8c727246b7ed04c4e5339b7a33d1c88c09758c7734b2d8342";
 }

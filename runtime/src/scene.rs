@@ -299,7 +299,9 @@ pub fn scene_xml(
                 .map(Mechanism::plugin_instance),
         );
     }
-    for (k, d) in distractors.iter().enumerate() {
+    // No more than a perturbation may draw, whatever an instance says.
+    let most = compiler::perturb::MAX_DISTRACTORS as usize;
+    for (k, d) in distractors.iter().take(most).enumerate() {
         let name = format!("{DISTRACTOR}{}", k + 1);
         let model = labware::Model::for_kind(&d.kind)
             .ok_or_else(|| SceneError::Unmodelled(name.clone(), d.kind.clone()))?;

@@ -53,7 +53,7 @@ pub(crate) fn lower(cx: &mut Cx, table: &ast::Perturb, task: &Task) -> Option<Pe
     if let Some(d) = &out.distractors
         && ok
         && d.count[1] > 0
-        && super::distractors::room(task) == 0
+        && super::distractors::room(task, d) == 0
     {
         let span = table
             .dimensions
@@ -63,7 +63,7 @@ pub(crate) fn lower(cx: &mut Cx, table: &ast::Perturb, task: &Task) -> Option<Pe
         cx.err(
             Code::E0045,
             span,
-            "no place on the bench is clear of the work for a distractor (20 cm from every item, 30 cm from every robot's base, 15 cm from the way between them)".into(),
+            super::distractors::NO_ROOM.into(),
             Some("move items closer together, or leave distractors out of this task".into()),
         );
         ok = false;

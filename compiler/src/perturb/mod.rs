@@ -21,6 +21,28 @@ pub use distractors::Distractor;
 pub(crate) use draw::draw;
 pub use draw::{CameraDraw, Drawn, LightDraw, NoiseDraw, Tint};
 pub use lower::camera_problem;
+
+/// What a task's perturbations (however they came: its file, a suite, the command line) would
+/// break: a camera shake that could lose the work, distractors with no free place (the checks
+/// `autobio check` makes of a `[perturb]` table, E0045). Empty when nothing.
+pub fn problems(task: &crate::Task) -> Vec<String> {
+    let Some(p) = &task.perturb else {
+        return Vec::new();
+    };
+    let mut out: Vec<String> = p
+        .camera
+        .as_ref()
+        .and_then(|c| camera_problem(task, c))
+        .into_iter()
+        .collect();
+    if let Some(d) = &p.distractors
+        && d.count[1] > 0
+        && distractors::room(task, d) == 0
+    {
+        out.push(distractors::NO_ROOM.to_string());
+    }
+    out
+}
 pub(crate) use lower::{check_paraphrases, lower};
 
 use serde::{Deserialize, Serialize};

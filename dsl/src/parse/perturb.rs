@@ -133,11 +133,21 @@ impl Parser {
         let mut out = Vec::new();
         for (key, value) in self.settings(t) {
             let k = key.get_ref().as_ref();
-            // A plain key may itself contain `_` (`blur_px`): look it up whole first.
+            // A plain key may itself contain `_` (`blur_px`): look it up whole first; a unit
+            // suffix is read only on a field that takes a unit.
             let (base, shape) = match fields.iter().find(|(n, _)| *n == k) {
                 Some((n, s)) => (*n, *s),
                 None => match fields.iter().find(|(n, _)| *n == split_unit(k).0) {
-                    Some((n, s)) => (*n, *s),
+                    Some((n, s @ Shape::Number(Some(_)))) => (*n, *s),
+                    Some((n, _)) => {
+                        self.err(
+                            Code::E0020,
+                            span_of(key),
+                            format!("`{n}` in `perturb.{dimension}` takes no unit"),
+                            Some(format!("write `{n} = ...`")),
+                        );
+                        continue;
+                    }
                     None => {
                         self.unknown_key(key, &allowed, &format!("`perturb.{dimension}`"));
                         continue;

@@ -71,7 +71,15 @@ fn difference(a: Count, b: Count) -> [f64; 2] {
 
 /// The table for a group's members, when their suite names presets.
 pub(super) fn table(members: &[&Submission]) -> Option<Robustness> {
-    let presets = members.first()?.index.suite.perturb.clone();
+    // The suite's presets as read (`camera` is `camera:1`), in its order.
+    let presets: Vec<String> = members
+        .first()?
+        .index
+        .suite
+        .presets()
+        .iter()
+        .map(ToString::to_string)
+        .collect();
     if presets.is_empty() {
         return None;
     }
@@ -105,9 +113,10 @@ pub(super) fn table(members: &[&Submission]) -> Option<Robustness> {
             let cells = presets
                 .iter()
                 .map(|p| {
+                    // Only tasks run both ways: the drop compares the same tasks.
                     let tasks: Vec<(&str, Count)> = under
                         .iter()
-                        .filter(|((q, _), _)| q == p)
+                        .filter(|((q, base), _)| q == p && clean.contains_key(base))
                         .map(|((_, base), c)| (*base, *c))
                         .collect();
                     if tasks.is_empty() {
