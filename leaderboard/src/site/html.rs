@@ -92,8 +92,8 @@ fn ranking(body: &mut String, g: &Group) {
 /// clean over the same tasks, each with its 95% interval.
 fn robustness(body: &mut String, r: &super::robustness::Robustness) {
     body.push_str(
-        "<h3>Robustness: success under each perturbation (Wilson 95%) and the drop from clean \
-         over the same tasks (Newcombe 95%)</h3><table class=robustness><tr><th>model</th><th>clean %</th>",
+        "<h3>Robustness: success under each perturbation (Wilson 95%) and its change from clean \
+         over the same tasks, negative for a drop (Newcombe 95%)</h3><table class=robustness><tr><th>model</th><th>clean %</th>",
     );
     for p in &r.presets {
         let _ = write!(body, "<th>{}</th>", esc(p));
@@ -114,13 +114,13 @@ fn robustness(body: &mut String, r: &super::robustness::Robustness) {
                 Some(c) => {
                     let _ = write!(
                         body,
-                        "<td>{:.1} [{:.1}, {:.1}]<br>drop {:+.1} [{:+.1}, {:+.1}]</td>",
+                        "<td>{:.1} [{:.1}, {:.1}]<br>change {:+.1} [{:+.1}, {:+.1}]</td>",
                         c.success,
                         c.wilson[0],
                         c.wilson[1],
-                        -c.drop,
-                        -c.drop_interval[1],
-                        -c.drop_interval[0]
+                        0.0 - c.drop,
+                        0.0 - c.drop_interval[1],
+                        0.0 - c.drop_interval[0]
                     );
                 }
                 None => body.push_str("<td>–</td>"),

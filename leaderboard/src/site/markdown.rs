@@ -57,9 +57,9 @@ pub(super) fn ranking(site: &Site) -> String {
                             c.success,
                             c.wilson[0],
                             c.wilson[1],
-                            -c.drop,
-                            -c.drop_interval[1],
-                            -c.drop_interval[0]
+                            0.0 - c.drop,
+                            0.0 - c.drop_interval[1],
+                            0.0 - c.drop_interval[0]
                         ),
                         None => " – |".into(),
                     })
