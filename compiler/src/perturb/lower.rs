@@ -96,6 +96,20 @@ fn within(
     !bad
 }
 
+/// An angle field in degrees (the parser gave radians), and whether it lies within 0 to `hi`°.
+fn degrees(cx: &mut Cx, v: &Spanned<PerturbValue>, what: &str, hi: f64) -> (f64, bool) {
+    let x = number(v).to_degrees();
+    let ok = within(
+        cx,
+        &Spanned::new(PerturbValue::Number(x), v.span),
+        what,
+        0.0,
+        hi,
+        "°",
+    );
+    (x, ok)
+}
+
 fn number(v: &Spanned<PerturbValue>) -> f64 {
     match v.value {
         PerturbValue::Number(x) => x,
@@ -136,7 +150,6 @@ fn field(
     task: &Task,
 ) -> bool {
     let what = format!("perturb.{d}.{key}");
-    let deg = |x: f64| x.to_degrees();
     match (d, key) {
         (Dimension::Light, "intensity") => {
             let ok = within(cx, v, &what, 0.05, 4.0, "");
@@ -146,15 +159,7 @@ fn field(
             ok
         }
         (Dimension::Light, "direction") => {
-            let x = deg(number(v));
-            let ok = within(
-                cx,
-                &Spanned::new(PerturbValue::Number(x), v.span),
-                &what,
-                0.0,
-                80.0,
-                "°",
-            );
+            let (x, ok) = degrees(cx, v, &what, 80.0);
             if let Some(l) = p.light.as_mut().filter(|_| ok) {
                 l.direction_deg = x;
             }
@@ -222,15 +227,7 @@ fn field(
             ok
         }
         (Dimension::Camera, "turn" | "fovy") => {
-            let x = deg(number(v));
-            let ok = within(
-                cx,
-                &Spanned::new(PerturbValue::Number(x), v.span),
-                &what,
-                0.0,
-                30.0,
-                "°",
-            );
+            let (x, ok) = degrees(cx, v, &what, 30.0);
             if let Some(c) = p.camera.as_mut().filter(|_| ok) {
                 if key == "turn" {
                     c.turn_deg = x;
@@ -316,15 +313,7 @@ fn field(
             ok
         }
         (Dimension::Layout, "turn") => {
-            let x = deg(number(v));
-            let ok = within(
-                cx,
-                &Spanned::new(PerturbValue::Number(x), v.span),
-                &what,
-                0.0,
-                45.0,
-                "°",
-            );
+            let (x, ok) = degrees(cx, v, &what, 45.0);
             if let Some(l) = p.layout.as_mut().filter(|_| ok) {
                 l.turn_deg = x;
             }
