@@ -102,25 +102,19 @@ fn robustness(body: &mut String, r: &super::robustness::Robustness) {
     for row in &r.rows {
         let _ = write!(
             body,
-            "<tr><td class=l><a href=\"submissions/{}.html\">{}</a></td><td>{:.1} [{:.1}, {:.1}]</td>",
+            "<tr><td class=l><a href=\"submissions/{}.html\">{}</a></td><td>{}</td>",
             row.submission,
             esc(&row.model),
-            row.clean.0,
-            row.clean.1[0],
-            row.clean.1[1]
+            super::interval_cell(row.clean.0, row.clean.1)
         );
         for c in &row.cells {
             match c {
                 Some(c) => {
                     let _ = write!(
                         body,
-                        "<td>{:.1} [{:.1}, {:.1}]<br>change {:+.1} [{:+.1}, {:+.1}]</td>",
-                        c.success,
-                        c.wilson[0],
-                        c.wilson[1],
-                        0.0 - c.drop,
-                        0.0 - c.drop_interval[1],
-                        0.0 - c.drop_interval[0]
+                        "<td>{}<br>change {}</td>",
+                        super::interval_cell(c.success, c.wilson),
+                        super::change_cell(c)
                     );
                 }
                 None => body.push_str("<td>–</td>"),

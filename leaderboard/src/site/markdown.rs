@@ -6,7 +6,7 @@
 //! reference and submission pages are the HTML's and the JSON exports').
 
 use super::model::{Site, TaskPage};
-use super::{across_cell, level_cell, rank_sem_cells, spread_cells};
+use super::{across_cell, change_cell, interval_cell, level_cell, rank_sem_cells, spread_cells};
 use std::fmt::Write as _;
 
 /// `ranking.md`.
@@ -53,24 +53,18 @@ pub(super) fn ranking(site: &Site) -> String {
                     .iter()
                     .map(|c| match c {
                         Some(c) => format!(
-                            " {:.1} [{:.1}, {:.1}], {:+.1} [{:+.1}, {:+.1}] |",
-                            c.success,
-                            c.wilson[0],
-                            c.wilson[1],
-                            0.0 - c.drop,
-                            0.0 - c.drop_interval[1],
-                            0.0 - c.drop_interval[0]
+                            " {}, {} |",
+                            interval_cell(c.success, c.wilson),
+                            change_cell(c)
                         ),
                         None => " – |".into(),
                     })
                     .collect();
                 let _ = writeln!(
                     md,
-                    "| {} | {:.1} [{:.1}, {:.1}] |{cells}",
+                    "| {} | {} |{cells}",
                     md_cell(&row.model),
-                    row.clean.0,
-                    row.clean.1[0],
-                    row.clean.1[1]
+                    interval_cell(row.clean.0, row.clean.1)
                 );
             }
         }

@@ -94,6 +94,18 @@ fn across_cell(across: Option<(f64, f64)>) -> String {
     })
 }
 
+/// A percentage with its interval, `62.0 [55.1, 68.4]`: the same cell in HTML and Markdown.
+fn interval_cell(value: f64, [lo, hi]: [f64; 2]) -> String {
+    format!("{value:.1} [{lo:.1}, {hi:.1}]")
+}
+
+/// A robustness cell's change from clean with its interval, negative for a drop
+/// (`-5.0 [-12.1, +2.0]`; never a negative zero).
+fn change_cell(c: &robustness::RobustCell) -> String {
+    let [lo, hi] = c.drop_interval;
+    format!("{:+.1} [{:+.1}, {:+.1}]", 0.0 - c.drop, 0.0 - hi, 0.0 - lo)
+}
+
 /// The two ± columns, over training seeds and over evaluation runs of one model: `cell` in the
 /// one its runs are, `–` in the other (the two are never one column).
 fn spread_cells(over: stats::Spread, cell: String) -> [String; 2] {
