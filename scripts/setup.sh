@@ -221,4 +221,15 @@ if [ ! -e "$DEPS/lerobot-env/.wheel-$WHEEL_SUM" ]; then
   "$DEPS/lerobot-env/bin/pip" install -q --disable-pip-version-check --force-reinstall --no-deps "$WHEEL"
   rm -f "$DEPS"/lerobot-env/.wheel-* && touch "$DEPS/lerobot-env/.wheel-$WHEEL_SUM"
 fi
-echo "setup: ok (mujoco $MUJOCO_VERSION, robot models, the mcap reader, the model servers' and the lab languages' environments, the Python package and LeRobot's environment under $DEPS/)"
+# Blender for photoreal frames (`--renderer blender`, runtime/src/blender): PyPI's `bpy` wheel
+# (about 1 GB installed) in its own environment on Python 3.11, which its 5.0 wheels require.
+BLENDER_REQS=python/requirements-blender.txt
+BLENDER_STAMP="$DEPS/blender-env/.requirements-$(sha256sum "$BLENDER_REQS" | cut -c1-16)"
+if [ ! -e "$BLENDER_STAMP" ]; then
+  echo "setup: making Blender's environment ($DEPS/blender-env: the bpy wheel)"
+  rm -rf "$DEPS/blender-env"
+  python3.11 -m venv "$DEPS/blender-env"
+  "$DEPS/blender-env/bin/pip" install -q --disable-pip-version-check --no-compile -r "$BLENDER_REQS"
+  touch "$BLENDER_STAMP"
+fi
+echo "setup: ok (mujoco $MUJOCO_VERSION, robot models, the mcap reader, the model servers' and the lab languages' environments, the Python package, LeRobot's and Blender's environments under $DEPS/)"

@@ -41,6 +41,7 @@ mod observation_history;
 mod paper_fidelity;
 mod pcr_setup;
 mod perturb;
+mod photoreal;
 mod pictures;
 mod pipette;
 mod planning;

@@ -10,6 +10,7 @@
 //! Its tests are the workspace's tests/step_by_hand.rs, tests/contact_and_position.rs,
 //! tests/level_of_detail.rs and tests/pictures.rs.
 
+pub mod blender;
 pub mod clearance;
 pub mod clock;
 pub mod deps;
