@@ -687,6 +687,7 @@ fn dataset_figures(task: &compiler::Task) -> Result<()> {
             out: dir.clone(),
             version: dataset::Version::V30,
             codec,
+            renderer: Default::default(),
             resume: false,
             image_size: [224, 224],
             workers,

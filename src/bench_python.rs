@@ -81,6 +81,7 @@ pub fn figures(task: &compiler::Task) -> Result<()> {
 fn rust_seconds(task: &compiler::Task, steps: usize) -> Result<f64> {
     let opts = runtime::EnvOptions {
         image_size: Some(SIZE),
+        ..Default::default()
     };
     let mut env = runtime::Env::make(task, 0, opts)?;
     let mut seed = 0;

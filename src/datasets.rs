@@ -97,6 +97,8 @@ pub struct ExportArgs {
     resume: bool,
     #[command(flatten)]
     files: FileSizeArgs,
+    #[command(flatten)]
+    renderer: crate::front::RendererArgs,
 }
 
 #[derive(Clone, Debug, clap::Subcommand)]
@@ -134,6 +136,7 @@ pub fn export_cli(front: &crate::front::Front, a: &ExportArgs) -> Result<ExitCod
         resume: a.resume,
         file_sizes: a.files.sizes(),
         observations: a.observation.observations(),
+        renderer: a.renderer.renderer(1),
     };
     export(&a.recordings, &opts)
 }

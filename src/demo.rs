@@ -57,6 +57,8 @@ pub struct DemoArgs {
     allow_trivial: bool,
     #[command(flatten)]
     perturb: crate::front::PerturbArgs,
+    #[command(flatten)]
+    renderer: crate::front::RendererArgs,
 }
 
 pub fn run(front: &Front, a: &DemoArgs) -> Result<ExitCode> {
@@ -92,6 +94,7 @@ pub fn run(front: &Front, a: &DemoArgs) -> Result<ExitCode> {
         shard: a.shard,
         file_sizes: a.files.sizes(),
         observations: a.observation.observations(),
+        renderer: a.renderer.renderer(a.workers as usize),
     };
     crate::datasets::generate(&tasks, &opts)
 }
@@ -107,6 +110,7 @@ fn mcap(tasks: &[compiler::Task], a: &DemoArgs) -> Result<ExitCode> {
             record: true,
             image_every: 5,
             image_size: a.size,
+            renderer: a.renderer.renderer(a.workers as usize),
             workers: a.workers as usize,
             resume: a.resume,
             ..Default::default()

@@ -146,6 +146,9 @@ pub fn eval(front: &Front, a: &EvalArgs) -> Result<ExitCode> {
             record: a.record || a.model.is_some() || suite.is_some(),
             image_every: if a.record { a.image_every } else { 0 },
             image_size: a.size,
+            // Scores are the rasteriser's: a model is compared with others on the same frames
+            // (docs/decisions.md, "Photoreal frames are a dataset pass").
+            renderer: Default::default(),
             resume: a.resume,
             model: model.clone(),
             runs,

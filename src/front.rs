@@ -118,3 +118,56 @@ pub fn refuse_problems(task: &compiler::Task) -> Result<()> {
         problems.join("; ")
     )
 }
+
+/// `--renderer` and Blender's settings, for the subcommands that draw frames into recordings and
+/// datasets (docs/photoreal.md).
+#[derive(Clone, Debug, clap::Args)]
+pub struct RendererArgs {
+    /// Who draws the cameras: `mujoco` (the rasteriser, what models are scored on) or `blender`
+    /// (photoreal, Cycles or Eevee through the `bpy` wheel `make setup` installs)
+    #[arg(long, value_enum, default_value = "mujoco")]
+    pub renderer: RendererArg,
+    /// Blender's engine
+    #[arg(long, value_enum, default_value = "cycles")]
+    pub engine: EngineArg,
+    /// Blender's samples a pixel
+    #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub samples: u32,
+    /// No OpenImageDenoise after Cycles' samples
+    #[arg(long)]
+    pub no_denoise: bool,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum RendererArg {
+    Mujoco,
+    Blender,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum EngineArg {
+    Cycles,
+    Eevee,
+}
+
+impl RendererArgs {
+    /// The renderer, Blender's threads shared among `workers` episodes at once.
+    pub fn renderer(&self, workers: usize) -> runtime::render::Renderer {
+        use runtime::blender::{Engine, Settings};
+        match self.renderer {
+            RendererArg::Mujoco => runtime::render::Renderer::Raster,
+            RendererArg::Blender => {
+                let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+                runtime::render::Renderer::Blender(Settings {
+                    engine: match self.engine {
+                        EngineArg::Cycles => Engine::Cycles,
+                        EngineArg::Eevee => Engine::Eevee,
+                    },
+                    samples: self.samples,
+                    denoise: !self.no_denoise,
+                    threads: (cores / workers.max(1)).max(1),
+                })
+            }
+        }
+    }
+}

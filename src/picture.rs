@@ -1,7 +1,8 @@
 //! `autobio render`: a seed's initial scene as one PNG (every task camera, then the view from
 //! above, side by side), drawn without the expert or any episode, so an author sees the layout a
 //! seed draws before an evaluation. A perturbed task (its own `[perturb]` or `--perturb`) is drawn
-//! twice, the clean scene above the perturbed one. The drawing is `runtime::picture`'s.
+//! twice, the clean scene above the perturbed one; `--renderer blender` adds Blender's frames of
+//! the task cameras in a last row. The drawing is `runtime::picture`'s.
 
 use crate::front::Front;
 use anyhow::{Context, Result};
@@ -23,6 +24,10 @@ pub struct RenderArgs {
     size: [usize; 2],
     #[command(flatten)]
     perturb: crate::front::PerturbArgs,
+    /// With `--renderer blender`, the task cameras drawn by Blender in a row below the
+    /// rasteriser's (the scene as the task gives it, perturbed when it is)
+    #[command(flatten)]
+    renderer: crate::front::RendererArgs,
 }
 
 pub fn run(front: &Front, a: &RenderArgs) -> Result<ExitCode> {
@@ -37,6 +42,11 @@ pub fn run(front: &Front, a: &RenderArgs) -> Result<ExitCode> {
     if drawn.is_some() {
         let perturbed = runtime::picture::initial_scene(&task, a.seed, a.size)?;
         sheet = runtime::picture::stacked(&[sheet, runtime::picture::side_by_side(&perturbed)]);
+    }
+    let renderer = a.renderer.renderer(1);
+    if renderer != runtime::render::Renderer::Raster {
+        let photoreal = runtime::picture::initial_frames(&task, a.seed, a.size, renderer)?;
+        sheet = runtime::picture::stacked(&[sheet, runtime::picture::side_by_side(&photoreal)]);
     }
     let png = sheet.to_png().context("encoding the PNG")?;
     std::fs::write(&a.png, png).with_context(|| format!("writing {}", a.png.display()))?;

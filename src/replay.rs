@@ -44,6 +44,8 @@ pub struct ReplayArgs {
     /// Also write every frame as PNG into this folder
     #[arg(long, value_name = "DIR", requires = "render")]
     png: Option<PathBuf>,
+    #[command(flatten)]
+    renderer: crate::front::RendererArgs,
 }
 
 pub fn parse_size(s: &str) -> Result<[usize; 2], String> {
@@ -172,8 +174,19 @@ fn render(rec: &Recording, a: &ReplayArgs) -> Result<()> {
             DetailArg::Simplified => Some(robots::Detail::Simplified),
         },
         every: a.every,
+        renderer: a.renderer.renderer(1),
     };
-    let r = replay::render(rec, &opts, &out, a.png.as_deref())?;
+    // A bar on a terminal (indicatif draws nothing elsewhere): Blender takes seconds a frame.
+    let bar = indicatif::ProgressBar::new(rec.steps() as u64).with_style(
+        indicatif::ProgressStyle::with_template(
+            "rendering {bar:30} {pos}/{len} steps, {per_sec}, {eta} left",
+        )
+        .expect("a valid template"),
+    );
+    let r = replay::render(rec, &opts, &out, a.png.as_deref(), |k, _| {
+        bar.set_position(k as u64)
+    })?;
+    bar.finish_and_clear();
     outln!(
         "rendered: {} frames at {}x{} into {}{}",
         r.frames,

@@ -79,6 +79,9 @@ pub enum LeaderboardCommand {
         dir: PathBuf,
         #[arg(long, value_name = "SITE")]
         out: PathBuf,
+        /// Who draws the episode pages' frames from the recorded states
+        #[command(flatten)]
+        renderer: crate::front::RendererArgs,
     },
 }
 
@@ -127,11 +130,13 @@ pub fn run(c: &LeaderboardCommand) -> Result<ExitCode> {
             )
         }
         LeaderboardCommand::Audit { .. } => audit(c),
-        LeaderboardCommand::Build { dir, out } => {
+        LeaderboardCommand::Build { dir, out, renderer } => {
+            let renderer = renderer.renderer(1);
+            let draw = move |p: &std::path::Path| draw_frames(p, renderer);
             // A fresh private folder, removed when dropped.
             let work = tempfile::Builder::new().prefix("autobio-site-").tempdir()?;
             let subs = leaderboard::site::load(dir, work.path())?;
-            let files = leaderboard::site::build(&subs, out, Some(&draw_frames))?;
+            let files = leaderboard::site::build(&subs, out, Some(&draw))?;
             outln!(
                 "built {} ({} submissions, {} files); open {}",
                 out.display(),
@@ -172,8 +177,11 @@ pub fn reenact(
 }
 
 /// Three frames (start, middle, end) of a recording's first camera at 224x224, drawn from its
-/// recorded states: the submission page's look at an episode.
-fn draw_frames(path: &std::path::Path) -> Result<Vec<Vec<u8>>, String> {
+/// recorded states by `renderer`: the submission page's look at an episode.
+fn draw_frames(
+    path: &std::path::Path,
+    renderer: runtime::render::Renderer,
+) -> Result<Vec<Vec<u8>>, String> {
     let rec = scoring::replay::Recording::open(path).map_err(|e| e.to_string())?;
     // Steps 0, about half way and about the end: three frames drawn, not the whole episode.
     let every = (rec.steps().saturating_sub(1) / 2).max(1);
@@ -181,6 +189,7 @@ fn draw_frames(path: &std::path::Path) -> Result<Vec<Vec<u8>>, String> {
         size: Some([224, 224]),
         detail: None,
         every: Some(every),
+        renderer,
     };
     let mut pngs = Vec::new();
     scoring::replay::frames(&rec, &opts, |_, _, images| {

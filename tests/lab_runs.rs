@@ -36,6 +36,7 @@ fn a_pcr_run_jumps_its_profile_and_replays_bit_for_bit() {
         record: Some(journal_recording(&dir, &task.id, 0)),
         image_every: 0,
         image_size: None,
+        ..Default::default()
     };
     let r = common::run_with(&task, 0, &opts, |t, s, i| {
         scoring::policies::make("expert", t, s, i).unwrap()

@@ -116,6 +116,7 @@ fn over_an_expert_episode_the_levels_differ_by_the_documented_psnr() {
             size: Some([224, 224]),
             detail: Some(detail),
             every: Some(1),
+            ..Default::default()
         };
         frames(&rec, &opts, |_, _, images| {
             all.push(images);

@@ -22,6 +22,7 @@ fn under(task: &Task, d: Dimension, strength: u8) -> Task {
 fn first_frames(task: &Task, seed: u64) -> Vec<results::Image> {
     let opts = runtime::EnvOptions {
         image_size: Some([96, 72]),
+        ..Default::default()
     };
     let mut env = runtime::Env::make(task, seed, opts).unwrap();
     env.frames().unwrap().to_vec()
@@ -134,6 +135,7 @@ fn the_expert_trajectory_is_the_same_under_every_look_and_wording() {
             record: Some(dir.join(format!("{name}.mcap"))),
             image_every: 1,
             image_size: Some([64, 64]),
+            ..Default::default()
         };
         common::run_with(t, seed, &opts, |t, s, i| {
             scoring::policies::make("expert", t, s, i).unwrap()
@@ -180,6 +182,7 @@ fn the_expert_trajectory_is_the_same_under_every_look_and_wording() {
         size: None,
         detail: None,
         every: Some(5),
+        ..Default::default()
     };
     scoring::replay::frames(&rec, &opts, |k, _, images| {
         if k == 5 {

@@ -124,6 +124,7 @@ fn frames_are_drawn_at_the_tasks_camera_size_unless_overridden() {
         0,
         EnvOptions {
             image_size: Some([64, 48]),
+            ..Default::default()
         },
     )
     .unwrap();

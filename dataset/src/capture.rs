@@ -24,6 +24,9 @@ pub struct Capture {
     error: Option<DatasetError>,
     /// What the episode's perturbations drew (`compiler::perturb::Drawn` as JSON), if any.
     pub(crate) perturbation: Option<serde_json::Value>,
+    /// Who drew the frames and with what settings, when not the rasteriser
+    /// (`runtime::render::Renderer::describe`).
+    pub(crate) renderer: Option<serde_json::Value>,
 }
 
 impl Capture {
@@ -61,6 +64,7 @@ impl Capture {
             size,
             error: None,
             perturbation: None,
+            renderer: None,
         })
     }
 
@@ -104,6 +108,15 @@ impl Capture {
     /// Records what the episode's perturbations drew, for the dataset's commit record.
     pub fn set_perturbation(&mut self, drawn: Option<&compiler::perturb::Drawn>) {
         self.perturbation = drawn.and_then(|d| serde_json::to_value(d).ok());
+    }
+
+    /// Records who draws the frames (Blender and its settings), for the dataset's commit record;
+    /// the rasteriser is recorded as nothing, as datasets before photoreal frames were.
+    pub fn set_renderer(&mut self, renderer: &runtime::render::Renderer) {
+        self.renderer = match renderer {
+            runtime::render::Renderer::Raster => None,
+            r => Some(r.describe()),
+        };
     }
 
     /// Whether this capture keeps the environment state.

@@ -61,6 +61,10 @@ pub(crate) struct Committed {
     /// pose, layout), when its task had any (docs/robustness.md).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub perturbation: Option<Value>,
+    /// Who drew its frames, when not MuJoCo's rasteriser: Blender, its engine, samples and
+    /// denoiser (docs/photoreal.md).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub renderer: Option<Value>,
 }
 
 /// What a dataset's frames observe: LeRobot's feature sets.
@@ -427,6 +431,7 @@ impl DatasetWriter {
             plan,
             instruction: instruction.to_string(),
             perturbation: capture.perturbation.take(),
+            renderer: capture.renderer.take(),
             image_stats: capture
                 .images
                 .iter()
@@ -464,6 +469,7 @@ impl DatasetWriter {
             plan: c.plan,
             instruction: c.instruction.clone(),
             perturbation: c.perturbation.clone(),
+            renderer: c.renderer.clone(),
             image_stats: from
                 .cameras
                 .iter()
@@ -553,6 +559,7 @@ impl DatasetWriter {
             instruction: e.instruction.clone(),
             stats,
             perturbation: e.perturbation.clone(),
+            renderer: e.renderer.clone(),
         };
         // The commit point: the episode exists once its line is on disk.
         let record = self.root.join("meta/autobio.jsonl");
@@ -868,6 +875,7 @@ struct Episode {
     plan: Option<usize>,
     instruction: String,
     perturbation: Option<Value>,
+    renderer: Option<Value>,
     image_stats: Vec<Value>,
     videos: Vec<PathBuf>,
     owned: bool,

@@ -23,6 +23,8 @@ pub struct ExportOptions {
     pub file_sizes: dataset::FileSizes,
     /// What the frames observe: cameras, the environment state, or both.
     pub observations: Observations,
+    /// Who draws the frames from the recorded states.
+    pub renderer: runtime::render::Renderer,
 }
 
 /// The `.mcap` files named, a folder standing for the recordings in it (sorted by name).
@@ -125,6 +127,9 @@ pub fn export(
             })
             .collect();
         let mut capture = spec.capture(&id, seed)?;
+        if opts.observations.cameras() {
+            capture.set_renderer(&opts.renderer);
+        }
         let environment: Vec<Vec<f64>> = if capture.wants_environment_state() {
             let layout = EnvironmentState::of(&rec.task);
             (0..rec.steps())
@@ -145,6 +150,7 @@ pub fn export(
                 size: Some(opts.image_size),
                 detail: None,
                 every: Some(1),
+                renderer: opts.renderer,
             };
             scoring::replay::frames(rec, &frames, |k, _, images| {
                 capture

@@ -36,6 +36,9 @@ pub struct GenerateOptions {
     pub file_sizes: FileSizes,
     /// What the frames observe: cameras, the environment state, or both.
     pub observations: Observations,
+    /// Who draws the frames: the rasteriser, or Blender for a photoreal dataset (the episodes
+    /// are the same either way: drawing never touches the simulation).
+    pub renderer: runtime::render::Renderer,
 }
 
 /// One episode handled, for progress reports.
@@ -122,7 +125,7 @@ pub fn generate(
                     let Some(&(_, t, seed)) = plan.get(k) else {
                         break;
                     };
-                    let r = record(&tasks[t], seed, spec, &mut scenes[t]);
+                    let r = record(&tasks[t], seed, spec, opts.renderer, &mut scenes[t]);
                     if tx.send((k, r)).is_err() {
                         break;
                     }
@@ -197,6 +200,7 @@ fn record(
     task: &compiler::Task,
     seed: u64,
     spec: &CaptureSpec,
+    renderer: runtime::render::Renderer,
     scene: &mut Option<Arc<runtime::Scene>>,
 ) -> Result<Recorded, DatasetError> {
     let episode_err = |why: String| DatasetError::Episode {
@@ -208,8 +212,10 @@ fn record(
     let scene = &runtime::Scene::reuse_or_build(scene, task, &instance)
         .map_err(|e| episode_err(e.to_string()))?;
     let mut capture = spec.capture(&task.id, seed)?;
+    capture.set_renderer(&renderer);
     let opts = scoring::episode::EpisodeOptions {
         image_size: Some(capture.image_size()),
+        renderer,
         ..Default::default()
     };
     let result = match scoring::policies::make("expert", task, scene, &instance) {

@@ -53,6 +53,7 @@ impl From<EnvFailure> for PyErr {
 pub fn options(image_size: Option<(usize, usize)>) -> EnvOptions {
     EnvOptions {
         image_size: image_size.map(|(w, h)| [w, h]),
+        ..Default::default()
     }
 }
 

@@ -18,7 +18,7 @@
 
 use crate::clock::IdleClock;
 use crate::episode::{Episode, StepError};
-use crate::render::{Cameras, RenderError};
+use crate::render::{RenderError, TaskCameras};
 use crate::scene::{Scene, SceneError};
 use compiler::{SceneInstance, Task};
 use labware::LabwareState;
@@ -30,10 +30,12 @@ use results::verdict::{Judge, Verdict};
 use std::sync::Arc;
 
 /// How an environment draws its cameras.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct EnvOptions {
     /// Every camera at this size (width, height); `None`: the task's own camera spec.
     pub image_size: Option<[usize; 2]>,
+    /// Who draws the cameras (the rasteriser unless a photoreal pass asks for Blender).
+    pub renderer: crate::render::Renderer,
 }
 
 /// Why the environment could not go on.
@@ -143,7 +145,7 @@ pub struct Env {
     /// The judge said the episode is over (success, or a stage's time ran out).
     over: bool,
     /// Made on the first frame asked for; the control step its last frames show.
-    cameras: Option<Cameras>,
+    cameras: Option<TaskCameras>,
     frames: Option<(u64, Vec<Image>)>,
     /// How long the robots have been idle (the clock's jumps).
     clock: IdleClock,
@@ -210,7 +212,7 @@ impl Env {
         *self = Env::new(scene, &task, &instance, self.opts);
         self.cameras = cameras;
         if let Some(c) = self.cameras.as_mut() {
-            c.set_look(&self.episode.scene, self.instance.perturbation.as_ref());
+            c.set_look(&self.episode.scene, self.instance.perturbation.as_ref())?;
         }
         Ok(self.observe())
     }
@@ -331,8 +333,8 @@ impl Env {
     fn make_cameras(&mut self) -> Result<(), RenderError> {
         if self.cameras.is_none() {
             let [w, h] = self.image_size();
-            let mut cams = Cameras::new(&self.episode.scene, w, h)?;
-            cams.set_look(&self.episode.scene, self.instance.perturbation.as_ref());
+            let mut cams = TaskCameras::new(&self.episode.scene, w, h, self.opts.renderer, None)?;
+            cams.set_look(&self.episode.scene, self.instance.perturbation.as_ref())?;
             self.cameras = Some(cams);
         }
         Ok(())

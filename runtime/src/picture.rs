@@ -17,6 +17,7 @@ pub fn initial_scene(task: &Task, seed: u64, size: [usize; 2]) -> Result<Vec<Ima
         seed,
         EnvOptions {
             image_size: Some(size),
+            ..Default::default()
         },
     )?;
     let mut images = env.frames()?.to_vec();
@@ -56,6 +57,25 @@ fn from_above(task: &Task, env: &Env) -> View {
         azimuth_deg: 90.0,
         elevation_deg: -89.0,
     }
+}
+
+/// The task cameras' frames of episode `seed` at its start drawn by `renderer` (Blender's
+/// photoreal frames beside the rasteriser's in `autobio render --renderer blender`).
+pub fn initial_frames(
+    task: &Task,
+    seed: u64,
+    size: [usize; 2],
+    renderer: crate::render::Renderer,
+) -> Result<Vec<Image>, EnvError> {
+    let mut env = Env::make(
+        task,
+        seed,
+        EnvOptions {
+            image_size: Some(size),
+            renderer,
+        },
+    )?;
+    Ok(env.frames()?.to_vec())
 }
 
 /// Frames of one size side by side, left to right, as one image named after them.

@@ -26,6 +26,8 @@ pub struct EpisodeOptions {
     /// Every camera at this size, unless the policy needs another (a model's profile: what it
     /// is sent wins); `None`: the task's camera spec.
     pub image_size: Option<[usize; 2]>,
+    /// Who draws the cameras (the rasteriser unless a photoreal pass asks for Blender).
+    pub renderer: runtime::render::Renderer,
 }
 
 /// Why an episode could not be run to its end (an episode that fails is a result, not this).
@@ -262,7 +264,11 @@ pub fn run_episode_with(
     let start = Instant::now();
     let needs = policy.needs();
     let image_size = needs.image_size.or(opts.image_size);
-    let mut env = Env::new(scene.clone(), task, instance, EnvOptions { image_size });
+    let env_opts = EnvOptions {
+        image_size,
+        renderer: opts.renderer,
+    };
+    let mut env = Env::new(scene.clone(), task, instance, env_opts);
     env.set_never_moves(policy.never_moves());
     let mut recording = match &opts.record {
         Some(p) => Some(Recording::create(

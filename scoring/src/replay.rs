@@ -17,7 +17,7 @@ use results::Image;
 use results::episode::TrajectoryHash;
 use results::recording::{RecordError, Recorder, RecordingSummary};
 use results::verdict::{Judge, Verdict};
-use runtime::render::{Cameras, RenderError};
+use runtime::render::{RenderError, TaskCameras};
 use runtime::{Episode, Scene};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -269,6 +269,7 @@ pub fn reenact(
     );
     let env_opts = runtime::EnvOptions {
         image_size: opts.image_size,
+        ..Default::default()
     };
     let mut env = runtime::Env::new(scene, task, &instance, env_opts);
     let mut recording = match &opts.record {
@@ -323,7 +324,7 @@ pub fn reenact(
 }
 
 /// How to draw a recording's frames.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct FrameOptions {
     /// Width and height; `None`: the recorded frames' size, else 224x224.
     pub size: Option<[usize; 2]>,
@@ -331,6 +332,8 @@ pub struct FrameOptions {
     pub detail: Option<robots::Detail>,
     /// Every this many control steps; `None`: the recorded frames' cadence, else every step.
     pub every: Option<usize>,
+    /// Who draws: the rasteriser, or Blender for photoreal frames.
+    pub renderer: runtime::render::Renderer,
 }
 
 impl Recording {
@@ -373,10 +376,10 @@ pub fn frames(
         .or_else(|| rec.recorded_every())
         .unwrap_or(1)
         .max(1);
-    let mut cams = Cameras::with_detail(&scene, w, h, detail)?;
+    let mut cams = TaskCameras::new(&scene, w, h, opts.renderer, Some(detail))?;
     // The episode's perturbation, as its environment showed it.
     let drawn = rec.instance.perturbation.as_ref();
-    cams.set_look(&scene, drawn);
+    cams.set_look(&scene, drawn)?;
     let names: Vec<String> = rec.task.cameras.iter().map(|c| c.name.clone()).collect();
     let mut ep = Episode::new(scene.clone(), &rec.task, &rec.instance);
     // The last state follows the last action; an episode records frames only before actions.
@@ -399,12 +402,14 @@ pub struct Rendered {
 }
 
 /// Writes a copy of the recording whose camera channels are redrawn with `opts` (and, with
-/// `png_dir`, every frame as `<camera>_<step>.png` there, a `/` in a camera's name as `_`).
+/// `png_dir`, every frame as `<camera>_<step>.png` there, a `/` in a camera's name as `_`);
+/// `progress` hears each drawn control step and the recording's steps.
 pub fn render(
     rec: &Recording,
     opts: &FrameOptions,
     out: &Path,
     png_dir: Option<&Path>,
+    mut progress: impl FnMut(usize, usize),
 ) -> Result<Rendered, ReplayError> {
     let write_err = |path: &Path| {
         let path = path.to_path_buf();
@@ -423,7 +428,9 @@ pub fn render(
     })?;
     let mut count = 0;
     let mut size = [0, 0];
+    let steps = rec.steps();
     frames(rec, opts, |k, t, images| {
+        progress(k, steps);
         for img in images {
             size = [img.width, img.height];
             if let Some(d) = png_dir {

@@ -23,7 +23,7 @@ pub enum Finish {
     Liquid,
     /// An instrument display: its texture, emissive.
     Display,
-    /// Pale, unsaturated and specular (a robot's links, a rotor): brushed metal.
+    /// Pale, unsaturated, and specular by its material (a robot's links): brushed metal.
     Metal,
     /// Near black: rubber (grippers' pads, feet).
     Rubber,
@@ -111,14 +111,15 @@ fn finish(model: &MjModel, g: usize, liquids: &BTreeSet<usize>, displays: &[usiz
     let max = r.max(gr).max(b);
     let min = r.min(gr).min(b);
     let saturation = if max > 0.0 { (max - min) / max } else { 0.0 };
+    // Only a material asks for shine: a bare geom (walls, housings) is paint.
     let specular = usize::try_from(model.geom_matid()[g])
         .map(|m| model.mat_specular()[m].max(model.mat_reflectance()[m]))
-        .unwrap_or(0.5);
+        .unwrap_or(0.0);
     if max < 0.12 {
         Finish::Rubber
     } else if saturation >= 0.25 {
         Finish::Plastic
-    } else if specular >= 0.5 && (0.45..=0.92).contains(&max) {
+    } else if specular >= 0.5 && (0.6..=0.92).contains(&max) {
         Finish::Metal
     } else {
         Finish::Painted

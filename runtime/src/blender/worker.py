@@ -129,7 +129,7 @@ class Stage:
         for i, light in enumerate(spec["lights"]):
             if light["directional"]:
                 data = bpy.data.lights.new(f"light{i}", "SUN")
-                data.energy = 3.0 * light["intensity"]
+                data.energy = 2.5 * light["intensity"]
                 data.angle = math.radians(8.0)
             else:
                 data = bpy.data.lights.new(f"light{i}", "AREA")
@@ -140,6 +140,15 @@ class Stage:
             obj = bpy.data.objects.new(f"light{i}", data)
             scene.collection.objects.link(obj)
             self.lights.append(obj)
+        # A soft panel over the bench, as a lab's ceiling fixture.
+        panel = bpy.data.lights.new("panel", "AREA")
+        panel.shape = "RECTANGLE"
+        panel.size, panel.size_y = 1.6, 0.8
+        panel.energy = 80.0
+        obj = bpy.data.objects.new("panel", panel)
+        obj.location = (0.0, -0.2, 2.4)
+        scene.collection.objects.link(obj)
+        self.fixtures = [obj]
         self.world()
         render = scene.render
         render.resolution_x, render.resolution_y = self.width, self.height
@@ -162,8 +171,8 @@ class Stage:
         w, h = t["width"], t["height"]
         rgb = np.frombuffer(pixels[t["offset"] : t["offset"] + w * h * 3], dtype=np.uint8)
         rgba = np.ones((h, w, 4), dtype=np.float32)
-        # MuJoCo's rows run from the texture's v = 0; Blender's pixel rows do too.
-        rgba[:, :, :3] = rgb.reshape(h, w, 3) / 255.0
+        # The display is drawn top row first; Blender's pixel rows run from the bottom.
+        rgba[:, :, :3] = np.flipud(rgb.reshape(h, w, 3)) / 255.0
         img.pixels.foreach_set(rgba.ravel())
         img.update()
 
@@ -252,7 +261,7 @@ class Stage:
             i["Specular IOR Level"].default_value = 0.25
         elif finish == "painted":
             i["Roughness"].default_value = 0.38
-            i["Coat Weight"].default_value = 0.25
+            i["Coat Weight"].default_value = 0.1
         elif finish == "bench":
             noise = nodes.new("ShaderNodeTexNoise")
             noise.inputs["Scale"].default_value = 60.0
@@ -292,7 +301,7 @@ class Stage:
         links.new(split.outputs["Z"], to01.inputs["Value"])
         links.new(to01.outputs["Result"], ramp.inputs["Fac"])
         links.new(ramp.outputs["Color"], bg.inputs["Color"])
-        bg.inputs["Strength"].default_value = 0.9
+        bg.inputs["Strength"].default_value = 0.35
         self.world_photo = world
         black = bpy.data.worlds.new("black")
         black.use_nodes = True
@@ -305,9 +314,10 @@ class Stage:
         scene.world = self.world_photo
         for obj, mat in zip(self.objects, self.looks):
             obj.material_slots[0].material = mat
-        for light in self.lights:
+        for light in self.lights + self.fixtures:
             light.hide_render = False
-        scene.view_settings.view_transform = "AgX"
+        # The rasteriser's colours as given (AgX would wash the paler ones out).
+        scene.view_settings.view_transform = "Standard"
         if s["engine"] == "eevee":
             scene.render.engine = "BLENDER_EEVEE"
             scene.eevee.taa_render_samples = int(s["samples"])
@@ -333,7 +343,7 @@ class Stage:
         scene.world = self.world_mask
         for obj, mat in zip(self.objects, self.masks):
             obj.material_slots[0].material = mat
-        for light in self.lights:
+        for light in self.lights + self.fixtures:
             light.hide_render = True
         scene.view_settings.view_transform = "Standard"
         scene.view_settings.look = "None"

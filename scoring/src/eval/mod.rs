@@ -86,6 +86,9 @@ pub struct EvalOptions {
     /// Every camera at this size (`--size`); a model's profile's size wins over it; `None`: the
     /// task's own camera spec.
     pub image_size: Option<[usize; 2]>,
+    /// Who draws the cameras: the rasteriser, or Blender for recordings with photoreal frames
+    /// (`demo --renderer blender`).
+    pub renderer: runtime::render::Renderer,
     /// Continue the run whose journal is in `out`: only when its manifest's fingerprints match,
     /// and never rerunning a finished episode.
     pub resume: bool,
@@ -111,6 +114,7 @@ impl Default for EvalOptions {
             record: false,
             image_every: 0,
             image_size: None,
+            renderer: Default::default(),
             resume: false,
             model: None,
             runs: 1,
@@ -344,6 +348,7 @@ impl Worker<'_> {
             },
             image_every: opts.image_every,
             image_size: opts.image_size,
+            renderer: opts.renderer,
         };
         // A policy that cannot be made for this episode fails this episode, not the run.
         let made = match (&opts.model, &self.layout) {
