@@ -131,7 +131,7 @@ pub struct RendererArgs {
     #[arg(long, value_enum, default_value = "cycles")]
     pub engine: EngineArg,
     /// Blender's samples a pixel
-    #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub samples: u32,
     /// No OpenImageDenoise after Cycles' samples
     #[arg(long)]

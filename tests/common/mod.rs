@@ -74,6 +74,16 @@ pub fn autobio(args: &[&str]) -> Output {
         .unwrap()
 }
 
+/// Runs the `autobio` binary with these environment variables set.
+pub fn autobio_env(args: &[&str], vars: &[(&str, &str)]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_autobio"))
+        .args(args)
+        .envs(vars.iter().copied())
+        .env_remove("NO_COLOR")
+        .output()
+        .unwrap()
+}
+
 /// Runs the `autobio` binary and kills it if it has not finished within `limit`: a run that
 /// would hang fails the test with the time it took instead of blocking the suite.
 pub fn autobio_within(args: &[&str], limit: std::time::Duration) -> Output {

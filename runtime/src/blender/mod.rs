@@ -49,11 +49,11 @@ pub struct Settings {
 }
 
 impl Default for Settings {
-    /// Cycles at 32 samples, denoised: a clean frame at 224x224 (docs/photoreal.md).
+    /// Cycles at 16 samples, denoised: a clean frame at 224x224 (docs/photoreal.md).
     fn default() -> Self {
         Settings {
             engine: Engine::Cycles,
-            samples: 32,
+            samples: 16,
             denoise: true,
             threads: 1,
         }

@@ -160,6 +160,8 @@ class Stage:
         render.dither_intensity = 0.0
         render.threads_mode = "FIXED"
         render.threads = max(1, int(self.settings["threads"]))
+        # Keep the built scene between frames: only moved objects are updated.
+        render.use_persistent_data = True
         self.photo()
 
     def image(self, t, pixels):
