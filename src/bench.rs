@@ -23,7 +23,9 @@
 //!   worker (AV1 and H.264; against upstream's expert plus `render.py`, a reference figure) and
 //!   two, and of a state dataset (no camera);
 //! - leaderboard (`crate::bench_leaderboard`): verification's episodes/s with one worker and two,
-//!   and the site's build time from 50 submissions x 16 tasks x 100 episodes.
+//!   and the site's build time from 50 submissions x 16 tasks x 100 episodes;
+//! - photoreal (`crate::bench_photoreal`): Blender's frames/s per engine and sample count against
+//!   the rasteriser's, and the two renderers' silhouette agreement.
 
 use anyhow::{Context, Result};
 use mujoco_rs::prelude::*;
@@ -59,6 +61,9 @@ pub enum Section {
     /// Hours of lab time: a 30-cycle PCR episode and a 10-minute spin, with the event-driven
     /// clock against stepping every control step.
     LabTime,
+    /// Blender's photoreal frames/s per engine and sample count, against the rasteriser (on the
+    /// first scene).
+    Photoreal,
 }
 
 #[derive(Clone, Debug, clap::Args)]
@@ -109,6 +114,11 @@ pub fn run(tasks: &[compiler::Task], only: &[Section]) -> Result<()> {
         && let Some(first) = tasks.first()
     {
         crate::bench_python::figures(first)?;
+    }
+    if wants(Section::Photoreal)
+        && let Some(first) = tasks.first()
+    {
+        crate::bench_photoreal::figures(first)?;
     }
     // The liquid's share is of the first pipetting scene's step where one is measured (a scene
     // with a liquid tool), else of the first scene's.

@@ -7,6 +7,7 @@ mod output;
 mod bench;
 mod bench_import;
 mod bench_leaderboard;
+mod bench_photoreal;
 mod bench_python;
 mod check;
 mod datasets;

@@ -16,7 +16,11 @@ use std::sync::Arc;
 const VISIBLE: usize = 50;
 
 /// Each camera's masks of `seed`'s start of `path` from both renderers (raster first).
-fn masks_of(path: &str, seed: u64, blender_seed: u64) -> Vec<(String, results::Image, results::Image)> {
+fn masks_of(
+    path: &str,
+    seed: u64,
+    blender_seed: u64,
+) -> Vec<(String, results::Image, results::Image)> {
     let task = common::compile(path);
     let size = [224, 224];
     let names: Vec<String> = task.cameras.iter().map(|c| c.name.clone()).collect();
@@ -66,10 +70,7 @@ fn every_visible_body_has_the_same_silhouette_in_both_renderers() {
         "protocols/tube/transfer.toml",
     ] {
         let bodies = agreement(path, 0, 0);
-        let worst = bodies
-            .iter()
-            .min_by(|a, b| a.2.total_cmp(&b.2))
-            .unwrap();
+        let worst = bodies.iter().min_by(|a, b| a.2.total_cmp(&b.2)).unwrap();
         assert!(
             worst.2 >= 0.95,
             "{path}: camera {} body {} agrees only {:.3} ({} px)",
@@ -102,7 +103,7 @@ fn a_photoreal_dataset_holds_the_same_episode_and_loads_in_lerobot() {
         let mut args = vec![
             "demo",
             "--protocol",
-            "protocols/centrifuge_5430/close_lid.toml",
+            "protocols/tube/pick_up.toml",
             "--format",
             "lerobot-v30",
             "--codec",
@@ -125,9 +126,8 @@ fn a_photoreal_dataset_holds_the_same_episode_and_loads_in_lerobot() {
     );
     // The same episode whoever draws its frames: the frames' table (states, actions, times)
     // byte for byte; only the videos differ.
-    let table = |d: &std::path::Path| {
-        std::fs::read(d.join("data/chunk-000/file-000.parquet")).unwrap()
-    };
+    let table =
+        |d: &std::path::Path| std::fs::read(d.join("data/chunk-000/file-000.parquet")).unwrap();
     assert_eq!(table(&raster), table(&photoreal));
     let videos = |d: &std::path::Path| {
         let mut v = Vec::new();
@@ -209,7 +209,10 @@ fn replay_redraws_a_recording_with_blender() {
         let frames = scoring::replay::recorded_frames(&after, camera).unwrap();
         assert_eq!(frames.len(), before.steps().div_ceil(40), "{camera}");
         assert_eq!([frames[0].1.width, frames[0].1.height], [48, 36]);
-        assert!(common::spread(&frames[0].1.rgb) > 10.0, "{camera}: a blank frame");
+        assert!(
+            common::spread(&frames[0].1.rgb) > 10.0,
+            "{camera}: a blank frame"
+        );
         // Not the rasteriser's frame of the same step.
         let raster = scoring::replay::recorded_frames(&before, camera).unwrap();
         assert_ne!(raster[0].1.rgb, frames[0].1.rgb, "{camera}");
@@ -225,7 +228,10 @@ fn a_missing_blender_is_named_with_its_remedy() {
             "--renderer",
             "blender",
             "--png",
-            common::scratch("no-blender").join("x.png").to_str().unwrap(),
+            common::scratch("no-blender")
+                .join("x.png")
+                .to_str()
+                .unwrap(),
         ],
         &[("AUTOBIO_BLENDER_PYTHON", "/nonexistent/python")],
     );
