@@ -217,7 +217,7 @@ impl Renderer {
 
 /// The task's cameras, drawn by either renderer.
 pub enum TaskCameras {
-    Raster(Cameras),
+    Raster(Box<Cameras>),
     Blender(Box<crate::blender::Cameras>),
 }
 
@@ -232,12 +232,12 @@ impl TaskCameras {
         detail: Option<Detail>,
     ) -> Result<TaskCameras, RenderError> {
         Ok(match renderer {
-            Renderer::Raster => TaskCameras::Raster(Cameras::with_detail(
+            Renderer::Raster => TaskCameras::Raster(Box::new(Cameras::with_detail(
                 scene,
                 width,
                 height,
                 detail.unwrap_or_else(|| detail_for(width, height)),
-            )?),
+            )?)),
             Renderer::Blender(s) => TaskCameras::Blender(Box::new(crate::blender::Cameras::new(
                 scene, width, height, s,
             )?)),
