@@ -152,13 +152,13 @@ pub enum EngineArg {
 
 impl RendererArgs {
     /// The renderer, Blender's threads shared among `workers` episodes at once.
-    pub fn renderer(&self, workers: usize) -> runtime::render::Renderer {
+    pub fn renderer(&self, workers: usize) -> runtime::cameras::Renderer {
         use runtime::blender::{Engine, Settings};
         match self.renderer {
-            RendererArg::Mujoco => runtime::render::Renderer::Raster,
+            RendererArg::Mujoco => runtime::cameras::Renderer::Raster,
             RendererArg::Blender => {
                 let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-                runtime::render::Renderer::Blender(Settings {
+                runtime::cameras::Renderer::Blender(Settings {
                     engine: match self.engine {
                         EngineArg::Cycles => Engine::Cycles,
                         EngineArg::Eevee => Engine::Eevee,

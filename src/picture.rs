@@ -44,7 +44,7 @@ pub fn run(front: &Front, a: &RenderArgs) -> Result<ExitCode> {
         sheet = runtime::picture::stacked(&[sheet, runtime::picture::side_by_side(&perturbed)]);
     }
     let renderer = a.renderer.renderer(1);
-    if renderer != runtime::render::Renderer::Raster {
+    if renderer != runtime::cameras::Renderer::Raster {
         let photoreal = runtime::picture::initial_frames(&task, a.seed, a.size, renderer)?;
         sheet = runtime::picture::stacked(&[sheet, runtime::picture::side_by_side(&photoreal)]);
     }

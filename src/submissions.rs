@@ -180,7 +180,7 @@ pub fn reenact(
 /// recorded states by `renderer`: the submission page's look at an episode.
 fn draw_frames(
     path: &std::path::Path,
-    renderer: runtime::render::Renderer,
+    renderer: runtime::cameras::Renderer,
 ) -> Result<Vec<Vec<u8>>, String> {
     let rec = scoring::replay::Recording::open(path).map_err(|e| e.to_string())?;
     // Steps 0, about half way and about the end: three frames drawn, not the whole episode.

@@ -242,3 +242,49 @@ fn a_missing_blender_is_named_with_its_remedy() {
         "{err}"
     );
 }
+
+#[test]
+fn blender_shows_a_perturbed_look_and_takes_a_new_one_in_the_same_worker() {
+    let task = common::compile("protocols/tube/transfer.toml");
+    let looks: Vec<compiler::perturb::Preset> = ["light:2", "material:2", "camera:2"]
+        .iter()
+        .map(|p| p.parse().unwrap())
+        .collect();
+    let shaken = task
+        .clone()
+        .with_perturb(&compiler::perturb::Preset::combine(&looks));
+    let instance = shaken.sample(0);
+    let scene = Arc::new(runtime::Scene::build(&shaken, &instance).unwrap());
+    let ep = runtime::Episode::new(scene.clone(), &shaken, &instance);
+    let names: Vec<String> = task.cameras.iter().map(|c| c.name.clone()).collect();
+    let settings = Settings {
+        samples: 1,
+        denoise: false,
+        ..Settings::default()
+    };
+    let mut cams = blender::Cameras::new(&scene, 32, 24, settings).unwrap();
+    let clean = cams.render(&ep.data, ep.logic(), &names).unwrap();
+    let drawn = instance.perturbation.as_ref();
+    assert!(drawn.is_some());
+    cams.set_look(&scene, drawn).unwrap();
+    let shown = cams.render(&ep.data, ep.logic(), &names).unwrap();
+    // The bench camera moved, the lights and colours changed: a different frame.
+    assert_ne!(clean[0].rgb, shown[0].rgb);
+    // Back to the clean look: the scene is built again in the same worker and draws as before.
+    cams.set_look(&scene, None).unwrap();
+    let again = cams.render(&ep.data, ep.logic(), &names).unwrap();
+    assert_eq!(clean.len(), again.len());
+    for (a, b) in clean.iter().zip(&again) {
+        let differing = a
+            .rgb
+            .iter()
+            .zip(&b.rgb)
+            .filter(|(x, y)| x.abs_diff(**y) > 8)
+            .count();
+        assert!(
+            differing * 50 < a.rgb.len(),
+            "{}: {differing} values differ",
+            a.camera
+        );
+    }
+}

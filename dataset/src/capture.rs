@@ -25,7 +25,7 @@ pub struct Capture {
     /// What the episode's perturbations drew (`compiler::perturb::Drawn` as JSON), if any.
     pub(crate) perturbation: Option<serde_json::Value>,
     /// Who drew the frames and with what settings, when not the rasteriser
-    /// (`runtime::render::Renderer::describe`).
+    /// (`runtime::cameras::Renderer::describe`).
     pub(crate) renderer: Option<serde_json::Value>,
 }
 
@@ -112,9 +112,9 @@ impl Capture {
 
     /// Records who draws the frames (Blender and its settings), for the dataset's commit record;
     /// the rasteriser is recorded as nothing, as datasets before photoreal frames were.
-    pub fn set_renderer(&mut self, renderer: &runtime::render::Renderer) {
+    pub fn set_renderer(&mut self, renderer: &runtime::cameras::Renderer) {
         self.renderer = match renderer {
-            runtime::render::Renderer::Raster => None,
+            runtime::cameras::Renderer::Raster => None,
             r => Some(r.describe()),
         };
     }

@@ -24,7 +24,7 @@ pub struct ExportOptions {
     /// What the frames observe: cameras, the environment state, or both.
     pub observations: Observations,
     /// Who draws the frames from the recorded states.
-    pub renderer: runtime::render::Renderer,
+    pub renderer: runtime::cameras::Renderer,
 }
 
 /// The `.mcap` files named, a folder standing for the recordings in it (sorted by name).

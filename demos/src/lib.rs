@@ -38,7 +38,7 @@ pub struct GenerateOptions {
     pub observations: Observations,
     /// Who draws the frames: the rasteriser, or Blender for a photoreal dataset (the episodes
     /// are the same either way: drawing never touches the simulation).
-    pub renderer: runtime::render::Renderer,
+    pub renderer: runtime::cameras::Renderer,
 }
 
 /// One episode handled, for progress reports.
@@ -200,7 +200,7 @@ fn record(
     task: &compiler::Task,
     seed: u64,
     spec: &CaptureSpec,
-    renderer: runtime::render::Renderer,
+    renderer: runtime::cameras::Renderer,
     scene: &mut Option<Arc<runtime::Scene>>,
 ) -> Result<Recorded, DatasetError> {
     let episode_err = |why: String| DatasetError::Episode {

@@ -16,9 +16,10 @@
 //! It does not decide actions (policies do, in `scoring`) and does not write results; it reports
 //! state, frames and the judge's verdict.
 
+use crate::cameras::TaskCameras;
 use crate::clock::IdleClock;
 use crate::episode::{Episode, StepError};
-use crate::render::{RenderError, TaskCameras};
+use crate::render::RenderError;
 use crate::scene::{Scene, SceneError};
 use compiler::{SceneInstance, Task};
 use labware::LabwareState;
@@ -35,7 +36,7 @@ pub struct EnvOptions {
     /// Every camera at this size (width, height); `None`: the task's own camera spec.
     pub image_size: Option<[usize; 2]>,
     /// Who draws the cameras (the rasteriser unless a photoreal pass asks for Blender).
-    pub renderer: crate::render::Renderer,
+    pub renderer: crate::cameras::Renderer,
 }
 
 /// Why the environment could not go on.

@@ -11,6 +11,7 @@
 //! tests/level_of_detail.rs and tests/pictures.rs.
 
 pub mod blender;
+pub mod cameras;
 pub mod clearance;
 pub mod clock;
 pub mod deps;

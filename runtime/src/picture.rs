@@ -65,7 +65,7 @@ pub fn initial_frames(
     task: &Task,
     seed: u64,
     size: [usize; 2],
-    renderer: crate::render::Renderer,
+    renderer: crate::cameras::Renderer,
 ) -> Result<Vec<Image>, EnvError> {
     let mut env = Env::make(
         task,

@@ -27,7 +27,7 @@ pub struct EpisodeOptions {
     /// is sent wins); `None`: the task's camera spec.
     pub image_size: Option<[usize; 2]>,
     /// Who draws the cameras (the rasteriser unless a photoreal pass asks for Blender).
-    pub renderer: runtime::render::Renderer,
+    pub renderer: runtime::cameras::Renderer,
 }
 
 /// Why an episode could not be run to its end (an episode that fails is a result, not this).

@@ -17,7 +17,8 @@ use results::Image;
 use results::episode::TrajectoryHash;
 use results::recording::{RecordError, Recorder, RecordingSummary};
 use results::verdict::{Judge, Verdict};
-use runtime::render::{RenderError, TaskCameras};
+use runtime::cameras::TaskCameras;
+use runtime::render::RenderError;
 use runtime::{Episode, Scene};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -333,7 +334,7 @@ pub struct FrameOptions {
     /// Every this many control steps; `None`: the recorded frames' cadence, else every step.
     pub every: Option<usize>,
     /// Who draws: the rasteriser, or Blender for photoreal frames.
-    pub renderer: runtime::render::Renderer,
+    pub renderer: runtime::cameras::Renderer,
 }
 
 impl Recording {

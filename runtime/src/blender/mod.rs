@@ -204,7 +204,7 @@ impl Cameras {
 
 fn decode(camera: &str, png: &[u8]) -> Result<Image, RenderError> {
     Image::from_png(camera, png).map_err(|e| {
-        RenderError::Blender(BlenderError::Answer(format!(
+        RenderError::from(BlenderError::Answer(format!(
             "a frame that is not a PNG: {e}"
         )))
     })

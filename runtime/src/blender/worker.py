@@ -64,7 +64,7 @@ def srgb_to_linear(c):
 
 class Stage:
     def __init__(self):
-        self.objects = []  # (object, geom index)
+        self.objects = []  # one per drawn geom, in the request's order
         self.cameras = []
         self.looks = []  # each object's photoreal material
         self.masks = []  # each object's flat body colour
@@ -73,11 +73,14 @@ class Stage:
         self.tmp = tempfile.mkdtemp(prefix="autobio-blender-")
 
     def build(self, spec, blob):
+        """The scene anew (a second `scene` request, for a perturbed look, replaces the first)."""
         bpy.ops.wm.read_factory_settings(use_empty=True)
+        self.objects, self.cameras, self.looks, self.masks = [], [], [], []
+        self.displays = {}
         scene = bpy.context.scene
         self.settings = spec["settings"]
         self.width, self.height = spec["size"]
-        self.near = (min(c["near"] for c in spec["cameras"]) if spec["cameras"] else 0.0)
+        self.near = min(c["near"] for c in spec["cameras"]) if spec["cameras"] else 0.0
         verts = array(blob, spec["verts"], "<f4", (-1, 3))
         faces = array(blob, spec["faces"], "<u4", (-1, 3))
         pixels = blob[spec["pixels"]["offset"] : spec["pixels"]["offset"] + spec["pixels"]["len"]]

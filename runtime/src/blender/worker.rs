@@ -36,6 +36,12 @@ pub enum BlenderError {
     Answer(String),
 }
 
+impl From<BlenderError> for crate::render::RenderError {
+    fn from(e: BlenderError) -> Self {
+        crate::render::RenderError::Blender(Box::new(e))
+    }
+}
+
 /// The Python that runs the worker: `$AUTOBIO_BLENDER_PYTHON`, else the environment `make setup`
 /// made under the dependencies folder.
 pub fn python() -> PathBuf {

@@ -1,4 +1,4 @@
-//! Silhouettes: each body of the scene in a flat colour of its own (`blender::stage::mask_colour`)
+//! Silhouettes: each body of the scene in a flat colour of its own ([`mask_colour`])
 //! on black, drawn by the rasteriser from a copy of the render model (no lights, no materials,
 //! no multisampling: a pixel is the body at its centre), and the agreement of two such masks
 //! body by body (intersection over union). Blender draws the same masks
@@ -6,7 +6,6 @@
 //! and `autobio bench`.
 
 use super::{Mirror, RenderError};
-use crate::blender::stage::{drawn, mask_body, mask_colour};
 use crate::scene::Scene;
 use labware::Logic;
 use mujoco_rs::prelude::*;
@@ -15,6 +14,39 @@ use results::Image;
 use robots::Detail;
 use std::collections::BTreeMap;
 use std::sync::Arc;
+
+/// MuJoCo's default geom colour: a geom with a material and this colour shows the material's.
+const DEFAULT_RGBA: [f32; 4] = [0.5, 0.5, 0.5, 1.0];
+
+/// A geom's colour as the rasteriser draws it.
+pub fn rgba(model: &MjModel, g: usize) -> [f32; 4] {
+    let own = model.geom_rgba()[g];
+    match usize::try_from(model.geom_matid()[g]) {
+        Ok(m) if own == DEFAULT_RGBA => model.mat_rgba()[m],
+        _ => own,
+    }
+}
+
+/// Whether the rasteriser draws geom `g` and Blender can build it.
+pub fn drawn(model: &MjModel, g: usize) -> bool {
+    let visible_group = (0..3).contains(&model.geom_group()[g]);
+    let shape = model.geom_type()[g];
+    let buildable = !matches!(shape, MjtGeomBase::mjGEOM_SDF | MjtGeomBase::mjGEOM_HFIELD);
+    visible_group && buildable && rgba(model, g)[3] > 0.0
+}
+
+/// A body's colour in a silhouette mask: 16 levels a channel, 17 apart, so an 8-bit value
+/// rounded either way still names its body (`None` for the background).
+pub fn mask_colour(body: usize) -> [u8; 3] {
+    let i = body + 1;
+    [i % 16, (i / 16) % 16, (i / 256) % 16].map(|v| (v * 17) as u8)
+}
+
+/// The body a mask pixel names (`None`: the background, black).
+pub fn mask_body(rgb: [u8; 3]) -> Option<usize> {
+    let [r, g, b] = rgb.map(|v| ((v as usize + 8) / 17).min(15));
+    (r + 16 * g + 256 * b).checked_sub(1)
+}
 
 /// The rasteriser's masks of every task camera, in task order, of `data`'s state under the
 /// episode's look (its cameras and lights; colours are the masks').
@@ -134,4 +166,22 @@ pub fn agreement(reference: &Image, other: &Image) -> Vec<BodyAgreement> {
             iou: i as f64 / (r + o - i).max(1) as f64,
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_body_has_its_own_mask_colour_and_reads_back_through_rounding() {
+        for body in 0..4000 {
+            let c = mask_colour(body);
+            assert_eq!(mask_body(c), Some(body));
+            // An 8-bit value off by a few still names the same body.
+            let off = c.map(|v| v.saturating_add(3));
+            assert_eq!(mask_body(off), Some(body), "{c:?}");
+        }
+        assert_eq!(mask_body([0, 0, 0]), None);
+        assert_eq!(mask_body([2, 1, 0]), None);
+    }
 }

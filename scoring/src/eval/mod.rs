@@ -88,7 +88,7 @@ pub struct EvalOptions {
     pub image_size: Option<[usize; 2]>,
     /// Who draws the cameras: the rasteriser, or Blender for recordings with photoreal frames
     /// (`demo --renderer blender`).
-    pub renderer: runtime::render::Renderer,
+    pub renderer: runtime::cameras::Renderer,
     /// Continue the run whose journal is in `out`: only when its manifest's fingerprints match,
     /// and never rerunning a finished episode.
     pub resume: bool,
