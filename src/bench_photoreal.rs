@@ -89,7 +89,7 @@ pub fn figures(task: &compiler::Task) -> Result<()> {
     let mut bodies = 0;
     for (r, b) in raster_masks.iter().zip(&drawn) {
         for a in runtime::render::masks::agreement(r, b) {
-            if a.reference >= 50 {
+            if a.reference.max(a.other) >= 50 {
                 bodies += 1;
                 if a.iou < worst.0 {
                     worst = (a.iou, r.camera.clone());

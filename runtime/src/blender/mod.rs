@@ -61,7 +61,7 @@ impl Default for Settings {
 }
 
 impl Settings {
-    /// The settings as datasets and recordings name them.
+    /// The settings as datasets name them (`meta/autobio.jsonl`).
     pub fn describe(&self) -> serde_json::Value {
         serde_json::json!({
             "renderer": "blender",
@@ -177,7 +177,13 @@ impl Cameras {
         let changed = self.mirror.sync(data, logic)?;
         let draw: Vec<usize> = (0..self.ids.len()).collect();
         let (header, blob) = self.stage.frame(&self.mirror, &changed, &draw, mode);
-        let (answer, pngs) = self.worker.request(&header, &blob)?;
+        let (answer, pngs) = match self.worker.request(&header, &blob) {
+            Ok(a) => a,
+            Err(e) => {
+                self.mirror.redraw_displays(&changed);
+                return Err(e.into());
+            }
+        };
         let sizes = answer["sizes"]
             .as_array()
             .filter(|s| s.len() == draw.len())

@@ -12,6 +12,7 @@
 import json
 import math
 import os
+import shutil
 import struct
 import sys
 import tempfile
@@ -71,9 +72,12 @@ class Stage:
         self.mode = "photo"
         self.displays = {}  # texture id -> bpy image
         self.tmp = tempfile.mkdtemp(prefix="autobio-blender-")
+        self.built = False
 
     def build(self, spec, blob):
-        """The scene anew (a second `scene` request, for a perturbed look, replaces the first)."""
+        """The scene anew (a second `scene` request, for a perturbed look, replaces the first).
+        Frames are refused until a build has succeeded."""
+        self.built = False
         bpy.ops.wm.read_factory_settings(use_empty=True)
         self.objects, self.cameras, self.looks, self.masks = [], [], [], []
         self.displays = {}
@@ -166,6 +170,7 @@ class Stage:
         # Keep the built scene between frames: only moved objects are updated.
         render.use_persistent_data = True
         self.photo()
+        self.built = True
 
     def image(self, t, pixels):
         img = bpy.data.images.new(f"display{t['id']}", t["width"], t["height"], alpha=False)
@@ -323,6 +328,7 @@ class Stage:
             light.hide_render = False
         # The rasteriser's colours as given (AgX would wash the paler ones out).
         scene.view_settings.view_transform = "Standard"
+        scene.render.filter_size = 1.5
         if s["engine"] == "eevee":
             scene.render.engine = "BLENDER_EEVEE"
             scene.eevee.taa_render_samples = int(s["samples"])
@@ -340,7 +346,6 @@ class Stage:
             c.transmission_bounces = 8
             c.glossy_bounces = 4
             c.diffuse_bounces = 3
-            scene.render.filter_size = 1.5
         self.mode = "photo"
 
     def mask(self):
@@ -365,10 +370,17 @@ class Stage:
         self.mode = "mask"
 
     def frame(self, header, blob):
+        if not self.built:
+            raise RuntimeError("no scene: the last scene request failed or none was made")
         poses = array(blob, header["geoms"], "<f4", (-1, 12))
+        cams = array(blob, header["cameras"], "<f4", (-1, 12))
+        if len(poses) != len(self.objects) or len(cams) != len(self.cameras):
+            raise ValueError(
+                f"{len(poses)} geom and {len(cams)} camera poses for a scene of "
+                f"{len(self.objects)} geoms and {len(self.cameras)} cameras"
+            )
         for obj, p in zip(self.objects, poses):
             obj.matrix_world = pose_matrix(p)
-        cams = array(blob, header["cameras"], "<f4", (-1, 12))
         for obj, p in zip(self.cameras, cams):
             obj.matrix_world = pose_matrix(p)
         if header["lights"]["len"]:
@@ -449,6 +461,7 @@ def main():
     while True:
         header, blob = receive()
         if header is None or header["op"] == "quit":
+            shutil.rmtree(stage.tmp, ignore_errors=True)
             return
         try:
             if header["op"] == "scene":

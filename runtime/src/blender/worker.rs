@@ -18,6 +18,11 @@ const SCRIPT: &str = include_str!("worker.py");
 /// Lines of the worker's standard error kept for an error message.
 const TAIL_LINES: usize = 30;
 
+/// The longest header and blob an answer may announce: anything longer is not the worker
+/// speaking (a stray write on its standard output), refused before allocating.
+const MAX_HEADER: usize = 1 << 20;
+const MAX_BLOB: u64 = 1 << 32;
+
 /// Why Blender could not draw.
 #[derive(Debug, thiserror::Error)]
 pub enum BlenderError {
@@ -131,11 +136,25 @@ impl Worker {
         let mut read = || -> std::io::Result<(Vec<u8>, Vec<u8>)> {
             let mut n = [0u8; 4];
             self.from.read_exact(&mut n)?;
-            let mut h = vec![0u8; u32::from_le_bytes(n) as usize];
+            let too_long = |what: &str, n: u64| {
+                std::io::Error::new(
+                    std::io::ErrorKind::InvalidData,
+                    format!("a {what} of {n} bytes announced: not the worker's answer"),
+                )
+            };
+            let header_len = u32::from_le_bytes(n) as usize;
+            if header_len > MAX_HEADER {
+                return Err(too_long("header", header_len as u64));
+            }
+            let mut h = vec![0u8; header_len];
             self.from.read_exact(&mut h)?;
             let mut m = [0u8; 8];
             self.from.read_exact(&mut m)?;
-            let mut blob = vec![0u8; u64::from_le_bytes(m) as usize];
+            let blob_len = u64::from_le_bytes(m);
+            if blob_len > MAX_BLOB {
+                return Err(too_long("blob", blob_len));
+            }
+            let mut blob = vec![0u8; blob_len as usize];
             self.from.read_exact(&mut blob)?;
             Ok((h, blob))
         };
@@ -155,6 +174,8 @@ impl Worker {
     }
 
     fn died(&mut self, why: String) -> BlenderError {
+        // Let the process end and the standard error reader catch its last lines.
+        std::thread::sleep(std::time::Duration::from_millis(100));
         let status = self
             .child
             .try_wait()
@@ -162,8 +183,6 @@ impl Worker {
             .flatten()
             .map(|s| format!(", {s}"))
             .unwrap_or_default();
-        // Let the standard error reader catch the last lines.
-        std::thread::sleep(std::time::Duration::from_millis(100));
         let tail = self.tail.lock().unwrap_or_else(|p| p.into_inner());
         BlenderError::Died {
             why: why + &status,

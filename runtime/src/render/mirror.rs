@@ -273,6 +273,18 @@ impl Mirror {
         Ok(changed)
     }
 
+    /// Forgets that these display textures were drawn, so the next sync redraws them and says
+    /// so: for a renderer that failed to take them (an upload, a Blender request).
+    pub fn redraw_displays(&mut self, textures: &[usize]) {
+        for s in self
+            .screens
+            .iter_mut()
+            .filter(|s| textures.contains(&s.texture))
+        {
+            s.drawn = None;
+        }
+    }
+
     /// A display texture's pixels as last drawn: width, height and RGB rows (MuJoCo's order).
     pub fn display_pixels(&self, texture: usize) -> Option<(usize, usize, &[u8])> {
         let s = self.screens.iter().find(|s| s.texture == texture)?;

@@ -160,12 +160,15 @@ impl Cameras {
         logic: &[Logic],
     ) -> Result<(), RenderError> {
         let changed = self.mirror.sync(data, logic)?;
-        if let Some(textures) = self.mirror.textures() {
-            for t in changed {
-                self.renderer
-                    .update_texture_from(textures, t)
-                    .map_err(|e| RenderError::Display(format!("upload: {e:?}")))?;
-            }
+        let uploaded = match self.mirror.textures() {
+            Some(textures) => changed
+                .iter()
+                .try_for_each(|&t| self.renderer.update_texture_from(textures, t)),
+            None => Ok(()),
+        };
+        if let Err(e) = uploaded {
+            self.mirror.redraw_displays(&changed);
+            return Err(RenderError::Display(format!("upload: {e:?}")));
         }
         Ok(())
     }
