@@ -153,6 +153,30 @@ fn a_photoreal_dataset_holds_the_same_episode_and_loads_in_lerobot() {
     assert_eq!(named["engine"], "cycles");
     assert_eq!(named["samples"], 1);
     assert_eq!(named["denoiser"], "none");
+    // Resumed with the rasteriser, or with other samples, it is refused: a dataset has one look.
+    for other in [&[][..], &["--renderer", "blender", "--samples", "2"][..]] {
+        let mut args = vec![
+            "demo",
+            "--protocol",
+            "protocols/tube/pick_up.toml",
+            "--format",
+            "lerobot-v30",
+            "--codec",
+            "h264",
+            "--episodes",
+            "2",
+            "--size",
+            "32x24",
+            "--resume",
+            "--out",
+            photoreal.to_str().unwrap(),
+        ];
+        args.extend(other);
+        let out = common::autobio(&args);
+        assert!(!out.status.success(), "{other:?}");
+        let err = common::text(&out.stderr);
+        assert!(err.contains("same --renderer"), "{other:?}: {err}");
+    }
     // The real LeRobot loads it and decodes its photoreal videos.
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     let out = std::process::Command::new(root.join(".deps/lerobot-env/bin/python"))

@@ -370,6 +370,42 @@ impl DatasetWriter {
             .any(|c| c.task_id == task && c.seed == seed)
     }
 
+    /// Refuses to add frames drawn by `renderer` to a dataset whose committed episodes another
+    /// renderer drew (or the same with other engine, samples or denoiser: threads aside): a
+    /// dataset holds one look, as it holds one codec and image size.
+    pub fn check_renderer(
+        &self,
+        renderer: &runtime::cameras::Renderer,
+    ) -> Result<(), DatasetError> {
+        let look = |v: Option<&Value>| -> Option<Value> {
+            let mut v = v?.clone();
+            v.as_object_mut()?.remove("threads");
+            Some(v)
+        };
+        let wanted = match renderer {
+            runtime::cameras::Renderer::Raster => None,
+            r => look(Some(&r.describe())),
+        };
+        match self
+            .done
+            .iter()
+            .find(|c| look(c.renderer.as_ref()) != wanted)
+        {
+            None => Ok(()),
+            Some(c) => Err(DatasetError::Existing {
+                path: self.root.clone(),
+                why: format!(
+                    "its frames were drawn by {} (episode {} of {}); resume it with the same --renderer, --engine, --samples and denoiser",
+                    c.renderer
+                        .as_ref()
+                        .map_or_else(|| "MuJoCo's rasteriser".to_string(), |r| r.to_string()),
+                    c.seed,
+                    c.task_id
+                ),
+            }),
+        }
+    }
+
     /// What a worker thread needs to stage captures.
     pub fn capture_spec(&self) -> CaptureSpec {
         CaptureSpec {

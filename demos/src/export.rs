@@ -79,6 +79,9 @@ pub fn export(
         opts.resume,
     )?;
     writer.set_file_sizes(opts.file_sizes);
+    if opts.observations.cameras() {
+        writer.check_renderer(&opts.renderer)?;
+    }
     let mut out = Generated {
         resumed: writer.episodes(),
         ..Default::default()

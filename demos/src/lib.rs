@@ -81,6 +81,9 @@ pub fn generate(
         opts.resume,
     )?;
     writer.set_file_sizes(opts.file_sizes);
+    if opts.observations.cameras() {
+        writer.check_renderer(&opts.renderer)?;
+    }
     if let Some(shard) = opts.shard {
         let asked = dataset::ShardPlan {
             shard,
@@ -111,6 +114,12 @@ pub fn generate(
         .map(|(k, (t, seed))| (k, t, seed))
         .collect();
     let spec = writer.capture_spec();
+    // A dataset without cameras draws nothing, whoever would have drawn.
+    let renderer = if opts.observations.cameras() {
+        opts.renderer
+    } else {
+        Default::default()
+    };
     let next = AtomicUsize::new(0);
     let stop = AtomicBool::new(false);
     let mut failure = None;
@@ -125,7 +134,7 @@ pub fn generate(
                     let Some(&(_, t, seed)) = plan.get(k) else {
                         break;
                     };
-                    let r = record(&tasks[t], seed, spec, opts.renderer, &mut scenes[t]);
+                    let r = record(&tasks[t], seed, spec, renderer, &mut scenes[t]);
                     if tx.send((k, r)).is_err() {
                         break;
                     }
