@@ -100,9 +100,10 @@ fn silhouettes_of_different_states_disagree() {
 #[test]
 fn a_photoreal_dataset_holds_the_same_episode_and_loads_in_lerobot() {
     let dir = common::scratch("photoreal-dataset");
-    let demo = |name: &str, extra: &[&str]| {
-        let out = dir.join(name);
-        let mut args = vec![
+    // `demo` of the tube pick-up (the shortest task: about 200 control steps) as a v3.0 dataset
+    // of `episodes` at 32x24, into `out`.
+    let args = |out: &std::path::Path, episodes: &'static str, extra: &[&'static str]| {
+        let mut a: Vec<String> = [
             "demo",
             "--protocol",
             "protocols/tube/pick_up.toml",
@@ -111,14 +112,22 @@ fn a_photoreal_dataset_holds_the_same_episode_and_loads_in_lerobot() {
             "--codec",
             "h264",
             "--episodes",
-            "1",
+            episodes,
             "--size",
             "32x24",
             "--out",
-            out.to_str().unwrap(),
-        ];
-        args.extend(extra);
-        autobio_ok(&args);
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        a.push(out.to_str().unwrap().to_string());
+        a.extend(extra.iter().map(|s| s.to_string()));
+        a
+    };
+    let demo = |name: &str, extra: &[&'static str]| {
+        let out = dir.join(name);
+        let a = args(&out, "1", extra);
+        autobio_ok(&a.iter().map(String::as_str).collect::<Vec<_>>());
         out
     };
     let raster = demo("raster", &[]);
@@ -155,24 +164,10 @@ fn a_photoreal_dataset_holds_the_same_episode_and_loads_in_lerobot() {
     assert_eq!(named["denoiser"], "none");
     // Resumed with the rasteriser, or with other samples, it is refused: a dataset has one look.
     for other in [&[][..], &["--renderer", "blender", "--samples", "2"][..]] {
-        let mut args = vec![
-            "demo",
-            "--protocol",
-            "protocols/tube/pick_up.toml",
-            "--format",
-            "lerobot-v30",
-            "--codec",
-            "h264",
-            "--episodes",
-            "2",
-            "--size",
-            "32x24",
-            "--resume",
-            "--out",
-            photoreal.to_str().unwrap(),
-        ];
-        args.extend(other);
-        let out = common::autobio(&args);
+        let mut a = args(&photoreal, "2", other);
+        a.push("--resume".into());
+        let a: Vec<&str> = a.iter().map(String::as_str).collect();
+        let out = common::autobio(&a);
         assert!(!out.status.success(), "{other:?}");
         let err = common::text(&out.stderr);
         assert!(err.contains("same --renderer"), "{other:?}: {err}");
