@@ -146,34 +146,28 @@ impl Cameras {
         logic: &[Logic],
         names: &[String],
     ) -> Result<Vec<Image>, RenderError> {
-        let pngs = self.draw(data, logic, "photo")?;
-        pngs.into_iter()
-            .zip(names)
-            .map(|(png, name)| decode(name, &png))
-            .collect()
+        self.draw(data, logic, names, "photo")
     }
 
     /// Each camera's silhouettes: every drawn body in its own flat colour
-    /// ([`stage::mask_colour`]) on black, one sample at each pixel's centre.
+    /// ([`crate::render::masks::mask_colour`]) on black, one sample at each pixel's centre.
     pub fn masks(
         &mut self,
         data: &MjData<Arc<MjModel>>,
         logic: &[Logic],
         names: &[String],
     ) -> Result<Vec<Image>, RenderError> {
-        let pngs = self.draw(data, logic, "mask")?;
-        pngs.into_iter()
-            .zip(names)
-            .map(|(png, name)| decode(name, &png))
-            .collect()
+        self.draw(data, logic, names, "mask")
     }
 
+    /// Every camera drawn in `mode` (`photo` or `mask`), decoded and named in task order.
     fn draw(
         &mut self,
         data: &MjData<Arc<MjModel>>,
         logic: &[Logic],
+        names: &[String],
         mode: &str,
-    ) -> Result<Vec<Vec<u8>>, RenderError> {
+    ) -> Result<Vec<Image>, RenderError> {
         let changed = self.mirror.sync(data, logic)?;
         let draw: Vec<usize> = (0..self.ids.len()).collect();
         let (header, blob) = self.stage.frame(&self.mirror, &changed, &draw, mode);
@@ -196,12 +190,12 @@ impl Cameras {
             })?;
         let mut out = Vec::with_capacity(sizes.len());
         let mut at = 0;
-        for s in sizes {
+        for (s, name) in sizes.iter().zip(names) {
             let n = s.as_u64().unwrap_or(0) as usize;
             let png = pngs
                 .get(at..at + n)
                 .ok_or_else(|| BlenderError::Answer("frames longer than the blob".into()))?;
-            out.push(png.to_vec());
+            out.push(decode(name, png)?);
             at += n;
         }
         Ok(out)
