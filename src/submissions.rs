@@ -149,30 +149,14 @@ pub fn run(c: &LeaderboardCommand) -> Result<ExitCode> {
     }
 }
 
-/// The verifier's re-enactment: `scoring::replay::reenact` in the verifier's terms.
+/// The verifier's re-enactment: `scoring::replay::reenact`, its error in the verifier's terms.
 pub fn reenact(
     task: &compiler::Task,
     seed: u64,
     actions: &[Vec<f64>],
-    ask: &leaderboard::verify::ReenactAsk,
+    opts: &leaderboard::verify::ReenactOptions,
 ) -> Result<leaderboard::verify::Reenacted, leaderboard::verify::ReenactError> {
-    let opts = scoring::replay::ReenactOptions {
-        record: Some(ask.record.to_path_buf()),
-        image_every: ask.image_every,
-        image_size: ask.image_size,
-        error: ask.error.map(str::to_string),
-    };
-    scoring::replay::reenact(task, seed, actions, &opts)
-        .map(|r| leaderboard::verify::Reenacted {
-            hash: r.hash,
-            verdict: r.verdict,
-            time_s: r.time_s,
-            control_steps: r.control_steps,
-            finished: r.finished,
-            unused_actions: r.unused_actions,
-            refused: r.refused,
-            unstable: r.unstable,
-        })
+    scoring::replay::reenact(task, seed, actions, opts)
         .map_err(|e| leaderboard::verify::ReenactError::new(task, seed, e))
 }
 

@@ -137,47 +137,98 @@ fn modules(src: &Path) -> Vec<(String, PathBuf)> {
         .collect()
 }
 
-/// The modules each module of `src` uses through `crate::` paths and `super::` (code only, not
-/// comments), its own ancestors and descendants aside.
+/// The paths an import names after its `crate::` or `super::` prefix (`rest` starts just after
+/// it): one path, or each of a `{...}` group's (nested groups read by their first segment).
+fn import_paths(rest: &str) -> Vec<String> {
+    let path_char = |c: char| c.is_ascii_alphanumeric() || c == '_' || c == ':';
+    let Some(group) = rest.strip_prefix('{') else {
+        return vec![rest.chars().take_while(|c| path_char(*c)).collect()];
+    };
+    let mut depth = 0;
+    let mut items = vec![String::new()];
+    for c in group.chars() {
+        match c {
+            '{' => depth += 1,
+            '}' if depth == 0 => break,
+            '}' => depth -= 1,
+            ',' if depth == 0 => items.push(String::new()),
+            c if depth == 0 && !c.is_whitespace() => items.last_mut().unwrap().push(c),
+            _ => {}
+        }
+    }
+    items
+        .into_iter()
+        .map(|i| i.chars().take_while(|c| path_char(*c)).collect())
+        .collect()
+}
+
+/// The modules each module of `src` uses through `crate::` and `super::` paths (code only, not
+/// comments or a file's trailing `#[cfg(test)]` module): a `super::x` path is `x` beside the
+/// module (in its parent), a plain `super::` use the parent itself; `crate::` paths to its own
+/// ancestors and descendants aside.
 fn module_graph(src: &Path) -> std::collections::BTreeMap<String, Vec<String>> {
     let mods = modules(src);
     let names: Vec<&str> = mods.iter().map(|(m, _)| m.as_str()).collect();
     let related = |a: &str, b: &str| {
         a == b || a.starts_with(&format!("{b}::")) || b.starts_with(&format!("{a}::"))
     };
+    // The longest module path that `parts` starts with.
+    let module_of = |parts: &[&str]| {
+        (1..=parts.len())
+            .rev()
+            .map(|k| parts[..k].join("::"))
+            .find(|t| names.contains(&t.as_str()))
+    };
     let mut graph = std::collections::BTreeMap::new();
     for (m, file) in &mods {
-        let code: String = std::fs::read_to_string(file)
-            .unwrap()
+        let text = std::fs::read_to_string(file).unwrap();
+        // A unit-test module at the end of a file imports `super::` as its own file.
+        let text = text.split("#[cfg(test)]").next().unwrap_or("");
+        let code: String = text
             .lines()
             .map(|l| l.split("//").next().unwrap_or(""))
             .collect::<Vec<_>>()
             .join("\n");
+        let word_before = |i: usize| {
+            i > 0 && code[..i].ends_with(|c: char| c.is_alphanumeric() || c == '_' || c == ':')
+        };
         let mut uses = std::collections::BTreeSet::new();
         for (i, _) in code.match_indices("crate::") {
-            if i > 0 && code[..i].ends_with(|c: char| c.is_alphanumeric() || c == '_') {
+            if word_before(i) {
                 continue;
             }
-            let path: String = code[i + 7..]
-                .chars()
-                .take_while(|c| {
-                    c.is_ascii_lowercase() || c.is_ascii_digit() || *c == '_' || *c == ':'
-                })
-                .collect();
-            let parts: Vec<&str> = path.split("::").filter(|p| !p.is_empty()).collect();
-            let target = (1..=parts.len())
-                .rev()
-                .map(|k| parts[..k].join("::"))
-                .find(|t| names.contains(&t.as_str()));
-            if let Some(t) = target.filter(|t| !related(m, t)) {
-                uses.insert(t);
+            for path in import_paths(&code[i + 7..]) {
+                let parts: Vec<&str> = path.split("::").filter(|p| !p.is_empty()).collect();
+                if let Some(t) = module_of(&parts).filter(|t| !related(m, t)) {
+                    uses.insert(t);
+                }
             }
         }
-        if code.contains("super::")
-            && let Some((parent, _)) = m.rsplit_once("::")
-            && names.contains(&parent)
-        {
-            uses.insert(parent.to_string());
+        // `super` of a file module `a::b` is `a` (of a top-level module, the crate root).
+        let parent: Vec<&str> = match m.rsplit_once("::") {
+            Some((parent, _)) => parent.split("::").collect(),
+            None => Vec::new(),
+        };
+        for (i, _) in code.match_indices("super::") {
+            if word_before(i) {
+                continue;
+            }
+            let mut base = parent.clone();
+            let mut rest = &code[i + 7..];
+            while let Some(r) = rest.strip_prefix("super::") {
+                base.pop();
+                rest = r;
+            }
+            for path in import_paths(rest) {
+                let mut parts = base.clone();
+                parts.extend(path.split("::").filter(|p| !p.is_empty()));
+                match module_of(&parts) {
+                    Some(t) if &t != m => {
+                        uses.insert(t);
+                    }
+                    _ => {}
+                }
+            }
         }
         graph.insert(m.clone(), uses.into_iter().collect());
     }
@@ -264,6 +315,32 @@ fn no_module_reaches_itself_through_its_imports() {
     )
     .unwrap();
     assert_eq!(find_cycle(&module_graph(&dir.join("src"))), None);
+    // Two siblings that import each other through `super::` are a cycle too (a `super::`
+    // path names a module beside the importer, not only its parent); a unit-test module's
+    // `use super::*` is no import of the file's.
+    std::fs::create_dir_all(dir.join("src/site")).unwrap();
+    std::fs::write(dir.join("src/lib.rs"), "//! x\nmod site;\n").unwrap();
+    std::fs::write(
+        dir.join("src/site/mod.rs"),
+        "//! x\nmod load;\nmod stats;\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("src/site/load.rs"),
+        "//! x\nuse super::{io, stats::Spread};\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("src/site/stats.rs"),
+        "//! x\nuse super::load::Submission;\n#[cfg(test)]\nmod tests {\n    use super::*;\n}\n",
+    )
+    .unwrap();
+    let _ = std::fs::remove_file(dir.join("src/check.rs"));
+    let _ = std::fs::remove_file(dir.join("src/primitives.rs"));
+    let cycle = find_cycle(&module_graph(&dir.join("src"))).expect("the siblings are a cycle");
+    assert_eq!(cycle, ["site::load", "site::stats", "site::load"]);
+    std::fs::write(dir.join("src/site/load.rs"), "//! x\nuse super::io;\n").unwrap();
+    assert_eq!(find_cycle(&module_graph(&dir.join("src"))), None);
 }
 
 /// The Python package's modules say what they do too: each starts with a docstring, which
@@ -291,4 +368,47 @@ fn every_python_module_starts_with_a_docstring() {
         .map(|p| p.display().to_string())
         .collect();
     assert!(bare.is_empty(), "start these with a docstring: {bare:?}");
+}
+
+/// The `mod` lines of a test binary's root (`tests/suite.rs`), and the test files beside it that
+/// no line names: such a file is never compiled, its tests never run.
+fn files_outside_the_suite(tests: &Path) -> Vec<String> {
+    let suite = std::fs::read_to_string(tests.join("suite.rs")).unwrap();
+    let declared: Vec<&str> = suite
+        .lines()
+        .filter_map(|l| l.trim().strip_prefix("mod ")?.strip_suffix(';'))
+        .collect();
+    let mut missing = Vec::new();
+    for entry in std::fs::read_dir(tests).unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_stem().unwrap().to_string_lossy().into_owned();
+        let is_module = if path.is_dir() {
+            path.join("mod.rs").is_file()
+        } else {
+            path.extension().is_some_and(|e| e == "rs") && name != "suite"
+        };
+        if is_module && !declared.contains(&name.as_str()) {
+            missing.push(name);
+        }
+    }
+    missing.sort();
+    missing
+}
+
+#[test]
+fn every_test_file_is_a_module_of_the_suite() {
+    let tests = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests");
+    assert_eq!(
+        files_outside_the_suite(&tests),
+        Vec::<String>::new(),
+        "test files tests/suite.rs does not name (`mod <file>;`), so their tests never run"
+    );
+    // The check can fail: a file beside a suite that names only the other one.
+    let dir = crate::common::scratch("suite-modules");
+    std::fs::create_dir_all(dir.join("helpers")).unwrap();
+    std::fs::write(dir.join("suite.rs"), "mod named;\n// mod forgotten;\n").unwrap();
+    std::fs::write(dir.join("named.rs"), "").unwrap();
+    std::fs::write(dir.join("forgotten.rs"), "").unwrap();
+    std::fs::write(dir.join("helpers/mod.rs"), "").unwrap();
+    assert_eq!(files_outside_the_suite(&dir), ["forgotten", "helpers"]);
 }

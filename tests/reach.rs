@@ -483,3 +483,62 @@ fn kept_reach_outcomes_give_the_same_diagnostics_and_an_edit_is_solved_afresh() 
     assert!(none.status.success());
     assert!(!home.join(".cache").exists());
 }
+
+/// A loop's expansions are steps of their own: where the third expansion of a `for_each`
+/// places its tube out of reach, E0036 names that expanded step (the plan's 6th) and points at
+/// the loop body's step that wrote it, not at a top-level step of the file by the plan's index
+/// (there is none: the file has one, the loop).
+#[test]
+fn a_for_each_whose_third_expansion_is_out_of_reach_points_at_the_loops_step() {
+    let path = "protocols/tube/transfer.toml";
+    let shipped = std::fs::read_to_string(path).unwrap();
+    let steps = shipped.find("[[steps]]").unwrap();
+    let mut head = shipped[..steps].to_string();
+    for (from, to) in [
+        ("\n[params.row]\nchoice = [\"A\", \"B\"]\n", "\n"),
+        ("\n[params.col]\nint = [1, 5]\n", "\n"),
+        ("\n[params.from]\nslot = \"source\"\n", "\n"),
+        (
+            ", row {row}, col {col}",
+            ", and two more, the last into the far rack",
+        ),
+        (
+            "[labware.tube]\nkind = \"tube_50ml\"\nat = \"source.{from}\"\n",
+            "",
+        ),
+    ] {
+        assert!(head.contains(from), "{path} has no {from:?}");
+        head = head.replacen(from, to, 1);
+    }
+    let mut source = head;
+    for (tube, at) in [("t1", "A1"), ("t2", "A3"), ("t3", "A5")] {
+        source += &format!("[labware.{tube}]\nkind = \"tube_50ml\"\nat = \"source.{at}\"\n\n");
+    }
+    source += "[labware.far]\nkind = \"tube_rack\"\npose = { pos_m = [0.5, 0.8, 0.854], yaw_deg = 90 }\n\n\
+[[steps]]\nfor_each = { tube = [\"t1\", \"t2\", \"t3\"], slot = [\"target.A1\", \"target.B3\", \"far.A1\"] }\n\n\
+[[steps.body]]\ndo = \"pick\"\non = \"{tube}\"\nwith = \"arm\"\n\n\
+[[steps.body]]\ndo = \"place\"\non = \"{tube}\"\nto = \"{slot}\"\nwith = \"arm\"\n\n\
+[success]\nall = [\"t1 in target.A1\", \"t2 in target.B3\", \"t3 in far.A1\"]\n";
+    let c = check_as(path, &source, "reach-for-each");
+    let reach: Vec<&dsl::Diagnostic> = c
+        .diagnostics
+        .iter()
+        .filter(|d| d.code == dsl::Code::E0036)
+        .collect();
+    assert_eq!(reach.len(), 1, "{:#?}", c.diagnostics);
+    assert!(
+        reach[0].message.contains("cannot reach step 6's target"),
+        "{}",
+        reach[0].message
+    );
+    // At the body's `place`, its `with`: the last `with = "arm"` of the file.
+    let with = source.rfind("with = \"arm\"").unwrap() + "with = ".len();
+    assert_eq!(
+        &source[reach[0].span.start..reach[0].span.end],
+        "\"arm\"",
+        "{:#?}",
+        reach[0]
+    );
+    assert_eq!(reach[0].span.start, with, "{:#?}", reach[0]);
+    assert!(c.task.is_none());
+}

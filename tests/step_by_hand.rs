@@ -7,6 +7,7 @@
 use crate::common;
 
 use policy::{Observation, Policy, Privileged};
+use results::end::EpisodeEnd;
 use runtime::{Env, EnvError, EnvOptions};
 use std::process::Command;
 
@@ -73,6 +74,8 @@ fn stepping_by_hand_with_the_experts_actions_gives_evals_trajectory() {
     let end = run_to_end(&mut env, expert.as_mut());
     assert!(end.terminated && !end.truncated, "{end:?}");
     assert_eq!(end.reward, 1.0);
+    assert_eq!(end.end, Some(EpisodeEnd::Success));
+    assert_eq!(env.end(), Some(EpisodeEnd::Success));
     assert!(env.verdict().success);
     let by_hand = env.trajectory_hash();
     assert_eq!(by_hand, eval_hash(protocol, seed));
@@ -101,6 +104,7 @@ fn no_motion_is_truncated_at_the_time_limit_with_no_reward() {
     let end = run_to_end(&mut env, &mut hold);
     assert!(end.truncated && !end.terminated, "{end:?}");
     assert_eq!(end.reward, 0.0);
+    assert_eq!(end.end, Some(EpisodeEnd::TimeLimit));
     let period = task.physics.timestep_s * task.physics.substeps as f64;
     assert!(
         end.time >= task.time_limit_s - 1e-6 && end.time < task.time_limit_s + period - 1e-6,
@@ -130,10 +134,38 @@ fn frames_are_drawn_at_the_tasks_camera_size_unless_overridden() {
     .unwrap();
     let f = &small.frames().unwrap()[0];
     assert_eq!([f.width, f.height, f.rgb.len()], [64, 48, 64 * 48 * 3]);
-    // A bad action is refused with a typed error and ends the episode.
+    // A bad action is refused with a typed error and ends the episode as the policy's error.
+    assert_eq!(env.end(), None, "the episode runs");
     assert!(matches!(
         env.step(&[0.0; 3]),
         Err(EnvError::Step(runtime::StepError::BadAction { got: 3, .. }))
     ));
+    assert_eq!(
+        env.end(),
+        Some(EpisodeEnd::PolicyError(
+            "action has 3 values, the robots take 7".into()
+        ))
+    );
+    assert!(matches!(env.step(&[0.0; 7]), Err(EnvError::Over)));
+}
+
+/// An unstable simulation (a timestep the arm's servos cannot take, as in
+/// tests/episode_failures.rs) is no error of the caller's: its step is truncated, scores 0 and
+/// carries the end with its reason, which the environment then reports.
+#[test]
+fn an_unstable_simulation_ends_the_step_truncated_with_its_reason() {
+    let mut task = common::compile("protocols/thermal_cycler/close_lid.toml");
+    task.physics.timestep_s = 0.05;
+    task.physics.substeps = 1;
+    let mut env = Env::make(&task, 0, EnvOptions::default()).unwrap();
+    let mut expert = scoring::policies::make("expert", &task, env.scene(), env.instance()).unwrap();
+    let end = run_to_end(&mut env, expert.as_mut());
+    assert!(end.truncated && !end.terminated, "{end:?}");
+    assert_eq!(end.reward, 0.0);
+    let Some(EpisodeEnd::Unstable(why)) = &end.end else {
+        panic!("not an unstable end: {end:?}");
+    };
+    assert!(why.starts_with("simulation became unstable at t="), "{why}");
+    assert_eq!(env.end(), end.end);
     assert!(matches!(env.step(&[0.0; 7]), Err(EnvError::Over)));
 }

@@ -8,6 +8,7 @@ mod common;
 mod aloha;
 mod architecture;
 mod authoring;
+mod build_loop;
 mod centrifuge_mini;
 mod centrifuges;
 mod chains;

@@ -194,6 +194,24 @@ pub struct PlannedStep {
     /// expert runs one motion lane per robot, and the steps of a group move at once.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub together: bool,
+    /// Where the step is written in its stage's file ([`Stage::source`]): what a diagnostic
+    /// after lowering points at.
+    #[serde(skip)]
+    pub span: StepSpan,
+}
+
+/// Where a planned step is written: its `with`, else the whole step; a step a loop expanded
+/// keeps the span of the body step it came from, so the third expansion of a `for_each` points
+/// at the loop's body. Not part of the task's content: never serialised (a task read back from
+/// JSON, a recording's, has the default) and equal whatever it is, so that a task compiled here
+/// equals the same task read back.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct StepSpan(pub dsl::Span);
+
+impl PartialEq for StepSpan {
+    fn eq(&self, _: &StepSpan) -> bool {
+        true
+    }
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -13,7 +13,7 @@ use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 use results::environment_state::EnvironmentState;
-use runtime::{EnvError, EnvOptions, StepError};
+use runtime::{EnvError, EnvOptions};
 
 /// What one step did: reward, terminated, truncated, and why the episode ended early, if it did.
 pub type Outcome = (f64, bool, bool, Option<String>);
@@ -25,9 +25,11 @@ pub fn step(env: &mut runtime::Env, action: &[f64]) -> Result<Outcome, EnvFailur
     runtime::check_action(&env.episode().action_bounds(), action)
         .map_err(|e| EnvFailure::Action(e.to_string()))?;
     match env.step(action) {
-        Ok(t) => Ok((t.reward, t.terminated, t.truncated, None)),
-        Err(EnvError::Step(e @ StepError::Unstable { .. })) => {
-            Ok((0.0, false, true, Some(e.to_string())))
+        // The runtime's end, as `autobio eval` reads it (an unstable simulation: truncated,
+        // scoring 0, with its reason).
+        Ok(t) => {
+            let why = t.end.as_ref().and_then(|e| e.error()).map(str::to_string);
+            Ok((t.reward, t.terminated, t.truncated, why))
         }
         Err(EnvError::Step(e)) => Err(EnvFailure::Action(e.to_string())),
         Err(e) => Err(EnvFailure::Other(e.to_string())),

@@ -1,5 +1,6 @@
 //! What episodes and runs produce, readable without a simulator: the judge and its verdicts
-//! ([`verdict`]), an episode's result and the trajectory-hash rule ([`episode`]), run records,
+//! ([`verdict`]), an episode's result and the trajectory-hash rule ([`episode`]), how an episode
+//! ended and what a re-enactment gives ([`end`]), run records,
 //! statistics and merging shards ([`run`]), model profiles ([`profile`]), camera frames
 //! ([`Image`]), MCAP recordings, written and read ([`recording`]), and suites ([`suite`]).
 //!
@@ -10,6 +11,7 @@
 //! Its tests are beside the code and in the workspace's tests/merge.rs, tests/resume.rs and
 //! tests/no_simulator.rs (that it links no simulator).
 
+pub mod end;
 pub mod environment_state;
 pub mod episode;
 mod image;

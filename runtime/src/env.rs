@@ -13,6 +13,10 @@
 //! may jump the clock after its physics ([`Transition::skipped_s`]), so a 30-cycle profile costs a
 //! few hundred control steps instead of a few hundred thousand.
 //!
+//! How an episode ended is the environment's to say where the end happens here
+//! ([`Env::end`], [`Transition::end`]: the judge's success or time limit, an unstable simulation,
+//! a refused action), as [`results::end::EpisodeEnd`], the one type every caller reads.
+//!
 //! It does not decide actions (policies do, in `scoring`) and does not write results; it reports
 //! state, frames and the judge's verdict.
 
@@ -24,6 +28,7 @@ use crate::scene::{Scene, SceneError};
 use compiler::{SceneInstance, Task};
 use labware::LabwareState;
 use results::Image;
+use results::end::EpisodeEnd;
 use results::environment_state::EnvironmentState;
 use results::episode::TrajectoryHash;
 use results::recording::RecordError;
@@ -44,7 +49,8 @@ pub struct EnvOptions {
 pub enum EnvError {
     #[error(transparent)]
     Scene(#[from] SceneError),
-    /// The action was refused or the simulation became invalid; the episode is over.
+    /// The action was refused; the episode is over ([`Env::end`]: a policy error). An unstable
+    /// simulation is no error of the caller's: its step ends the episode ([`Transition::end`]).
     #[error(transparent)]
     Step(#[from] StepError),
     #[error(transparent)]
@@ -113,8 +119,9 @@ pub struct Observation {
     pub qpos: Vec<f64>,
 }
 
-/// What one step did: gymnasium's `(reward, terminated, truncated)` and the time it reached.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// What one step did: gymnasium's `(reward, terminated, truncated)`, the time it reached, and how
+/// the episode ended if it ended here.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Transition {
     /// The task's score when the episode ends at this step; 0 before.
     pub reward: f64,
@@ -127,6 +134,8 @@ pub struct Transition {
     /// Seconds of lab time the step jumped over after its physics (only instrument timers ran);
     /// 0 for an ordinary step.
     pub skipped_s: f64,
+    /// How the episode ended, where it ended at this step.
+    pub end: Option<EpisodeEnd>,
 }
 
 impl Transition {
@@ -145,6 +154,8 @@ pub struct Env {
     hash: TrajectoryHash,
     /// The judge said the episode is over (success, or a stage's time ran out).
     over: bool,
+    /// The episode ended by an error of its own: an unstable simulation or a refused action.
+    failed: Option<EpisodeEnd>,
     /// Made on the first frame asked for; the control step its last frames show.
     cameras: Option<TaskCameras>,
     frames: Option<(u64, Vec<Image>)>,
@@ -176,6 +187,7 @@ impl Env {
             judge,
             hash: TrajectoryHash::new(),
             over,
+            failed: None,
             cameras: None,
             frames: None,
             clock: IdleClock::default(),
@@ -252,7 +264,17 @@ impl Env {
 
     /// The episode is over: success, a stage's time ran out, or the task's time limit passed.
     pub fn done(&self) -> bool {
-        self.over || self.time() >= self.task.time_limit_s
+        self.over || self.failed.is_some() || self.time() >= self.task.time_limit_s
+    }
+
+    /// How the episode ended (`None` while it runs): an unstable simulation or a refused action
+    /// where one ended it, else the judge's success or time limit.
+    pub fn end(&self) -> Option<EpisodeEnd> {
+        if let Some(failed) = &self.failed {
+            return Some(failed.clone());
+        }
+        self.done()
+            .then(|| EpisodeEnd::judged(&self.judge.verdict()))
     }
 
     /// The judge's verdict so far.
@@ -356,7 +378,8 @@ impl Env {
 
     /// One control step: the observers see the state before the action, the action is held for
     /// the task's physics steps, the checks are polled, and the observers see the result. A
-    /// refused action or an unstable simulation ends the episode with [`EnvError::Step`].
+    /// refused action ends the episode with [`EnvError::Step`]; an unstable simulation ends it
+    /// with a truncated step whose [`Transition::end`] says why (observers do not see it).
     pub fn step_with(
         &mut self,
         action: &[f64],
@@ -373,7 +396,21 @@ impl Env {
             .apply(action)
             .and_then(|_| self.episode.control_step())
         {
-            self.over = true;
+            self.skipped_s = 0.0;
+            if let StepError::Unstable { .. } = e {
+                let end = EpisodeEnd::Unstable(e.to_string());
+                self.failed = Some(end.clone());
+                return Ok(Transition {
+                    reward: 0.0,
+                    terminated: false,
+                    truncated: true,
+                    time: self.time(),
+                    control_steps: self.control_steps(),
+                    skipped_s: 0.0,
+                    end: Some(end),
+                });
+            }
+            self.failed = Some(EpisodeEnd::PolicyError(e.to_string()));
             return Err(e.into());
         }
         self.clock.note(action, &self.episode);
@@ -401,12 +438,13 @@ impl Env {
         let verdict = done.then(|| self.judge.verdict());
         let success = verdict.as_ref().is_some_and(|v| v.success);
         Ok(Transition {
-            reward: verdict.map_or(0.0, |v| v.score),
+            reward: verdict.as_ref().map_or(0.0, |v| v.score),
             terminated: success,
             truncated: done && !success,
             time: self.time(),
             control_steps: self.control_steps(),
             skipped_s: self.skipped_s,
+            end: verdict.as_ref().map(EpisodeEnd::judged),
         })
     }
 }

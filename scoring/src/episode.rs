@@ -9,7 +9,8 @@
 use compiler::{SceneInstance, Task};
 use policy::{Observation, Policy, Privileged};
 use results::Image;
-use results::episode::{EpisodeResult, Outcome};
+use results::end::{Concluded, EpisodeEnd};
+use results::episode::EpisodeResult;
 use results::recording::{RecordError, Recorder};
 use runtime::render::RenderError;
 use runtime::{Env, EnvError, EnvOptions, ObserveError, Observer};
@@ -47,11 +48,11 @@ pub enum EpisodeError {
     Describe(#[from] serde_json::Error),
 }
 
-/// The outcome class of a policy's failure.
-pub fn outcome_of(e: &policy::PolicyError) -> Outcome {
+/// How a policy's failure ends its episode: a model server's fault, or the policy's error.
+pub fn end_of(e: &policy::PolicyError) -> EpisodeEnd {
     match e {
-        policy::PolicyError::Server(_) => Outcome::ServerFault,
-        _ => Outcome::PolicyError,
+        policy::PolicyError::Server(_) => EpisodeEnd::ServerFault(e.to_string()),
+        _ => EpisodeEnd::PolicyError(e.to_string()),
     }
 }
 
@@ -68,19 +69,21 @@ pub fn policy_failed(
     record: Option<PathBuf>,
 ) -> Result<EpisodeResult, EpisodeError> {
     let env = Env::new(scene.clone(), task, instance, EnvOptions::default());
-    let mut verdict = env.verdict();
-    verdict.ended_by_error();
-    let error = failure.to_string();
+    let ended = end_of(failure).conclude(env.verdict());
     if let Some(path) = &record {
-        Recording::create(path.clone(), task, instance, 0)?.finish(&env, Some(&error), &verdict)?;
+        Recording::create(path.clone(), task, instance, 0)?.finish(
+            &env,
+            ended.error.as_deref(),
+            &ended.verdict,
+        )?;
     }
     Ok(EpisodeResult {
         seed: instance.seed,
         run: 0,
-        success: false,
-        outcome: outcome_of(failure),
-        verdict,
-        error: Some(error),
+        success: ended.verdict.success,
+        outcome: ended.outcome,
+        verdict: ended.verdict,
+        error: ended.error,
         sim_time_s: 0.0,
         control_steps: 0,
         wall_time_s: 0.0,
@@ -284,7 +287,8 @@ pub fn run_episode_with(
         .environment_state
         .then(|| results::environment_state::EnvironmentState::of(task));
     let mut policy_time = 0.0;
-    let mut failure: Option<(Outcome, String)> = None;
+    // How the policy's side ended the episode, where it did (the environment says the rest).
+    let mut failure: Option<EpisodeEnd> = None;
     'episode: while !env.done() {
         let images = match needs.image_size {
             Some(_) => env.frames()?.to_vec(),
@@ -315,14 +319,13 @@ pub fn run_episode_with(
         let chunk = match answer {
             Ok(c) if !c.is_empty() => c,
             Ok(_) => {
-                failure = Some((
-                    Outcome::PolicyError,
+                failure = Some(EpisodeEnd::PolicyError(
                     "policy returned an empty action chunk".into(),
                 ));
                 break;
             }
             Err(e) => {
-                failure = Some((outcome_of(&e), e.to_string()));
+                failure = Some(end_of(&e));
                 break;
             }
         };
@@ -346,16 +349,12 @@ pub fn run_episode_with(
             match env.step_with(&action, &mut observers) {
                 Ok(t) if t.done() => break 'episode,
                 Ok(_) => {}
-                Err(EnvError::Step(e)) => {
-                    let outcome = match e {
-                        runtime::StepError::Unstable { .. } => Outcome::Unstable,
-                        _ => Outcome::PolicyError,
-                    };
-                    failure = Some((outcome, e.to_string()));
-                    break 'episode;
-                }
+                // A refused action: the environment's end says so.
+                Err(EnvError::Step(_)) => break 'episode,
                 Err(EnvError::Observe(ObserveError::Own(e))) => {
-                    failure = Some((Outcome::PolicyError, format!("the step sink failed: {e}")));
+                    failure = Some(EpisodeEnd::PolicyError(format!(
+                        "the step sink failed: {e}"
+                    )));
                     break 'episode;
                 }
                 Err(EnvError::Observe(ObserveError::Render(e)) | EnvError::Render(e)) => {
@@ -371,23 +370,24 @@ pub fn run_episode_with(
             }
         }
     }
-    let mut verdict = env.verdict();
-    if failure.is_some() {
-        // A run's mean score never credits a policy that crashed (a task whose success held at
-        // the start would otherwise score 1).
-        verdict.ended_by_error();
-    }
+    // The environment's own end first (an unstable simulation, a refused action), else the
+    // policy's, else the judge's.
+    let end = env
+        .end()
+        .filter(|e| e.error().is_some())
+        .or(failure)
+        .or_else(|| env.end())
+        .unwrap_or_else(|| EpisodeEnd::judged(&env.verdict()));
+    let Concluded {
+        outcome,
+        error,
+        verdict,
+    } = end.conclude(env.verdict());
     let steps = env.control_steps();
     policy.end_episode(verdict.success, steps);
-    let error = failure.as_ref().map(|(_, why)| why.clone());
     if let Some(r) = recording {
         r.finish(&env, error.as_deref(), &verdict)?;
     }
-    let outcome = failure.map(|(o, _)| o).unwrap_or(if verdict.success {
-        Outcome::Success
-    } else {
-        Outcome::TimeLimit
-    });
     Ok(EpisodeResult {
         seed: instance.seed,
         run: 0,

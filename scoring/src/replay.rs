@@ -8,12 +8,15 @@
 //!
 //! - [`reenact`]: a verifier's replay, trusting nothing a recording states but its actions: the
 //!   scene the seed draws for the caller's own task, the actions applied one control step each,
-//!   the trajectory hash and verdict as the episode then comes out.
+//!   the trajectory hash, verdict and end as the episode then comes out (`results::end`'s
+//!   [`Reenacted`], the one type the verifier reads).
 //!
 //! Offline re-scoring from the labware series alone is [`results::verdict::Judge::replay`].
 
 use compiler::{SceneInstance, Task};
 use results::Image;
+use results::end::EpisodeEnd;
+pub use results::end::{ReenactOptions, Reenacted};
 use results::episode::TrajectoryHash;
 use results::recording::{RecordError, Recorder, RecordingSummary};
 use results::verdict::{Judge, Verdict};
@@ -216,41 +219,6 @@ pub fn resimulate(rec: &Recording, from_step: usize) -> Result<Resimulation, Rep
     })
 }
 
-/// An episode re-enacted from its seed and actions.
-#[derive(Clone, Debug)]
-pub struct Reenacted {
-    /// The trajectory hash over the control steps the actions drove.
-    pub hash: String,
-    /// The judge's verdict, scored 0 when the episode ended by an error (`error`).
-    pub verdict: Verdict,
-    /// Simulated time at the end (s).
-    pub time_s: f64,
-    pub control_steps: u64,
-    /// The episode ended (success or time limit) with the last action.
-    pub finished: bool,
-    /// Actions left over once the episode had ended (a claimed episode that ran on after its
-    /// end).
-    pub unused_actions: usize,
-    /// Why the simulation refused an action, if it did, and whether it was because the
-    /// simulation became unstable.
-    pub refused: Option<String>,
-    pub unstable: bool,
-}
-
-/// What a re-enactment writes besides its outcome.
-#[derive(Clone, Debug, Default)]
-pub struct ReenactOptions {
-    /// Write the re-enacted episode's recording here, as `eval` writes one (with camera frames
-    /// every `image_every` control steps at `image_size`; 0: none).
-    pub record: Option<PathBuf>,
-    pub image_every: u32,
-    pub image_size: Option<[usize; 2]>,
-    /// The error the episode is said to have ended with, where no action was refused: a policy's
-    /// or a model server's, which only the harness saw. The verdict then scores 0 and the
-    /// recording's verdict carries it, as the harness wrote them.
-    pub error: Option<String>,
-}
-
 /// Re-enacts an episode of `task` (the verifier's own, not a recording's) from the scene `seed`
 /// draws and `actions` (one per control step, every robot's part in task order). Trusts
 /// nothing recorded but the actions (and, for an episode that ended by a policy's or server's
@@ -282,8 +250,6 @@ pub fn reenact(
         )?),
         None => None,
     };
-    let mut refused = None;
-    let mut unstable = false;
     let mut used = 0;
     for a in actions {
         if env.done() {
@@ -295,32 +261,32 @@ pub fn reenact(
             observers.push(r);
         }
         match env.step_with(a, &mut observers) {
-            Ok(_) => {}
-            Err(runtime::EnvError::Step(e)) => {
-                unstable = matches!(e, runtime::StepError::Unstable { .. });
-                refused = Some(e.to_string());
-                break;
-            }
+            // A refused action ended the episode: the environment's end says why.
+            Ok(_) | Err(runtime::EnvError::Step(_)) => {}
             Err(e) => return Err(EpisodeError::Env(e)),
         }
     }
-    let error = refused.clone().or_else(|| opts.error.clone());
-    let mut verdict = env.verdict();
-    if error.is_some() {
-        verdict.ended_by_error();
-    }
+    // The environment's error first (a refused action, an unstable simulation), then the error
+    // the claim names, then the judge's end; none where the actions ran out first.
+    let end = env
+        .end()
+        .filter(|e| e.error().is_some())
+        .or_else(|| opts.claimed.clone())
+        .or_else(|| env.end());
+    let concluded = end
+        .clone()
+        .unwrap_or_else(|| EpisodeEnd::judged(&env.verdict()))
+        .conclude(env.verdict());
     if let Some(r) = recording {
-        r.finish(&env, error.as_deref(), &verdict)?;
+        r.finish(&env, concluded.error.as_deref(), &concluded.verdict)?;
     }
     Ok(Reenacted {
         hash: env.trajectory_hash(),
-        verdict,
+        end,
+        verdict: concluded.verdict,
         time_s: env.time(),
         control_steps: env.control_steps(),
-        finished: env.done() && refused.is_none(),
         unused_actions: actions.len() - used,
-        refused,
-        unstable,
     })
 }
 

@@ -221,6 +221,7 @@ fn planned_step(step: &Step, prim: &LabPrimitive) -> PlannedStep {
         labware: args.get("on").cloned(),
         args,
         together: step.together.as_ref().is_some_and(|t| t.value),
+        span: crate::task::StepSpan(step.with.as_ref().map(|w| w.span).unwrap_or(step.span)),
     }
 }
 

@@ -15,21 +15,21 @@ pub fn check(checked: &mut Checked, store: &Store) {
     if checked.diagnostics.iter().any(|d| d.code == Code::W0003) {
         return;
     }
-    let (doc, _) = dsl::parse(&checked.source);
-    let Document::Protocol(protocol) = &doc else {
+    // A chain's stages are checked in their own files, not across the chain.
+    if task.stages.iter().any(|s| s.source != task.source) {
         return;
-    };
-    let steps = &protocol.steps;
+    }
+    // Each planned step's own span (a loop's expansions point at the loop's body step).
+    let spans: Vec<dsl::Span> = task.steps().map(|(_, s)| s.span.0).collect();
     let missed = unreachable(task, store);
     if missed.is_empty() {
-        partly(checked, steps, store);
+        partly(checked, &spans, store);
         return;
     }
     for m in &missed {
-        let Some(step) = steps.get(m.step) else {
+        let Some(&span) = spans.get(m.step) else {
             continue;
         };
-        let span = step.with.as_ref().map(|w| w.span).unwrap_or(step.span);
         let [x, y, z] = m.at;
         let how = match (&m.limit, m.short_by) {
             (Some(l), _) => format!(
@@ -88,7 +88,7 @@ fn stand_at([hx, hy, hz]: [f64; 3], [bx, by, bz]: [f64; 3]) -> String {
 
 /// W0010 for every step reached in seed 0's layout but not in some of the next ones, at the
 /// step's `with`: the task checks, but some episodes will fail at planning.
-fn partly(checked: &mut Checked, steps: &[dsl::ast::Step], store: &Store) {
+fn partly(checked: &mut Checked, spans: &[dsl::Span], store: &Store) {
     let Some(task) = &checked.task else {
         return;
     };
@@ -96,10 +96,9 @@ fn partly(checked: &mut Checked, steps: &[dsl::ast::Step], store: &Store) {
     // Called where seed 0's layout misses nothing: only the next seeds are left to solve.
     let mut hints: BTreeMap<usize, Option<[f64; 3]>> = BTreeMap::new();
     for (i, seeds) in beyond_seed_0(task, &BTreeSet::new(), store) {
-        let (Some(step), Some(planned)) = (steps.get(i), planned.get(i)) else {
+        let (Some(&span), Some(planned)) = (spans.get(i), planned.get(i)) else {
             continue;
         };
-        let span = step.with.as_ref().map(|w| w.span).unwrap_or(step.span);
         let list: Vec<String> = seeds.iter().map(u64::to_string).collect();
         let first = seeds[0];
         let drawn: Vec<String> = task

@@ -38,7 +38,6 @@
 use aims::aims;
 use compiler::motion::{Motion, Target};
 use compiler::{Checked, Task};
-use dsl::ast::Document;
 use dsl::{Code, Diagnostic};
 use hint::base_for_every_layout;
 use labware::{LabwareState, Pose};

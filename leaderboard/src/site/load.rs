@@ -112,13 +112,23 @@ pub struct Submission {
 impl Submission {
     /// What its ± is taken over: training seeds when its runs name their checkpoints (verify
     /// refuses a bundle where only some do), else evaluation runs of one model.
-    pub fn spread(&self) -> super::stats::Spread {
+    pub fn spread(&self) -> Spread {
         if self.checkpoints.is_empty() {
-            super::stats::Spread::EvaluationRuns
+            Spread::EvaluationRuns
         } else {
-            super::stats::Spread::TrainingSeeds
+            Spread::TrainingSeeds
         }
     }
+}
+
+/// What a ± is taken over. The paper's is the SEM over three models trained alike on different
+/// training seeds; re-evaluating one model on fresh seeds measures only the evaluation's own
+/// spread, a smaller one. The site never puts the two in one column.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Spread {
+    TrainingSeeds,
+    EvaluationRuns,
 }
 
 /// Every bundle (`*.tar`, `*.tar.zst`) in `dir`, read with its standing; a bundle that does not

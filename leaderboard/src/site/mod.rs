@@ -108,10 +108,10 @@ fn change_cell(c: &robustness::RobustCell) -> String {
 
 /// The two ± columns, over training seeds and over evaluation runs of one model: `cell` in the
 /// one its runs are, `–` in the other (the two are never one column).
-fn spread_cells(over: stats::Spread, cell: String) -> [String; 2] {
+fn spread_cells(over: load::Spread, cell: String) -> [String; 2] {
     match over {
-        stats::Spread::TrainingSeeds => [cell, "–".into()],
-        stats::Spread::EvaluationRuns => ["–".into(), cell],
+        load::Spread::TrainingSeeds => [cell, "–".into()],
+        load::Spread::EvaluationRuns => ["–".into(), cell],
     }
 }
 

@@ -6,10 +6,11 @@
 //! It neither formats, escapes nor writes anything, and draws no frame: [`Shot::frames`] is
 //! filled in by [`super::build`] when it is handed a renderer.
 
+use super::load::Spread;
 use super::load::{Submission, TaskResult};
 use super::paper::{Reference, paper};
 use super::slug;
-use super::stats::{Paired, RankRow, Spread, paired, paired_over_suite, rankings};
+use super::stats::{Paired, RankRow, paired, paired_over_suite, rankings};
 use results::run::stats::EvalSummary;
 use std::collections::BTreeMap;
 use std::path::PathBuf;

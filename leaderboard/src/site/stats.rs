@@ -4,20 +4,10 @@
 //!
 //! It computes numbers from loaded submissions; it reads no file and renders nothing.
 
-use super::load::{Submission, TaskResult};
+use super::load::{Spread, Submission, TaskResult};
 use results::run::stats::mean_sem;
 use serde::Serialize;
 use std::collections::BTreeMap;
-
-/// What a ± is taken over. The paper's is the SEM over three models trained alike on different
-/// training seeds; re-evaluating one model on fresh seeds measures only the evaluation's own
-/// spread, a smaller one. The site never puts the two in one column.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Spread {
-    TrainingSeeds,
-    EvaluationRuns,
-}
 
 /// One ranked row.
 #[derive(Clone, Debug, Serialize)]

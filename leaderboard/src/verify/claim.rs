@@ -7,9 +7,10 @@
 //! where no action was refused; its outcome must then be one of those two), the recording's path
 //! on the submitter's machine (it must name the recording), and the policy's `/stage` labels.
 
-use super::{Claim, Reenact, ReenactAsk, differ, rel};
+use super::{Claim, Reenact, ReenactOptions, differ, rel};
 use compiler::Task;
-use results::episode::{EpisodeResult, Outcome};
+use results::end::EpisodeEnd;
+use results::episode::EpisodeResult;
 use std::path::Path;
 
 /// Re-enacts one claimed episode of `task` (as its run compiled it), writing the re-enactment's
@@ -63,22 +64,29 @@ pub(super) fn check(
         Ok(f) => f,
         Err(why) => return Some(format!("{what}: its recording's camera frames: {why}")),
     };
-    let ask = ReenactAsk {
-        record: out,
+    let ask = ReenactOptions {
+        record: Some(out.to_path_buf()),
         image_every,
         image_size,
-        error: e.error.as_deref(),
+        claimed: e
+            .error
+            .clone()
+            .map(|why| EpisodeEnd::claimed(e.outcome, why)),
     };
     let got = match reenact(task, e.seed, &actions, &ask) {
         Ok(g) => g,
         Err(err) => return Some(format!("{what}: cannot be re-enacted: {}", err.why)),
     };
     let mut differs = Vec::new();
-    if e.error.is_none() && !got.finished {
-        differs.push(match &got.refused {
-            Some(why) => format!("the simulation refused an action: {why}"),
-            None => "the actions run out before the episode ends".into(),
-        });
+    if e.error.is_none() {
+        match &got.end {
+            None => differs.push("the actions run out before the episode ends".into()),
+            Some(end) => {
+                if let Some(why) = end.error() {
+                    differs.push(format!("the simulation refused an action: {why}"));
+                }
+            }
+        }
     }
     if got.unused_actions > 0 {
         differs.push(format!(
@@ -112,18 +120,14 @@ pub(super) fn check(
 
 /// The journal's line against the one the re-enactment derives; the first difference, by field.
 fn journal_line(e: &EpisodeResult, got: &super::Reenacted, name: &str) -> Option<String> {
-    // The error: the refused action's, else the claimed one (a policy's or server's).
-    let error = got.refused.clone().or_else(|| e.error.clone());
-    let outcome = match (&got.refused, &e.error) {
-        (Some(_), _) if got.unstable => Outcome::Unstable,
-        (Some(_), _) => Outcome::PolicyError,
-        (None, Some(_)) => match e.outcome {
-            Outcome::PolicyError | Outcome::ServerFault => e.outcome,
-            _ => Outcome::PolicyError,
-        },
-        (None, None) if got.verdict.success => Outcome::Success,
-        (None, None) => Outcome::TimeLimit,
-    };
+    // The re-enactment's end (a refused action's, else the claimed error, a policy's or a
+    // server's, else the judge's), read as the harness reads an end.
+    let end = got
+        .end
+        .clone()
+        .unwrap_or_else(|| EpisodeEnd::judged(&got.verdict));
+    let outcome = end.outcome();
+    let error = end.error().map(str::to_string);
     let fine = |x: f64| x.is_finite() && x >= 0.0;
     if !fine(e.wall_time_s) || !fine(e.policy_time_s) {
         return Some(format!(

@@ -34,41 +34,14 @@ use compiler::Task;
 use results::episode::EpisodeResult;
 use results::run::record::{sha256_hex, task_content_sha256};
 use results::suite::{LoadedSuite, SUITE_FILE};
-use results::verdict::Verdict;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-/// What re-enacting an episode from its seed and actions gave.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Reenacted {
-    pub hash: String,
-    /// The judge's verdict, scored 0 where the episode ended by an error.
-    pub verdict: Verdict,
-    /// Simulated time at the end (s).
-    pub time_s: f64,
-    pub control_steps: u64,
-    /// The episode ended (success or time limit) exactly with the last action.
-    pub finished: bool,
-    pub unused_actions: usize,
-    /// Why the simulation refused an action, if it did, and whether it became unstable.
-    pub refused: Option<String>,
-    pub unstable: bool,
-}
-
-/// What a re-enactment must write besides its outcome: a recording at `record`, as `eval`
-/// writes one (camera frames every `image_every` control steps at `image_size`; 0: none), whose
-/// verdict carries `error` where the episode claims one and no action is refused.
-#[derive(Clone, Debug)]
-pub struct ReenactAsk<'a> {
-    pub record: &'a Path,
-    pub image_every: u32,
-    pub image_size: Option<[usize; 2]>,
-    pub error: Option<&'a str>,
-}
+pub use results::end::{ReenactOptions, Reenacted};
 
 /// Re-enacts an episode of the (shipped) task from its seed and actions, in a simulator.
 pub type Reenact<'a> =
-    dyn Fn(&Task, u64, &[Vec<f64>], &ReenactAsk) -> Result<Reenacted, ReenactError> + Sync + 'a;
+    dyn Fn(&Task, u64, &[Vec<f64>], &ReenactOptions) -> Result<Reenacted, ReenactError> + Sync + 'a;
 
 /// Why the caller's simulator could not re-enact an episode ([`Reenact`]'s error): the task and
 /// seed it was asked to re-enact, and what the simulator said. Verification names the episode
