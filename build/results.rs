@@ -1,6 +1,8 @@
 //! Build script of the `results` package: the source's git commit for run manifests
 //! (`AUTOBIO_GIT_COMMIT`: the commit, with `-dirty` when the work tree had changes, or `unknown`
 //! outside a git checkout). No MuJoCo: `results` links no simulator.
+// A build script speaks to Cargo through `cargo:` lines on stdout.
+#![allow(clippy::print_stdout)]
 use std::process::Command;
 
 fn main() {

@@ -1,6 +1,8 @@
 //! Compiles the one-function C++ shim over OMPL 1.5 (`cpp/shim.cpp`) and links `libompl`
 //! (Debian's `libompl-dev`, installed by `make setup`). Its headers sit outside the default
 //! include path and need Eigen's; `ompl.pc` is unusable, so no pkg-config.
+// A build script speaks to Cargo through `cargo:` lines on stdout.
+#![allow(clippy::print_stdout)]
 fn main() {
     println!("cargo:rerun-if-changed=cpp/shim.cpp");
     // Debian's libompl-dev: 1.5 (bookworm); a later 1.x keeps the same API.

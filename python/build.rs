@@ -1,6 +1,8 @@
 //! Build script of the Python extension: the MuJoCo rpath every package that links MuJoCo embeds
 //! (`build/rpath.rs`), and the shipped protocols (`protocols/**/*.toml`) compiled into the
 //! extension, so that an installed wheel names every shipped task without a checkout.
+// A build script speaks to Cargo through `cargo:` lines on stdout.
+#![allow(clippy::print_stdout)]
 #[path = "../build/rpath.rs"]
 mod rpath;
 #[path = "../build/toml_files.rs"]

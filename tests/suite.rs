@@ -2,6 +2,8 @@
 //! here (one link of the workspace instead of one per file; see docs/decisions.md, "One test
 //! binary"). They run the real MuJoCo, real files, the real `autobio` binary and real servers on
 //! loopback. A new test file is a new `mod` line below.
+// Tests print the figures they measure (shown with --nocapture).
+#![allow(clippy::print_stdout)]
 
 mod common;
 

@@ -1,6 +1,8 @@
 //! The detent plugin and the eccentric drive on real MuJoCo: a released knob settles at the nearest
 //! click position from any start; the vortex cup orbits a circle of the throw's radius without
 //! turning, stable at 2,500 rpm for 10 simulated seconds.
+// Tests print the figures they measure (shown with --nocapture).
+#![allow(clippy::print_stdout)]
 
 use mujoco_rs::prelude::*;
 use physics::detent::Detent;

@@ -1,4 +1,6 @@
 //! The thread SDF plugin on real MuJoCo, with upstream's 1.5 mL screw-cap geometry.
+// Tests print the figures they measure (shown with --nocapture).
+#![allow(clippy::print_stdout)]
 
 use mujoco_rs::prelude::*;
 use physics::thread::ScrewCap;
