@@ -3,7 +3,7 @@
 //! so binaries and tests run without `LD_LIBRARY_PATH`. It does nothing else.
 // A build script speaks to Cargo through `cargo:` lines on stdout.
 #![allow(clippy::print_stdout)]
-pub fn main() {
+pub(crate) fn main() {
     println!("cargo:rerun-if-env-changed=MUJOCO_DYNAMIC_LINK_DIR");
     if let Ok(dir) = std::env::var("MUJOCO_DYNAMIC_LINK_DIR") {
         println!("cargo:rustc-link-arg=-Wl,-rpath,{dir}");

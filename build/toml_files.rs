@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 /// Every `.toml` file under `dir` and its subfolders, appended to `files`; cargo reruns the
 /// build script when any of those folders changes.
-pub fn walk(dir: &Path, files: &mut Vec<PathBuf>) {
+pub(crate) fn walk(dir: &Path, files: &mut Vec<PathBuf>) {
     println!("cargo:rerun-if-changed={}", dir.display());
     for entry in std::fs::read_dir(dir).expect("a readable shipped folder") {
         let path = entry.expect("a readable entry").path();

@@ -5,6 +5,8 @@
 // A build script speaks to Cargo through `cargo:` lines on stdout.
 #![allow(clippy::print_stdout)]
 
+// The library's module, whose `pub` items the library exports and this script does not.
+#[allow(unreachable_pub)]
 #[path = "src/definition.rs"]
 #[allow(dead_code)]
 mod definition;

@@ -19,7 +19,7 @@ fn main() {
     let mut files = Vec::new();
     toml_files::walk(&root, &mut files);
     files.sort();
-    let mut table = String::from("pub static SHIPPED: &[(&str, &str)] = &[\n");
+    let mut table = String::from("pub(crate) static SHIPPED: &[(&str, &str)] = &[\n");
     for f in &files {
         let rel = f.strip_prefix(&root).expect("under the root");
         table += &format!(

@@ -45,7 +45,7 @@ const UPSTREAM_DATASET_FRAMES_S: f64 = 1.0 / (0.140 / 50.0 + 1.0 / 16.1);
 
 /// A group of figures (`autobio bench --only`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Section {
+pub(crate) enum Section {
     /// Checking a large parameter domain.
     FrontEnd,
     /// Workers, a model in the loop, dataset generation (on the first scene).
@@ -67,7 +67,7 @@ pub enum Section {
 }
 
 #[derive(Clone, Debug, clap::Args)]
-pub struct BenchArgs {
+pub(crate) struct BenchArgs {
     /// Task scenes to measure (repeatable)
     #[arg(
         long,
@@ -87,7 +87,10 @@ pub struct BenchArgs {
 }
 
 /// `autobio bench`.
-pub fn run_cli(front: &crate::front::Front, a: &BenchArgs) -> Result<std::process::ExitCode> {
+pub(crate) fn run_cli(
+    front: &crate::front::Front,
+    a: &BenchArgs,
+) -> Result<std::process::ExitCode> {
     let tasks = front.load_all(&a.protocol)?;
     run(&tasks, &a.only)?;
     Ok(std::process::ExitCode::SUCCESS)
@@ -95,7 +98,7 @@ pub fn run_cli(front: &crate::front::Front, a: &BenchArgs) -> Result<std::proces
 
 /// Every figure for each task's scene, then the lab-physics figures once; `only` (when not empty)
 /// picks sections.
-pub fn run(tasks: &[compiler::Task], only: &[Section]) -> Result<()> {
+pub(crate) fn run(tasks: &[compiler::Task], only: &[Section]) -> Result<()> {
     let wants = |s: Section| only.is_empty() || only.contains(&s);
     if wants(Section::FrontEnd) {
         front_end_figures()?;
@@ -361,7 +364,7 @@ fn row(name: &str, with: f64, without: f64, note: &str) {
 /// the cost of one liquid surface solve.
 /// `task_step_s` is one physics step of the task scene measured above: the liquid's per-step cost
 /// is reported against it.
-pub fn physics_figures(task_step_s: Option<f64>) -> Result<()> {
+pub(crate) fn physics_figures(task_step_s: Option<f64>) -> Result<()> {
     use physics::detent::Detent;
     use physics::eccentric::{Eccentric, rpm_to_rad_s};
     use physics::liquid::{Container, Liquid, Nanolitres};

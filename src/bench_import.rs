@@ -136,7 +136,7 @@ fn autoprotocol_figures(options: &interchange::Options) -> Result<()> {
     Ok(())
 }
 
-pub fn figures() -> Result<()> {
+pub(crate) fn figures() -> Result<()> {
     let text = largest_file()?;
     let commands = text.matches("\"commandType\"").count();
     let options = interchange::Options {

@@ -8,7 +8,7 @@ use std::path::Path;
 use std::time::Instant;
 
 /// Both figures; `task` is the first scene's.
-pub fn figures(task: &compiler::Task) -> Result<()> {
+pub(crate) fn figures(task: &compiler::Task) -> Result<()> {
     let dir = std::env::temp_dir().join(format!("autobio-bench-lb-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir)?;

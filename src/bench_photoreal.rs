@@ -20,7 +20,7 @@ const RUNS: [(Engine, u32, bool, usize); 5] = [
     (Engine::Eevee, 16, false, 1),
 ];
 
-pub fn figures(task: &compiler::Task) -> Result<()> {
+pub(crate) fn figures(task: &compiler::Task) -> Result<()> {
     if !blender::installed() {
         outln!(
             "photoreal (skipped: no Blender at {}; `make setup` installs it)",

@@ -12,7 +12,7 @@ use std::time::Instant;
 const STEPS: usize = 600;
 const SIZE: [usize; 2] = [224, 224];
 
-pub fn figures(task: &compiler::Task) -> Result<()> {
+pub(crate) fn figures(task: &compiler::Task) -> Result<()> {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     let python = root.join(".deps/python-env/bin/python");
     if !python.exists() {

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Clone, Debug, clap::Args)]
-pub struct CheckArgs {
+pub(crate) struct CheckArgs {
     files: Vec<PathBuf>,
     /// Print the diagnostics as JSON lines (one object per diagnostic) instead of text
     #[arg(long)]
@@ -16,14 +16,14 @@ pub struct CheckArgs {
 }
 
 #[derive(Clone, Debug, clap::Args)]
-pub struct ExplainArgs {
+pub(crate) struct ExplainArgs {
     #[arg(required_unless_present = "all")]
     code: Option<String>,
     #[arg(long)]
     all: bool,
 }
 
-pub fn check(front: &Front, a: &CheckArgs) -> Result<ExitCode> {
+pub(crate) fn check(front: &Front, a: &CheckArgs) -> Result<ExitCode> {
     if a.files.is_empty() {
         bail!(
             "no files to check: name protocol or chain files, e.g. `autobio check protocols/*/*.toml`"
@@ -65,7 +65,7 @@ pub fn check(front: &Front, a: &CheckArgs) -> Result<ExitCode> {
     })
 }
 
-pub fn explain(a: &ExplainArgs) -> Result<ExitCode> {
+pub(crate) fn explain(a: &ExplainArgs) -> Result<ExitCode> {
     if a.all {
         for c in dsl::Code::ALL {
             outln!("{c}  {}", c.summary());

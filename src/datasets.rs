@@ -9,7 +9,7 @@ use std::process::ExitCode;
 
 /// `--format` of `export`.
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
-pub enum DatasetFormat {
+pub(crate) enum DatasetFormat {
     #[value(name = "lerobot-v21")]
     LerobotV21,
     #[value(name = "lerobot-v30")]
@@ -17,7 +17,7 @@ pub enum DatasetFormat {
 }
 
 impl DatasetFormat {
-    pub fn version(self) -> dataset::Version {
+    pub(crate) fn version(self) -> dataset::Version {
         match self {
             DatasetFormat::LerobotV21 => dataset::Version::V21,
             DatasetFormat::LerobotV30 => dataset::Version::V30,
@@ -27,13 +27,13 @@ impl DatasetFormat {
 
 /// `--codec` of `demo` and `export`.
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
-pub enum CodecArg {
+pub(crate) enum CodecArg {
     Av1,
     H264,
 }
 
 impl CodecArg {
-    pub fn codec(self) -> dataset::Codec {
+    pub(crate) fn codec(self) -> dataset::Codec {
         match self {
             CodecArg::Av1 => dataset::Codec::Av1,
             CodecArg::H264 => dataset::Codec::H264,
@@ -43,7 +43,7 @@ impl CodecArg {
 
 /// What a dataset's frames observe (`--observation`).
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
-pub enum ObservationArg {
+pub(crate) enum ObservationArg {
     /// Every task camera and the robots' state (LeRobot's `observation.images.*`,
     /// `observation.state`)
     Vision,
@@ -55,7 +55,7 @@ pub enum ObservationArg {
 }
 
 impl ObservationArg {
-    pub fn observations(self) -> dataset::Observations {
+    pub(crate) fn observations(self) -> dataset::Observations {
         match self {
             ObservationArg::Vision => dataset::Observations::Vision,
             ObservationArg::State => dataset::Observations::State,
@@ -65,7 +65,7 @@ impl ObservationArg {
 }
 
 #[derive(Clone, Debug, clap::Args)]
-pub struct ExportArgs {
+pub(crate) struct ExportArgs {
     /// Recordings, or folders of them; with `--to autoprotocol`, one protocol file
     #[arg(required = true)]
     recordings: Vec<PathBuf>,
@@ -102,7 +102,7 @@ pub struct ExportArgs {
 }
 
 #[derive(Clone, Debug, clap::Subcommand)]
-pub enum DatasetCommand {
+pub(crate) enum DatasetCommand {
     /// Join the datasets of a generation's shards (`demo --shard I/N`, one folder each) into one
     Merge {
         /// The shards' --out folders
@@ -116,12 +116,12 @@ pub enum DatasetCommand {
 
 /// The lab languages a protocol exports to.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum LabLanguage {
+pub(crate) enum LabLanguage {
     Autoprotocol,
 }
 
 /// `autobio export`.
-pub fn export_cli(front: &crate::front::Front, a: &ExportArgs) -> Result<ExitCode> {
+pub(crate) fn export_cli(front: &crate::front::Front, a: &ExportArgs) -> Result<ExitCode> {
     if let Some(LabLanguage::Autoprotocol) = a.to {
         let [protocol] = a.recordings.as_slice() else {
             anyhow::bail!("--to autoprotocol exports one protocol file");
@@ -142,7 +142,7 @@ pub fn export_cli(front: &crate::front::Front, a: &ExportArgs) -> Result<ExitCod
 }
 
 /// `autobio dataset ...`.
-pub fn dataset_cli(c: &DatasetCommand) -> Result<ExitCode> {
+pub(crate) fn dataset_cli(c: &DatasetCommand) -> Result<ExitCode> {
     match c {
         DatasetCommand::Merge { shards, out } => merge(shards, out),
     }
@@ -150,7 +150,7 @@ pub fn dataset_cli(c: &DatasetCommand) -> Result<ExitCode> {
 
 /// Where a v3.0 dataset's shared files roll over.
 #[derive(Clone, Copy, Debug, clap::Args)]
-pub struct FileSizeArgs {
+pub(crate) struct FileSizeArgs {
     /// v3.0: start a new data file once one reaches this size (MiB)
     #[arg(long, default_value_t = 100.0, value_name = "MIB", value_parser = positive)]
     data_file_mb: f64,
@@ -167,7 +167,7 @@ fn positive(s: &str) -> Result<f64, String> {
 }
 
 impl FileSizeArgs {
-    pub fn sizes(self) -> dataset::FileSizes {
+    pub(crate) fn sizes(self) -> dataset::FileSizes {
         dataset::FileSizes {
             data_mb: self.data_file_mb,
             video_mb: self.video_file_mb,
@@ -200,19 +200,22 @@ fn with_progress(
     Ok(ExitCode::SUCCESS)
 }
 
-pub fn generate(tasks: &[compiler::Task], opts: &demos::GenerateOptions) -> Result<ExitCode> {
+pub(crate) fn generate(
+    tasks: &[compiler::Task],
+    opts: &demos::GenerateOptions,
+) -> Result<ExitCode> {
     with_progress("demo", "written", &opts.out, |progress| {
         demos::generate(tasks, opts, progress)
     })
 }
 
-pub fn export(recordings: &[PathBuf], opts: &demos::ExportOptions) -> Result<ExitCode> {
+pub(crate) fn export(recordings: &[PathBuf], opts: &demos::ExportOptions) -> Result<ExitCode> {
     with_progress("export", "exported", &opts.out, |progress| {
         demos::export(recordings, opts, progress)
     })
 }
 
-pub fn merge(shards: &[PathBuf], out: &Path) -> Result<ExitCode> {
+pub(crate) fn merge(shards: &[PathBuf], out: &Path) -> Result<ExitCode> {
     let m = dataset::merge(shards, out)?;
     outln!(
         "{}: {} episodes, {} frames, merged from {} shards",

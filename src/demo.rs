@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
-pub enum DemoFormat {
+pub(crate) enum DemoFormat {
     Mcap,
     #[value(name = "lerobot-v21")]
     LerobotV21,
@@ -17,7 +17,7 @@ pub enum DemoFormat {
 }
 
 #[derive(Clone, Debug, clap::Args)]
-pub struct DemoArgs {
+pub(crate) struct DemoArgs {
     #[arg(long, required = true)]
     protocol: Vec<PathBuf>,
     #[arg(long, default_value_t = 1)]
@@ -61,7 +61,7 @@ pub struct DemoArgs {
     renderer: crate::front::RendererArgs,
 }
 
-pub fn run(front: &Front, a: &DemoArgs) -> Result<ExitCode> {
+pub(crate) fn run(front: &Front, a: &DemoArgs) -> Result<ExitCode> {
     let tasks: Vec<compiler::Task> = front
         .load_all_to_run(&a.protocol, a.allow_trivial)?
         .into_iter()

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Clone, Debug, clap::Args)]
-pub struct DescribeArgs {
+pub(crate) struct DescribeArgs {
     #[arg(required_unless_present = "catalogue")]
     file: Option<PathBuf>,
     /// Print the catalogue of labware kinds and lab primitives instead
@@ -19,11 +19,11 @@ pub struct DescribeArgs {
 }
 
 #[derive(Clone, Debug, clap::Args)]
-pub struct CompileArgs {
+pub(crate) struct CompileArgs {
     file: PathBuf,
 }
 
-pub fn describe(front: &Front, a: &DescribeArgs) -> Result<ExitCode> {
+pub(crate) fn describe(front: &Front, a: &DescribeArgs) -> Result<ExitCode> {
     if a.catalogue {
         out!("{}", compiler::describe::catalogue());
         return Ok(ExitCode::SUCCESS);
@@ -42,7 +42,7 @@ pub fn describe(front: &Front, a: &DescribeArgs) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-pub fn compile(front: &Front, a: &CompileArgs) -> Result<ExitCode> {
+pub(crate) fn compile(front: &Front, a: &CompileArgs) -> Result<ExitCode> {
     let task = front.load(&a.file)?;
     outln!("{}", serde_json::to_string_pretty(&task)?);
     Ok(ExitCode::SUCCESS)

@@ -14,7 +14,7 @@ use std::io::IsTerminal;
 
 /// When to colour diagnostics (`--color`), as cargo and ripgrep do.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum ColorChoice {
+pub(crate) enum ColorChoice {
     /// On a terminal, unless `NO_COLOR` is set to something non-empty.
     Auto,
     Always,
@@ -23,7 +23,7 @@ pub enum ColorChoice {
 
 impl ColorChoice {
     /// Whether diagnostics written to stderr are coloured.
-    pub fn for_stderr(self) -> bool {
+    pub(crate) fn for_stderr(self) -> bool {
         match self {
             ColorChoice::Always => true,
             ColorChoice::Never => false,
@@ -36,7 +36,7 @@ impl ColorChoice {
 }
 
 /// Every diagnostic of a checked file, then a count of errors.
-pub fn render_all(checked: &Checked, color: bool) -> String {
+pub(crate) fn render_all(checked: &Checked, color: bool) -> String {
     let renderer = if color {
         Renderer::styled()
     } else {
@@ -105,7 +105,7 @@ fn fit(text: &str, span: dsl::Span) -> std::ops::Range<usize> {
 }
 
 /// One diagnostic as a JSON object with its resolved file, line and column.
-pub fn to_json(checked: &Checked, d: &Diagnostic) -> String {
+pub(crate) fn to_json(checked: &Checked, d: &Diagnostic) -> String {
     let (name, line, col) = match checked.text_of(d) {
         Some((name, text)) => {
             let (l, c) = line_col(&text, d.span.start);

@@ -11,7 +11,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Clone, Debug, clap::Args)]
-pub struct EvalArgs {
+pub(crate) struct EvalArgs {
     #[arg(long, required_unless_present = "suite")]
     protocol: Vec<PathBuf>,
     /// Run a whole suite (`suites/*.toml`: its tasks, episodes, seed and runs, which the flags
@@ -88,7 +88,7 @@ pub struct EvalArgs {
 }
 
 #[derive(Clone, Debug, clap::Subcommand)]
-pub enum ResultsCommand {
+pub(crate) enum ResultsCommand {
     /// Join the run records of a run's shards (`eval --shard I/N`, one folder each) into one
     Merge {
         /// The shards' --out folders
@@ -100,7 +100,7 @@ pub enum ResultsCommand {
     },
 }
 
-pub fn eval(front: &Front, a: &EvalArgs) -> Result<ExitCode> {
+pub(crate) fn eval(front: &Front, a: &EvalArgs) -> Result<ExitCode> {
     let model = match &a.model {
         Some(url) => Some(scoring::eval::ModelSpec {
             url: url.clone(),
@@ -273,7 +273,7 @@ fn suite_run(file: &std::path::Path, out: &std::path::Path) -> Result<results::s
     Ok(suite)
 }
 
-pub fn results(c: &ResultsCommand) -> Result<ExitCode> {
+pub(crate) fn results(c: &ResultsCommand) -> Result<ExitCode> {
     match c {
         ResultsCommand::Merge { shards, out } => {
             let rows = results::run::merge(shards, out)?;

@@ -8,7 +8,7 @@ use anyhow::{Context, Result};
 use std::path::Path;
 use std::process::ExitCode;
 
-pub fn run(front: &Front, protocol: &Path, out: &Path, seed: u64) -> Result<ExitCode> {
+pub(crate) fn run(front: &Front, protocol: &Path, out: &Path, seed: u64) -> Result<ExitCode> {
     let checked = compiler::check_file(protocol, front.root.as_deref())?;
     let Some(task) = checked
         .task

@@ -8,14 +8,14 @@ use crate::diagnostics;
 use anyhow::{Result, bail};
 use std::path::{Path, PathBuf};
 
-pub struct Front {
+pub(crate) struct Front {
     pub root: Option<PathBuf>,
     pub color: bool,
 }
 
 impl Front {
     /// Checks a protocol or chain file and returns its task, or shows its diagnostics and fails.
-    pub fn load(&self, path: &Path) -> Result<compiler::Task> {
+    pub(crate) fn load(&self, path: &Path) -> Result<compiler::Task> {
         self.checked(path).map(|(_, task)| task)
     }
 
@@ -38,14 +38,14 @@ impl Front {
     }
 
     /// Loads every file, stopping at the first with errors.
-    pub fn load_all(&self, paths: &[PathBuf]) -> Result<Vec<compiler::Task>> {
+    pub(crate) fn load_all(&self, paths: &[PathBuf]) -> Result<Vec<compiler::Task>> {
         paths.iter().map(|p| self.load(p)).collect()
     }
 
     /// Loads a protocol to run episodes of: its errors as [`Front::load`]; its warnings shown
     /// (what `check` would print); a task whose success already holds at the start (W0001)
     /// refused unless `allow_trivial`, since a motionless robot would pass it.
-    pub fn load_to_run(&self, path: &Path, allow_trivial: bool) -> Result<compiler::Task> {
+    pub(crate) fn load_to_run(&self, path: &Path, allow_trivial: bool) -> Result<compiler::Task> {
         let (checked, task) = self.checked(path)?;
         if checked.diagnostics.is_empty() {
             return Ok(task);
@@ -64,7 +64,7 @@ impl Front {
     }
 
     /// [`Front::load_to_run`] for every file, stopping at the first refused.
-    pub fn load_all_to_run(
+    pub(crate) fn load_all_to_run(
         &self,
         paths: &[PathBuf],
         allow_trivial: bool,
@@ -78,7 +78,7 @@ impl Front {
 
 /// `--perturb DIM[:STRENGTH]`, for the subcommands that run or draw episodes.
 #[derive(Clone, Debug, Default, clap::Args)]
-pub struct PerturbArgs {
+pub(crate) struct PerturbArgs {
     /// Perturb every episode along a dimension at strength 1 (mild, the default) or 2 (strong):
     /// light, material, camera, noise, language, robot_start, layout or distractors (`--perturb camera:2`;
     /// repeat for more; over the task's own `[perturb]`; docs/robustness.md)
@@ -90,7 +90,7 @@ impl PerturbArgs {
     /// The task with the presets over its own perturbations, its id naming them
     /// (`tube.pick_up@camera-2+noise-1`, so that its results never mix with the clean task's);
     /// refused where a preset would break it (a camera off the work, no room for distractors).
-    pub fn apply(&self, task: compiler::Task) -> Result<compiler::Task> {
+    pub(crate) fn apply(&self, task: compiler::Task) -> Result<compiler::Task> {
         if self.presets.is_empty() {
             return Ok(task);
         }
@@ -107,7 +107,7 @@ impl PerturbArgs {
 }
 
 /// Refuses a task whose perturbations would break it (`compiler::perturb::problems`).
-pub fn refuse_problems(task: &compiler::Task) -> Result<()> {
+pub(crate) fn refuse_problems(task: &compiler::Task) -> Result<()> {
     let problems = compiler::perturb::problems(task);
     if problems.is_empty() {
         return Ok(());
@@ -122,7 +122,7 @@ pub fn refuse_problems(task: &compiler::Task) -> Result<()> {
 /// `--renderer` and Blender's settings, for the subcommands that draw frames into recordings and
 /// datasets (docs/photoreal.md).
 #[derive(Clone, Debug, clap::Args)]
-pub struct RendererArgs {
+pub(crate) struct RendererArgs {
     /// Who draws the cameras: `mujoco` (the rasteriser, what models are scored on) or `blender`
     /// (photoreal, Cycles or Eevee through the `bpy` wheel `make setup` installs)
     #[arg(long, value_enum, default_value = "mujoco")]
@@ -139,20 +139,20 @@ pub struct RendererArgs {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum RendererArg {
+pub(crate) enum RendererArg {
     Mujoco,
     Blender,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum EngineArg {
+pub(crate) enum EngineArg {
     Cycles,
     Eevee,
 }
 
 impl RendererArgs {
     /// The renderer, Blender's threads shared among `workers` episodes at once.
-    pub fn renderer(&self, workers: usize) -> runtime::cameras::Renderer {
+    pub(crate) fn renderer(&self, workers: usize) -> runtime::cameras::Renderer {
         use runtime::blender::{Engine, Settings};
         match self.renderer {
             RendererArg::Mujoco => runtime::cameras::Renderer::Raster,

@@ -12,7 +12,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Clone, Debug, clap::Args)]
-pub struct ImportArgs {
+pub(crate) struct ImportArgs {
     /// The file to import: an Opentrons analysis (`opentrons analyze --json-output`), a
     /// Protocol Designer file (schema 8) or an Autoprotocol document (`refs`, `instructions`)
     file: PathBuf,
@@ -36,7 +36,7 @@ pub struct ImportArgs {
     keep_instrument_steps: bool,
 }
 
-pub fn run(front: &Front, a: &ImportArgs) -> Result<ExitCode> {
+pub(crate) fn run(front: &Front, a: &ImportArgs) -> Result<ExitCode> {
     let text = std::fs::read_to_string(&a.file)
         .with_context(|| format!("reading {}", a.file.display()))?;
     let mut robots = Vec::new();

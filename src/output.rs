@@ -5,7 +5,7 @@ use std::fmt::Arguments;
 use std::io::Write;
 
 /// Writes to stdout; exits quietly when the reader has gone away.
-pub fn stdout(args: Arguments) {
+pub(crate) fn stdout(args: Arguments) {
     let mut out = std::io::stdout().lock();
     if let Err(e) = out.write_fmt(args).and_then(|_| out.flush()) {
         if e.kind() == std::io::ErrorKind::BrokenPipe {
@@ -17,7 +17,7 @@ pub fn stdout(args: Arguments) {
 }
 
 /// Writes to stderr, ignoring failure (there is nowhere left to report it).
-pub fn stderr(args: Arguments) {
+pub(crate) fn stderr(args: Arguments) {
     let _ = std::io::stderr().lock().write_fmt(args);
 }
 

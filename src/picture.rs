@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Clone, Debug, clap::Args)]
-pub struct RenderArgs {
+pub(crate) struct RenderArgs {
     /// The protocol or chain file
     file: PathBuf,
     /// The episode seed whose initial scene is drawn
@@ -30,7 +30,7 @@ pub struct RenderArgs {
     renderer: crate::front::RendererArgs,
 }
 
-pub fn run(front: &Front, a: &RenderArgs) -> Result<ExitCode> {
+pub(crate) fn run(front: &Front, a: &RenderArgs) -> Result<ExitCode> {
     let task = a.perturb.apply(front.load(&a.file)?)?;
     let clean = compiler::Task {
         perturb: None,

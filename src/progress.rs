@@ -6,7 +6,7 @@ use scoring::eval::Progress;
 use std::io::IsTerminal;
 use std::time::Instant;
 
-pub struct ProgressView {
+pub(crate) struct ProgressView {
     label: String,
     /// The task evaluated, so that a failure line names what its seed drew.
     task: Option<compiler::Task>,
@@ -18,7 +18,7 @@ pub struct ProgressView {
 }
 
 impl ProgressView {
-    pub fn new(label: &str) -> ProgressView {
+    pub(crate) fn new(label: &str) -> ProgressView {
         ProgressView {
             label: label.to_string(),
             task: None,
@@ -31,7 +31,7 @@ impl ProgressView {
 
     /// Progress of an evaluation of `task`: each failure line also names the parameters its
     /// seed drew.
-    pub fn for_task(task: &compiler::Task) -> ProgressView {
+    pub(crate) fn for_task(task: &compiler::Task) -> ProgressView {
         ProgressView {
             task: Some(task.clone()),
             ..ProgressView::new(&task.id)
@@ -49,7 +49,7 @@ impl ProgressView {
     }
 
     /// One evaluated episode.
-    pub fn update(&mut self, p: &Progress) {
+    pub(crate) fn update(&mut self, p: &Progress) {
         let e = p.result;
         let rate = 100.0 * p.successes as f64 / p.done.max(1) as f64;
         let outcome = serde_json::to_value(e.outcome)
@@ -80,7 +80,7 @@ impl ProgressView {
     }
 
     /// One episode written to a dataset, or left out.
-    pub fn step(&mut self, s: &demos::Step<'_>) {
+    pub(crate) fn step(&mut self, s: &demos::Step<'_>) {
         self.left_out += usize::from(s.result.is_err());
         let what = match s.result {
             Ok(frames) => format!("{frames} frames"),
@@ -133,7 +133,7 @@ impl ProgressView {
     }
 
     /// Ends the bar's line.
-    pub fn finish(&mut self) {
+    pub(crate) fn finish(&mut self) {
         if self.bar && self.drawn {
             errln!("");
         }

@@ -9,7 +9,7 @@ use std::process::ExitCode;
 
 /// `--detail` of `replay --render`.
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
-pub enum DetailArg {
+pub(crate) enum DetailArg {
     /// Simplified meshes up to 320 pixels a side, full meshes above.
     Auto,
     Full,
@@ -17,7 +17,7 @@ pub enum DetailArg {
 }
 
 #[derive(Clone, Debug, clap::Args)]
-pub struct ReplayArgs {
+pub(crate) struct ReplayArgs {
     recording: PathBuf,
     /// Re-simulate the recorded actions from the recorded state and check every state and the
     /// trajectory hash (exit 1 if they differ)
@@ -48,7 +48,7 @@ pub struct ReplayArgs {
     renderer: crate::front::RendererArgs,
 }
 
-pub fn parse_size(s: &str) -> Result<[usize; 2], String> {
+pub(crate) fn parse_size(s: &str) -> Result<[usize; 2], String> {
     let (w, h) = s
         .split_once(['x', 'X'])
         .ok_or_else(|| format!("`{s}` is not WIDTHxHEIGHT (e.g. 224x224)"))?;
@@ -59,7 +59,7 @@ pub fn parse_size(s: &str) -> Result<[usize; 2], String> {
     Ok([side(w)?, side(h)?])
 }
 
-pub fn run(a: &ReplayArgs) -> Result<ExitCode> {
+pub(crate) fn run(a: &ReplayArgs) -> Result<ExitCode> {
     let doing = || format!("cannot replay {}", a.recording.display());
     let rec = Recording::open(&a.recording).with_context(doing)?;
     let mut ok = rescore(&rec);

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Clone, Debug, clap::Subcommand)]
-pub enum LeaderboardCommand {
+pub(crate) enum LeaderboardCommand {
     /// Pack finished suite runs (`eval --suite ... --out RUN`, or its shards) into a bundle: a tar
     /// archive (zstd-compressed when BUNDLE ends in .zst) with an index of every file's SHA-256
     Submit {
@@ -85,7 +85,7 @@ pub enum LeaderboardCommand {
     },
 }
 
-pub fn run(c: &LeaderboardCommand) -> Result<ExitCode> {
+pub(crate) fn run(c: &LeaderboardCommand) -> Result<ExitCode> {
     match c {
         LeaderboardCommand::Submit {
             runs,
@@ -150,7 +150,7 @@ pub fn run(c: &LeaderboardCommand) -> Result<ExitCode> {
 }
 
 /// The verifier's re-enactment: `scoring::replay::reenact`, its error in the verifier's terms.
-pub fn reenact(
+pub(crate) fn reenact(
     task: &compiler::Task,
     seed: u64,
     actions: &[Vec<f64>],

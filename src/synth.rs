@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Clone, Debug, clap::Args)]
-pub struct SynthArgs {
+pub(crate) struct SynthArgs {
     /// Protocol files, or folders of them, whose steps are recombined (those naming a scene file)
     #[arg(long, required = true, num_args = 1..)]
     from: Vec<PathBuf>,
@@ -47,7 +47,7 @@ fn parse_steps(s: &str) -> Result<RangeInclusive<usize>, String> {
     Ok(a..=b)
 }
 
-pub fn run(a: &SynthArgs) -> Result<ExitCode> {
+pub(crate) fn run(a: &SynthArgs) -> Result<ExitCode> {
     if a.out.is_file() {
         bail!("--out {}: a file, not a folder", a.out.display());
     }

@@ -24,7 +24,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(Clone, Debug, clap::Args)]
-pub struct TasksArgs {
+pub(crate) struct TasksArgs {
     /// Folders of protocol files
     #[arg(default_values = ["protocols"])]
     dirs: Vec<PathBuf>,
@@ -55,7 +55,7 @@ pub struct TasksArgs {
 }
 
 /// `autobio tasks`: measures the table and writes it.
-pub fn run_cli(a: &TasksArgs) -> Result<ExitCode> {
+pub(crate) fn run_cli(a: &TasksArgs) -> Result<ExitCode> {
     if let Some(table) = &a.verify_hold {
         return verify_hold_cli(table, a);
     }
@@ -77,7 +77,7 @@ pub fn run_cli(a: &TasksArgs) -> Result<ExitCode> {
 }
 
 /// What the table is measured over.
-pub struct Options {
+pub(crate) struct Options {
     pub dirs: Vec<PathBuf>,
     pub episodes: usize,
     pub seed: u64,
@@ -361,7 +361,7 @@ fn hold_episode_problems(task: &compiler::Task, hold: &EvalReport, file: &str) -
 }
 
 /// Builds the table; `log` hears one line per task as it is measured.
-pub fn table(opts: &Options, mut log: impl FnMut(&str)) -> Result<String> {
+pub(crate) fn table(opts: &Options, mut log: impl FnMut(&str)) -> Result<String> {
     let mut rows = Vec::new();
     let mut not_run = Vec::new();
     for path in protocol_files(&opts.dirs)? {

@@ -13,7 +13,7 @@ use dsl::ast::{LoopValues, Protocol, Scalar, Spanned, Step};
 use std::collections::BTreeMap;
 
 /// The most steps a protocol's loops may expand to.
-pub const MAX_STEPS: usize = 10_000;
+pub(crate) const MAX_STEPS: usize = 10_000;
 
 /// Replaces `p`'s loop steps by the steps they run.
 pub(crate) fn expand(cx: &mut Cx, p: &mut Protocol) {

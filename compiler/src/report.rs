@@ -21,7 +21,7 @@ pub(crate) struct Cx {
 }
 
 impl Cx {
-    pub fn new(file: Option<String>) -> Self {
+    pub(crate) fn new(file: Option<String>) -> Self {
         Cx {
             diags: Vec::new(),
             file,
@@ -29,7 +29,7 @@ impl Cx {
         }
     }
 
-    pub fn push(&mut self, mut d: Diagnostic) {
+    pub(crate) fn push(&mut self, mut d: Diagnostic) {
         d.file = self.file.clone();
         // One report per place: the proof may hit the same failure under many parameter values.
         if self.reported.insert((d.code, d.span, d.file.clone())) {
@@ -37,13 +37,13 @@ impl Cx {
         }
     }
 
-    pub fn err(&mut self, code: Code, span: Span, msg: String, hint: Option<String>) {
+    pub(crate) fn err(&mut self, code: Code, span: Span, msg: String, hint: Option<String>) {
         let mut d = Diagnostic::new(code, span, msg);
         d.hint = hint;
         self.push(d);
     }
 
-    pub fn has_errors(&self) -> bool {
+    pub(crate) fn has_errors(&self) -> bool {
         self.diags.iter().any(|d| d.is_error())
     }
 }

@@ -25,7 +25,7 @@ pub(crate) struct Merged {
 
 impl Merged {
     /// Points the diagnostics that fell into the scene's tables back into the scene file.
-    pub fn remap(&self, diags: &mut [Diagnostic]) {
+    pub(crate) fn remap(&self, diags: &mut [Diagnostic]) {
         for d in diags {
             if d.file == self.owner && d.span.start >= self.offset {
                 d.file = Some(self.path.clone());

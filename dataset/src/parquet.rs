@@ -22,7 +22,7 @@ use std::sync::Arc;
 
 /// One frame's row.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Row {
+pub(crate) struct Row {
     pub state: Vec<f32>,
     /// `observation.environment_state`; empty when the dataset has none.
     pub environment_state: Vec<f32>,
@@ -64,7 +64,7 @@ fn list(values: Vec<f32>, width: usize) -> Result<ArrayRef, ArrowError> {
 }
 
 /// The frames table: one row per frame.
-pub fn write_frames(path: &Path, rows: &[Row]) -> Result<(), DatasetError> {
+pub(crate) fn write_frames(path: &Path, rows: &[Row]) -> Result<(), DatasetError> {
     let bad = |e: String| DatasetError::Parquet {
         path: path.to_path_buf(),
         why: e,
@@ -144,7 +144,7 @@ pub fn write_frames(path: &Path, rows: &[Row]) -> Result<(), DatasetError> {
 }
 
 /// v3.0's `meta/tasks.parquet`: `task_index`, indexed by the task string.
-pub fn write_tasks(path: &Path, tasks: &[String]) -> Result<(), DatasetError> {
+pub(crate) fn write_tasks(path: &Path, tasks: &[String]) -> Result<(), DatasetError> {
     let bad = |e: String| DatasetError::Parquet {
         path: path.to_path_buf(),
         why: e,
@@ -181,7 +181,7 @@ pub fn write_tasks(path: &Path, tasks: &[String]) -> Result<(), DatasetError> {
 
 /// One episode's row in v3.0's `meta/episodes` table.
 #[derive(Clone, Debug)]
-pub struct EpisodeRow {
+pub(crate) struct EpisodeRow {
     pub episode_index: i64,
     pub tasks: Vec<String>,
     pub length: i64,
@@ -195,7 +195,7 @@ pub struct EpisodeRow {
 
 /// Where one camera's frames of an episode are in v3.0's shared videos.
 #[derive(Clone, Debug)]
-pub struct EpisodeVideo {
+pub(crate) struct EpisodeVideo {
     pub key: String,
     pub file: (i64, i64),
     pub from_s: f64,
@@ -203,7 +203,7 @@ pub struct EpisodeVideo {
 }
 
 /// v3.0's `meta/episodes/chunk-000/file-000.parquet` (one metadata file).
-pub fn write_episodes(path: &Path, eps: &[EpisodeRow]) -> Result<(), DatasetError> {
+pub(crate) fn write_episodes(path: &Path, eps: &[EpisodeRow]) -> Result<(), DatasetError> {
     let bad = |e: String| DatasetError::Parquet {
         path: path.to_path_buf(),
         why: e,
@@ -287,7 +287,7 @@ pub fn write_episodes(path: &Path, eps: &[EpisodeRow]) -> Result<(), DatasetErro
 }
 
 /// Joins episodes' frame tables, in order, into one file (v3.0's shared data file).
-pub fn concat_frames(parts: &[std::path::PathBuf], out: &Path) -> Result<(), DatasetError> {
+pub(crate) fn concat_frames(parts: &[std::path::PathBuf], out: &Path) -> Result<(), DatasetError> {
     use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
     let bad = |e: String| DatasetError::Parquet {
         path: out.to_path_buf(),
@@ -350,14 +350,14 @@ fn batches(
 /// One frame's vectors: `observation.state`, `observation.environment_state` (empty when the
 /// table has none) and `action`.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct Frame {
+pub(crate) struct Frame {
     pub state: Vec<f32>,
     pub environment_state: Vec<f32>,
     pub action: Vec<f32>,
 }
 
 /// Every frame's vectors of an episode's frames table, in order.
-pub fn read_frames(path: &Path) -> Result<Vec<Frame>, DatasetError> {
+pub(crate) fn read_frames(path: &Path) -> Result<Vec<Frame>, DatasetError> {
     use arrow_array::Array;
     let bad = |e: String| DatasetError::Parquet {
         path: path.to_path_buf(),
@@ -402,7 +402,7 @@ pub fn read_frames(path: &Path) -> Result<Vec<Frame>, DatasetError> {
 }
 
 /// v3.0's `meta/tasks.parquet` read back: (task_index, task) in file order.
-pub fn read_tasks(path: &Path) -> Result<Vec<(i64, String)>, DatasetError> {
+pub(crate) fn read_tasks(path: &Path) -> Result<Vec<(i64, String)>, DatasetError> {
     let bad = |e: String| DatasetError::Parquet {
         path: path.to_path_buf(),
         why: e,

@@ -43,7 +43,7 @@ impl Codec {
 }
 
 /// One video being written.
-pub struct VideoWriter {
+pub(crate) struct VideoWriter {
     child: Child,
     stdin: Option<ChildStdin>,
     path: PathBuf,
@@ -53,7 +53,7 @@ pub struct VideoWriter {
 }
 
 impl VideoWriter {
-    pub fn create(
+    pub(crate) fn create(
         path: &Path,
         width: usize,
         height: usize,
@@ -88,7 +88,7 @@ impl VideoWriter {
         })
     }
 
-    pub fn push(&mut self, rgb: &[u8]) -> Result<(), DatasetError> {
+    pub(crate) fn push(&mut self, rgb: &[u8]) -> Result<(), DatasetError> {
         assert_eq!(rgb.len(), self.width * self.height * 3, "frame size");
         let stdin = self.stdin.as_mut().expect("open until finish");
         if let Err(e) = stdin.write_all(rgb) {
@@ -112,7 +112,7 @@ impl VideoWriter {
     }
 
     /// Closes the stream and waits for the file.
-    pub fn finish(mut self) -> Result<usize, DatasetError> {
+    pub(crate) fn finish(mut self) -> Result<usize, DatasetError> {
         self.stdin.take();
         let out = self
             .child
@@ -133,7 +133,7 @@ impl VideoWriter {
 
 /// Joins videos of the same codec, size and rate into one, copying streams (LeRobot v3.0's
 /// shared files).
-pub fn concatenate(parts: &[PathBuf], out: &Path) -> Result<(), DatasetError> {
+pub(crate) fn concatenate(parts: &[PathBuf], out: &Path) -> Result<(), DatasetError> {
     let list = out.with_extension("txt");
     // Absolute: ffmpeg resolves a list's relative names against the list's own folder.
     let mut text = String::new();

@@ -23,7 +23,7 @@ use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-pub const FPS: u32 = 50;
+pub(crate) const FPS: u32 = 50;
 const CHUNK: usize = 1000;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -938,7 +938,7 @@ impl Source {
     }
 
     /// Reads a dataset's layout and commit record (v3.0 needs its `.episodes/` parts).
-    pub fn open(root: &Path) -> Result<Source, DatasetError> {
+    pub(crate) fn open(root: &Path) -> Result<Source, DatasetError> {
         let bad = |why: String| DatasetError::Existing {
             path: root.to_path_buf(),
             why,
@@ -1021,7 +1021,7 @@ impl Source {
     }
 
     /// The layout its episodes share.
-    pub fn layout(&self) -> Layout {
+    pub(crate) fn layout(&self) -> Layout {
         Layout {
             robot_type: self.robot_type.clone(),
             state_names: self.state_names.clone(),

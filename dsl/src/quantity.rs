@@ -95,7 +95,7 @@ const UNITS: &[(&str, Dimension, f64)] = &[
 ];
 
 /// Looks up a unit symbol (also used for unit-suffixed keys such as `yaw_deg`).
-pub fn unit(symbol: &str) -> Option<(Dimension, f64)> {
+pub(crate) fn unit(symbol: &str) -> Option<(Dimension, f64)> {
     UNITS
         .iter()
         .find(|(s, _, _)| *s == symbol)
@@ -104,7 +104,7 @@ pub fn unit(symbol: &str) -> Option<(Dimension, f64)> {
 
 /// The unit a symbol that is not one most likely means: lab spellings (`C`, `deg C`, `RPM`,
 /// `sec`, `secs`, `mins`, `seconds`), other case (`ML`), else the closest symbol by spelling.
-pub fn suggest_unit(symbol: &str) -> Option<&'static str> {
+pub(crate) fn suggest_unit(symbol: &str) -> Option<&'static str> {
     let folded: String = symbol
         .chars()
         .filter(|c| !c.is_whitespace() && *c != '.')

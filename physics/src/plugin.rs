@@ -15,8 +15,8 @@ use mujoco_rs::mujoco_c::{
 use std::ffi::{CStr, CString, c_char, c_int, c_void};
 use std::sync::OnceLock;
 
-pub const DETENT: &str = "autobio.detent";
-pub const THREAD: &str = "autobio.thread";
+pub(crate) const DETENT: &str = "autobio.detent";
+pub(crate) const THREAD: &str = "autobio.thread";
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum PluginError {

@@ -16,12 +16,12 @@ use results::environment_state::EnvironmentState;
 use runtime::{EnvError, EnvOptions};
 
 /// What one step did: reward, terminated, truncated, and why the episode ended early, if it did.
-pub type Outcome = (f64, bool, bool, Option<String>);
+pub(crate) type Outcome = (f64, bool, bool, Option<String>);
 
 /// One step in Python's terms: an action the runtime would refuse raises before anything moves
 /// (the episode goes on); an unstable simulation ends the episode with its reason, failed and
 /// scoring 0, as `autobio eval` scores an episode that ends in an error.
-pub fn step(env: &mut runtime::Env, action: &[f64]) -> Result<Outcome, EnvFailure> {
+pub(crate) fn step(env: &mut runtime::Env, action: &[f64]) -> Result<Outcome, EnvFailure> {
     runtime::check_action(&env.episode().action_bounds(), action)
         .map_err(|e| EnvFailure::Action(e.to_string()))?;
     match env.step(action) {
@@ -52,14 +52,14 @@ impl From<EnvFailure> for PyErr {
     }
 }
 
-pub fn options(image_size: Option<(usize, usize)>) -> EnvOptions {
+pub(crate) fn options(image_size: Option<(usize, usize)>) -> EnvOptions {
     EnvOptions {
         image_size: image_size.map(|(w, h)| [w, h]),
         ..Default::default()
     }
 }
 
-pub fn runtime_err(e: impl std::fmt::Display) -> PyErr {
+pub(crate) fn runtime_err(e: impl std::fmt::Display) -> PyErr {
     PyRuntimeError::new_err(e.to_string())
 }
 
@@ -257,19 +257,22 @@ impl Env {
     }
 }
 
-pub fn control_dt(task: &compiler::Task) -> f64 {
+pub(crate) fn control_dt(task: &compiler::Task) -> f64 {
     task.physics.timestep_s * f64::from(task.physics.substeps)
 }
 
 /// An upper bound on an episode's control steps: the time limit over the control period, and one
 /// more for the clock's rounding (the runtime ends the episode at its own time, never later).
-pub fn max_steps(task: &compiler::Task) -> u64 {
+pub(crate) fn max_steps(task: &compiler::Task) -> u64 {
     (task.time_limit_s / control_dt(task)).ceil() as u64 + 1
 }
 
 /// A layout over the task's robots, each name prefixed with its robot's name (`arm/...`), as the
 /// datasets name their features.
-pub fn layout(task: &compiler::Task, names: fn(&robots::RobotModel) -> Vec<String>) -> Vec<String> {
+pub(crate) fn layout(
+    task: &compiler::Task,
+    names: fn(&robots::RobotModel) -> Vec<String>,
+) -> Vec<String> {
     task.robots
         .iter()
         .flat_map(|r| {

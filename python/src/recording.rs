@@ -13,7 +13,7 @@ use std::path::PathBuf;
 /// order), `physics` (times and MuJoCo states), `labware` (times and JSON states), `images`
 /// (camera to times and PNG bytes), `duration_s`.
 #[pyfunction]
-pub fn read_recording<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyDict>> {
+pub(crate) fn read_recording<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyDict>> {
     let r = results::recording::read_recording(&path)
         .map_err(|e| pyo3::exceptions::PyValueError::new_err(format!("{}: {e}", path.display())))?;
     let robots: Vec<String> = r.task["robots"]
@@ -63,7 +63,10 @@ pub fn read_recording<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py
 
 /// A PNG's pixels as (width, height, RGB bytes), for recorded frames (8-bit RGB).
 #[pyfunction]
-pub fn decode_png<'py>(py: Python<'py>, png: &[u8]) -> PyResult<(u32, u32, Bound<'py, PyBytes>)> {
+pub(crate) fn decode_png<'py>(
+    py: Python<'py>,
+    png: &[u8],
+) -> PyResult<(u32, u32, Bound<'py, PyBytes>)> {
     let bad = |e: png::DecodingError| pyo3::exceptions::PyValueError::new_err(e.to_string());
     let mut decoder = png::Decoder::new(std::io::Cursor::new(png));
     decoder.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
@@ -87,7 +90,7 @@ pub fn decode_png<'py>(py: Python<'py>, png: &[u8]) -> PyResult<(u32, u32, Bound
 
 /// A LeRobot dataset's task table (either format autobio writes): [(task_index, task)].
 #[pyfunction]
-pub fn dataset_tasks(root: PathBuf) -> PyResult<Vec<(i64, String)>> {
+pub(crate) fn dataset_tasks(root: PathBuf) -> PyResult<Vec<(i64, String)>> {
     dataset::meta::task_table(&root)
         .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))
 }

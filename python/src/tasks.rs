@@ -15,7 +15,7 @@ include!(concat!(env!("OUT_DIR"), "/protocols.rs"));
 
 /// Why a task could not be loaded.
 #[derive(Debug, thiserror::Error)]
-pub enum LoadError {
+pub(crate) enum LoadError {
     #[error("{0}")]
     File(#[from] compiler::FileError),
     /// The protocol's diagnostics, rendered.
@@ -29,7 +29,7 @@ pub enum LoadError {
 
 /// One shipped task: its id, file, level, instruction, stage count and whether it simulates.
 #[derive(Clone, Debug)]
-pub struct Shipped {
+pub(crate) struct Shipped {
     pub file: &'static str,
     pub task: Task,
     /// Every item has an instrument model, so the runtime can build its scene.
@@ -37,7 +37,7 @@ pub struct Shipped {
 }
 
 /// Every shipped protocol that compiles, in file order (compiled once per process).
-pub fn shipped() -> &'static [Shipped] {
+pub(crate) fn shipped() -> &'static [Shipped] {
     static TASKS: OnceLock<Vec<Shipped>> = OnceLock::new();
     TASKS.get_or_init(|| {
         SHIPPED
@@ -63,13 +63,13 @@ pub fn shipped() -> &'static [Shipped] {
 }
 
 /// Every item has an instrument model: the runtime can build the task's scene.
-pub fn simulated(task: &Task) -> bool {
+pub(crate) fn simulated(task: &Task) -> bool {
     task.labware.iter().all(|l| l.params.instrument().is_some())
 }
 
 /// A shipped task by id, or a protocol or chain file by path (a chain's stages confined to its
 /// folder, as `autobio check` reads them).
-pub fn load(spec: &str) -> Result<Task, LoadError> {
+pub(crate) fn load(spec: &str) -> Result<Task, LoadError> {
     if let Some(s) = shipped().iter().find(|s| s.task.id == spec) {
         return Ok(s.task.clone());
     }

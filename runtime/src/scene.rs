@@ -188,7 +188,7 @@ fn pedestal(robot: &str, base: &Pose) -> String {
 }
 
 /// The name prefix of distractor items in the scene (`perturb/distractor1`, ...).
-pub const DISTRACTOR: &str = "perturb/distractor";
+pub(crate) const DISTRACTOR: &str = "perturb/distractor";
 
 /// The distractors an instance's perturbation drew (none without one).
 fn distractors_of(instance: &SceneInstance) -> Vec<compiler::perturb::Distractor> {
@@ -212,7 +212,7 @@ fn spare_lights(task: &Task) -> String {
 
 /// The name prefix of the lights a light perturbation may turn on (off in the scene as built;
 /// `crate::perturb` turns them on).
-pub const SPARE_LIGHT: &str = "perturb/light";
+pub(crate) const SPARE_LIGHT: &str = "perturb/light";
 
 /// The MJCF of `n` spare lights around the room, off until a light perturbation turns them on.
 fn spare_light_mjcf(n: u32) -> String {
@@ -239,7 +239,7 @@ fn spare_light_mjcf(n: u32) -> String {
 }
 
 /// The scene's MJCF; `detail` picks the robots' visual meshes (nothing else differs).
-pub fn scene_xml(
+pub(crate) fn scene_xml(
     task: &Task,
     placements: &[Pose],
     distractors: &[compiler::perturb::Distractor],
@@ -819,11 +819,11 @@ fn check_starts(task: &Task, instance: &SceneInstance) -> Result<(), SceneError>
     Ok(())
 }
 
-pub fn joint_qposadr(m: &MjModel, joint: usize) -> usize {
+pub(crate) fn joint_qposadr(m: &MjModel, joint: usize) -> usize {
     m.jnt_qposadr()[joint] as usize
 }
 
-pub fn joint_dofadr(m: &MjModel, joint: usize) -> usize {
+pub(crate) fn joint_dofadr(m: &MjModel, joint: usize) -> usize {
     m.jnt_dofadr()[joint] as usize
 }
 

@@ -16,13 +16,17 @@ use std::fmt::Write as _;
 /// where the step before left the arm, not from the pose their sources started at.
 const TIME_FACTOR: f64 = 1.25;
 
-pub struct Header<'a> {
+pub(crate) struct Header<'a> {
     pub id: &'a str,
     pub scene: &'a str,
     pub comment: &'a str,
 }
 
-pub fn protocol(h: &Header, walk: &Walk, kinds: &BTreeMap<String, &'static LabwareKind>) -> String {
+pub(crate) fn protocol(
+    h: &Header,
+    walk: &Walk,
+    kinds: &BTreeMap<String, &'static LabwareKind>,
+) -> String {
     let mut s = String::new();
     for line in h.comment.lines() {
         let _ = writeln!(s, "# {line}");
@@ -74,7 +78,7 @@ pub fn protocol(h: &Header, walk: &Walk, kinds: &BTreeMap<String, &'static Labwa
 }
 
 /// Every fact that differs between the start and the end, as success predicates.
-pub fn success(
+pub(crate) fn success(
     first: &World,
     last: &World,
     kinds: &BTreeMap<String, &'static LabwareKind>,

@@ -20,14 +20,14 @@ use std::collections::BTreeMap;
 
 /// One drawn step: its shape and arguments as they will be written.
 #[derive(Clone, Debug)]
-pub struct Step {
+pub(crate) struct Step {
     pub template: Template,
     pub args: BTreeMap<String, String>,
 }
 
 /// A finished walk.
 #[derive(Clone, Debug)]
-pub struct Walk {
+pub(crate) struct Walk {
     pub start: Start,
     pub first: World,
     pub steps: Vec<Step>,
@@ -36,7 +36,7 @@ pub struct Walk {
 
 /// Why a walk stopped short.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-pub enum Stuck {
+pub(crate) enum Stuck {
     /// No step shape could go on from where the walk was.
     NoStep,
     /// No start could be drawn (a holder with no free slot for an item).
@@ -49,7 +49,7 @@ const TRIES_PER_SHAPE: usize = 4;
 /// Step shapes a walk may try in all, backtracking included, before it gives up on its start.
 const EXPANSIONS: usize = 400;
 
-pub fn walk(bench: &Bench, n: usize, rng: &mut ChaCha8Rng) -> Result<Walk, Stuck> {
+pub(crate) fn walk(bench: &Bench, n: usize, rng: &mut ChaCha8Rng) -> Result<Walk, Stuck> {
     let start = draw_start(bench, rng).ok_or(Stuck::NoStart)?;
     let first = world_at(&bench.kinds, &bench.robots, &start);
     let mut search = Search {

@@ -9,7 +9,7 @@ use std::process::{Command, Output};
 use std::sync::Arc;
 
 /// The value of the predicate written `text` in an episode's verdict.
-pub fn predicate<'a>(
+pub(crate) fn predicate<'a>(
     r: &'a results::episode::EpisodeResult,
     text: &str,
 ) -> &'a results::verdict::PredicateValue {
@@ -21,26 +21,29 @@ pub fn predicate<'a>(
 }
 
 /// A protocol file compiled as it is.
-pub fn compile(path: &str) -> compiler::Task {
+pub(crate) fn compile(path: &str) -> compiler::Task {
     compile_edited(path, |s| s)
 }
 
 /// A protocol file compiled after editing its text.
-pub fn compile_edited(path: &str, edit: impl FnOnce(String) -> String) -> compiler::Task {
+pub(crate) fn compile_edited(path: &str, edit: impl FnOnce(String) -> String) -> compiler::Task {
     let source = edit(std::fs::read_to_string(path).unwrap());
     let (task, diags) = compiler::compile_source(&source, path);
     task.unwrap_or_else(|| panic!("{path}: {diags:#?}"))
 }
 
 /// The scene for episode `seed`, built.
-pub fn scene(task: &compiler::Task, seed: u64) -> (compiler::SceneInstance, Arc<runtime::Scene>) {
+pub(crate) fn scene(
+    task: &compiler::Task,
+    seed: u64,
+) -> (compiler::SceneInstance, Arc<runtime::Scene>) {
     let instance = task.sample(seed);
     let scene = Arc::new(runtime::Scene::build(task, &instance).unwrap());
     (instance, scene)
 }
 
 /// One episode of `task` with the policy `make` builds for its scene.
-pub fn run_with(
+pub(crate) fn run_with(
     task: &compiler::Task,
     seed: u64,
     opts: &scoring::episode::EpisodeOptions,
@@ -56,7 +59,11 @@ pub fn run_with(
 }
 
 /// One episode with a policy by name (`expert`, `hold`), not recorded.
-pub fn run(task: &compiler::Task, seed: u64, policy: &str) -> results::episode::EpisodeResult {
+pub(crate) fn run(
+    task: &compiler::Task,
+    seed: u64,
+    policy: &str,
+) -> results::episode::EpisodeResult {
     run_with(
         task,
         seed,
@@ -66,7 +73,7 @@ pub fn run(task: &compiler::Task, seed: u64, policy: &str) -> results::episode::
 }
 
 /// Runs the `autobio` binary with `NO_COLOR` unset.
-pub fn autobio(args: &[&str]) -> Output {
+pub(crate) fn autobio(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_autobio"))
         .args(args)
         .env_remove("NO_COLOR")
@@ -75,7 +82,7 @@ pub fn autobio(args: &[&str]) -> Output {
 }
 
 /// Runs the `autobio` binary with these environment variables set.
-pub fn autobio_env(args: &[&str], vars: &[(&str, &str)]) -> Output {
+pub(crate) fn autobio_env(args: &[&str], vars: &[(&str, &str)]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_autobio"))
         .args(args)
         .envs(vars.iter().copied())
@@ -86,7 +93,7 @@ pub fn autobio_env(args: &[&str], vars: &[(&str, &str)]) -> Output {
 
 /// Runs the `autobio` binary and kills it if it has not finished within `limit`: a run that
 /// would hang fails the test with the time it took instead of blocking the suite.
-pub fn autobio_within(args: &[&str], limit: std::time::Duration) -> Output {
+pub(crate) fn autobio_within(args: &[&str], limit: std::time::Duration) -> Output {
     use std::io::Read;
     let mut child = Command::new(env!("CARGO_BIN_EXE_autobio"))
         .args(args)
@@ -130,7 +137,7 @@ pub fn autobio_within(args: &[&str], limit: std::time::Duration) -> Output {
 }
 
 /// Runs the `autobio` binary, which must succeed; its standard output.
-pub fn autobio_ok(args: &[&str]) -> String {
+pub(crate) fn autobio_ok(args: &[&str]) -> String {
     let out = autobio(args);
     assert!(
         out.status.success(),
@@ -142,7 +149,7 @@ pub fn autobio_ok(args: &[&str]) -> String {
 }
 
 /// `autobio eval --suite SUITE --out OUT` with `extra` arguments, which must succeed.
-pub fn eval_suite(suite: &std::path::Path, out: &std::path::Path, extra: &[&str]) -> String {
+pub(crate) fn eval_suite(suite: &std::path::Path, out: &std::path::Path, extra: &[&str]) -> String {
     let mut args = vec![
         "eval",
         "--suite",
@@ -156,7 +163,7 @@ pub fn eval_suite(suite: &std::path::Path, out: &std::path::Path, extra: &[&str]
 
 /// `autobio leaderboard submit RUN --model-name MODEL --out BUNDLE` with `extra` arguments,
 /// which must succeed.
-pub fn submit(
+pub(crate) fn submit(
     run: &std::path::Path,
     model: &str,
     bundle: &std::path::Path,
@@ -175,13 +182,13 @@ pub fn submit(
     autobio_ok(&args)
 }
 
-pub fn text(bytes: &[u8]) -> String {
+pub(crate) fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
 }
 
 /// A fresh, empty folder under the system's temporary folder, unique to this call (tests run
 /// in parallel in one process: two that ask for the same name get two folders).
-pub fn scratch(name: &str) -> PathBuf {
+pub(crate) fn scratch(name: &str) -> PathBuf {
     static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
     let n = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     let dir = std::env::temp_dir().join(format!("autobio-test-{}-{n}-{name}", std::process::id()));
@@ -191,7 +198,7 @@ pub fn scratch(name: &str) -> PathBuf {
 }
 
 /// The lines of a run's journal (`<out>/<task id>.journal.jsonl`), parsed; none if it is absent.
-pub fn journal(dir: &std::path::Path, task_id: &str) -> Vec<serde_json::Value> {
+pub(crate) fn journal(dir: &std::path::Path, task_id: &str) -> Vec<serde_json::Value> {
     std::fs::read_to_string(dir.join(format!("{task_id}.journal.jsonl")))
         .unwrap_or_default()
         .lines()
@@ -201,17 +208,17 @@ pub fn journal(dir: &std::path::Path, task_id: &str) -> Vec<serde_json::Value> {
 
 /// How long a reference model server may take to come up (Python and numpy importing on a
 /// loaded 2-core machine take a few seconds).
-pub const SERVER_START_DEADLINE: std::time::Duration = std::time::Duration::from_secs(60);
+pub(crate) const SERVER_START_DEADLINE: std::time::Duration = std::time::Duration::from_secs(60);
 
 /// A reference model server (`tests/servers/<script>`) running on loopback in the servers'
 /// Python environment; killed when dropped.
-pub struct Server {
+pub(crate) struct Server {
     child: std::process::Child,
     pub url: String,
 }
 
 impl Server {
-    pub fn start(script: &str, args: &[&str]) -> Server {
+    pub(crate) fn start(script: &str, args: &[&str]) -> Server {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
         let mut cmd = Command::new(python());
         cmd.arg(root.join("tests/servers").join(script)).args(args);
@@ -220,7 +227,7 @@ impl Server {
 
     /// Starts `cmd` and waits at most `deadline` for its first line, `listening on <url>`; a
     /// server that says nothing by then is killed and reported.
-    pub fn spawn(
+    pub(crate) fn spawn(
         mut cmd: Command,
         name: &str,
         deadline: std::time::Duration,
@@ -268,7 +275,7 @@ impl Server {
 }
 
 /// The lab languages' Python (autoprotocol-python, Opentrons' analyzer; `make setup` makes it).
-pub fn lab_python() -> std::path::PathBuf {
+pub(crate) fn lab_python() -> std::path::PathBuf {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     let python = root.join(".deps/lab-languages/bin/python");
     assert!(
@@ -280,7 +287,7 @@ pub fn lab_python() -> std::path::PathBuf {
 }
 
 /// The servers' Python (`make setup` makes it).
-pub fn python() -> std::path::PathBuf {
+pub(crate) fn python() -> std::path::PathBuf {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     let python = root.join(".deps/servers/bin/python");
     assert!(
@@ -299,7 +306,7 @@ impl Drop for Server {
 }
 
 /// Standard deviation of an image's pixel values: a blank (one-colour) frame has none.
-pub fn spread(rgb: &[u8]) -> f64 {
+pub(crate) fn spread(rgb: &[u8]) -> f64 {
     let n = rgb.len() as f64;
     let mean = rgb.iter().map(|&v| f64::from(v)).sum::<f64>() / n;
     (rgb.iter()
@@ -311,7 +318,7 @@ pub fn spread(rgb: &[u8]) -> f64 {
 
 /// Every shipped protocol and chain file (`protocols/<kind>/<name>.toml`), sorted; scene files,
 /// which protocols share and which are no tasks, left out.
-pub fn shipped_protocols() -> Vec<PathBuf> {
+pub(crate) fn shipped_protocols() -> Vec<PathBuf> {
     let mut out = Vec::new();
     for dir in std::fs::read_dir("protocols").unwrap() {
         for f in std::fs::read_dir(dir.unwrap().path()).unwrap() {
@@ -328,7 +335,7 @@ pub fn shipped_protocols() -> Vec<PathBuf> {
 
 /// A protocol the expert cannot run: two arms, a tube from a drawn slot, and a hand-over it has no
 /// motions for yet (every episode ends in a policy error naming step 2).
-pub const HAND_OVER: &str = r#"format = 1
+pub(crate) const HAND_OVER: &str = r#"format = 1
 [protocol]
 id = "tube.hand_over"
 level = "medium"

@@ -87,7 +87,7 @@ pub struct NoiseDraw {
 }
 
 /// The share of a camera shake's shift a wrist camera takes.
-pub const WRIST_SHIFT: f64 = 0.25;
+pub(super) const WRIST_SHIFT: f64 = 0.25;
 
 /// The stream a dimension draws from.
 fn stream(seed: u64, d: Dimension) -> ChaCha8Rng {

@@ -4,7 +4,7 @@ use super::liquid;
 use super::prelude::*;
 use crate::motion::{Motion, MotionStep, goals};
 
-pub const PRIMITIVE: LabPrimitive = LabPrimitive {
+pub(super) const PRIMITIVE: LabPrimitive = LabPrimitive {
     name: "aspirate",
     description: "draw liquid from an open container into the pipette the robot holds",
     args: &[ON, VOLUME],

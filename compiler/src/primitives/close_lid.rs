@@ -4,7 +4,7 @@ use super::lid;
 use super::prelude::*;
 use crate::motion::{Motion, MotionStep};
 
-pub const PRIMITIVE: LabPrimitive = LabPrimitive {
+pub(super) const PRIMITIVE: LabPrimitive = LabPrimitive {
     name: "close_lid",
     description: "swing a lid shut by its handle and latch it where the instrument has a latch",
     args: &[ON],

@@ -4,7 +4,7 @@ use super::liquid;
 use super::prelude::*;
 use crate::motion::{Motion, MotionStep, goals};
 
-pub const PRIMITIVE: LabPrimitive = LabPrimitive {
+pub(super) const PRIMITIVE: LabPrimitive = LabPrimitive {
     name: "dispense",
     description: "expel liquid from the pipette the robot holds into an open container",
     args: &[ON, VOLUME],

@@ -9,7 +9,7 @@
 use super::prelude::*;
 use crate::motion::{Motion, MotionStep};
 
-pub const PRIMITIVE: LabPrimitive = LabPrimitive {
+pub(super) const PRIMITIVE: LabPrimitive = LabPrimitive {
     name: "external",
     description: "an instrument-only step, done off the bench while the robots stand by",
     args: &[

@@ -2,7 +2,7 @@
 
 use super::prelude::*;
 
-pub const PRIMITIVE: LabPrimitive = LabPrimitive {
+pub(super) const PRIMITIVE: LabPrimitive = LabPrimitive {
     name: "hand_over",
     description: "pass a carried item to another robot's gripper",
     args: &[

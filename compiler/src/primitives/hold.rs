@@ -3,7 +3,7 @@
 use super::prelude::*;
 use crate::motion::{Motion, MotionStep, Target};
 
-pub const PRIMITIVE: LabPrimitive = LabPrimitive {
+pub(super) const PRIMITIVE: LabPrimitive = LabPrimitive {
     name: "hold",
     description: "grip an item where it is to keep it still (a second arm stabilising a tube)",
     args: &[ON],

@@ -5,7 +5,7 @@ use super::prelude::*;
 use super::run;
 use crate::motion::{Motion, MotionStep};
 
-pub const PRIMITIVE: LabPrimitive = LabPrimitive {
+pub(super) const PRIMITIVE: LabPrimitive = LabPrimitive {
     name: "incubate",
     description: "incubate what stands in a thermal mixer's block at a temperature, shaking at a speed, for a time: press its start key and wait until its timer ends",
     args: &[

@@ -12,7 +12,7 @@ const MAX_TIMES: u32 = 20;
 /// the rack it took the tube from by more than that.
 const LIFT_M: f64 = 0.25;
 
-pub const PRIMITIVE: LabPrimitive = LabPrimitive {
+pub(super) const PRIMITIVE: LabPrimitive = LabPrimitive {
     name: "invert",
     description: "turn a carried, capped tube upside down and back, a number of times, to mix it",
     args: &[

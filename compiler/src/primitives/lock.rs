@@ -4,7 +4,7 @@ use super::lid;
 use super::prelude::*;
 use crate::motion::{Motion, MotionStep};
 
-pub const PRIMITIVE: LabPrimitive = LabPrimitive {
+pub(super) const PRIMITIVE: LabPrimitive = LabPrimitive {
     name: "lock",
     description: "press a closed lid's latch or lever home",
     args: &[ON],

@@ -4,7 +4,7 @@ use super::lid;
 use super::prelude::*;
 use crate::motion::{Motion, MotionStep};
 
-pub const PRIMITIVE: LabPrimitive = LabPrimitive {
+pub(super) const PRIMITIVE: LabPrimitive = LabPrimitive {
     name: "open_lid",
     description: "unlatch a lid if latched and swing it open",
     args: &[ON],

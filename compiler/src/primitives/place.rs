@@ -3,7 +3,7 @@
 use super::prelude::*;
 use crate::motion::{Motion, MotionStep, Target};
 
-pub const PRIMITIVE: LabPrimitive = LabPrimitive {
+pub(super) const PRIMITIVE: LabPrimitive = LabPrimitive {
     name: "place",
     description: "put a carried item into a holder's slot and let go",
     args: &[

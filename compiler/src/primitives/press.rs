@@ -3,7 +3,7 @@
 use super::prelude::*;
 use crate::motion::{Motion, MotionStep, Target};
 
-pub const PRIMITIVE: LabPrimitive = LabPrimitive {
+pub(super) const PRIMITIVE: LabPrimitive = LabPrimitive {
     name: "press",
     description: "press one of an instrument's buttons once (with a closed gripper as the finger)",
     args: &[

@@ -2,7 +2,7 @@
 
 use super::prelude::*;
 
-pub const PRIMITIVE: LabPrimitive = LabPrimitive {
+pub(super) const PRIMITIVE: LabPrimitive = LabPrimitive {
     name: "release",
     description: "let go of an item held steady",
     args: &[],

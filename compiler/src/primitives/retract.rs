@@ -6,7 +6,7 @@
 use super::prelude::*;
 use crate::motion::{Motion, MotionStep};
 
-pub const PRIMITIVE: LabPrimitive = LabPrimitive {
+pub(super) const PRIMITIVE: LabPrimitive = LabPrimitive {
     name: "retract",
     description: "take the arm back to its home pose, clear of the bench",
     args: &[],

@@ -4,7 +4,7 @@
 use super::prelude::*;
 use crate::motion::{Motion, MotionStep, Target};
 
-pub const PRIMITIVE: LabPrimitive = LabPrimitive {
+pub(super) const PRIMITIVE: LabPrimitive = LabPrimitive {
     name: "set_parameter",
     description: "set an instrument's panel value to a target with its buttons or its dial",
     args: &[

@@ -4,7 +4,7 @@ use super::prelude::*;
 use super::run;
 use crate::motion::{Motion, MotionStep};
 
-pub const PRIMITIVE: LabPrimitive = LabPrimitive {
+pub(super) const PRIMITIVE: LabPrimitive = LabPrimitive {
     name: "spin",
     description: "spin a centrifuge at a speed for a time: press its start key and wait until the rotor has stopped",
     args: &[

@@ -4,7 +4,7 @@ use super::prelude::*;
 use super::run;
 use crate::motion::{Motion, MotionStep};
 
-pub const PRIMITIVE: LabPrimitive = LabPrimitive {
+pub(super) const PRIMITIVE: LabPrimitive = LabPrimitive {
     name: "thermocycle",
     description: "run a thermal profile (holds and cycles interleaved) on a thermal cycler under its heated lid, and wait until it ends; the cycler starts it as its lid locks",
     args: &[

@@ -3,7 +3,7 @@
 use super::prelude::*;
 use crate::motion::{Motion, MotionStep, Target};
 
-pub const PRIMITIVE: LabPrimitive = LabPrimitive {
+pub(super) const PRIMITIVE: LabPrimitive = LabPrimitive {
     name: "unscrew_cap",
     description: "twist a screw cap off a tube that stands in a slot or is held by another robot",
     args: &[ON],

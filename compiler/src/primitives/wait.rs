@@ -3,7 +3,7 @@
 use super::prelude::*;
 use crate::motion::{Motion, MotionStep};
 
-pub const PRIMITIVE: LabPrimitive = LabPrimitive {
+pub(super) const PRIMITIVE: LabPrimitive = LabPrimitive {
     name: "wait",
     description: "keep still for a time, holding whatever the hand holds",
     args: &[DURATION],

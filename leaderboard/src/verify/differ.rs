@@ -10,7 +10,7 @@ use serde_json::Value;
 
 /// A record as JSON, through its text and the parser (what a claimed record went through): two
 /// figures are equal when their JSON is.
-pub fn as_json(record: &impl Serialize) -> Value {
+pub(super) fn as_json(record: &impl Serialize) -> Value {
     serde_json::to_string(record)
         .ok()
         .and_then(|t| serde_json::from_str::<Value>(&t).ok())
@@ -19,7 +19,7 @@ pub fn as_json(record: &impl Serialize) -> Value {
 
 /// Parses a record strictly: JSON (no NaN or infinity, nesting at most 128 deep) into `T`, and
 /// nothing in the text that `T` does not hold (an unknown field is a claim nobody checks).
-pub fn strict<T: DeserializeOwned + Serialize>(text: &[u8]) -> Result<T, String> {
+pub(super) fn strict<T: DeserializeOwned + Serialize>(text: &[u8]) -> Result<T, String> {
     let typed: T = serde_json::from_slice(text).map_err(|e| e.to_string())?;
     let raw: Value = serde_json::from_slice(text).map_err(|e| e.to_string())?;
     match first_difference(&raw, &as_json(&typed)) {
@@ -30,7 +30,7 @@ pub fn strict<T: DeserializeOwned + Serialize>(text: &[u8]) -> Result<T, String>
 
 /// The first place where `claimed` is not `derived` (objects by key in order, arrays by index),
 /// as `path: claimed (derived ...)`; `None` where they are equal.
-pub fn first_difference(claimed: &Value, derived: &Value) -> Option<String> {
+pub(super) fn first_difference(claimed: &Value, derived: &Value) -> Option<String> {
     walk(claimed, derived, String::new())
 }
 
