@@ -621,7 +621,7 @@ mod tests {
             if path.file_name().is_some_and(|n| n == "mod.rs") {
                 continue;
             }
-            if text.contains("pub const PRIMITIVE: LabPrimitive") {
+            if text.contains("const PRIMITIVE: LabPrimitive") {
                 declared.push(path.file_stem().unwrap().to_string_lossy().into_owned());
             }
         }
